@@ -1,0 +1,153 @@
+//! A dynamically sized view of any [`crate::Mechanism`], for command lines, reports and
+//! bindings that handle machines whose type is known only at run time.
+//!
+//! Hot loops (sweeps, paths) should use the generic [`crate::Mechanism`] through
+//! [`crate::Machine::visit`]; this view allocates small vectors per call.
+
+use nalgebra::{DMatrix, SVector};
+
+use crate::error::{Error, Result};
+use crate::limits::Violation;
+use crate::mechanism::{Actuator, Coordinate, PoseSpace, Skeleton};
+use crate::pose::Pose;
+
+/// Forward-kinematics result with a dynamic pose vector.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DynForward {
+    /// Pose coordinates (mm, rad).
+    pub pose: Vec<f64>,
+    /// Iterations used (0 for closed form).
+    pub iterations: usize,
+    /// Largest actuator residual.
+    pub residual: f64,
+}
+
+/// Object-safe mirror of [`crate::Mechanism`] with slices and vectors (internal units).
+pub trait DynMechanism: Send + Sync {
+    /// See [`crate::Mechanism::name`].
+    fn name(&self) -> &str;
+    /// See [`crate::Mechanism::kind`].
+    fn kind(&self) -> &'static str;
+    /// See [`crate::Mechanism::coordinates`].
+    fn coordinates(&self) -> &[Coordinate];
+    /// See [`crate::Mechanism::actuators`].
+    fn actuators(&self) -> &[Actuator];
+    /// See [`crate::Mechanism::driven`].
+    fn driven(&self) -> Vec<usize>;
+    /// See [`crate::Mechanism::pose_space`].
+    fn pose_space(&self) -> PoseSpace;
+    /// See [`crate::Mechanism::home`].
+    fn home(&self) -> Vec<f64>;
+    /// See [`crate::Mechanism::inverse`].
+    fn inverse(&self, x: &[f64]) -> Result<Vec<f64>>;
+    /// See [`crate::Mechanism::jacobian`].
+    fn jacobian(&self, x: &[f64]) -> Result<DMatrix<f64>>;
+    /// See [`crate::Mechanism::forward`].
+    fn forward(&self, q: &[f64], start: &[f64]) -> Result<DynForward>;
+    /// See [`crate::Mechanism::tool_pose`].
+    fn tool_pose(&self, x: &[f64]) -> Result<Pose>;
+    /// See [`crate::Mechanism::coords_from_pose`].
+    fn coords_from_pose(&self, pose: &Pose, orientation_given: bool) -> Result<Vec<f64>>;
+    /// See [`crate::Mechanism::check_limits`]; returns the violations.
+    fn check_limits(&self, x: &[f64], q: &[f64]) -> Result<Vec<Violation>>;
+    /// See [`crate::Mechanism::skeleton`].
+    fn skeleton(&self, x: &[f64]) -> Result<Skeleton>;
+}
+
+/// Copies a slice into a fixed vector, checking its length and finiteness.
+pub fn fixed<const N: usize>(what: &str, v: &[f64]) -> Result<SVector<f64, N>> {
+    if v.len() != N {
+        return Err(Error::InvalidInput {
+            what: what.into(),
+            message: format!("expected {N} values, got {}", v.len()),
+        });
+    }
+    if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+        return Err(Error::InvalidInput {
+            what: what.into(),
+            message: format!("value {} is not a finite number ({})", i + 1, v[i]),
+        });
+    }
+    Ok(SVector::<f64, N>::from_column_slice(v))
+}
+
+/// Implements [`DynMechanism`] for a type implementing [`Mechanism<P, A>`].
+#[macro_export]
+macro_rules! impl_dyn_mechanism {
+    ($t:ty, $p:literal, $a:literal) => {
+        impl $crate::dynamic::DynMechanism for $t {
+            fn name(&self) -> &str {
+                $crate::Mechanism::<$p, $a>::name(self)
+            }
+            fn kind(&self) -> &'static str {
+                $crate::Mechanism::<$p, $a>::kind(self)
+            }
+            fn coordinates(&self) -> &[$crate::Coordinate] {
+                $crate::Mechanism::<$p, $a>::coordinates(self)
+            }
+            fn actuators(&self) -> &[$crate::Actuator] {
+                $crate::Mechanism::<$p, $a>::actuators(self)
+            }
+            fn driven(&self) -> Vec<usize> {
+                $crate::Mechanism::<$p, $a>::driven(self).to_vec()
+            }
+            fn pose_space(&self) -> $crate::PoseSpace {
+                $crate::Mechanism::<$p, $a>::pose_space(self)
+            }
+            fn home(&self) -> Vec<f64> {
+                $crate::Mechanism::<$p, $a>::home(self).as_slice().to_vec()
+            }
+            fn inverse(&self, x: &[f64]) -> $crate::Result<Vec<f64>> {
+                let x = $crate::dynamic::fixed::<$p>("pose", x)?;
+                Ok($crate::Mechanism::<$p, $a>::inverse(self, &x)?
+                    .as_slice()
+                    .to_vec())
+            }
+            fn jacobian(&self, x: &[f64]) -> $crate::Result<nalgebra::DMatrix<f64>> {
+                let x = $crate::dynamic::fixed::<$p>("pose", x)?;
+                let j = $crate::Mechanism::<$p, $a>::jacobian(self, &x)?;
+                Ok(nalgebra::DMatrix::from_fn($a, $p, |r, c| j[(r, c)]))
+            }
+            fn forward(
+                &self,
+                q: &[f64],
+                start: &[f64],
+            ) -> $crate::Result<$crate::dynamic::DynForward> {
+                let q = $crate::dynamic::fixed::<$a>("actuators", q)?;
+                let s = $crate::dynamic::fixed::<$p>("start pose", start)?;
+                let f = $crate::Mechanism::<$p, $a>::forward(self, &q, &s)?;
+                Ok($crate::dynamic::DynForward {
+                    pose: f.pose.as_slice().to_vec(),
+                    iterations: f.iterations,
+                    residual: f.residual,
+                })
+            }
+            fn tool_pose(&self, x: &[f64]) -> $crate::Result<$crate::Pose> {
+                let x = $crate::dynamic::fixed::<$p>("pose", x)?;
+                $crate::Mechanism::<$p, $a>::tool_pose(self, &x)
+            }
+            fn coords_from_pose(
+                &self,
+                pose: &$crate::Pose,
+                orientation_given: bool,
+            ) -> $crate::Result<Vec<f64>> {
+                Ok(
+                    $crate::Mechanism::<$p, $a>::coords_from_pose(self, pose, orientation_given)?
+                        .as_slice()
+                        .to_vec(),
+                )
+            }
+            fn check_limits(&self, x: &[f64], q: &[f64]) -> $crate::Result<Vec<$crate::Violation>> {
+                let x = $crate::dynamic::fixed::<$p>("pose", x)?;
+                let q = $crate::dynamic::fixed::<$a>("actuators", q)?;
+                let mut v = Vec::new();
+                $crate::Mechanism::<$p, $a>::check_limits(self, &x, &q, &mut v);
+                Ok(v)
+            }
+            fn skeleton(&self, x: &[f64]) -> $crate::Result<$crate::Skeleton> {
+                let x = $crate::dynamic::fixed::<$p>("pose", x)?;
+                $crate::Mechanism::<$p, $a>::skeleton(self, &x)
+            }
+        }
+    };
+}

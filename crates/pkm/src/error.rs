@@ -1,0 +1,98 @@
+//! The one error type of the `pkm` library.
+
+use crate::limits::Violation;
+
+/// Everything that can go wrong in `pkm`.
+///
+/// Every variant carries structured fields so that a caller (the CLI, a Python binding,
+/// a sweep) can report the problem precisely or react to it programmatically.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// A machine file could not be read or does not describe a valid machine.
+    #[error("{}", format_file_error(.file, .line, .column, .field, .message))]
+    MachineFile {
+        /// File name (or `<string>` for in-memory sources).
+        file: String,
+        /// 1-based line, when known.
+        line: Option<usize>,
+        /// 1-based column, when known.
+        column: Option<usize>,
+        /// Dotted path of the offending field (`struts[1].length`), empty when the
+        /// problem is in the syntax itself.
+        field: String,
+        /// What was wrong and what was expected.
+        message: String,
+    },
+    /// A value given by the user is not acceptable (wrong count, not finite, ...).
+    #[error("{what}: {message}")]
+    InvalidInput {
+        /// The input concerned (`--pose`, `actuators`, a CSV column, ...).
+        what: String,
+        /// What was wrong and what was expected.
+        message: String,
+    },
+    /// The requested pose or actuator set violates one or more limits of the machine.
+    #[error("unreachable: {}", join_violations(.violations))]
+    Unreachable {
+        /// Every violated limit, with its value and bound.
+        violations: Vec<Violation>,
+    },
+    /// The pose cannot be produced by this mechanism at all (its motion constraint
+    /// forbids it), independent of any stroke limit.
+    #[error("pose not attainable by the mechanism: {reason}")]
+    NotAttainable {
+        /// Why, in words, with the numbers involved.
+        reason: String,
+    },
+    /// An iterative solver did not converge.
+    #[error("{solver} did not converge after {iterations} iterations (residual {residual:.3e})")]
+    NotConverged {
+        /// Which solver (`forward kinematics`, ...).
+        solver: &'static str,
+        /// Iterations performed.
+        iterations: usize,
+        /// Final residual norm in the solver's units (mm for strut lengths).
+        residual: f64,
+    },
+    /// The configuration is singular (or too close to it) for the requested operation.
+    #[error("singular configuration: {what} (reciprocal condition number {rcond:.3e})")]
+    Singular {
+        /// What is singular (`Jacobian`, ...).
+        what: String,
+        /// Reciprocal condition number found (0 = exactly singular).
+        rcond: f64,
+    },
+}
+
+fn format_file_error(
+    file: &str,
+    line: &Option<usize>,
+    column: &Option<usize>,
+    field: &str,
+    message: &str,
+) -> String {
+    let mut s = file.to_string();
+    if let Some(l) = line {
+        s.push_str(&format!(":{l}"));
+        if let Some(c) = column {
+            s.push_str(&format!(":{c}"));
+        }
+    }
+    s.push_str(": ");
+    if !field.is_empty() {
+        s.push_str(&format!("field `{field}`: "));
+    }
+    s.push_str(message);
+    s
+}
+
+fn join_violations(v: &[Violation]) -> String {
+    v.iter()
+        .map(|x| x.to_string())
+        .collect::<Vec<_>>()
+        .join("; ")
+}
+
+/// Result type of the library.
+pub type Result<T, E = Error> = std::result::Result<T, E>;

@@ -1,0 +1,49 @@
+//! # pkm — kinematics and accuracy of parallel, hybrid and serial machine tools
+//!
+//! The library behind the `pkm` command. It describes a machine by a text file
+//! ([`Machine`]), solves its inverse and forward kinematics with every design limit
+//! checked ([`Mechanism`], [`Violation`]), and provides the rotation conventions and
+//! pose algebra the analyses share ([`rotation`], [`pose`]).
+//!
+//! Units: millimetres and radians inside, millimetres and degrees at the user boundary
+//! ([`Quantity`]).
+//!
+//! ```
+//! use pkm::{Machine, Mechanism, machine::Model};
+//! let text = std::fs::read_to_string(concat!(
+//!     env!("CARGO_MANIFEST_DIR"),
+//!     "/../../examples/machines/tripod-seed000.toml"
+//! )).unwrap();
+//! let machine = Machine::from_toml_str(&text, "tripod-seed000.toml").unwrap();
+//! let Model::TranslationalTripod(tripod) = &machine.model else { panic!() };
+//! let lengths = tripod.inverse(&tripod.home()).unwrap();
+//! assert!(lengths.iter().all(|l| *l > 0.0));
+//! ```
+
+#![warn(missing_docs)]
+
+pub mod dynamic;
+pub mod error;
+pub mod limits;
+pub mod linalg;
+pub mod machine;
+pub mod mechanism;
+pub mod pose;
+pub mod rotation;
+pub mod tripod;
+pub mod units;
+
+pub use dynamic::DynMechanism;
+pub use error::{Error, Result};
+pub use limits::{LimitKind, Range, Side, Violation};
+pub use machine::{Machine, Visitor};
+pub use mechanism::{
+    inverse_checked, newton_forward, Actuator, Coordinate, Forward, Mechanism, NewtonOptions,
+    PoseSpace, Skeleton,
+};
+pub use pose::{Pose, SmallDisplacement};
+pub use rotation::Convention;
+pub use units::Quantity;
+
+impl_dyn_mechanism!(tripod::TranslationalTripod, 6, 3);
+impl_dyn_mechanism!(tripod::CentreLegTripod, 3, 3);

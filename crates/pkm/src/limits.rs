@@ -1,0 +1,140 @@
+//! Limits of a machine and the violations a check reports.
+//!
+//! A limit check never answers with a bare boolean: it lists every violated limit
+//! with its name, the value found and the bound it crossed, in user units, so that a
+//! person can see which limit binds and by how much.
+
+use std::fmt;
+
+use serde::Serialize;
+
+use crate::units::Quantity;
+
+/// Which side of a bound was crossed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Side {
+    /// The value is below its minimum.
+    Min,
+    /// The value is above its maximum.
+    Max,
+}
+
+/// The family of a limit, for grouping (workspace maps count points per family).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "kebab-case")]
+#[non_exhaustive]
+pub enum LimitKind {
+    /// Actuator position (strut length, slider position, joint angle).
+    ActuatorPosition,
+    /// Tilt of the spindle / platform relative to the base.
+    Tilt,
+    /// Collision of a strut with the spindle (seed 000: phi <= lambda).
+    StrutSpindleCollision,
+    /// Stroke of a passive joint (e.g. the telescopic centre leg of a Tricept).
+    PassiveJoint,
+}
+
+/// One violated limit.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Violation {
+    /// Human-readable name of the limit, e.g. `strut e length`.
+    pub limit: String,
+    /// Family of the limit.
+    pub kind: LimitKind,
+    /// Minimum or maximum.
+    pub side: Side,
+    /// Value found, in user units.
+    pub value: f64,
+    /// The bound it crossed, in user units.
+    pub bound: f64,
+    /// By how much the bound is crossed (always positive), in user units.
+    pub excess: f64,
+    /// Unit of `value`, `bound` and `excess`.
+    pub unit: &'static str,
+}
+
+impl Violation {
+    /// Builds a violation from internal values (mm / rad), converting to user units.
+    pub fn new(
+        limit: impl Into<String>,
+        kind: LimitKind,
+        side: Side,
+        quantity: Quantity,
+        value: f64,
+        bound: f64,
+    ) -> Self {
+        let value = quantity.to_user(value);
+        let bound = quantity.to_user(bound);
+        Violation {
+            limit: limit.into(),
+            kind,
+            side,
+            value,
+            bound,
+            excess: (value - bound).abs(),
+            unit: quantity.unit(),
+        }
+    }
+}
+
+impl fmt::Display for Violation {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let (verb, word) = match self.side {
+            Side::Min => ("below", "minimum"),
+            Side::Max => ("above", "maximum"),
+        };
+        write!(
+            f,
+            "{} {:.3} {} is {} its {} {:.3} {} by {:.3} {}",
+            self.limit,
+            self.value,
+            self.unit,
+            verb,
+            word,
+            self.bound,
+            self.unit,
+            self.excess,
+            self.unit
+        )
+    }
+}
+
+/// A closed interval `[min, max]` in internal units, with optional rate limits.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Range {
+    /// Lower bound (mm or rad).
+    pub min: f64,
+    /// Upper bound (mm or rad).
+    pub max: f64,
+}
+
+impl Range {
+    /// The side and bound crossed by `value`, or `None` inside the range.
+    #[inline]
+    pub fn crossed(&self, value: f64) -> Option<(Side, f64)> {
+        if value < self.min {
+            Some((Side::Min, self.min))
+        } else if value > self.max {
+            Some((Side::Max, self.max))
+        } else {
+            None
+        }
+    }
+
+    /// Pushes a violation when `value` is outside the range; the name is only built
+    /// (allocated) when there is something to report.
+    #[inline]
+    pub fn check(
+        &self,
+        name: impl FnOnce() -> String,
+        kind: LimitKind,
+        quantity: Quantity,
+        value: f64,
+        out: &mut Vec<Violation>,
+    ) {
+        if let Some((side, bound)) = self.crossed(value) {
+            out.push(Violation::new(name(), kind, side, quantity, value, bound));
+        }
+    }
+}

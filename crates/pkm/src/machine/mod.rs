@@ -1,0 +1,139 @@
+//! Machines described by a TOML file, and the dispatch from a machine of any type to
+//! code generic over [`Mechanism`].
+//!
+//! The file format is documented in `docs/machine-file.md`. Every file has a `type`
+//! field; unknown keys are rejected; errors name the file, line, column and field.
+
+mod source;
+mod tripod_file;
+
+use std::path::Path;
+
+use crate::dynamic::DynMechanism;
+use crate::error::{Error, Result};
+use crate::mechanism::Mechanism;
+use crate::tripod::{CentreLegTripod, TranslationalTripod};
+
+pub use source::line_col;
+
+/// The machine types pkm knows, each a [`Mechanism`].
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum Model {
+    /// `type = "tripod"`, `constraint = "translational"`.
+    TranslationalTripod(TranslationalTripod),
+    /// `type = "tripod"`, `constraint = "centre-leg"`.
+    CentreLegTripod(CentreLegTripod),
+}
+
+/// Code generic over any mechanism, run on a machine whose type is known at run time
+/// by [`Machine::visit`].
+pub trait Visitor {
+    /// What the visit returns.
+    type Output;
+    /// Called with the concrete mechanism.
+    fn visit<M: Mechanism<P, A>, const P: usize, const A: usize>(self, m: &M) -> Self::Output;
+}
+
+/// A machine loaded from a file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Machine {
+    /// Where it was read from (file name, or `<string>`).
+    pub source: String,
+    /// Name from the file.
+    pub name: Option<String>,
+    /// Description from the file.
+    pub description: Option<String>,
+    /// The mechanism.
+    pub model: Model,
+}
+
+/// Machine types accepted in the `type` field.
+pub const MACHINE_TYPES: &[&str] = &["tripod"];
+
+impl Machine {
+    /// Reads and validates a machine file.
+    pub fn from_path(path: impl AsRef<Path>) -> Result<Machine> {
+        let path = path.as_ref();
+        let name = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| Error::MachineFile {
+            file: name.clone(),
+            line: None,
+            column: None,
+            field: String::new(),
+            message: format!("cannot read: {e}"),
+        })?;
+        Machine::from_toml_str(&text, &name)
+    }
+
+    /// Parses and validates a machine description; `file` names it in errors.
+    pub fn from_toml_str(text: &str, file: &str) -> Result<Machine> {
+        let src = source::Source::parse(file, text)?;
+        src.check_finite()?;
+        let kind = src
+            .root()
+            .iter()
+            .find(|(k, _)| k.get_ref().as_ref() == "type")
+            .map(|(_, v)| v.get_ref().as_str().map(str::to_string));
+        let kind = match kind {
+            None => {
+                return Err(Error::MachineFile {
+                    file: file.into(),
+                    line: None,
+                    column: None,
+                    field: "type".into(),
+                    message: format!(
+                        "missing field `type`, expected one of: {}",
+                        MACHINE_TYPES.join(", ")
+                    ),
+                })
+            }
+            Some(None) => {
+                return Err(src.error(
+                    &[source::Seg::Key("type".into())],
+                    "expected a string naming the machine type",
+                ))
+            }
+            Some(Some(k)) => k,
+        };
+        let (model, name, description) = match kind.as_str() {
+            "tripod" => tripod_file::build(&src, src.deserialize()?)?,
+            other => {
+                return Err(src.error(
+                    &[source::Seg::Key("type".into())],
+                    format!(
+                        "unknown machine type `{other}`, expected one of: {}",
+                        MACHINE_TYPES.join(", ")
+                    ),
+                ))
+            }
+        };
+        Ok(Machine {
+            source: file.into(),
+            name,
+            description,
+            model,
+        })
+    }
+
+    /// The mechanism behind a dynamic (run-time sized) interface.
+    pub fn mechanism(&self) -> &dyn DynMechanism {
+        match &self.model {
+            Model::TranslationalTripod(m) => m,
+            Model::CentreLegTripod(m) => m,
+        }
+    }
+
+    /// Runs generic code on the concrete mechanism.
+    pub fn visit<V: Visitor>(&self, v: V) -> V::Output {
+        match &self.model {
+            Model::TranslationalTripod(m) => v.visit(m),
+            Model::CentreLegTripod(m) => v.visit(m),
+        }
+    }
+
+    /// The machine type as written in the `type` field plus its variant.
+    pub fn kind(&self) -> &'static str {
+        self.mechanism().kind()
+    }
+}

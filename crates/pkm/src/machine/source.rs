@@ -1,0 +1,224 @@
+//! Locating fields of a TOML source for error messages (file, line, column, field).
+
+use std::ops::Range;
+
+use toml::de::{DeTable, DeValue};
+
+use crate::error::Error;
+
+/// A parsed TOML source that can turn a field path into a line and column.
+pub struct Source<'a> {
+    /// File name used in messages.
+    pub file: &'a str,
+    /// The raw text.
+    pub text: &'a str,
+    root: toml::Spanned<DeTable<'a>>,
+}
+
+/// One segment of a field path.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Seg {
+    /// A table key.
+    Key(String),
+    /// An array index.
+    Index(usize),
+}
+
+/// Renders a path as `a.b[2].c`.
+pub fn path_string(path: &[Seg]) -> String {
+    let mut s = String::new();
+    for seg in path {
+        match seg {
+            Seg::Key(k) => {
+                if !s.is_empty() {
+                    s.push('.');
+                }
+                s.push_str(k);
+            }
+            Seg::Index(i) => s.push_str(&format!("[{i}]")),
+        }
+    }
+    s
+}
+
+/// Parses `a.b[2].c` into segments.
+pub fn parse_path(path: &str) -> Vec<Seg> {
+    let mut out = Vec::new();
+    for part in path.split('.') {
+        let mut rest = part;
+        if let Some(i) = rest.find('[') {
+            if i > 0 {
+                out.push(Seg::Key(rest[..i].to_string()));
+            }
+            rest = &rest[i..];
+            while let Some(stripped) = rest.strip_prefix('[') {
+                let end = stripped.find(']').unwrap_or(stripped.len());
+                if let Ok(n) = stripped[..end].parse() {
+                    out.push(Seg::Index(n));
+                }
+                rest = stripped.get(end + 1..).unwrap_or("");
+            }
+        } else if !rest.is_empty() {
+            out.push(Seg::Key(rest.to_string()));
+        }
+    }
+    out
+}
+
+/// 1-based line and column of a byte offset.
+pub fn line_col(text: &str, offset: usize) -> (usize, usize) {
+    let offset = offset.min(text.len());
+    let before = &text[..offset];
+    let line = before.matches('\n').count() + 1;
+    let col = before
+        .rfind('\n')
+        .map(|i| before[i + 1..].chars().count() + 1)
+        .unwrap_or_else(|| before.chars().count() + 1);
+    (line, col)
+}
+
+impl<'a> Source<'a> {
+    /// Parses the TOML syntax; a syntax error names its line and column.
+    pub fn parse(file: &'a str, text: &'a str) -> Result<Self, Error> {
+        match DeTable::parse(text) {
+            Ok(root) => Ok(Source { file, text, root }),
+            Err(e) => {
+                let (line, column) = match e.span() {
+                    Some(s) => {
+                        let (l, c) = line_col(text, s.start);
+                        (Some(l), Some(c))
+                    }
+                    None => (None, None),
+                };
+                Err(Error::MachineFile {
+                    file: file.into(),
+                    line,
+                    column,
+                    field: String::new(),
+                    message: format!("invalid TOML: {}", e.message().trim()),
+                })
+            }
+        }
+    }
+
+    /// The root table.
+    pub fn root(&self) -> &DeTable<'a> {
+        self.root.get_ref()
+    }
+
+    /// Span of the value at `path`, or of the deepest existing parent.
+    pub fn span_of(&self, path: &[Seg]) -> Option<Range<usize>> {
+        let mut span = None;
+        let mut table: Option<&DeTable> = Some(self.root.get_ref());
+        let mut array: Option<&[toml::Spanned<DeValue>]> = None;
+        for seg in path {
+            let next = match (seg, table, array) {
+                (Seg::Key(k), Some(t), _) => t
+                    .iter()
+                    .find(|(key, _)| key.get_ref().as_ref() == k.as_str())
+                    .map(|(_, v)| v),
+                (Seg::Index(i), _, Some(a)) => a.get(*i),
+                _ => None,
+            };
+            let Some(v) = next else { break };
+            span = Some(v.span());
+            table = None;
+            array = None;
+            match v.get_ref() {
+                DeValue::Table(t) => table = Some(t),
+                DeValue::Array(a) => array = Some(a.as_ref()),
+                _ => {}
+            }
+        }
+        span
+    }
+
+    /// An error about the field at `path` with its line and column.
+    pub fn error(&self, path: &[Seg], message: impl Into<String>) -> Error {
+        let (line, column) = match self.span_of(path) {
+            Some(s) => {
+                let (l, c) = line_col(self.text, s.start);
+                (Some(l), Some(c))
+            }
+            None => (None, None),
+        };
+        Error::MachineFile {
+            file: self.file.into(),
+            line,
+            column,
+            field: path_string(path),
+            message: message.into(),
+        }
+    }
+
+    /// The first float anywhere in the file that is not finite (`nan`, `inf`).
+    pub fn check_finite(&self) -> Result<(), Error> {
+        fn walk(v: &DeValue, path: &mut Vec<Seg>, found: &mut Option<Vec<Seg>>) {
+            if found.is_some() {
+                return;
+            }
+            match v {
+                DeValue::Float(f) => {
+                    let s = f.as_str().to_ascii_lowercase();
+                    if s.contains("nan") || s.contains("inf") {
+                        *found = Some(path.clone());
+                    }
+                }
+                DeValue::Table(t) => {
+                    for (k, v) in t.iter() {
+                        path.push(Seg::Key(k.get_ref().to_string()));
+                        walk(v.get_ref(), path, found);
+                        path.pop();
+                    }
+                }
+                DeValue::Array(a) => {
+                    for (i, v) in a.iter().enumerate() {
+                        path.push(Seg::Index(i));
+                        walk(v.get_ref(), path, found);
+                        path.pop();
+                    }
+                }
+                _ => {}
+            }
+        }
+        let mut found = None;
+        for (k, v) in self.root().iter() {
+            let mut path = vec![Seg::Key(k.get_ref().to_string())];
+            walk(v.get_ref(), &mut path, &mut found);
+        }
+        match found {
+            Some(p) => Err(self.error(&p, "expected a finite number, found nan or inf")),
+            None => Ok(()),
+        }
+    }
+
+    /// Deserializes the whole document into `T`; errors name the field path (from
+    /// `serde_path_to_error`) and the line of the offending value.
+    pub fn deserialize<T: serde::de::DeserializeOwned>(&self) -> Result<T, Error> {
+        let de = toml::de::Deserializer::parse(self.text).map_err(|e| self.toml_error(&e, ""))?;
+        serde_path_to_error::deserialize(de).map_err(|e| {
+            let path = e.path().to_string();
+            let path = if path == "." { String::new() } else { path };
+            self.toml_error(e.inner(), &path)
+        })
+    }
+
+    fn toml_error(&self, e: &toml::de::Error, path: &str) -> Error {
+        let segs = parse_path(path);
+        let span = e.span().or_else(|| self.span_of(&segs));
+        let (line, column) = match span {
+            Some(s) => {
+                let (l, c) = line_col(self.text, s.start);
+                (Some(l), Some(c))
+            }
+            None => (None, None),
+        };
+        Error::MachineFile {
+            file: self.file.into(),
+            line,
+            column,
+            field: path.to_string(),
+            message: e.message().trim().to_string(),
+        }
+    }
+}

@@ -1,0 +1,318 @@
+//! The `type = "tripod"` machine file.
+
+use std::collections::BTreeMap;
+
+use nalgebra::{Vector3, Vector6};
+use serde::Deserialize;
+
+use super::source::{Seg, Source};
+use super::Model;
+use crate::error::Error;
+use crate::limits::Range;
+use crate::mechanism::Actuator;
+use crate::rotation::Convention;
+use crate::tripod::{CentreLeg, CentreLegTripod, Strut, TranslationalTripod, TripodGeometry};
+use crate::units::Quantity;
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct TripodFile {
+    #[serde(rename = "type")]
+    _kind: String,
+    #[serde(default)]
+    name: Option<String>,
+    #[serde(default)]
+    description: Option<String>,
+    constraint: Constraint,
+    base_joints: BTreeMap<String, [f64; 3]>,
+    platform_joints: BTreeMap<String, [f64; 3]>,
+    struts: Vec<StrutFile>,
+    tool: ToolFile,
+    #[serde(default)]
+    limits: LimitsFile,
+    home: HomeFile,
+    #[serde(default)]
+    centre_leg: Option<CentreLegFile>,
+}
+
+#[derive(Debug, Deserialize, Clone, Copy, PartialEq)]
+#[serde(rename_all = "kebab-case")]
+enum Constraint {
+    Translational,
+    CentreLeg,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct StrutFile {
+    name: String,
+    base: String,
+    platform: String,
+    length: [f64; 2],
+    #[serde(default)]
+    max_velocity: Option<f64>,
+    #[serde(default)]
+    max_acceleration: Option<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ToolFile {
+    tip: [f64; 3],
+}
+
+#[derive(Debug, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct LimitsFile {
+    #[serde(default)]
+    max_tilt: Option<f64>,
+    #[serde(default)]
+    min_strut_spindle_angle: Option<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct HomeFile {
+    position: [f64; 3],
+    #[serde(default)]
+    angles: Option<[f64; 3]>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CentreLegFile {
+    base: [f64; 3],
+    #[serde(default)]
+    length: Option<[f64; 2]>,
+}
+
+fn key(k: &str) -> Seg {
+    Seg::Key(k.into())
+}
+
+fn v3(a: [f64; 3]) -> Vector3<f64> {
+    Vector3::new(a[0], a[1], a[2])
+}
+
+/// Checks a `[min, max]` pair of lengths: non-negative, ordered.
+fn length_range(src: &Source, path: &[Seg], r: [f64; 2]) -> Result<Range, Error> {
+    if r[0] < 0.0 || r[1] < 0.0 {
+        return Err(src.error(
+            path,
+            format!(
+                "expected lengths >= 0 mm as [min, max], found [{}, {}]",
+                r[0], r[1]
+            ),
+        ));
+    }
+    if r[0] >= r[1] {
+        return Err(src.error(
+            path,
+            format!(
+                "expected [min, max] with min < max, found [{}, {}]",
+                r[0], r[1]
+            ),
+        ));
+    }
+    Ok(Range {
+        min: r[0],
+        max: r[1],
+    })
+}
+
+fn positive_opt(src: &Source, path: &[Seg], v: Option<f64>, unit: &str) -> Result<(), Error> {
+    match v {
+        Some(x) if x <= 0.0 => {
+            Err(src.error(path, format!("expected a value > 0 {unit}, found {x}")))
+        }
+        _ => Ok(()),
+    }
+}
+
+fn check_triangle(
+    src: &Source,
+    path: &[Seg],
+    pts: [Vector3<f64>; 3],
+    what: &str,
+) -> Result<(), Error> {
+    let area2 = (pts[1] - pts[0]).cross(&(pts[2] - pts[0])).norm();
+    let scale = (pts[1] - pts[0])
+        .norm()
+        .max((pts[2] - pts[0]).norm())
+        .max(1e-300);
+    if area2 < 1e-9 * scale * scale {
+        return Err(src.error(
+            path,
+            format!("the three {what} joints are collinear or coincide; they must span a triangle"),
+        ));
+    }
+    Ok(())
+}
+
+pub(super) fn build(
+    src: &Source,
+    f: TripodFile,
+) -> Result<(Model, Option<String>, Option<String>), Error> {
+    if f.struts.len() != 3 {
+        return Err(src.error(
+            &[key("struts")],
+            format!("a tripod has exactly 3 struts, found {}", f.struts.len()),
+        ));
+    }
+    let mut struts = Vec::with_capacity(3);
+    for (i, s) in f.struts.iter().enumerate() {
+        let p = |k: &str| vec![key("struts"), Seg::Index(i), key(k)];
+        if s.name.trim().is_empty() {
+            return Err(src.error(&p("name"), "expected a non-empty strut name"));
+        }
+        if f.struts[..i].iter().any(|o| o.name == s.name) {
+            return Err(src.error(&p("name"), format!("strut name `{}` is used twice", s.name)));
+        }
+        let base = f.base_joints.get(&s.base).ok_or_else(|| {
+            src.error(
+                &p("base"),
+                format!(
+                    "unknown base joint `{}`, expected one of {}",
+                    s.base,
+                    f.base_joints.keys().cloned().collect::<Vec<_>>().join(", ")
+                ),
+            )
+        })?;
+        let plat = f.platform_joints.get(&s.platform).ok_or_else(|| {
+            src.error(
+                &p("platform"),
+                format!(
+                    "unknown platform joint `{}`, expected one of {}",
+                    s.platform,
+                    f.platform_joints
+                        .keys()
+                        .cloned()
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            )
+        })?;
+        if f.struts[..i].iter().any(|o| o.base == s.base) {
+            return Err(src.error(
+                &p("base"),
+                format!("base joint `{}` already used by another strut", s.base),
+            ));
+        }
+        if f.struts[..i].iter().any(|o| o.platform == s.platform) {
+            return Err(src.error(
+                &p("platform"),
+                format!(
+                    "platform joint `{}` already used by another strut",
+                    s.platform
+                ),
+            ));
+        }
+        let range = length_range(src, &p("length"), s.length)?;
+        positive_opt(src, &p("max_velocity"), s.max_velocity, "mm/s")?;
+        positive_opt(src, &p("max_acceleration"), s.max_acceleration, "mm/s^2")?;
+        struts.push(Strut {
+            actuator: Actuator {
+                name: s.name.clone(),
+                quantity: Quantity::Length,
+                range,
+                max_velocity: s.max_velocity,
+                max_acceleration: s.max_acceleration,
+            },
+            base_name: s.base.clone(),
+            platform_name: s.platform.clone(),
+            base: v3(*base),
+            platform: v3(*plat),
+        });
+    }
+    let struts: [Strut; 3] = struts.try_into().expect("three struts checked above");
+    check_triangle(
+        src,
+        &[key("base_joints")],
+        [0, 1, 2].map(|i| struts[i].base),
+        "base",
+    )?;
+    check_triangle(
+        src,
+        &[key("platform_joints")],
+        [0, 1, 2].map(|i| struts[i].platform),
+        "platform",
+    )?;
+    let lim = &f.limits;
+    if let Some(t) = lim.max_tilt {
+        if !(t > 0.0 && t <= 180.0) {
+            return Err(src.error(
+                &[key("limits"), key("max_tilt")],
+                format!("expected an angle in (0, 180] deg, found {t}"),
+            ));
+        }
+    }
+    if let Some(a) = lim.min_strut_spindle_angle {
+        if !(-90.0..=90.0).contains(&a) {
+            return Err(src.error(
+                &[key("limits"), key("min_strut_spindle_angle")],
+                format!("expected an angle in [-90, 90] deg, found {a}"),
+            ));
+        }
+    }
+    let geometry = TripodGeometry::new(
+        f.name.clone().unwrap_or_else(|| "tripod".into()),
+        struts,
+        v3(f.tool.tip),
+        lim.max_tilt.map(f64::to_radians),
+        lim.min_strut_spindle_angle.map(f64::to_radians),
+    );
+    let model = match f.constraint {
+        Constraint::Translational => {
+            if f.centre_leg.is_some() {
+                return Err(src.error(
+                    &[key("centre_leg")],
+                    "a `translational` tripod has no centre leg; set constraint = \"centre-leg\" or remove this table",
+                ));
+            }
+            let a = f.home.angles.unwrap_or([0.0; 3]);
+            let a = a.map(f64::to_radians);
+            let p = f.home.position;
+            // Home angles are in the default convention; normalise through the matrix so
+            // that the stored angles are canonical.
+            let a = Convention::Rpy.from_matrix(&Convention::Rpy.to_matrix(a));
+            Model::TranslationalTripod(TranslationalTripod::new(
+                geometry,
+                Vector6::new(p[0], p[1], p[2], a[0], a[1], a[2]),
+            ))
+        }
+        Constraint::CentreLeg => {
+            let Some(leg) = &f.centre_leg else {
+                return Err(src.error(
+                    &[key("constraint")],
+                    "constraint = \"centre-leg\" needs a [centre_leg] table with `base` (and optionally `length`)",
+                ));
+            };
+            if f.home.angles.is_some() {
+                return Err(src.error(
+                    &[key("home"), key("angles")],
+                    "a centre-leg tripod's orientation follows from its position: give home.position only",
+                ));
+            }
+            let length = match leg.length {
+                Some(r) => Some(length_range(src, &[key("centre_leg"), key("length")], r)?),
+                None => None,
+            };
+            let t = CentreLegTripod::new(
+                geometry,
+                CentreLeg {
+                    base: v3(leg.base),
+                    length,
+                },
+                v3(f.home.position),
+            );
+            if let Err(e) = t.leg_state(&t.home) {
+                return Err(src.error(
+                    &[key("home"), key("position")],
+                    format!("home is not attainable: {e}"),
+                ));
+            }
+            Model::CentreLegTripod(t)
+        }
+    };
+    Ok((model, f.name, f.description))
+}

@@ -1,0 +1,378 @@
+//! The mechanism abstraction every analysis is written against.
+//!
+//! A mechanism maps its *pose coordinates* `x` (what the machine controls: X, Y, Z, A,
+//! B, C of the tool for a spatial machine; `z, theta` for a planar head; ...) to its
+//! *actuator coordinates* `q` (strut lengths, slider positions, joint angles) and back.
+//!
+//! * `P` is the number of pose coordinates, `A` the number of actuators. A mechanism
+//!   with fewer actuators than pose coordinates *holds* the others: the translational
+//!   tripod, for instance, takes X, Y, Z, A, B, C but its three struts only move X, Y, Z;
+//!   A, B, C stay where the mechanism holds them. [`Mechanism::driven`] says which
+//!   coordinates the actuators drive.
+//! * Internal units are millimetres and radians; [`Coordinate::quantity`] and
+//!   [`Actuator::quantity`] say how to convert at the user boundary.
+//! * Fixed-size nalgebra types keep the hot paths free of allocation: an inverse
+//!   solution, a Jacobian and a limit check with no violation allocate nothing.
+//! * The model is immutable and `Sync`, so sweeps share one model across threads.
+//!
+//! The inverse Jacobian `J = dq/dx` (`A x P`) relates the rates:
+//! `q_dot = J x_dot`; orientation columns are with respect to the coordinates as the
+//! mechanism defines them (radians of the RPY angles for spatial machines).
+
+use nalgebra::{SMatrix, SVector};
+use serde::Serialize;
+
+use crate::error::{Error, Result};
+use crate::limits::{Range, Violation};
+use crate::linalg::{rcond1, SmallLu};
+use crate::pose::Pose;
+use crate::units::Quantity;
+
+/// One pose coordinate of a mechanism.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Coordinate {
+    /// Name users type (`X`, `A`, `z`, `theta`).
+    pub name: String,
+    /// Length or angle.
+    pub quantity: Quantity,
+}
+
+impl Coordinate {
+    /// A length coordinate.
+    pub fn length(name: &str) -> Self {
+        Coordinate {
+            name: name.into(),
+            quantity: Quantity::Length,
+        }
+    }
+
+    /// An angle coordinate.
+    pub fn angle(name: &str) -> Self {
+        Coordinate {
+            name: name.into(),
+            quantity: Quantity::Angle,
+        }
+    }
+}
+
+/// The six coordinates of a spatial pose: tool tip X, Y, Z (mm) and the A, B, C angles
+/// of the default convention (`R = Rz(C) Ry(B) Rx(A)`).
+pub fn spatial_coordinates() -> [Coordinate; 6] {
+    [
+        Coordinate::length("X"),
+        Coordinate::length("Y"),
+        Coordinate::length("Z"),
+        Coordinate::angle("A"),
+        Coordinate::angle("B"),
+        Coordinate::angle("C"),
+    ]
+}
+
+/// One actuated joint (drive).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Actuator {
+    /// Name (`e`, `U`, `A1`).
+    pub name: String,
+    /// Linear (mm) or revolute (rad) drive.
+    pub quantity: Quantity,
+    /// Position range.
+    pub range: Range,
+    /// Largest speed (mm/s or rad/s), when the file gives one.
+    pub max_velocity: Option<f64>,
+    /// Largest acceleration (mm/s^2 or rad/s^2), when the file gives one.
+    pub max_acceleration: Option<f64>,
+}
+
+/// How a mechanism's pose coordinates relate to a full tool pose.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum PoseSpace {
+    /// Coordinates are X, Y, Z, A, B, C of the tool (mm, default convention).
+    Spatial,
+    /// Coordinates are X, Y, Z of the tool tip; the mechanism determines the orientation.
+    Position,
+    /// The mechanism's own coordinates (a planar head's `z, theta`, joint space, ...).
+    Own,
+}
+
+/// Result of a forward-kinematics solve.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Forward<const P: usize> {
+    /// The pose coordinates found.
+    pub pose: SVector<f64, P>,
+    /// Iterations used (0 for closed-form solutions).
+    pub iterations: usize,
+    /// Largest actuator residual `|IK(pose) - q|` (mm or rad).
+    pub residual: f64,
+}
+
+/// A named point of the mechanism at a pose, for drawings and joint reports.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SkeletonPoint {
+    /// Joint or point name (`F`, `C`, `tool`).
+    pub name: String,
+    /// What it belongs to.
+    pub role: PointRole,
+    /// Position in the base frame (mm).
+    pub position: [f64; 3],
+}
+
+/// What a skeleton point belongs to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum PointRole {
+    /// A joint fixed to the base.
+    BaseJoint,
+    /// A joint on the moving platform.
+    PlatformJoint,
+    /// The centre of the moving platform.
+    PlatformCentre,
+    /// The tool tip.
+    Tool,
+    /// Any other point (passive joints, ...).
+    Other,
+}
+
+/// A segment of the mechanism between two skeleton points.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SkeletonLink {
+    /// Name (`e` for a strut), may be empty.
+    pub name: String,
+    /// What kind of body it is.
+    pub kind: LinkKind,
+    /// Index of the first point.
+    pub from: usize,
+    /// Index of the second point.
+    pub to: usize,
+}
+
+/// Kind of a skeleton link.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum LinkKind {
+    /// An actuated strut or leg.
+    Strut,
+    /// An edge of the fixed base.
+    Base,
+    /// An edge of the moving platform.
+    Platform,
+    /// The tool / spindle.
+    Tool,
+    /// A passive leg or link.
+    Passive,
+}
+
+/// Points and links of a mechanism at one pose.
+#[derive(Debug, Clone, PartialEq, Default, Serialize)]
+pub struct Skeleton {
+    /// Named points.
+    pub points: Vec<SkeletonPoint>,
+    /// Segments between points.
+    pub links: Vec<SkeletonLink>,
+}
+
+impl Skeleton {
+    /// Adds a point and returns its index.
+    pub fn point(&mut self, name: &str, role: PointRole, p: &nalgebra::Vector3<f64>) -> usize {
+        self.points.push(SkeletonPoint {
+            name: name.into(),
+            role,
+            position: [p.x, p.y, p.z],
+        });
+        self.points.len() - 1
+    }
+
+    /// Adds a link between two point indices.
+    pub fn link(&mut self, name: &str, kind: LinkKind, from: usize, to: usize) {
+        self.links.push(SkeletonLink {
+            name: name.into(),
+            kind,
+            from,
+            to,
+        });
+    }
+}
+
+/// A mechanism with `P` pose coordinates and `A` actuators.
+pub trait Mechanism<const P: usize, const A: usize>: Send + Sync {
+    /// Machine name from its file.
+    fn name(&self) -> &str;
+
+    /// Machine type (`tripod/translational`, ...).
+    fn kind(&self) -> &'static str;
+
+    /// The pose coordinates, in order.
+    fn coordinates(&self) -> &[Coordinate; P];
+
+    /// The actuators, in order.
+    fn actuators(&self) -> &[Actuator; A];
+
+    /// Indices of the pose coordinates driven by the actuators. The others are held by
+    /// the mechanism: forward kinematics takes them from its starting pose.
+    fn driven(&self) -> [usize; A];
+
+    /// How the pose coordinates relate to a full tool pose.
+    fn pose_space(&self) -> PoseSpace;
+
+    /// The home pose from the machine file.
+    fn home(&self) -> SVector<f64, P>;
+
+    /// Inverse kinematics: actuator coordinates for pose `x`. Fails only when no
+    /// geometric solution exists; stroke and other limits are checked separately by
+    /// [`Mechanism::check_limits`].
+    fn inverse(&self, x: &SVector<f64, P>) -> Result<SVector<f64, A>>;
+
+    /// Inverse Jacobian `dq/dx` at `x` (`A x P`).
+    fn jacobian(&self, x: &SVector<f64, P>) -> Result<SMatrix<f64, A, P>>;
+
+    /// Forward kinematics: the pose with actuator coordinates `q`, found from the
+    /// starting pose `start` (the machine's last known state); held coordinates are
+    /// taken from `start`. The default is [`newton_forward`].
+    fn forward(&self, q: &SVector<f64, A>, start: &SVector<f64, P>) -> Result<Forward<P>> {
+        newton_forward(self, q, start, &NewtonOptions::default())
+    }
+
+    /// The full tool pose (tool tip position and tool frame) at `x`.
+    fn tool_pose(&self, x: &SVector<f64, P>) -> Result<Pose>;
+
+    /// Pose coordinates of a full tool pose. `orientation_given` says whether the
+    /// orientation part was given by the user (and must then be consistent with what
+    /// the mechanism can produce) or may be chosen by the mechanism.
+    fn coords_from_pose(&self, pose: &Pose, orientation_given: bool) -> Result<SVector<f64, P>>;
+
+    /// Pushes every violated limit at pose `x` with actuators `q` onto `out`.
+    fn check_limits(&self, x: &SVector<f64, P>, q: &SVector<f64, A>, out: &mut Vec<Violation>);
+
+    /// Points and links of the mechanism at `x`, for drawings and joint reports.
+    fn skeleton(&self, x: &SVector<f64, P>) -> Result<Skeleton>;
+}
+
+/// Settings of [`newton_forward`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NewtonOptions {
+    /// Largest number of iterations.
+    pub max_iterations: usize,
+    /// Convergence tolerance on the largest actuator residual (mm or rad).
+    pub tolerance: f64,
+    /// Reciprocal condition number of the driven Jacobian below which the pose is
+    /// reported as singular.
+    pub min_rcond: f64,
+}
+
+impl Default for NewtonOptions {
+    fn default() -> Self {
+        NewtonOptions {
+            max_iterations: 50,
+            tolerance: 1e-11,
+            min_rcond: 1e-10,
+        }
+    }
+}
+
+/// The columns of `J` belonging to the driven coordinates (`A x A`).
+pub fn driven_jacobian<const P: usize, const A: usize>(
+    j: &SMatrix<f64, A, P>,
+    driven: &[usize; A],
+) -> SMatrix<f64, A, A> {
+    SMatrix::<f64, A, A>::from_fn(|r, c| j[(r, driven[c])])
+}
+
+/// Forward kinematics by damped Newton iteration on the driven coordinates:
+/// `x <- x - t Jd^-1 (IK(x) - q)`, with `Jd` the driven columns of the analytic
+/// inverse Jacobian and the step `t` halved until the residual decreases.
+///
+/// Converges quadratically near the solution; reports [`Error::Singular`] when `Jd`
+/// is (nearly) singular and [`Error::NotConverged`] with its residual otherwise.
+pub fn newton_forward<M, const P: usize, const A: usize>(
+    m: &M,
+    q: &SVector<f64, A>,
+    start: &SVector<f64, P>,
+    opt: &NewtonOptions,
+) -> Result<Forward<P>>
+where
+    M: Mechanism<P, A> + ?Sized,
+{
+    let driven = m.driven();
+    let mut x = *start;
+    let mut r = m.inverse(&x)? - q;
+    let mut res = r.amax();
+    for it in 0..opt.max_iterations {
+        if res <= opt.tolerance {
+            return Ok(Forward {
+                pose: x,
+                iterations: it,
+                residual: res,
+            });
+        }
+        let jd = driven_jacobian(&m.jacobian(&x)?, &driven);
+        let rc = rcond1(&jd);
+        let step = match SmallLu::new(&jd) {
+            Some(lu) if rc >= opt.min_rcond => lu.solve(&r),
+            _ => {
+                return Err(Error::Singular {
+                    what: "forward kinematics Jacobian".into(),
+                    rcond: rc,
+                })
+            }
+        };
+        let mut t = 1.0;
+        let mut accepted = false;
+        for _ in 0..30 {
+            let mut xn = x;
+            for (k, &d) in driven.iter().enumerate() {
+                xn[d] -= t * step[k];
+            }
+            if let Ok(qn) = m.inverse(&xn) {
+                let rn = qn - q;
+                let resn = rn.amax();
+                if resn < res || resn <= opt.tolerance {
+                    x = xn;
+                    r = rn;
+                    res = resn;
+                    accepted = true;
+                    break;
+                }
+            }
+            t *= 0.5;
+        }
+        if !accepted {
+            return Err(Error::NotConverged {
+                solver: "forward kinematics (Newton)",
+                iterations: it + 1,
+                residual: res,
+            });
+        }
+    }
+    if res <= opt.tolerance {
+        Ok(Forward {
+            pose: x,
+            iterations: opt.max_iterations,
+            residual: res,
+        })
+    } else {
+        Err(Error::NotConverged {
+            solver: "forward kinematics (Newton)",
+            iterations: opt.max_iterations,
+            residual: res,
+        })
+    }
+}
+
+/// Inverse kinematics with every limit checked: the actuator coordinates, or
+/// [`Error::Unreachable`] listing every violated limit.
+pub fn inverse_checked<M, const P: usize, const A: usize>(
+    m: &M,
+    x: &SVector<f64, P>,
+) -> Result<SVector<f64, A>>
+where
+    M: Mechanism<P, A> + ?Sized,
+{
+    let q = m.inverse(x)?;
+    let mut v = Vec::new();
+    m.check_limits(x, &q, &mut v);
+    if v.is_empty() {
+        Ok(q)
+    } else {
+        Err(Error::Unreachable { violations: v })
+    }
+}

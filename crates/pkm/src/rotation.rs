@@ -1,0 +1,272 @@
+//! Rotation conventions users type, and conversions between them.
+//!
+//! All conventions map three angles (radians here; degrees at the user boundary) to a
+//! proper rotation matrix `R` that takes vectors from the moving (platform / tool) frame
+//! to the fixed (base) frame: `x_base = R x_moving + p`.
+//!
+//! | convention | angles typed | matrix |
+//! |---|---|---|
+//! | [`Convention::Rpy`] (default) | A, B, C | `Rz(C) Ry(B) Rx(A)`: fixed-axis roll-pitch-yaw X-Y-Z, the A/B/C convention of CNC controllers such as LinuxCNC |
+//! | [`Convention::Zyx`] | alpha, beta, gamma | `Rz(alpha) Ry(beta) Rx(gamma)`: intrinsic Z-Y'-X'' Euler angles (same matrix as RPY, angles typed in the opposite order) |
+//! | [`Convention::Zyz`] | alpha, beta, gamma | `Rz(alpha) Ry(beta) Rz(gamma)`: intrinsic Z-Y'-Z'' Euler angles |
+//! | [`Convention::Krylov`] | psi, theta, gamma | seed 001 eq. 2, which equals `Rz(-psi) Rx(-theta) Ry(-gamma)` |
+//! | [`Convention::RotationVector`] | rx, ry, rz | axis * angle (axis-angle as one vector) |
+//!
+//! `Rx`, `Ry`, `Rz` are right-hand rotations about the base axes. Quaternions and
+//! axis-angle pairs are converted with [`quaternion_wxyz`], [`from_quaternion_wxyz`],
+//! [`axis_angle`] and [`from_axis_angle`].
+
+use std::fmt;
+use std::str::FromStr;
+
+use nalgebra::{Matrix3, Rotation3, Unit, UnitQuaternion, Vector3};
+use serde::Serialize;
+
+use crate::error::Error;
+
+/// A way of writing an orientation as three angles.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Convention {
+    /// Fixed-axis X-Y-Z roll/pitch/yaw: `R = Rz(c) Ry(b) Rx(a)` for angles `(a, b, c)`.
+    #[default]
+    Rpy,
+    /// Intrinsic Z-Y'-X'' Euler: `R = Rz(a) Ry(b) Rx(c)` for angles `(a, b, c)`.
+    Zyx,
+    /// Intrinsic Z-Y'-Z'' Euler: `R = Rz(a) Ry(b) Rz(c)` for angles `(a, b, c)`.
+    Zyz,
+    /// Krylov angles of seed 001 (Smirnov 2009, eq. 2) for `(psi, theta, gamma)`:
+    /// `R = Rz(-psi) Rx(-theta) Ry(-gamma)`.
+    Krylov,
+    /// Rotation vector: axis times angle.
+    RotationVector,
+}
+
+impl Convention {
+    /// Every convention, for help texts and tests.
+    pub const ALL: [Convention; 5] = [
+        Convention::Rpy,
+        Convention::Zyx,
+        Convention::Zyz,
+        Convention::Krylov,
+        Convention::RotationVector,
+    ];
+
+    /// The name users type.
+    pub fn name(self) -> &'static str {
+        match self {
+            Convention::Rpy => "rpy",
+            Convention::Zyx => "zyx",
+            Convention::Zyz => "zyz",
+            Convention::Krylov => "krylov",
+            Convention::RotationVector => "rotvec",
+        }
+    }
+
+    /// Names of the three angles in this convention.
+    pub fn angle_names(self) -> [&'static str; 3] {
+        match self {
+            Convention::Rpy => ["A", "B", "C"],
+            Convention::Zyx | Convention::Zyz => ["alpha", "beta", "gamma"],
+            Convention::Krylov => ["psi", "theta", "gamma"],
+            Convention::RotationVector => ["rx", "ry", "rz"],
+        }
+    }
+
+    /// Rotation matrix from three angles (radians).
+    pub fn to_matrix(self, a: [f64; 3]) -> Matrix3<f64> {
+        match self {
+            Convention::Rpy => rz(a[2]) * ry(a[1]) * rx(a[0]),
+            Convention::Zyx => rz(a[0]) * ry(a[1]) * rx(a[2]),
+            Convention::Zyz => rz(a[0]) * ry(a[1]) * rz(a[2]),
+            Convention::Krylov => krylov_matrix(a[0], a[1], a[2]),
+            Convention::RotationVector => {
+                *Rotation3::from_scaled_axis(Vector3::new(a[0], a[1], a[2])).matrix()
+            }
+        }
+    }
+
+    /// Three angles (radians) of a rotation matrix in this convention.
+    ///
+    /// At a gimbal lock (the middle angle at +-90 deg for RPY/ZYX/Krylov, 0 or 180 deg
+    /// for ZYZ) only a sum or difference of the outer angles is defined; the last one
+    /// is then set to zero. The result always reproduces the matrix.
+    pub fn from_matrix(self, m: &Matrix3<f64>) -> [f64; 3] {
+        match self {
+            Convention::Rpy => rpy_from_matrix(m),
+            Convention::Zyx => {
+                let [a, b, c] = rpy_from_matrix(m);
+                [c, b, a]
+            }
+            Convention::Zyz => zyz_from_matrix(m),
+            Convention::Krylov => krylov_from_matrix(m),
+            Convention::RotationVector => {
+                let v = Rotation3::from_matrix_unchecked(*m).scaled_axis();
+                [v.x, v.y, v.z]
+            }
+        }
+    }
+}
+
+impl fmt::Display for Convention {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for Convention {
+    type Err = Error;
+
+    fn from_str(s: &str) -> Result<Self, Error> {
+        Convention::ALL
+            .into_iter()
+            .find(|c| c.name().eq_ignore_ascii_case(s.trim()))
+            .ok_or_else(|| Error::InvalidInput {
+                what: "rotation convention".into(),
+                message: format!(
+                    "unknown convention `{s}`, expected one of {}",
+                    Convention::ALL.map(|c| c.name()).join(", ")
+                ),
+            })
+    }
+}
+
+/// Right-hand rotation about the X axis.
+pub fn rx(a: f64) -> Matrix3<f64> {
+    let (s, c) = a.sin_cos();
+    Matrix3::new(1.0, 0.0, 0.0, 0.0, c, -s, 0.0, s, c)
+}
+
+/// Right-hand rotation about the Y axis.
+pub fn ry(a: f64) -> Matrix3<f64> {
+    let (s, c) = a.sin_cos();
+    Matrix3::new(c, 0.0, s, 0.0, 1.0, 0.0, -s, 0.0, c)
+}
+
+/// Right-hand rotation about the Z axis.
+pub fn rz(a: f64) -> Matrix3<f64> {
+    let (s, c) = a.sin_cos();
+    Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0)
+}
+
+/// The direction-cosine matrix of seed 001 (Smirnov 2009, eq. 2), written entry by
+/// entry as the paper prints it; rows `(l1 l2 l3)`, `(m1 m2 m3)`, `(n1 n2 n3)`.
+///
+/// It equals `Rz(-psi) Rx(-theta) Ry(-gamma)` (checked in the tests), i.e. the
+/// transpose of `Ry(gamma) Rx(theta) Rz(psi)`.
+pub fn krylov_matrix(psi: f64, theta: f64, gamma: f64) -> Matrix3<f64> {
+    let (sp, cp) = psi.sin_cos();
+    let (st, ct) = theta.sin_cos();
+    let (sg, cg) = gamma.sin_cos();
+    Matrix3::new(
+        cp * cg + st * sp * sg,
+        sp * ct,
+        -cp * sg + sp * st * cg,
+        -sp * cg + st * cp * sg,
+        cp * ct,
+        sp * sg + cp * st * cg,
+        ct * sg,
+        -st,
+        ct * cg,
+    )
+}
+
+const LOCK: f64 = 1e-12;
+
+fn rpy_from_matrix(m: &Matrix3<f64>) -> [f64; 3] {
+    // R = Rz(c) Ry(b) Rx(a): r20 = -sin b, r21 = cos b sin a, r22 = cos b cos a,
+    // r10 = sin c cos b, r00 = cos c cos b.
+    let cb = m[(0, 0)].hypot(m[(1, 0)]);
+    let b = (-m[(2, 0)]).atan2(cb);
+    if cb > LOCK {
+        [m[(2, 1)].atan2(m[(2, 2)]), b, m[(1, 0)].atan2(m[(0, 0)])]
+    } else {
+        // Gimbal lock: only c -+ a is defined; take a = 0.
+        // b = +90: r01 = -sin c, r11 = cos c (with a = 0); b = -90 likewise.
+        [0.0, b, (-m[(0, 1)]).atan2(m[(1, 1)])]
+    }
+}
+
+fn zyz_from_matrix(m: &Matrix3<f64>) -> [f64; 3] {
+    // R = Rz(a) Ry(b) Rz(c): r22 = cos b, r02 = cos a sin b, r12 = sin a sin b,
+    // r20 = -sin b cos c, r21 = sin b sin c.
+    let sb = m[(0, 2)].hypot(m[(1, 2)]);
+    let b = sb.atan2(m[(2, 2)]);
+    if sb > LOCK {
+        [m[(1, 2)].atan2(m[(0, 2)]), b, m[(2, 1)].atan2(-m[(2, 0)])]
+    } else if m[(2, 2)] > 0.0 {
+        // b = 0: R = Rz(a + c).
+        [m[(1, 0)].atan2(m[(0, 0)]), b, 0.0]
+    } else {
+        // b = pi: R = Rz(a) diag(-1, 1, -1) Rz(c); with c = 0, r00 = -cos a, r10 = -sin a.
+        [(-m[(1, 0)]).atan2(-m[(0, 0)]), b, 0.0]
+    }
+}
+
+fn krylov_from_matrix(m: &Matrix3<f64>) -> [f64; 3] {
+    // n2 = -sin theta, l2 = sin psi cos theta, m2 = cos psi cos theta,
+    // n1 = cos theta sin gamma, n3 = cos theta cos gamma.
+    let ct = m[(0, 1)].hypot(m[(1, 1)]);
+    let theta = (-m[(2, 1)]).atan2(ct);
+    if ct > LOCK {
+        [
+            m[(0, 1)].atan2(m[(1, 1)]),
+            theta,
+            m[(2, 0)].atan2(m[(2, 2)]),
+        ]
+    } else {
+        // theta = +-90 deg: only psi -+ gamma is defined; take gamma = 0. Then
+        // l1 = cos psi, m1 = -sin psi.
+        [(-m[(1, 0)]).atan2(m[(0, 0)]), theta, 0.0]
+    }
+}
+
+/// Unit quaternion `[w, x, y, z]` of a rotation matrix.
+pub fn quaternion_wxyz(m: &Matrix3<f64>) -> [f64; 4] {
+    let q = UnitQuaternion::from_matrix(m);
+    [q.w, q.i, q.j, q.k]
+}
+
+/// Rotation matrix of a quaternion `[w, x, y, z]` (normalised first).
+pub fn from_quaternion_wxyz(q: [f64; 4]) -> Result<Matrix3<f64>, Error> {
+    let raw = nalgebra::Quaternion::new(q[0], q[1], q[2], q[3]);
+    if !(raw.norm() > 1e-12) || !raw.norm().is_finite() {
+        return Err(Error::InvalidInput {
+            what: "quaternion".into(),
+            message: "must be finite and non-zero".into(),
+        });
+    }
+    Ok(*UnitQuaternion::from_quaternion(raw)
+        .to_rotation_matrix()
+        .matrix())
+}
+
+/// Axis (unit) and angle (radians, in `[0, pi]`) of a rotation matrix; the axis is
+/// `+Z` for the identity.
+pub fn axis_angle(m: &Matrix3<f64>) -> (Vector3<f64>, f64) {
+    match Rotation3::from_matrix_unchecked(*m).axis_angle() {
+        Some((axis, angle)) => (axis.into_inner(), angle),
+        None => (Vector3::z(), 0.0),
+    }
+}
+
+/// Rotation matrix of a rotation by `angle` (radians) about `axis` (any length > 0).
+pub fn from_axis_angle(axis: &Vector3<f64>, angle: f64) -> Result<Matrix3<f64>, Error> {
+    let unit = Unit::try_new(*axis, 1e-12).ok_or_else(|| Error::InvalidInput {
+        what: "rotation axis".into(),
+        message: "must be a non-zero vector".into(),
+    })?;
+    Ok(*Rotation3::from_axis_angle(&unit, angle).matrix())
+}
+
+/// Angle (radians) between the Z axes of the moving and fixed frames: the tilt of a
+/// spindle whose axis is the moving frame's Z.
+pub fn tilt(m: &Matrix3<f64>) -> f64 {
+    m[(2, 2)].clamp(-1.0, 1.0).acos()
+}
+
+/// Angle (radians) of the relative rotation `a^T b`, in `[0, pi]`.
+pub fn angle_between(a: &Matrix3<f64>, b: &Matrix3<f64>) -> f64 {
+    let r = a.transpose() * b;
+    ((r.trace() - 1.0) / 2.0).clamp(-1.0, 1.0).acos()
+}

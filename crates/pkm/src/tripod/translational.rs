@@ -1,0 +1,189 @@
+use nalgebra::{Matrix3, SMatrix, SVector, Vector3, Vector6};
+
+use super::geometry::{rpy_rate_matrix, TripodGeometry};
+use crate::error::{Error, Result};
+use crate::limits::Violation;
+use crate::mechanism::{
+    spatial_coordinates, Actuator, Coordinate, Forward, Mechanism, PoseSpace, Skeleton,
+};
+use crate::pose::{pose_from_parts, rotation_matrix, Pose};
+use crate::rotation::Convention;
+
+/// A tripod whose mechanism holds the platform orientation constant (seed 000's arc
+/// study). Pose coordinates X, Y, Z, A, B, C of the tool tip (default convention); the
+/// struts drive X, Y, Z and A, B, C are held.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TranslationalTripod {
+    /// Geometry and limits.
+    pub geometry: TripodGeometry,
+    /// Home pose (X, Y, Z mm, A, B, C rad).
+    pub home: Vector6<f64>,
+    coordinates: [Coordinate; 6],
+}
+
+impl TranslationalTripod {
+    /// New translational tripod with a home pose.
+    pub fn new(geometry: TripodGeometry, home: Vector6<f64>) -> Self {
+        TranslationalTripod {
+            geometry,
+            home,
+            coordinates: spatial_coordinates(),
+        }
+    }
+
+    /// Tool tip and rotation matrix of pose coordinates.
+    #[inline]
+    pub fn split(x: &Vector6<f64>) -> (Vector3<f64>, Matrix3<f64>) {
+        (
+            Vector3::new(x[0], x[1], x[2]),
+            Convention::Rpy.to_matrix([x[3], x[4], x[5]]),
+        )
+    }
+
+    /// Forward kinematics in closed form for a given platform rotation: the tool tip
+    /// lies on three spheres (centre `F_i - R (c_i - t)`, radius `L_i`); of their two
+    /// intersections (mirror images in the plane of the centres) the one nearest
+    /// `near` is returned.
+    pub fn forward_closed_form(
+        &self,
+        q: &Vector3<f64>,
+        r: &Matrix3<f64>,
+        near: &Vector3<f64>,
+    ) -> Result<Vector3<f64>> {
+        let g = &self.geometry;
+        let c = [0, 1, 2].map(|i| g.struts[i].base - r * (g.struts[i].platform - g.tool));
+        let d21 = c[1] - c[0];
+        let d = d21.norm();
+        let ex = d21 / d;
+        let d31 = c[2] - c[0];
+        let i = ex.dot(&d31);
+        let ey_raw = d31 - ex * i;
+        let jn = ey_raw.norm();
+        let scale = d.max(d31.norm());
+        if !(d > 1e-9 * scale.max(1.0)) || !(jn > 1e-9 * scale.max(1.0)) {
+            return Err(Error::Singular {
+                what: "tripod joints are collinear: the strut lengths do not fix the platform"
+                    .into(),
+                rcond: 0.0,
+            });
+        }
+        let ey = ey_raw / jn;
+        let ez = ex.cross(&ey);
+        let (l1, l2, l3) = (q[0] * q[0], q[1] * q[1], q[2] * q[2]);
+        let x = (l1 - l2 + d * d) / (2.0 * d);
+        let y = (l1 - l3 + i * i + jn * jn) / (2.0 * jn) - i / jn * x;
+        let z2 = l1 - x * x - y * y;
+        if z2 < 0.0 {
+            return Err(Error::NotAttainable {
+                reason: format!(
+                    "no platform position has strut lengths {:.4}, {:.4}, {:.4} mm at this \
+                     orientation: the three spheres miss each other ({:.3e} mm^2 short)",
+                    q[0], q[1], q[2], -z2
+                ),
+            });
+        }
+        let z = z2.sqrt();
+        if z < 1e-9 * scale.max(1.0) {
+            return Err(Error::Singular {
+                what: "the struts lie in one plane with the platform joints (the two assembly \
+                       modes meet)"
+                    .into(),
+                rcond: 0.0,
+            });
+        }
+        let base = c[0] + ex * x + ey * y;
+        let p1 = base + ez * z;
+        let p2 = base - ez * z;
+        Ok(if (p1 - near).norm() <= (p2 - near).norm() {
+            p1
+        } else {
+            p2
+        })
+    }
+}
+
+impl Mechanism<6, 3> for TranslationalTripod {
+    fn name(&self) -> &str {
+        &self.geometry.name
+    }
+
+    fn kind(&self) -> &'static str {
+        "tripod/translational"
+    }
+
+    fn coordinates(&self) -> &[Coordinate; 6] {
+        &self.coordinates
+    }
+
+    fn actuators(&self) -> &[Actuator; 3] {
+        self.geometry.actuators()
+    }
+
+    fn driven(&self) -> [usize; 3] {
+        [0, 1, 2]
+    }
+
+    fn pose_space(&self) -> PoseSpace {
+        PoseSpace::Spatial
+    }
+
+    fn home(&self) -> Vector6<f64> {
+        self.home
+    }
+
+    #[inline]
+    fn inverse(&self, x: &Vector6<f64>) -> Result<Vector3<f64>> {
+        let (p, r) = Self::split(x);
+        Ok(self.geometry.strut_lengths(&p, &r))
+    }
+
+    /// `dL/dx = J_twist diag(I, E(A, B, C))`, with `E` the angular-velocity map of the
+    /// A, B, C rates.
+    fn jacobian(&self, x: &Vector6<f64>) -> Result<SMatrix<f64, 3, 6>> {
+        let (p, r) = Self::split(x);
+        let jt = self.geometry.twist_jacobian(&p, &r);
+        let e = rpy_rate_matrix([x[3], x[4], x[5]]);
+        let mut j = jt;
+        let rot = jt.fixed_view::<3, 3>(0, 3) * e;
+        j.fixed_view_mut::<3, 3>(0, 3).copy_from(&rot);
+        Ok(j)
+    }
+
+    fn forward(&self, q: &Vector3<f64>, start: &Vector6<f64>) -> Result<Forward<6>> {
+        let (p0, r) = Self::split(start);
+        let p = self.forward_closed_form(q, &r, &p0)?;
+        let mut x = *start;
+        x.fixed_rows_mut::<3>(0).copy_from(&p);
+        let residual = (self.geometry.strut_lengths(&p, &r) - q).amax();
+        Ok(Forward {
+            pose: x,
+            iterations: 0,
+            residual,
+        })
+    }
+
+    fn tool_pose(&self, x: &Vector6<f64>) -> Result<Pose> {
+        let (p, r) = Self::split(x);
+        Ok(pose_from_parts(p, &r))
+    }
+
+    fn coords_from_pose(&self, pose: &Pose, orientation_given: bool) -> Result<Vector6<f64>> {
+        let p = pose.translation.vector;
+        let a = if orientation_given {
+            Convention::Rpy.from_matrix(&rotation_matrix(pose))
+        } else {
+            [self.home[3], self.home[4], self.home[5]]
+        };
+        Ok(Vector6::new(p.x, p.y, p.z, a[0], a[1], a[2]))
+    }
+
+    fn check_limits(&self, x: &Vector6<f64>, q: &Vector3<f64>, out: &mut Vec<Violation>) {
+        let (p, r) = Self::split(x);
+        self.geometry.check_limits(&p, &r, q, out);
+    }
+
+    fn skeleton(&self, x: &SVector<f64, 6>) -> Result<Skeleton> {
+        let (p, r) = Self::split(x);
+        Ok(self.geometry.skeleton(&p, &r).0)
+    }
+}

@@ -1,0 +1,43 @@
+//! Units at the user-facing boundary.
+//!
+//! Internally pkm computes in millimetres and radians; files, command lines and reports
+//! use millimetres and degrees (mm/min for feeds, as on CNC machines). [`Quantity`]
+//! says which a number is and converts it.
+
+use serde::Serialize;
+
+/// The physical kind of a scalar coordinate.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Quantity {
+    /// A length: mm internally and at the boundary.
+    Length,
+    /// An angle: radians internally, degrees at the boundary.
+    Angle,
+}
+
+impl Quantity {
+    /// Unit symbol shown to users.
+    pub fn unit(self) -> &'static str {
+        match self {
+            Quantity::Length => "mm",
+            Quantity::Angle => "deg",
+        }
+    }
+
+    /// Converts an internal value (mm or rad) to the user unit (mm or deg).
+    pub fn to_user(self, v: f64) -> f64 {
+        match self {
+            Quantity::Length => v,
+            Quantity::Angle => v.to_degrees(),
+        }
+    }
+
+    /// Converts a user value (mm or deg) to the internal unit (mm or rad).
+    pub fn from_user(self, v: f64) -> f64 {
+        match self {
+            Quantity::Length => v,
+            Quantity::Angle => v.to_radians(),
+        }
+    }
+}
