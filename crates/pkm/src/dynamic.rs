@@ -4,12 +4,13 @@
 //! Hot loops (sweeps, paths) should use the generic [`crate::Mechanism`] through
 //! [`crate::Machine::visit`]; this view allocates small vectors per call.
 
-use nalgebra::{DMatrix, SVector};
+use nalgebra::{DMatrix, SVector, Vector3};
 
 use crate::error::{Error, Result};
 use crate::limits::Violation;
 use crate::mechanism::{Actuator, Coordinate, PoseSpace, Skeleton};
-use crate::pose::Pose;
+use crate::pose::{pose_from_angles, Pose};
+use crate::rotation::Convention;
 
 /// Forward-kinematics result with a dynamic pose vector.
 #[derive(Debug, Clone, PartialEq)]
@@ -150,4 +151,66 @@ macro_rules! impl_dyn_mechanism {
             }
         }
     };
+}
+
+/// Names of the values `--pose` expects for this machine and convention.
+pub fn pose_names(m: &dyn DynMechanism, conv: Convention) -> Vec<String> {
+    match m.pose_space() {
+        PoseSpace::Spatial | PoseSpace::Position => {
+            let mut v: Vec<String> = ["X", "Y", "Z"].iter().map(|s| s.to_string()).collect();
+            v.extend(conv.angle_names().iter().map(|s| s.to_string()));
+            v
+        }
+        PoseSpace::Own => m.coordinates().iter().map(|c| c.name.clone()).collect(),
+    }
+}
+
+/// Converts user values (mm, deg) of a pose into the mechanism's coordinates
+/// (mm, rad). Spatial machines take X, Y, Z and optionally three angles in `conv`.
+pub fn pose_from_user(m: &dyn DynMechanism, vals: &[f64], conv: Convention) -> Result<Vec<f64>> {
+    match m.pose_space() {
+        PoseSpace::Spatial | PoseSpace::Position => {
+            let names = pose_names(m, conv);
+            if vals.len() != 3 && vals.len() != 6 {
+                return Err(Error::InvalidInput {
+                    what: "pose".into(),
+                    message: format!(
+                        "expected 3 or 6 values ({}), got {}",
+                        names.join(","),
+                        vals.len()
+                    ),
+                });
+            }
+            let given = vals.len() == 6;
+            let angles = if given {
+                [vals[3], vals[4], vals[5]].map(f64::to_radians)
+            } else {
+                [0.0; 3]
+            };
+            let pose = pose_from_angles(Vector3::new(vals[0], vals[1], vals[2]), angles, conv);
+            m.coords_from_pose(&pose, given)
+        }
+        PoseSpace::Own => {
+            let c = m.coordinates();
+            if vals.len() != c.len() {
+                return Err(Error::InvalidInput {
+                    what: "pose".into(),
+                    message: format!(
+                        "expected {} values ({}), got {}",
+                        c.len(),
+                        c.iter()
+                            .map(|c| c.name.as_str())
+                            .collect::<Vec<_>>()
+                            .join(","),
+                        vals.len()
+                    ),
+                });
+            }
+            Ok(vals
+                .iter()
+                .zip(c)
+                .map(|(v, c)| c.quantity.from_user(*v))
+                .collect())
+        }
+    }
 }

@@ -32,6 +32,7 @@ pub mod pose;
 pub mod rotation;
 pub mod tripod;
 pub mod units;
+pub mod verify;
 
 pub use dynamic::DynMechanism;
 pub use error::{Error, Result};

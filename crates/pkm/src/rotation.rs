@@ -261,12 +261,22 @@ pub fn from_axis_angle(axis: &Vector3<f64>, angle: f64) -> Result<Matrix3<f64>, 
 
 /// Angle (radians) between the Z axes of the moving and fixed frames: the tilt of a
 /// spindle whose axis is the moving frame's Z.
+///
+/// Computed as `atan2(|(r02, r12)|, r22)`, accurate for small and large tilts alike.
 pub fn tilt(m: &Matrix3<f64>) -> f64 {
-    m[(2, 2)].clamp(-1.0, 1.0).acos()
+    m[(0, 2)].hypot(m[(1, 2)]).atan2(m[(2, 2)])
 }
 
 /// Angle (radians) of the relative rotation `a^T b`, in `[0, pi]`.
+///
+/// Computed as `atan2(|vee(R - R^T)| / 2, (tr R - 1) / 2)` with `R = a^T b`, accurate
+/// near 0 (where `acos` of the trace alone loses half the digits) and near pi.
 pub fn angle_between(a: &Matrix3<f64>, b: &Matrix3<f64>) -> f64 {
     let r = a.transpose() * b;
-    ((r.trace() - 1.0) / 2.0).clamp(-1.0, 1.0).acos()
+    let v = Vector3::new(
+        r[(2, 1)] - r[(1, 2)],
+        r[(0, 2)] - r[(2, 0)],
+        r[(1, 0)] - r[(0, 1)],
+    );
+    (0.5 * v.norm()).atan2(0.5 * (r.trace() - 1.0))
 }

@@ -4,6 +4,7 @@
 //! The file format is documented in `docs/machine-file.md`. Every file has a `type`
 //! field; unknown keys are rejected; errors name the file, line, column and field.
 
+mod reference;
 mod source;
 mod tripod_file;
 
@@ -14,7 +15,43 @@ use crate::error::{Error, Result};
 use crate::mechanism::Mechanism;
 use crate::tripod::{CentreLegTripod, TranslationalTripod};
 
+pub use reference::Reference;
 pub use source::line_col;
+
+/// What a machine-type loader returns.
+pub(crate) struct Parts {
+    model: Model,
+    name: Option<String>,
+    description: Option<String>,
+    references: Vec<Reference>,
+}
+
+/// Checks the `[[reference]]` entries' own values (tolerance, finiteness).
+pub(crate) fn check_references(src: &source::Source, refs: &[Reference]) -> Result<()> {
+    use source::Seg;
+    for (i, r) in refs.iter().enumerate() {
+        let at = |k: &str| {
+            vec![
+                Seg::Key("reference".into()),
+                Seg::Index(i),
+                Seg::Key(k.into()),
+            ]
+        };
+        if !(r.tolerance > 0.0) {
+            return Err(src.error(
+                &at("tolerance"),
+                format!("expected a tolerance > 0, found {}", r.tolerance),
+            ));
+        }
+        if r.joints.is_empty() && r.actuators.is_empty() {
+            return Err(src.error(
+                &at("source"),
+                "a reference needs expected `joints` or `actuators`",
+            ));
+        }
+    }
+    Ok(())
+}
 
 /// The machine types pkm knows, each a [`Mechanism`].
 #[derive(Debug, Clone, PartialEq)]
@@ -46,6 +83,8 @@ pub struct Machine {
     pub description: Option<String>,
     /// The mechanism.
     pub model: Model,
+    /// Reference poses with published values to reproduce.
+    pub references: Vec<Reference>,
 }
 
 /// Machine types accepted in the `type` field.
@@ -96,7 +135,7 @@ impl Machine {
             }
             Some(Some(k)) => k,
         };
-        let (model, name, description) = match kind.as_str() {
+        let parts = match kind.as_str() {
             "tripod" => tripod_file::build(&src, src.deserialize()?)?,
             other => {
                 return Err(src.error(
@@ -110,9 +149,10 @@ impl Machine {
         };
         Ok(Machine {
             source: file.into(),
-            name,
-            description,
-            model,
+            name: parts.name,
+            description: parts.description,
+            model: parts.model,
+            references: parts.references,
         })
     }
 

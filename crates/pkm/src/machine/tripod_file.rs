@@ -5,6 +5,7 @@ use std::collections::BTreeMap;
 use nalgebra::{Vector3, Vector6};
 use serde::Deserialize;
 
+use super::reference::Reference;
 use super::source::{Seg, Source};
 use super::Model;
 use crate::error::Error;
@@ -33,6 +34,8 @@ pub(super) struct TripodFile {
     home: HomeFile,
     #[serde(default)]
     centre_leg: Option<CentreLegFile>,
+    #[serde(default)]
+    reference: Vec<Reference>,
 }
 
 #[derive(Debug, Deserialize, Clone, Copy, PartialEq)]
@@ -149,10 +152,7 @@ fn check_triangle(
     Ok(())
 }
 
-pub(super) fn build(
-    src: &Source,
-    f: TripodFile,
-) -> Result<(Model, Option<String>, Option<String>), Error> {
+pub(super) fn build(src: &Source, f: TripodFile) -> Result<super::Parts, Error> {
     if f.struts.len() != 3 {
         return Err(src.error(
             &[key("struts")],
@@ -314,5 +314,11 @@ pub(super) fn build(
             Model::CentreLegTripod(t)
         }
     };
-    Ok((model, f.name, f.description))
+    super::check_references(src, &f.reference)?;
+    Ok(super::Parts {
+        model,
+        name: f.name,
+        description: f.description,
+        references: f.reference,
+    })
 }

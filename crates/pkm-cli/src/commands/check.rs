@@ -1,0 +1,160 @@
+//! `pkm check`: validate a machine file and summarise it.
+
+use anyhow::Result;
+use pkm::verify::check_references;
+use pkm::Convention;
+use serde_json::json;
+
+use super::load;
+use crate::poses::{actuators_json, coords_text, tool_json};
+use crate::CheckArgs;
+
+pub fn run(a: &CheckArgs) -> Result<u8> {
+    let machine = load(&a.machine)?;
+    let m = machine.mechanism();
+    let home = m.home();
+    let q = m.inverse(&home)?;
+    let violations = m.check_limits(&home, &q)?;
+    let tool = tool_json(m, &home, Convention::Rpy)?;
+    let jac = m.jacobian(&home)?;
+    let driven: Vec<usize> = m.driven();
+    let jd = nalgebra::DMatrix::from_fn(jac.nrows(), driven.len(), |r, c| jac[(r, driven[c])]);
+    let sv = jd.singular_values();
+    let cond = sv.max() / sv.min();
+    let references = check_references(&machine);
+    if a.json {
+        let actuators: Vec<_> = m
+            .actuators()
+            .iter()
+            .map(|x| {
+                let u = |v: f64| x.quantity.to_user(v);
+                json!({
+                    "name": x.name,
+                    "unit": x.quantity.unit(),
+                    "min": u(x.range.min),
+                    "max": u(x.range.max),
+                    "max_velocity": x.max_velocity.map(u),
+                    "max_acceleration": x.max_acceleration.map(u),
+                })
+            })
+            .collect();
+        let coords: Vec<_> = m
+            .coordinates()
+            .iter()
+            .enumerate()
+            .map(|(i, c)| {
+                json!({
+                    "name": c.name,
+                    "unit": c.quantity.unit(),
+                    "driven": driven.contains(&i),
+                })
+            })
+            .collect();
+        let v = json!({
+            "file": machine.source,
+            "name": m.name(),
+            "description": machine.description,
+            "type": m.kind(),
+            "pose_space": m.pose_space(),
+            "coordinates": coords,
+            "actuators": actuators,
+            "home": {
+                "position": tool["position"],
+                "angles": tool["angles"],
+                "actuators": actuators_json(m, &q),
+                "violations": violations,
+                "jacobian_condition": cond,
+            },
+            "references": references,
+        });
+        println!("{}", serde_json::to_string_pretty(&v)?);
+    } else {
+        println!("{}: valid {} machine", machine.source, m.kind());
+        println!("name        {}", m.name());
+        if let Some(d) = &machine.description {
+            println!("description {d}");
+        }
+        let c: Vec<String> = m
+            .coordinates()
+            .iter()
+            .enumerate()
+            .map(|(i, c)| {
+                let held = if driven.contains(&i) { "" } else { " (held)" };
+                format!("{} [{}]{held}", c.name, c.quantity.unit())
+            })
+            .collect();
+        println!("coordinates {}", c.join(", "));
+        for (x, v) in m.actuators().iter().zip(&q) {
+            let u = |v: f64| x.quantity.to_user(v);
+            let unit = x.quantity.unit();
+            let mut line = format!(
+                "actuator    {:<6} range [{:.3}, {:.3}] {unit}, at home {:.4} {unit}",
+                x.name,
+                u(x.range.min),
+                u(x.range.max),
+                u(*v)
+            );
+            if let Some(vm) = x.max_velocity {
+                line.push_str(&format!(", max velocity {:.1} {unit}/s", u(vm)));
+            }
+            if let Some(am) = x.max_acceleration {
+                line.push_str(&format!(", max acceleration {:.1} {unit}/s^2", u(am)));
+            }
+            println!("{line}");
+        }
+        println!("home        {}", coords_text(m, &home));
+        println!("jacobian    condition number {cond:.3} at home (driven columns, 2-norm)");
+        if violations.is_empty() {
+            println!("home limits all satisfied");
+        } else {
+            for v in &violations {
+                println!("home limit  VIOLATED: {v}");
+            }
+        }
+    }
+    for r in &references {
+        let status = if r.pass {
+            "reproduced"
+        } else {
+            "NOT REPRODUCED"
+        };
+        let worst = r
+            .items
+            .iter()
+            .filter_map(|i| i.deviation)
+            .fold(0.0, f64::max);
+        if !a.json {
+            println!(
+                "reference   {}: {status} (largest deviation {worst:.4}, tolerance {})",
+                r.source, r.tolerance
+            );
+        }
+    }
+    if let Some(r) = references.iter().find(|r| !r.pass) {
+        let detail = r.error.clone().unwrap_or_else(|| {
+            r.items
+                .iter()
+                .filter(|i| !i.pass)
+                .map(|i| match i.deviation {
+                    Some(d) => format!("{} {} off by {d:.4} {}", i.what, i.name, i.unit),
+                    None => format!("{} {} does not exist", i.what, i.name),
+                })
+                .collect::<Vec<_>>()
+                .join(", ")
+        });
+        eprintln!(
+            "error: {}: reference `{}` is not reproduced: {detail}",
+            machine.source, r.source
+        );
+        return Ok(1);
+    }
+    if violations.is_empty() {
+        Ok(0)
+    } else {
+        eprintln!(
+            "error: {}: the home pose violates the machine's own limits",
+            machine.source
+        );
+        Ok(crate::EXIT_UNREACHABLE)
+    }
+}

@@ -1,0 +1,167 @@
+//! `pkm fk`: forward kinematics, one actuator set or a CSV batch.
+
+use std::path::Path;
+
+use anyhow::Result;
+use pkm::pose::rotation_matrix;
+use pkm::{DynMechanism, PoseSpace};
+use serde_json::json;
+
+use super::csvio::{num, read_table};
+use super::ik::csv_text;
+use super::load;
+use crate::io::write_atomic;
+use crate::poses::{
+    actuators_from_user, actuators_json, coords_json, coords_text, parse_list, pose_from_user,
+    tool_json,
+};
+use crate::{FkArgs, EXIT_UNREACHABLE};
+
+fn start_pose(m: &dyn DynMechanism, a: &FkArgs) -> Result<Vec<f64>> {
+    match &a.from {
+        Some(s) => Ok(pose_from_user(
+            m,
+            &parse_list(s, "--from")?,
+            a.opts.rotation,
+        )?),
+        None => Ok(m.home()),
+    }
+}
+
+pub fn run(a: &FkArgs) -> Result<u8> {
+    let machine = load(&a.machine)?;
+    let m = machine.mechanism();
+    let conv = a.opts.rotation;
+    let start = start_pose(m, a)?;
+    if let (Some(input), Some(output)) = (&a.input, &a.output) {
+        return batch(m, a, start, input, output);
+    }
+    let vals = parse_list(a.actuators.as_deref().unwrap_or_default(), "--actuators")?;
+    let q = actuators_from_user(m, &vals)?;
+    let f = m.forward(&q, &start)?;
+    let violations = m.check_limits(&f.pose, &q)?;
+    if a.opts.json {
+        let mut v = tool_json(m, &f.pose, conv)?;
+        let o = v.as_object_mut().expect("object");
+        o.insert("machine".into(), json!(m.name()));
+        o.insert("type".into(), json!(m.kind()));
+        o.insert("pose".into(), coords_json(m, &f.pose));
+        o.insert("actuators".into(), actuators_json(m, &q));
+        o.insert("iterations".into(), json!(f.iterations));
+        o.insert("residual".into(), json!(f.residual));
+        o.insert("violations".into(), json!(violations));
+        o.insert("reachable".into(), json!(violations.is_empty()));
+        println!("{}", serde_json::to_string_pretty(&v)?);
+    } else {
+        let pose = m.tool_pose(&f.pose)?;
+        let r = rotation_matrix(&pose);
+        let ang = conv.from_matrix(&r).map(f64::to_degrees);
+        let names = conv.angle_names();
+        println!("{} ({})", m.name(), m.kind());
+        println!("pose       {}", coords_text(m, &f.pose));
+        let p = pose.translation.vector;
+        println!("tool       X={:.4} Y={:.4} Z={:.4} mm", p.x, p.y, p.z);
+        println!(
+            "angles     {}={:.4} {}={:.4} {}={:.4} deg ({conv})",
+            names[0], ang[0], names[1], ang[1], names[2], ang[2]
+        );
+        println!(
+            "solver     {} iterations, residual {:.3e}",
+            f.iterations, f.residual
+        );
+        if violations.is_empty() {
+            println!("limits     all satisfied");
+        }
+    }
+    if violations.is_empty() {
+        Ok(0)
+    } else {
+        eprintln!("error: {}", pkm::Error::Unreachable { violations });
+        Ok(EXIT_UNREACHABLE)
+    }
+}
+
+fn batch(
+    m: &dyn DynMechanism,
+    a: &FkArgs,
+    start: Vec<f64>,
+    input: &Path,
+    output: &Path,
+) -> Result<u8> {
+    let conv = a.opts.rotation;
+    let names: Vec<String> = m.actuators().iter().map(|a| a.name.clone()).collect();
+    let table = read_table(input, &[names])?;
+    let mut header = table.header.clone();
+    let spatial = m.pose_space() != PoseSpace::Own;
+    if spatial {
+        header.extend(["X_mm", "Y_mm", "Z_mm"].map(String::from));
+        header.extend(conv.angle_names().map(|n| format!("{n}_deg")));
+    } else {
+        header.extend(
+            m.coordinates()
+                .iter()
+                .map(|c| format!("{}_{}", c.name, c.quantity.unit())),
+        );
+    }
+    header.extend(["iterations", "residual", "reachable", "status"].map(String::from));
+    let mut out = header.join(",") + "\n";
+    let mut last = start;
+    let mut failed = 0usize;
+    for (line, vals) in &table.rows {
+        let mut cells: Vec<String> = vals.iter().map(|v| num(*v)).collect();
+        let res = actuators_from_user(m, vals).and_then(|q| {
+            let f = m.forward(&q, &last)?;
+            let v = m.check_limits(&f.pose, &q)?;
+            Ok((f, v))
+        });
+        match res {
+            Ok((f, v)) => {
+                if spatial {
+                    let pose = m.tool_pose(&f.pose)?;
+                    let p = pose.translation.vector;
+                    let ang = conv.from_matrix(&rotation_matrix(&pose));
+                    cells.extend([p.x, p.y, p.z].map(num));
+                    cells.extend(ang.map(|x| num(x.to_degrees())));
+                } else {
+                    cells.extend(
+                        m.coordinates()
+                            .iter()
+                            .zip(&f.pose)
+                            .map(|(c, x)| num(c.quantity.to_user(*x))),
+                    );
+                }
+                cells.push(f.iterations.to_string());
+                cells.push(num(f.residual));
+                cells.push(v.is_empty().to_string());
+                if !v.is_empty() {
+                    failed += 1;
+                }
+                cells.push(csv_text(
+                    &v.iter()
+                        .map(|x| x.to_string())
+                        .collect::<Vec<_>>()
+                        .join("; "),
+                ));
+                last = f.pose;
+            }
+            Err(e) => {
+                failed += 1;
+                let n = if spatial { 6 } else { m.coordinates().len() };
+                cells.extend((0..n + 2).map(|_| String::new()));
+                cells.push("false".into());
+                cells.push(csv_text(&format!("line {line}: {e}")));
+            }
+        }
+        out.push_str(&cells.join(","));
+        out.push('\n');
+    }
+    write_atomic(output, out.as_bytes(), &[input, &a.machine])?;
+    eprintln!(
+        "wrote {} rows to {}: {} solved within limits, {} not",
+        table.rows.len(),
+        output.display(),
+        table.rows.len() - failed,
+        failed
+    );
+    Ok(if failed > 0 { EXIT_UNREACHABLE } else { 0 })
+}

@@ -1,0 +1,188 @@
+//! `pkm ik`: inverse kinematics, one pose or a CSV batch.
+
+use std::collections::BTreeMap;
+
+use anyhow::Result;
+use pkm::{DynMechanism, Machine, PoseSpace, Violation};
+use serde_json::{json, Map, Value};
+
+use super::csvio::{num, read_table};
+use super::load;
+use crate::io::write_atomic;
+use crate::poses::{
+    actuators_json, coords_json, coords_text, parse_list, pose_from_user, pose_names, tool_json,
+};
+use crate::{IkArgs, EXIT_UNREACHABLE};
+
+/// The result of one inverse solution.
+pub struct IkResult {
+    /// Pose coordinates (internal units).
+    pub x: Vec<f64>,
+    /// Actuator values (internal units).
+    pub q: Vec<f64>,
+    /// Violated limits.
+    pub violations: Vec<Violation>,
+}
+
+/// Inverse kinematics with the limit check.
+pub fn solve(m: &dyn DynMechanism, x: Vec<f64>) -> Result<IkResult> {
+    let q = m.inverse(&x)?;
+    let violations = m.check_limits(&x, &q)?;
+    Ok(IkResult { x, q, violations })
+}
+
+/// JSON of a solution (the `pkm ik --json` contract).
+pub fn to_json(machine: &Machine, r: &IkResult, conv: pkm::Convention) -> Result<Value> {
+    let m = machine.mechanism();
+    let mut joints = Map::new();
+    for p in m.skeleton(&r.x)?.points {
+        joints.insert(p.name.clone(), json!(p.position));
+    }
+    Ok(json!({
+        "machine": m.name(),
+        "type": m.kind(),
+        "pose": coords_json(m, &r.x),
+        "tool": tool_json(m, &r.x, conv)?,
+        "actuators": actuators_json(m, &r.q),
+        "joints": joints,
+        "violations": r.violations,
+        "reachable": r.violations.is_empty(),
+    }))
+}
+
+pub fn run(a: &IkArgs) -> Result<u8> {
+    let machine = load(&a.machine)?;
+    let m = machine.mechanism();
+    let conv = a.opts.rotation;
+    if let (Some(input), Some(output)) = (&a.input, &a.output) {
+        return batch(&machine, a, input, output);
+    }
+    let vals = parse_list(a.pose.as_deref().unwrap_or_default(), "--pose")?;
+    let x = pose_from_user(m, &vals, conv)?;
+    let r = solve(m, x)?;
+    if a.opts.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&to_json(&machine, &r, conv)?)?
+        );
+    } else {
+        println!("{} ({})", m.name(), m.kind());
+        println!("pose       {}", coords_text(m, &r.x));
+        for (act, v) in m.actuators().iter().zip(&r.q) {
+            println!(
+                "actuator   {:<8} {:>12.4} {}   range [{:.3}, {:.3}]",
+                act.name,
+                act.quantity.to_user(*v),
+                act.quantity.unit(),
+                act.quantity.to_user(act.range.min),
+                act.quantity.to_user(act.range.max)
+            );
+        }
+        for p in m.skeleton(&r.x)?.points {
+            println!(
+                "joint      {:<8} {:>10.4} {:>10.4} {:>10.4} mm",
+                p.name, p.position[0], p.position[1], p.position[2]
+            );
+        }
+        if r.violations.is_empty() {
+            println!("limits     all satisfied");
+        }
+    }
+    if r.violations.is_empty() {
+        Ok(0)
+    } else {
+        eprintln!(
+            "error: {}",
+            pkm::Error::Unreachable {
+                violations: r.violations
+            }
+        );
+        Ok(EXIT_UNREACHABLE)
+    }
+}
+
+fn batch(
+    machine: &Machine,
+    a: &IkArgs,
+    input: &std::path::Path,
+    output: &std::path::Path,
+) -> Result<u8> {
+    let m = machine.mechanism();
+    let conv = a.opts.rotation;
+    let names = pose_names(m, conv);
+    let mut accepted = vec![names.clone()];
+    if matches!(m.pose_space(), PoseSpace::Spatial | PoseSpace::Position) {
+        accepted.push(names[..3].to_vec());
+    }
+    let table = read_table(input, &accepted)?;
+    let mut out = String::new();
+    let mut header = table.header.clone();
+    header.extend(
+        m.actuators()
+            .iter()
+            .map(|a| format!("{}_{}", a.name, a.quantity.unit())),
+    );
+    header.push("reachable".into());
+    header.push("violations".into());
+    out.push_str(&header.join(","));
+    out.push('\n');
+    let mut unreachable = 0usize;
+    let mut counts: BTreeMap<String, usize> = BTreeMap::new();
+    for (line, vals) in &table.rows {
+        let mut cells: Vec<String> = vals.iter().map(|v| num(*v)).collect();
+        let res = pose_from_user(m, vals, conv)
+            .map_err(anyhow::Error::from)
+            .and_then(|x| solve(m, x));
+        match res {
+            Ok(r) => {
+                for (act, q) in m.actuators().iter().zip(&r.q) {
+                    cells.push(num(act.quantity.to_user(*q)));
+                }
+                cells.push(r.violations.is_empty().to_string());
+                if !r.violations.is_empty() {
+                    unreachable += 1;
+                    for v in &r.violations {
+                        *counts.entry(v.limit.clone()).or_default() += 1;
+                    }
+                }
+                cells.push(csv_text(
+                    &r.violations
+                        .iter()
+                        .map(|v| v.to_string())
+                        .collect::<Vec<_>>()
+                        .join("; "),
+                ));
+            }
+            Err(e) => {
+                unreachable += 1;
+                *counts.entry("no solution".into()).or_default() += 1;
+                cells.extend(m.actuators().iter().map(|_| String::new()));
+                cells.push("false".into());
+                cells.push(csv_text(&format!("line {line}: {e}")));
+            }
+        }
+        out.push_str(&cells.join(","));
+        out.push('\n');
+    }
+    write_atomic(output, out.as_bytes(), &[input, &a.machine])?;
+    eprintln!(
+        "wrote {} rows to {}: {} reachable, {} not",
+        table.rows.len(),
+        output.display(),
+        table.rows.len() - unreachable,
+        unreachable
+    );
+    for (k, n) in &counts {
+        eprintln!("  {n} x {k}");
+    }
+    Ok(if unreachable > 0 { EXIT_UNREACHABLE } else { 0 })
+}
+
+/// Quotes a text cell for CSV.
+pub fn csv_text(s: &str) -> String {
+    if s.contains([',', '"', '\n']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}

@@ -1,0 +1,16 @@
+//! The subcommands.
+
+pub mod check;
+pub mod csvio;
+pub mod fk;
+pub mod ik;
+
+use std::path::Path;
+
+use anyhow::Result;
+use pkm::Machine;
+
+/// Loads a machine file; the error already names file, line and field.
+pub fn load(path: &Path) -> Result<Machine> {
+    Ok(Machine::from_path(path)?)
+}

@@ -1,0 +1,143 @@
+//! Rotation conventions: round trips, the Krylov matrix of seed 001, gimbal locks.
+
+use nalgebra::{Matrix3, Rotation3, Vector3};
+use pkm::rotation::{
+    axis_angle, from_axis_angle, from_quaternion_wxyz, krylov_matrix, quaternion_wxyz, rx, ry, rz,
+    Convention,
+};
+use proptest::prelude::*;
+
+fn is_rotation(m: &Matrix3<f64>) -> bool {
+    (m.transpose() * m - Matrix3::identity()).amax() < 1e-12
+        && (m.determinant() - 1.0).abs() < 1e-12
+}
+
+#[test]
+fn krylov_equals_composed_rotations() {
+    // Seed 001 eq. 2, as printed, equals Rz(-psi) Rx(-theta) Ry(-gamma) (spec 02).
+    for &(psi, theta, gamma) in &[
+        (0.3, -0.2, 0.7),
+        (-1.2, 0.9, 2.5),
+        (3.0, 1.4, -0.1),
+        (0.0, 0.0, 0.0),
+    ] {
+        let paper = krylov_matrix(psi, theta, gamma);
+        let composed = rz(-psi) * rx(-theta) * ry(-gamma);
+        assert!((paper - composed).amax() < 1e-15, "{paper} vs {composed}");
+        assert!(is_rotation(&paper));
+        // ... and is the transpose of Ry(gamma) Rx(theta) Rz(psi).
+        let t = (ry(gamma) * rx(theta) * rz(psi)).transpose();
+        assert!((paper - t).amax() < 1e-15);
+    }
+}
+
+#[test]
+fn rpy_matches_nalgebra_euler_angles() {
+    // Independent implementation: nalgebra's from_euler_angles(roll, pitch, yaw) is
+    // Rz(yaw) Ry(pitch) Rx(roll).
+    let (a, b, c) = (0.4, -0.3, 1.1);
+    let ours = Convention::Rpy.to_matrix([a, b, c]);
+    let theirs = *Rotation3::from_euler_angles(a, b, c).matrix();
+    assert!((ours - theirs).amax() < 1e-15);
+    let back = Convention::Rpy.from_matrix(&theirs);
+    assert!(
+        (back[0] - a).abs() < 1e-14 && (back[1] - b).abs() < 1e-14 && (back[2] - c).abs() < 1e-14
+    );
+}
+
+#[test]
+fn elementary_rotations_are_right_handed() {
+    let v = rz(std::f64::consts::FRAC_PI_2) * Vector3::x();
+    assert!((v - Vector3::y()).amax() < 1e-15);
+    let v = rx(std::f64::consts::FRAC_PI_2) * Vector3::y();
+    assert!((v - Vector3::z()).amax() < 1e-15);
+    let v = ry(std::f64::consts::FRAC_PI_2) * Vector3::z();
+    assert!((v - Vector3::x()).amax() < 1e-15);
+}
+
+#[test]
+fn zyx_is_rpy_typed_in_reverse() {
+    let m1 = Convention::Zyx.to_matrix([0.1, 0.2, 0.3]);
+    let m2 = Convention::Rpy.to_matrix([0.3, 0.2, 0.1]);
+    assert!((m1 - m2).amax() < 1e-15);
+}
+
+#[test]
+fn gimbal_locks_reproduce_the_matrix() {
+    let h = std::f64::consts::FRAC_PI_2;
+    let cases = [
+        (Convention::Rpy, [0.3, h, 0.5]),
+        (Convention::Rpy, [0.3, -h, 0.5]),
+        (Convention::Zyx, [0.3, h, -0.5]),
+        (Convention::Zyz, [0.3, 0.0, 0.5]),
+        (Convention::Zyz, [0.3, std::f64::consts::PI, 0.5]),
+        (Convention::Krylov, [0.3, h, 0.5]),
+        (Convention::Krylov, [0.3, -h, 0.5]),
+    ];
+    for (c, a) in cases {
+        let m = c.to_matrix(a);
+        let back = c.from_matrix(&m);
+        let m2 = c.to_matrix(back);
+        assert!((m - m2).amax() < 1e-12, "{c}: {a:?} -> {back:?}");
+    }
+}
+
+#[test]
+fn conventions_parse_by_name() {
+    for c in Convention::ALL {
+        assert_eq!(c.name().parse::<Convention>().unwrap(), c);
+    }
+    assert!("euler".parse::<Convention>().is_err());
+}
+
+fn angles() -> impl Strategy<Value = [f64; 3]> {
+    [-3.1f64..3.1, -3.1f64..3.1, -3.1f64..3.1]
+}
+
+proptest! {
+    #[test]
+    fn every_convention_round_trips(a in angles()) {
+        // Any matrix -> angles -> matrix, in every convention, and conversions between
+        // every pair of conventions through the matrix.
+        let m = Convention::Rpy.to_matrix(a);
+        prop_assert!(is_rotation(&m));
+        for c in Convention::ALL {
+            let ang = c.from_matrix(&m);
+            let m2 = c.to_matrix(ang);
+            prop_assert!((m - m2).amax() < 1e-12, "{} {:?}", c, a);
+            for d in Convention::ALL {
+                let other = d.from_matrix(&c.to_matrix(ang));
+                prop_assert!((d.to_matrix(other) - m).amax() < 1e-12);
+            }
+        }
+    }
+
+    #[test]
+    fn angles_inside_principal_ranges_come_back_unchanged(
+        a in -3.0f64..3.0, b in -1.5f64..1.5, c in -3.0f64..3.0
+    ) {
+        for conv in [Convention::Rpy, Convention::Zyx, Convention::Krylov] {
+            let back = conv.from_matrix(&conv.to_matrix([a, b, c]));
+            prop_assert!((back[0] - a).abs() < 1e-9 && (back[1] - b).abs() < 1e-9 && (back[2] - c).abs() < 1e-9);
+        }
+        let bz = b.abs() + 0.05; // ZYZ middle angle in (0, pi)
+        let back = Convention::Zyz.from_matrix(&Convention::Zyz.to_matrix([a, bz, c]));
+        prop_assert!((back[0] - a).abs() < 1e-9 && (back[1] - bz).abs() < 1e-9 && (back[2] - c).abs() < 1e-9);
+    }
+
+    #[test]
+    fn quaternion_and_axis_angle_round_trip(a in angles()) {
+        let m = Convention::Rpy.to_matrix(a);
+        let q = quaternion_wxyz(&m);
+        prop_assert!((from_quaternion_wxyz(q).unwrap() - m).amax() < 1e-12);
+        let (axis, angle) = axis_angle(&m);
+        prop_assert!((from_axis_angle(&axis, angle).unwrap() - m).amax() < 1e-12);
+    }
+}
+
+#[test]
+fn bad_quaternion_and_axis_are_errors() {
+    assert!(from_quaternion_wxyz([0.0; 4]).is_err());
+    assert!(from_quaternion_wxyz([f64::NAN, 0.0, 0.0, 1.0]).is_err());
+    assert!(from_axis_angle(&Vector3::zeros(), 1.0).is_err());
+}
