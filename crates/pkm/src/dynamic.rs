@@ -72,7 +72,7 @@ pub fn fixed<const N: usize>(what: &str, v: &[f64]) -> Result<SVector<f64, N>> {
     Ok(SVector::<f64, N>::from_column_slice(v))
 }
 
-/// Implements [`DynMechanism`] for a type implementing [`Mechanism<P, A>`].
+/// Implements [`DynMechanism`] for a type implementing [`crate::Mechanism`]`<P, A>`.
 #[macro_export]
 macro_rules! impl_dyn_mechanism {
     ($t:ty, $p:literal, $a:literal) => {

@@ -21,6 +21,8 @@
 //! ```
 
 #![warn(missing_docs)]
+// `!(x > 0.0)` is used on purpose: it is also true for NaN, which must fail validation.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod dynamic;
 pub mod error;

@@ -12,8 +12,8 @@ use super::ik::csv_text;
 use super::load;
 use crate::io::write_atomic;
 use crate::poses::{
-    actuators_from_user, actuators_json, coords_json, coords_text, parse_list, pose_from_user,
-    tool_json,
+    actuators_from_user, actuators_json, clean, coords_json, coords_text, parse_list,
+    pose_from_user, tool_json,
 };
 use crate::{FkArgs, EXIT_UNREACHABLE};
 
@@ -55,12 +55,17 @@ pub fn run(a: &FkArgs) -> Result<u8> {
     } else {
         let pose = m.tool_pose(&f.pose)?;
         let r = rotation_matrix(&pose);
-        let ang = conv.from_matrix(&r).map(f64::to_degrees);
+        let ang = conv.from_matrix(&r).map(|v| clean(v.to_degrees()));
         let names = conv.angle_names();
         println!("{} ({})", m.name(), m.kind());
         println!("pose       {}", coords_text(m, &f.pose));
         let p = pose.translation.vector;
-        println!("tool       X={:.4} Y={:.4} Z={:.4} mm", p.x, p.y, p.z);
+        println!(
+            "tool       X={:.4} Y={:.4} Z={:.4} mm",
+            clean(p.x),
+            clean(p.y),
+            clean(p.z)
+        );
         println!(
             "angles     {}={:.4} {}={:.4} {}={:.4} deg ({conv})",
             names[0], ang[0], names[1], ang[1], names[2], ang[2]
@@ -71,6 +76,9 @@ pub fn run(a: &FkArgs) -> Result<u8> {
         );
         if violations.is_empty() {
             println!("limits     all satisfied");
+        }
+        for v in &violations {
+            println!("limit      VIOLATED: {v}");
         }
     }
     if violations.is_empty() {

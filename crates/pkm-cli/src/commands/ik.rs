@@ -87,6 +87,9 @@ pub fn run(a: &IkArgs) -> Result<u8> {
         if r.violations.is_empty() {
             println!("limits     all satisfied");
         }
+        for v in &r.violations {
+            println!("limit      VIOLATED: {v}");
+        }
     }
     if r.violations.is_empty() {
         Ok(0)

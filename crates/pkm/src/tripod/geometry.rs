@@ -178,8 +178,8 @@ impl TripodGeometry {
         }
         if let Some(min) = self.min_strut_spindle_angle {
             let ang = self.strut_spindle_angles(p, r);
-            for i in 0..3 {
-                if ang[i] < min {
+            for (i, &a) in ang.iter().enumerate() {
+                if a < min {
                     out.push(Violation::new(
                         format!(
                             "strut {}/spindle collision (inclination relative to spindle, phi <= lambda)",
@@ -188,7 +188,7 @@ impl TripodGeometry {
                         LimitKind::StrutSpindleCollision,
                         Side::Min,
                         Quantity::Angle,
-                        ang[i],
+                        a,
                         min,
                     ));
                 }

@@ -1,0 +1,388 @@
+//! The `pkm` command end to end: JSON contracts, batches, errors and the report.
+
+use std::path::PathBuf;
+
+use assert_cmd::Command;
+use serde_json::Value;
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn seed000() -> String {
+    root()
+        .join("examples/machines/tripod-seed000.toml")
+        .display()
+        .to_string()
+}
+
+fn centre_leg() -> String {
+    root()
+        .join("examples/machines/tripod-centre-leg.toml")
+        .display()
+        .to_string()
+}
+
+fn pkm() -> Command {
+    Command::cargo_bin("pkm").unwrap()
+}
+
+fn json(args: &[&str]) -> (Value, i32) {
+    let out = pkm().args(args).output().unwrap();
+    let v: Value = serde_json::from_slice(&out.stdout)
+        .unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&out.stdout)));
+    (v, out.status.code().unwrap())
+}
+
+fn stderr_of(args: &[&str]) -> (String, i32) {
+    let out = pkm().args(args).output().unwrap();
+    (
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+        out.status.code().unwrap(),
+    )
+}
+
+#[test]
+fn table1_through_the_cli() {
+    let m = seed000();
+    let (v, code) = json(&["ik", &m, "--pose=-20,45.54,-286.25,15,0,0", "--json"]);
+    assert_eq!(code, 0);
+    let expect = [
+        ("C", [-70.00, -5.64, -206.79]),
+        ("E", [-20.00, 78.02, -184.38]),
+        ("D", [30.00, -5.64, -206.79]),
+    ];
+    for (n, e) in expect {
+        let j = &v["joints"][n];
+        for k in 0..3 {
+            let d = (j[k].as_f64().unwrap() - e[k]).abs();
+            assert!(d <= 0.02, "{n}[{k}]: {} vs {}", j[k], e[k]);
+        }
+    }
+    for n in ["F", "H", "G"] {
+        assert!(v["joints"][n].is_array());
+    }
+    assert_eq!(v["reachable"], true);
+    assert_eq!(v["violations"].as_array().unwrap().len(), 0);
+    for a in ["e", "f", "g"] {
+        assert!(v["actuators"][a].as_f64().unwrap() > 150.0);
+    }
+}
+
+#[test]
+fn fk_json_contract_and_round_trip() {
+    let m = seed000();
+    let (ik, _) = json(&["ik", &m, "--pose=10,-5,-300,4,-3,20", "--json"]);
+    let q: Vec<String> = ["e", "f", "g"]
+        .iter()
+        .map(|a| format!("{}", ik["actuators"][a].as_f64().unwrap()))
+        .collect();
+    let (fk, code) = json(&[
+        "fk",
+        &m,
+        "--actuators",
+        &q.join(","),
+        "--from=0,0,-290,4,-3,20",
+        "--json",
+    ]);
+    assert_eq!(code, 0);
+    let p = fk["position"].as_array().unwrap();
+    for (k, e) in [10.0, -5.0, -300.0].iter().enumerate() {
+        assert!((p[k].as_f64().unwrap() - e).abs() < 1e-9);
+    }
+    let a = fk["angles"].as_array().unwrap();
+    for (k, e) in [4.0, -3.0, 20.0].iter().enumerate() {
+        assert!((a[k].as_f64().unwrap() - e).abs() < 1e-9);
+    }
+    let r = fk["rotation"].as_array().unwrap();
+    assert_eq!(r.len(), 3);
+    assert_eq!(r[0].as_array().unwrap().len(), 3);
+    // Angles in another convention describe the same rotation.
+    let (z, _) = json(&[
+        "fk",
+        &m,
+        "--actuators",
+        &q.join(","),
+        "--from=0,0,-290,20,-3,4",
+        "--rotation",
+        "zyx",
+        "--json",
+    ]);
+    assert_eq!(z["rotation"], fk["rotation"]);
+}
+
+#[test]
+fn check_json_contract() {
+    let (v, code) = json(&["check", &seed000(), "--json"]);
+    assert_eq!(code, 0);
+    assert_eq!(v["type"], "tripod/translational");
+    let acts = v["actuators"].as_array().unwrap();
+    assert_eq!(acts.len(), 3);
+    assert_eq!(acts[0]["name"], "e");
+    assert_eq!(acts[0]["min"], 150.0);
+    assert_eq!(acts[0]["max"], 300.0);
+    assert_eq!(v["home"]["position"][2], -290.0);
+    assert_eq!(v["home"]["angles"].as_array().unwrap().len(), 3);
+    assert_eq!(v["references"][0]["pass"], true);
+    let (v, code) = json(&["check", &centre_leg(), "--json"]);
+    assert_eq!(code, 0);
+    assert_eq!(v["type"], "tripod/centre-leg");
+}
+
+#[test]
+fn unreachable_poses_name_the_limit() {
+    let m = seed000();
+    let cases = [
+        (
+            "--pose=0,0,-420",
+            "strut e length",
+            "above its maximum 300.000 mm",
+        ),
+        (
+            "--pose=0,0,-200",
+            "strut e length",
+            "below its minimum 150.000 mm",
+        ),
+        (
+            "--pose=0,0,-290,35,0,0",
+            "spindle tilt 35.000 deg",
+            "by 5.000 deg",
+        ),
+        (
+            "--pose=0,0,-290,25,0,0",
+            "strut e/spindle collision",
+            "below its minimum 0.000 deg",
+        ),
+    ];
+    for (pose, limit, detail) in cases {
+        let (err, code) = stderr_of(&["ik", &m, pose]);
+        assert_eq!(code, 3, "{pose}: {err}");
+        assert!(err.contains(limit) && err.contains(detail), "{pose}: {err}");
+        assert_eq!(err.lines().count(), 1, "one line: {err}");
+        // The JSON output says the same.
+        let (v, code) = json(&["ik", &m, pose, "--json"]);
+        assert_eq!(code, 3);
+        assert_eq!(v["reachable"], false);
+        assert!(!v["violations"].as_array().unwrap().is_empty());
+    }
+    // Centre-leg: an orientation the leg cannot give.
+    let (err, code) = stderr_of(&["ik", &centre_leg(), "--pose=30,0,-300,0,0,0"]);
+    assert_eq!(code, 3);
+    assert!(err.contains("centre leg sets the orientation"), "{err}");
+}
+
+#[test]
+fn bad_files_give_located_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = std::fs::read_to_string(seed000()).unwrap();
+    let cases = [
+        (
+            "malformed",
+            good.replace("max_tilt = 30.0", "max_tilt = = 30"),
+            ":60:",
+        ),
+        (
+            "missing",
+            good.replace("tip = [0.0, 0.0, -90.0]", ""),
+            "field `tool`: missing field `tip`",
+        ),
+        (
+            "type",
+            good.replacen("length = [150.0, 300.0]", "length = 3", 1),
+            "field `struts[0].length`",
+        ),
+        (
+            "unknown",
+            good.replace("max_tilt = 30.0", "max_tilt = 30.0\nspeed = 1"),
+            "unknown field `speed`",
+        ),
+        (
+            "nan",
+            good.replace("max_tilt = 30.0", "max_tilt = nan"),
+            "expected a finite number",
+        ),
+        (
+            "negative",
+            good.replacen("length = [150.0, 300.0]", "length = [-1.0, 300.0]", 1),
+            "expected lengths >= 0",
+        ),
+    ];
+    for (name, text, want) in cases {
+        let p = dir.path().join(format!("{name}.toml"));
+        std::fs::write(&p, text).unwrap();
+        let ps = p.display().to_string();
+        for args in [
+            vec!["check", ps.as_str()],
+            vec!["ik", ps.as_str(), "--pose", "0,0,-290"],
+        ] {
+            let (err, code) = stderr_of(&args);
+            assert_eq!(code, 1, "{name}: {err}");
+            assert!(err.starts_with(&format!("error: {ps}:")), "{name}: {err}");
+            assert!(err.contains(want), "{name}: {err}");
+            assert_eq!(err.lines().count(), 1, "{name}: {err}");
+            assert!(!err.contains("panicked"));
+        }
+    }
+}
+
+#[test]
+fn bad_command_line_values() {
+    let m = seed000();
+    let (err, code) = stderr_of(&["ik", &m, "--pose", "1,2"]);
+    assert_eq!(code, 1);
+    assert!(err.contains("expected 3 or 6 values"), "{err}");
+    let (err, code) = stderr_of(&["ik", &m, "--pose", "1,2,nan"]);
+    assert_eq!(code, 1);
+    assert!(err.contains("finite"), "{err}");
+    let (err, code) = stderr_of(&["fk", &m, "--actuators", "200,200"]);
+    assert_eq!(code, 1);
+    assert!(err.contains("expected 3 values (e,f,g)"), "{err}");
+    let (err, code) = stderr_of(&["fk", &m, "--actuators", "10,10,400"]);
+    assert_eq!(code, 3);
+    assert!(err.contains("no platform position"), "{err}");
+}
+
+#[test]
+fn csv_batches() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = seed000();
+    let input = dir.path().join("poses.csv");
+    std::fs::write(
+        &input,
+        "X,Y,Z,A,B,C\n0,0,-290,0,0,0\n10,5,-300,2,0,0\n0,0,-420,0,0,0\n",
+    )
+    .unwrap();
+    let output = dir.path().join("out.csv");
+    let out = pkm()
+        .args(["ik", &m, "--input"])
+        .arg(&input)
+        .arg("--output")
+        .arg(&output)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(3), "one unreachable row");
+    let text = std::fs::read_to_string(&output).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines[0], "X,Y,Z,A,B,C,e_mm,f_mm,g_mm,reachable,violations");
+    assert_eq!(lines.len(), 4);
+    assert!(lines[1].contains(",true,"));
+    assert!(lines[3].contains(",false,") && lines[3].contains("strut e length"));
+
+    // FK batch of the lengths just computed, each row from the previous solution.
+    let lengths = dir.path().join("lengths.csv");
+    let mut l = String::from("e,f,g\n");
+    for line in &lines[1..3] {
+        let c: Vec<&str> = line.split(',').collect();
+        l.push_str(&format!("{},{},{}\n", c[6], c[7], c[8]));
+    }
+    std::fs::write(&lengths, l).unwrap();
+    let poses = dir.path().join("fk.csv");
+    pkm()
+        .args(["fk", &m, "--input"])
+        .arg(&lengths)
+        .arg("--output")
+        .arg(&poses)
+        .assert()
+        .success();
+    let text = std::fs::read_to_string(&poses).unwrap();
+    let row: Vec<f64> = text
+        .lines()
+        .nth(1)
+        .unwrap()
+        .split(',')
+        .take(6)
+        .map(|c| c.parse().unwrap())
+        .collect();
+    assert!(
+        (row[3]).abs() < 1e-9 && (row[4]).abs() < 1e-9 && (row[5] + 290.0).abs() < 1e-9,
+        "{text}"
+    );
+
+    // A malformed row is an error with its line number, and nothing is written.
+    let bad = dir.path().join("bad.csv");
+    std::fs::write(&bad, "X,Y,Z\n0,0,-290\n0,abc,-290\n").unwrap();
+    let fresh = dir.path().join("fresh.csv");
+    let out = pkm()
+        .args(["ik", &m, "--input"])
+        .arg(&bad)
+        .arg("--output")
+        .arg(&fresh)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(err.contains("bad.csv:3: column `Y`"), "{err}");
+    assert!(!fresh.exists());
+
+    // Never over an input.
+    let out = pkm()
+        .args(["ik", &m, "--input"])
+        .arg(&input)
+        .arg("--output")
+        .arg(&input)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("refusing to write"));
+    assert!(std::fs::read_to_string(&input)
+        .unwrap()
+        .starts_with("X,Y,Z,A,B,C\n0,0,-290"));
+}
+
+#[test]
+fn report_writes_a_self_contained_page() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("rep");
+    // No machine argument: the bundled seed-000 tripod, from any working directory.
+    pkm()
+        .current_dir(dir.path())
+        .args(["report", "--out"])
+        .arg(&out)
+        .assert()
+        .success();
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    assert!(html.starts_with("<!DOCTYPE html>"));
+    assert!(html.contains("Seed 000 tripod"));
+    assert_eq!(
+        html.matches("<svg").count(),
+        6,
+        "three views at home, three at Table 1"
+    );
+    assert!(html.contains("Kinematic checks"));
+    assert!(html.contains("Top view") && html.contains("Front view") && html.contains("Side view"));
+    assert!(
+        !html.contains("http://") || !html.contains("<script src"),
+        "no network resources"
+    );
+    assert!(
+        !html.contains("class=\"bad\""),
+        "every check passes on the default machine"
+    );
+    // The default output directory is pkm-report/.
+    pkm()
+        .current_dir(dir.path())
+        .arg("report")
+        .assert()
+        .success();
+    assert!(dir.path().join("pkm-report/index.html").exists());
+    // Any machine.
+    pkm()
+        .args(["report", &centre_leg(), "--out"])
+        .arg(dir.path().join("cl"))
+        .assert()
+        .success();
+    let html = std::fs::read_to_string(dir.path().join("cl/index.html")).unwrap();
+    assert!(html.contains("centre leg"));
+}
+
+#[test]
+fn help_has_examples() {
+    for cmd in ["ik", "fk", "check", "report"] {
+        let out = pkm().args([cmd, "--help"]).output().unwrap();
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            text.contains("Examples") || text.contains("Example:"),
+            "{cmd}: {text}"
+        );
+    }
+}

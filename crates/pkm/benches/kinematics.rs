@@ -1,0 +1,55 @@
+//! Kinematics speed (criterion, single thread). Targets (issue 2): tripod IK per pose
+//! from a rotation matrix <= 15 ns.
+
+use std::hint::black_box;
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use nalgebra::{Matrix3, Vector3, Vector6};
+use pkm::machine::Model;
+use pkm::rotation::Convention;
+use pkm::{Machine, Mechanism};
+
+fn machine(name: &str) -> Machine {
+    Machine::from_path(format!(
+        "{}/../../examples/machines/{name}",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap()
+}
+
+fn tripod(c: &mut Criterion) {
+    let Model::TranslationalTripod(t) = machine("tripod-seed000.toml").model else {
+        panic!()
+    };
+    let p = Vector3::new(-20.0, 45.54, -286.25);
+    let r: Matrix3<f64> = Convention::Rpy.to_matrix([15f64.to_radians(), 0.0, 0.0]);
+    c.bench_function("tripod IK from rotation matrix", |b| {
+        b.iter(|| t.geometry.strut_lengths(black_box(&p), black_box(&r)))
+    });
+    let x = Vector6::new(-20.0, 45.54, -286.25, 15f64.to_radians(), 0.0, 0.0);
+    c.bench_function("tripod IK from X,Y,Z,A,B,C", |b| {
+        b.iter(|| Mechanism::<6, 3>::inverse(&t, black_box(&x)).unwrap())
+    });
+    c.bench_function("tripod jacobian", |b| {
+        b.iter(|| Mechanism::<6, 3>::jacobian(&t, black_box(&x)).unwrap())
+    });
+    let q = Mechanism::<6, 3>::inverse(&t, &x).unwrap();
+    c.bench_function("tripod FK closed form", |b| {
+        b.iter(|| Mechanism::<6, 3>::forward(&t, black_box(&q), black_box(&x)).unwrap())
+    });
+    let Model::CentreLegTripod(cl) = machine("tripod-centre-leg.toml").model else {
+        panic!()
+    };
+    let xc = Vector3::new(30.0, -20.0, -300.0);
+    let qc = Mechanism::<3, 3>::inverse(&cl, &xc).unwrap();
+    c.bench_function("centre-leg tripod IK", |b| {
+        b.iter(|| Mechanism::<3, 3>::inverse(&cl, black_box(&xc)).unwrap())
+    });
+    let home = cl.home;
+    c.bench_function("centre-leg tripod FK (Newton from home)", |b| {
+        b.iter(|| Mechanism::<3, 3>::forward(&cl, black_box(&qc), black_box(&home)).unwrap())
+    });
+}
+
+criterion_group!(benches, tripod);
+criterion_main!(benches);
