@@ -4,6 +4,9 @@ use std::path::Path;
 
 use anyhow::{bail, Context, Result};
 
+use crate::io::write_atomic;
+use crate::EXIT_UNREACHABLE;
+
 /// A numeric CSV table: header names and rows with their 1-based line numbers.
 pub struct Table {
     /// Header as written.
@@ -88,4 +91,23 @@ pub fn read_table(path: &Path, accepted: &[Vec<String>]) -> Result<Table> {
 /// Formats a float for CSV output (full precision, shortest round-trip form).
 pub fn num(v: f64) -> String {
     format!("{v}")
+}
+
+/// Writes a batch result whole, says on stderr how many rows were `ok_word` and how
+/// many not, and returns the exit code (unreachable when any row failed).
+pub fn finish_batch(
+    output: &Path,
+    text: &str,
+    inputs: &[&Path],
+    rows: usize,
+    failed: usize,
+    ok_word: &str,
+) -> Result<u8> {
+    write_atomic(output, text.as_bytes(), inputs)?;
+    eprintln!(
+        "wrote {rows} rows to {}: {} {ok_word}, {failed} not",
+        output.display(),
+        rows - failed
+    );
+    Ok(if failed > 0 { EXIT_UNREACHABLE } else { 0 })
 }

@@ -7,10 +7,9 @@ use pkm::pose::rotation_matrix;
 use pkm::{DynMechanism, PoseSpace};
 use serde_json::json;
 
-use super::csvio::{num, read_table};
+use super::csvio::{finish_batch, num, read_table};
 use super::ik::csv_text;
 use super::load;
-use crate::io::write_atomic;
 use crate::poses::{
     actuators_from_user, actuators_json, clean, coords_json, coords_text, parse_list,
     pose_from_user, tool_json,
@@ -163,13 +162,12 @@ fn batch(
         out.push_str(&cells.join(","));
         out.push('\n');
     }
-    write_atomic(output, out.as_bytes(), &[input, &a.machine])?;
-    eprintln!(
-        "wrote {} rows to {}: {} solved within limits, {} not",
+    finish_batch(
+        output,
+        &out,
+        &[input, &a.machine],
         table.rows.len(),
-        output.display(),
-        table.rows.len() - failed,
-        failed
-    );
-    Ok(if failed > 0 { EXIT_UNREACHABLE } else { 0 })
+        failed,
+        "solved within limits",
+    )
 }

@@ -6,9 +6,8 @@ use anyhow::Result;
 use pkm::{DynMechanism, Machine, PoseSpace, Violation};
 use serde_json::{json, Map, Value};
 
-use super::csvio::{num, read_table};
+use super::csvio::{finish_batch, num, read_table};
 use super::load;
-use crate::io::write_atomic;
 use crate::poses::{
     actuators_json, coords_json, coords_text, parse_list, pose_from_user, pose_names, tool_json,
 };
@@ -167,18 +166,18 @@ fn batch(
         out.push_str(&cells.join(","));
         out.push('\n');
     }
-    write_atomic(output, out.as_bytes(), &[input, &a.machine])?;
-    eprintln!(
-        "wrote {} rows to {}: {} reachable, {} not",
+    let code = finish_batch(
+        output,
+        &out,
+        &[input, &a.machine],
         table.rows.len(),
-        output.display(),
-        table.rows.len() - unreachable,
-        unreachable
-    );
+        unreachable,
+        "reachable",
+    )?;
     for (k, n) in &counts {
         eprintln!("  {n} x {k}");
     }
-    Ok(if unreachable > 0 { EXIT_UNREACHABLE } else { 0 })
+    Ok(code)
 }
 
 /// Quotes a text cell for CSV.

@@ -133,15 +133,20 @@ impl<'a> Source<'a> {
         span
     }
 
-    /// An error about the field at `path` with its line and column.
-    pub fn error(&self, path: &[Seg], message: impl Into<String>) -> Error {
-        let (line, column) = match self.span_of(path) {
+    /// Line and column of the start of a span, when there is one.
+    fn locate(&self, span: Option<Range<usize>>) -> (Option<usize>, Option<usize>) {
+        match span {
             Some(s) => {
                 let (l, c) = line_col(self.text, s.start);
                 (Some(l), Some(c))
             }
             None => (None, None),
-        };
+        }
+    }
+
+    /// An error about the field at `path` with its line and column.
+    pub fn error(&self, path: &[Seg], message: impl Into<String>) -> Error {
+        let (line, column) = self.locate(self.span_of(path));
         Error::MachineFile {
             file: self.file.into(),
             line,
@@ -206,13 +211,7 @@ impl<'a> Source<'a> {
     fn toml_error(&self, e: &toml::de::Error, path: &str) -> Error {
         let segs = parse_path(path);
         let span = e.span().or_else(|| self.span_of(&segs));
-        let (line, column) = match span {
-            Some(s) => {
-                let (l, c) = line_col(self.text, s.start);
-                (Some(l), Some(c))
-            }
-            None => (None, None),
-        };
+        let (line, column) = self.locate(span);
         Error::MachineFile {
             file: self.file.into(),
             line,
