@@ -30,6 +30,7 @@ pub mod limits;
 pub mod linalg;
 pub mod machine;
 pub mod mechanism;
+pub mod motion;
 pub mod pose;
 pub mod rotation;
 pub mod tripod;
@@ -41,8 +42,8 @@ pub use error::{Error, Result};
 pub use limits::{LimitKind, Range, Side, Violation};
 pub use machine::{Machine, Visitor};
 pub use mechanism::{
-    inverse_checked, newton_forward, Actuator, Coordinate, Forward, Mechanism, NewtonOptions,
-    PoseSpace, Skeleton,
+    inverse_checked, newton_forward, Actuator, ActuatorMotion, Coordinate, Forward, Mechanism,
+    NewtonOptions, PoseSpace, Skeleton,
 };
 pub use pose::{Pose, SmallDisplacement};
 pub use rotation::Convention;

@@ -245,6 +245,28 @@ pub trait Mechanism<const P: usize, const A: usize>: Send + Sync {
 
     /// Points and links of the mechanism at `x`, for drawings and joint reports.
     fn skeleton(&self, x: &SVector<f64, P>) -> Result<Skeleton>;
+
+    /// Exact actuator position, velocity and acceleration for a pose moving with
+    /// coordinate rates `xd` and accelerations `xdd`: `q = IK(x)`, `q' = J x'`,
+    /// `q'' = J x'' + J' x'`, computed from the mechanism's analytic derivatives (no
+    /// finite differences).
+    fn actuator_motion(
+        &self,
+        x: &SVector<f64, P>,
+        xd: &SVector<f64, P>,
+        xdd: &SVector<f64, P>,
+    ) -> Result<ActuatorMotion<A>>;
+}
+
+/// Actuator position, velocity and acceleration at one instant (mm or rad, per s, per s^2).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ActuatorMotion<const A: usize> {
+    /// Positions.
+    pub q: SVector<f64, A>,
+    /// Velocities.
+    pub qd: SVector<f64, A>,
+    /// Accelerations.
+    pub qdd: SVector<f64, A>,
 }
 
 /// Settings of [`newton_forward`].

@@ -5,7 +5,9 @@ use nalgebra::{Matrix3, SMatrix, Vector3};
 use super::geometry::TripodGeometry;
 use crate::error::{Error, Result};
 use crate::limits::{LimitKind, Range, Violation};
-use crate::mechanism::{Actuator, Coordinate, LinkKind, Mechanism, PointRole, PoseSpace, Skeleton};
+use crate::mechanism::{
+    Actuator, ActuatorMotion, Coordinate, LinkKind, Mechanism, PointRole, PoseSpace, Skeleton,
+};
 use crate::pose::{pose_from_parts, rotation_matrix, Pose};
 use crate::rotation::{angle_between, rx, ry, Convention};
 use crate::units::Quantity;
@@ -121,6 +123,38 @@ impl CentreLegTripod {
     }
 }
 
+impl CentreLegTripod {
+    /// Platform angular velocity and acceleration for a tool tip moving with velocity
+    /// `v` and acceleration `a`, from the leg's tangent map: with
+    /// `u = (alpha', beta', s')`, `p' = M u` and `w = W u`, so `u = M^-1 p'`,
+    /// `u' = M^-1 (p'' - M' u)` and `al = W u' + W' u`.
+    pub fn angular_motion(
+        &self,
+        p: &Vector3<f64>,
+        v: &Vector3<f64>,
+        a: &Vector3<f64>,
+    ) -> Result<(LegState, Vector3<f64>, Vector3<f64>)> {
+        let st = self.leg_state(p)?;
+        let d = p - self.leg.base;
+        let ex = Vector3::x();
+        let wb = rx(st.alpha) * Vector3::y();
+        let ez_r = st.rotation.column(2).into_owned();
+        let m = Matrix3::from_columns(&[ex.cross(&d), wb.cross(&d), -ez_r]);
+        let minv = m.try_inverse().ok_or_else(|| Error::Singular {
+            what: "centre-leg universal joint".into(),
+            rcond: 0.0,
+        })?;
+        let u = minv * v;
+        let w = ex * u[0] + wb * u[1];
+        let wb_dot = ex.cross(&wb) * u[0];
+        let m_dot =
+            Matrix3::from_columns(&[ex.cross(v), wb_dot.cross(&d) + wb.cross(v), -w.cross(&ez_r)]);
+        let ud = minv * (a - m_dot * u);
+        let al = ex * ud[0] + wb * ud[1] + wb_dot * u[1];
+        Ok((st, w, al))
+    }
+}
+
 impl Mechanism<3, 3> for CentreLegTripod {
     fn name(&self) -> &str {
         &self.geometry.name
@@ -225,6 +259,18 @@ impl Mechanism<3, 3> for CentreLegTripod {
                 out,
             );
         }
+    }
+
+    fn actuator_motion(
+        &self,
+        x: &Vector3<f64>,
+        xd: &Vector3<f64>,
+        xdd: &Vector3<f64>,
+    ) -> Result<ActuatorMotion<3>> {
+        let (st, w, al) = self.angular_motion(x, xd, xdd)?;
+        Ok(self
+            .geometry
+            .strut_motion(x, &st.rotation, xd, &w, xdd, &al))
     }
 
     fn skeleton(&self, x: &Vector3<f64>) -> Result<Skeleton> {

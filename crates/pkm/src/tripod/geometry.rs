@@ -119,6 +119,41 @@ impl TripodGeometry {
         j
     }
 
+    /// Exact strut lengths, rates and accelerations for a platform moving with tool-tip
+    /// velocity `v`, acceleration `a`, angular velocity `w` and angular acceleration
+    /// `al` (all base frame). With `d_i = p + r_i - F_i`, `r_i = R (c_i - t)`:
+    /// `d' = v + w x r`, `d'' = a + al x r + w x (w x r)`, `L' = n . d'`,
+    /// `L'' = (|d'|^2 - L'^2) / L + n . d''`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn strut_motion(
+        &self,
+        p: &Vector3<f64>,
+        r: &Matrix3<f64>,
+        v: &Vector3<f64>,
+        w: &Vector3<f64>,
+        a: &Vector3<f64>,
+        al: &Vector3<f64>,
+    ) -> crate::mechanism::ActuatorMotion<3> {
+        let mut out = crate::mechanism::ActuatorMotion {
+            q: Vector3::zeros(),
+            qd: Vector3::zeros(),
+            qdd: Vector3::zeros(),
+        };
+        for i in 0..3 {
+            let ri = r * self.arms[i];
+            let d = p + ri - self.struts[i].base;
+            let l = d.norm();
+            let n = d / l;
+            let dd = v + w.cross(&ri);
+            let ddd = a + al.cross(&ri) + w.cross(&w.cross(&ri));
+            let ld = n.dot(&dd);
+            out.q[i] = l;
+            out.qd[i] = ld;
+            out.qdd[i] = (dd.norm_squared() - ld * ld) / l + n.dot(&ddd);
+        }
+        out
+    }
+
     /// Inclination of each strut relative to the spindle axis (rad), measured in the
     /// plane through the spindle axis and the strut's platform joint, positive when the
     /// strut leans away from the axis.
@@ -233,6 +268,29 @@ impl TripodGeometry {
         s.link("tool", LinkKind::Tool, b, a);
         (s, b)
     }
+}
+
+/// Angular velocity and acceleration of the A, B, C angles moving with rates `ad` and
+/// accelerations `add`: `w = E ad`, `al = E add + E' ad`, with `E` from
+/// [`rpy_rate_matrix`] and `E'` its time derivative.
+pub fn rpy_angular_motion(
+    a: [f64; 3],
+    ad: &Vector3<f64>,
+    add: &Vector3<f64>,
+) -> (Vector3<f64>, Vector3<f64>) {
+    use crate::rotation::{ry, rz};
+    let e = rpy_rate_matrix(a);
+    let w = e * ad;
+    let rzc = rz(a[2]);
+    let ez = Vector3::z();
+    let ey = Vector3::y();
+    let c0 = rzc * ry(a[1]) * Vector3::x();
+    let c1 = rzc * ey;
+    // d/dt (Rz(C) Ry(B) e_x) = C' e_z x c0 + Rz(C) (B' e_y x Ry(B) e_x); d/dt (Rz(C) e_y) = C' e_z x c1.
+    let dc0 = ez.cross(&c0) * ad[2] + rzc * (ey.cross(&(ry(a[1]) * Vector3::x())) * ad[1]);
+    let dc1 = ez.cross(&c1) * ad[2];
+    let edot = Matrix3::from_columns(&[dc0, dc1, Vector3::zeros()]);
+    (w, e * add + edot * ad)
 }
 
 /// Angular-velocity map of the A, B, C angles (`R = Rz(C) Ry(B) Rx(A)`):

@@ -1,10 +1,11 @@
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3, Vector6};
 
-use super::geometry::{rpy_rate_matrix, TripodGeometry};
+use super::geometry::{rpy_angular_motion, rpy_rate_matrix, TripodGeometry};
 use crate::error::{Error, Result};
 use crate::limits::Violation;
 use crate::mechanism::{
-    spatial_coordinates, Actuator, Coordinate, Forward, Mechanism, PoseSpace, Skeleton,
+    spatial_coordinates, Actuator, ActuatorMotion, Coordinate, Forward, Mechanism, PoseSpace,
+    Skeleton,
 };
 use crate::pose::{pose_from_parts, rotation_matrix, Pose};
 use crate::rotation::Convention;
@@ -180,6 +181,28 @@ impl Mechanism<6, 3> for TranslationalTripod {
     fn check_limits(&self, x: &Vector6<f64>, q: &Vector3<f64>, out: &mut Vec<Violation>) {
         let (p, r) = Self::split(x);
         self.geometry.check_limits(&p, &r, q, out);
+    }
+
+    fn actuator_motion(
+        &self,
+        x: &Vector6<f64>,
+        xd: &Vector6<f64>,
+        xdd: &Vector6<f64>,
+    ) -> Result<ActuatorMotion<3>> {
+        let (p, r) = Self::split(x);
+        let (w, al) = rpy_angular_motion(
+            [x[3], x[4], x[5]],
+            &xd.fixed_rows::<3>(3).into_owned(),
+            &xdd.fixed_rows::<3>(3).into_owned(),
+        );
+        Ok(self.geometry.strut_motion(
+            &p,
+            &r,
+            &xd.fixed_rows::<3>(0).into_owned(),
+            &w,
+            &xdd.fixed_rows::<3>(0).into_owned(),
+            &al,
+        ))
     }
 
     fn skeleton(&self, x: &SVector<f64, 6>) -> Result<Skeleton> {

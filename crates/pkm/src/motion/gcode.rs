@@ -1,0 +1,415 @@
+//! A modal G-code interpreter over the `gcode` crate's syntax tree.
+//!
+//! Supported (anything else is an error naming its line, never skipped):
+//! G0, G1, G2, G3 (I J K and R forms, full circles, helical arcs, P turns), G4 (dwell,
+//! P seconds), G17/G18/G19, G20/G21, G90/G91, G90.1/G91.1, F (per minute), X Y Z A B C,
+//! N line numbers, comments, and M0/M1/M2/M30/M3/M4/M5 with S (no kinematic effect).
+//! Numbers are re-read from the source text as f64 (the syntax tree holds f32).
+//!
+//! Lines are interpreted one at a time ([`Interpreter::line`]), so a program of any
+//! length streams with flat memory.
+
+use nalgebra::Vector3;
+
+use crate::error::{Error, Result};
+
+/// Active plane for arcs: in-plane axes `(e1, e2)` and normal `e1 x e2`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Plane {
+    /// G17: X, Y; normal Z.
+    XY,
+    /// G18: Z, X; normal Y.
+    ZX,
+    /// G19: Y, Z; normal X.
+    YZ,
+}
+
+impl Plane {
+    /// Indices of the first in-plane axis, second in-plane axis and normal.
+    pub fn axes(self) -> (usize, usize, usize) {
+        match self {
+            Plane::XY => (0, 1, 2),
+            Plane::ZX => (2, 0, 1),
+            Plane::YZ => (1, 2, 0),
+        }
+    }
+}
+
+/// What a line asks the machine to do.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Motion {
+    /// G0 or G1 to `end`.
+    Line {
+        /// G0.
+        rapid: bool,
+    },
+    /// G2/G3 about `centre` in `plane`, signed sweep (rad; positive = G3).
+    Arc {
+        /// Centre (mm), in the plane of the start point.
+        centre: Vector3<f64>,
+        /// Plane.
+        plane: Plane,
+        /// Signed sweep (rad).
+        sweep: f64,
+    },
+    /// G4: stay for `seconds`.
+    Dwell {
+        /// Duration (s).
+        seconds: f64,
+    },
+}
+
+/// One move of the program, in mm, rad and mm/s.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GMove {
+    /// 1-based source line.
+    pub line: u64,
+    /// Start `[X, Y, Z, A, B, C]` (mm, rad).
+    pub start: [f64; 6],
+    /// End `[X, Y, Z, A, B, C]`.
+    pub end: [f64; 6],
+    /// What kind of move.
+    pub motion: Motion,
+    /// Programmed feed (mm/s), for G1-G3.
+    pub feed: Option<f64>,
+}
+
+/// Modal state.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Interpreter {
+    /// Current `[X, Y, Z, A, B, C]` (mm, rad).
+    pub position: [f64; 6],
+    /// Active plane.
+    pub plane: Plane,
+    /// G90 (true) or G91.
+    pub absolute: bool,
+    /// G90.1 (true) or G91.1 (default) for I, J, K.
+    pub arc_absolute: bool,
+    /// G20 (true: inches) or G21.
+    pub inches: bool,
+    /// Feed (mm/s).
+    pub feed: Option<f64>,
+    /// Modal motion: 0, 1, 2 or 3.
+    pub mode: Option<u32>,
+    /// M2/M30 seen.
+    pub ended: bool,
+}
+
+fn err(line: u64, message: String) -> Error {
+    Error::InvalidInput {
+        what: format!("G-code line {line}"),
+        message,
+    }
+}
+
+const TWO_PI: f64 = std::f64::consts::TAU;
+
+impl Interpreter {
+    /// A program starting at `position` (mm, rad), G17 G21 G90 G91.1, no feed.
+    pub fn new(position: [f64; 6]) -> Self {
+        Interpreter {
+            position,
+            plane: Plane::XY,
+            absolute: true,
+            arc_absolute: false,
+            inches: false,
+            feed: None,
+            mode: None,
+            ended: false,
+        }
+    }
+
+    /// Interprets one source line (1-based number `line`); returns its move, if any.
+    pub fn line(&mut self, text: &str, line: u64) -> Result<Option<GMove>> {
+        if text.trim().is_empty() || text.trim() == "%" {
+            return Ok(None);
+        }
+        let program = gcode::parse(text).map_err(|d| {
+            let first = d
+                .iter()
+                .next()
+                .map(|x| x.kind.to_string())
+                .unwrap_or_default();
+            err(line, format!("malformed: {first}"))
+        })?;
+        let mut words: Vec<(char, f64)> = Vec::new();
+        let mut codes: Vec<(char, u32, Option<u32>)> = Vec::new();
+        let value = |span: gcode::core::Span, letter: char| -> Result<f64> {
+            let raw = text.get(span.start..span.start + span.length).unwrap_or("");
+            let num = raw
+                .trim_start_matches([letter, letter.to_ascii_lowercase()])
+                .trim();
+            num.parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| err(line, format!("`{raw}`: expected a number after {letter}")))
+        };
+        for block in &program.blocks {
+            for code in &block.codes {
+                let (letter, number, args) = match code {
+                    gcode::Code::General(g) => ('G', g.number, &g.args),
+                    gcode::Code::Miscellaneous(m) => ('M', m.number, &m.args),
+                    gcode::Code::ToolChange(t) => ('T', t.number, &t.args),
+                    _ => return Err(err(line, "unsupported code".into())),
+                };
+                codes.push((letter, number.major(), number.minor().map(|m| m.get())));
+                for a in args {
+                    let l = a.letter.to_ascii_uppercase();
+                    if let gcode::Value::Variable(v) = &a.value {
+                        return Err(err(line, format!("{l}#{v}: variables are not supported")));
+                    }
+                    words.push((l, value(a.span, a.letter)?));
+                }
+            }
+            for w in &block.word_addresses {
+                let l = w.letter.to_ascii_uppercase();
+                if let gcode::Value::Variable(v) = &w.value {
+                    return Err(err(line, format!("{l}#{v}: variables are not supported")));
+                }
+                words.push((l, value(w.span, w.letter)?));
+            }
+        }
+        self.apply(codes, words, line)
+    }
+
+    fn apply(
+        &mut self,
+        codes: Vec<(char, u32, Option<u32>)>,
+        words: Vec<(char, f64)>,
+        line: u64,
+    ) -> Result<Option<GMove>> {
+        let mut dwell = false;
+        for (letter, major, minor) in &codes {
+            match (letter, major, minor) {
+                ('G', 0..=3, None) => self.mode = Some(*major),
+                ('G', 4, None) => dwell = true,
+                ('G', 17, None) => self.plane = Plane::XY,
+                ('G', 18, None) => self.plane = Plane::ZX,
+                ('G', 19, None) => self.plane = Plane::YZ,
+                ('G', 20, None) => self.inches = true,
+                ('G', 21, None) => self.inches = false,
+                ('G', 90, None) => self.absolute = true,
+                ('G', 91, None) => self.absolute = false,
+                ('G', 90, Some(1)) => self.arc_absolute = true,
+                ('G', 91, Some(1)) => self.arc_absolute = false,
+                ('M', 2 | 30, None) => self.ended = true,
+                ('M', 0 | 1 | 3 | 4 | 5, None) => {}
+                _ => {
+                    let code = match minor {
+                        Some(m) => format!("{letter}{major}.{m}"),
+                        None => format!("{letter}{major}"),
+                    };
+                    return Err(err(line, format!("unsupported code {code}")));
+                }
+            }
+        }
+        let unit = if self.inches { 25.4 } else { 1.0 };
+        let mut target = self.position;
+        let mut axis_given = false;
+        let (mut ijk, mut r, mut p) = ([None::<f64>; 3], None::<f64>, None::<f64>);
+        for &(l, v) in &words {
+            match l {
+                'X' | 'Y' | 'Z' => {
+                    let k = (l as u8 - b'X') as usize;
+                    let v = v * unit;
+                    target[k] = if self.absolute {
+                        v
+                    } else {
+                        self.position[k] + v
+                    };
+                    axis_given = true;
+                }
+                'A' | 'B' | 'C' => {
+                    let k = 3 + (l as u8 - b'A') as usize;
+                    let v = v.to_radians();
+                    target[k] = if self.absolute {
+                        v
+                    } else {
+                        self.position[k] + v
+                    };
+                    axis_given = true;
+                }
+                'I' | 'J' | 'K' => ijk[(l as u8 - b'I') as usize] = Some(v * unit),
+                'R' => r = Some(v * unit),
+                'P' => p = Some(v),
+                'F' => {
+                    if !(v > 0.0) {
+                        return Err(err(line, format!("F{v}: the feed must be > 0")));
+                    }
+                    self.feed = Some(v * unit / 60.0);
+                }
+                'S' => {}
+                'N' => {}
+                _ => return Err(err(line, format!("unsupported word {l}{v}"))),
+            }
+        }
+        if dwell {
+            let seconds = p.ok_or_else(|| err(line, "G4 needs P (seconds)".into()))?;
+            if !(seconds >= 0.0) {
+                return Err(err(line, format!("G4 P{seconds}: expected seconds >= 0")));
+            }
+            return Ok(Some(GMove {
+                line,
+                start: self.position,
+                end: self.position,
+                motion: Motion::Dwell { seconds },
+                feed: None,
+            }));
+        }
+        let arc_words = ijk.iter().any(Option::is_some) || r.is_some();
+        if !axis_given {
+            if arc_words {
+                return Err(err(
+                    line,
+                    "arc words without an end point (give X, Y or Z)".into(),
+                ));
+            }
+            return Ok(None);
+        }
+        let mode = self.mode.ok_or_else(|| {
+            err(
+                line,
+                "axis words without a motion mode (G0, G1, G2, G3)".into(),
+            )
+        })?;
+        let start = self.position;
+        let motion = match mode {
+            0 | 1 => {
+                if arc_words {
+                    return Err(err(line, format!("I, J, K or R given with G{mode}")));
+                }
+                Motion::Line { rapid: mode == 0 }
+            }
+            _ => self.arc(mode == 3, &start, &target, ijk, r, p, line)?,
+        };
+        let feed = if mode == 0 {
+            None
+        } else {
+            Some(
+                self.feed
+                    .ok_or_else(|| err(line, format!("G{mode} without a feed (F)")))?,
+            )
+        };
+        self.position = target;
+        Ok(Some(GMove {
+            line,
+            start,
+            end: target,
+            motion,
+            feed,
+        }))
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn arc(
+        &self,
+        ccw: bool,
+        start: &[f64; 6],
+        end: &[f64; 6],
+        ijk: [Option<f64>; 3],
+        r: Option<f64>,
+        p: Option<f64>,
+        line: u64,
+    ) -> Result<Motion> {
+        let (i1, i2, _) = self.plane.axes();
+        let (a0, b0) = (start[i1], start[i2]);
+        let (a1, b1) = (end[i1], end[i2]);
+        let turns = match p {
+            None => 0.0,
+            Some(v) if v >= 1.0 && v.fract() == 0.0 => v - 1.0,
+            Some(v) => {
+                return Err(err(
+                    line,
+                    format!("P{v}: expected a whole number of turns >= 1"),
+                ))
+            }
+        };
+        let (ca, cb) = if let Some(rad) = r {
+            if ijk.iter().any(Option::is_some) {
+                return Err(err(line, "give either R or I, J, K, not both".into()));
+            }
+            let (dx, dy) = (a1 - a0, b1 - b0);
+            let d = dx.hypot(dy);
+            if d < 1e-9 {
+                return Err(err(
+                    line,
+                    "an R arc cannot be a full circle: use I, J, K".into(),
+                ));
+            }
+            let h2 = rad * rad - d * d / 4.0;
+            if h2 < -1e-6 * rad * rad {
+                return Err(err(
+                    line,
+                    format!("R{rad}: the end point is {d:.4} mm away, more than the diameter"),
+                ));
+            }
+            let h = h2.max(0.0).sqrt();
+            // Left of the chord for G3 with R > 0; the other side for G2 or R < 0.
+            let side = if ccw == (rad > 0.0) { 1.0 } else { -1.0 };
+            let (mx, my) = ((a0 + a1) / 2.0, (b0 + b1) / 2.0);
+            (mx - side * h * dy / d, my + side * h * dx / d)
+        } else {
+            let idx = |axis: usize| match axis {
+                0 => ijk[0],
+                1 => ijk[1],
+                _ => ijk[2],
+            };
+            let (oa, ob) = (idx(i1), idx(i2));
+            if oa.is_none() && ob.is_none() {
+                return Err(err(
+                    line,
+                    "arc without a centre: give I, J, K (in the active plane) or R".into(),
+                ));
+            }
+            let (oa, ob) = (oa.unwrap_or(0.0), ob.unwrap_or(0.0));
+            if self.arc_absolute {
+                (oa, ob)
+            } else {
+                (a0 + oa, b0 + ob)
+            }
+        };
+        let r0 = (a0 - ca).hypot(b0 - cb);
+        let r1 = (a1 - ca).hypot(b1 - cb);
+        if r0 < 1e-9 {
+            return Err(err(line, "the arc centre is the start point".into()));
+        }
+        if (r0 - r1).abs() > 0.002_f64.max(1e-6 * r0) {
+            return Err(err(
+                line,
+                format!("radius to start {r0:.4} mm differs from radius to end {r1:.4} mm"),
+            ));
+        }
+        let t0 = (b0 - cb).atan2(a0 - ca);
+        let t1 = (b1 - cb).atan2(a1 - ca);
+        let mut sweep = (t1 - t0).rem_euclid(TWO_PI);
+        if ccw {
+            if sweep < 1e-12 {
+                sweep = TWO_PI;
+            }
+        } else {
+            sweep = -((TWO_PI - sweep) % TWO_PI);
+            if sweep > -1e-12 {
+                sweep = -TWO_PI;
+            }
+        }
+        sweep += turns * TWO_PI * sweep.signum();
+        let mut centre = Vector3::new(start[0], start[1], start[2]);
+        centre[i1] = ca;
+        centre[i2] = cb;
+        Ok(Motion::Arc {
+            centre,
+            plane: self.plane,
+            sweep,
+        })
+    }
+}
+
+/// In-plane unit axes `(e1, e2)` of a plane.
+pub fn plane_axes(plane: Plane) -> (Vector3<f64>, Vector3<f64>) {
+    let (i1, i2, _) = plane.axes();
+    let mut e1 = Vector3::zeros();
+    let mut e2 = Vector3::zeros();
+    e1[i1] = 1.0;
+    e2[i2] = 1.0;
+    (e1, e2)
+}

@@ -1,0 +1,15 @@
+//! Motion analysis: tool paths through any mechanism, with exact actuator position,
+//! velocity and acceleration, a serial-machine comparison (seed 000) and limits along
+//! the path.
+
+pub mod gcode;
+pub mod path;
+pub mod profile;
+pub mod program;
+pub mod run;
+pub mod stats;
+
+pub use path::{Segment, Shape};
+pub use profile::Profile;
+pub use run::{MotionSummary, Move, Runner, Sample, Sampling, ViolationRun};
+pub use stats::{AxisStats, Ratios};

@@ -1,0 +1,107 @@
+//! From G-code moves to mechanism moves: geometry in the mechanism's coordinates and a
+//! feed profile per move.
+
+use serde::Serialize;
+
+use super::gcode::{plane_axes, GMove, Motion};
+use super::path::Segment;
+use super::profile::Profile;
+use super::run::{from_spatial, quantities, Move};
+use crate::error::{Error, Result};
+use crate::mechanism::{Mechanism, PoseSpace};
+
+/// Shape of the velocity along each move.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ProfileKind {
+    /// Constant feed, velocity jumps at the ends (seed 000).
+    Constant,
+    /// Trapezoidal velocity, rest to rest, acceleration-limited (seed 004).
+    Trapezoid,
+    /// Jerk-limited S-curve, rest to rest.
+    Scurve,
+}
+
+/// How moves are timed.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct FeedOptions {
+    /// Velocity shape.
+    pub profile: ProfileKind,
+    /// Path acceleration for trapezoid and S-curve (mm/s^2).
+    pub acceleration: f64,
+    /// Path jerk for the S-curve (mm/s^3).
+    pub jerk: f64,
+    /// G0 rate (mm/s).
+    pub rapid: f64,
+    /// Replaces every programmed F (mm/s) when given.
+    pub feed: Option<f64>,
+}
+
+impl Default for FeedOptions {
+    fn default() -> Self {
+        FeedOptions {
+            profile: ProfileKind::Constant,
+            acceleration: 1000.0,
+            jerk: 20_000.0,
+            rapid: 10_000.0 / 60.0,
+            feed: None,
+        }
+    }
+}
+
+/// A time law of `kind` along `length` at speed `v`.
+pub fn profile(kind: ProfileKind, length: f64, v: f64, o: &FeedOptions) -> Result<Profile> {
+    match kind {
+        ProfileKind::Constant => Profile::constant(length, v),
+        ProfileKind::Trapezoid => Profile::trapezoid(length, v, o.acceleration),
+        ProfileKind::Scurve => Profile::scurve(length, v, o.acceleration, o.jerk),
+    }
+}
+
+/// The mechanism move for one G-code move.
+pub fn to_move<M: Mechanism<P, A>, const P: usize, const A: usize>(
+    m: &M,
+    g: &GMove,
+    o: &FeedOptions,
+) -> Result<Move<P>> {
+    let space = m.pose_space();
+    let start = from_spatial::<P>(space, &g.start)?;
+    let end = from_spatial::<P>(space, &g.end)?;
+    if space == PoseSpace::Position && (3..6).any(|k| (g.end[k] - g.start[k]).abs() > 1e-12) {
+        return Err(Error::InvalidInput {
+            what: format!("G-code line {}", g.line),
+            message: "A, B, C words: this machine's orientation follows from its position".into(),
+        });
+    }
+    let q = quantities(m);
+    let segment = match g.motion {
+        Motion::Line { .. } | Motion::Dwell { .. } => Segment::line(start, end, &q, true),
+        Motion::Arc {
+            centre,
+            plane,
+            sweep,
+        } => {
+            let (e1, e2) = plane_axes(plane);
+            Segment::arc(start, end, centre, e1, e2, sweep).map_err(|e| Error::InvalidInput {
+                what: format!("G-code line {}", g.line),
+                message: e.to_string(),
+            })?
+        }
+    };
+    let profile = match g.motion {
+        Motion::Dwell { seconds } => Profile::dwell(seconds),
+        Motion::Line { rapid: true } => profile(o.profile, segment.length, o.rapid, o)?,
+        _ => {
+            let v = o.feed.or(g.feed).ok_or_else(|| Error::InvalidInput {
+                what: format!("G-code line {}", g.line),
+                message: "no feed".into(),
+            })?;
+            profile(o.profile, segment.length, v, o)?
+        }
+    };
+    Ok(Move {
+        segment,
+        profile,
+        line: Some(g.line),
+    })
+}

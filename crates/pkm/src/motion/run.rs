@@ -1,0 +1,364 @@
+//! Running moves through a mechanism: sampling, exact actuator kinematics, serial
+//! comparison, limits along the path and the largest feed override.
+
+use nalgebra::SVector;
+use serde::Serialize;
+
+use super::path::Segment;
+use super::profile::Profile;
+use super::stats::{ratios, AxisStats, Ratios};
+use crate::error::{Error, Result};
+use crate::limits::{LimitKind, Side, Violation};
+use crate::mechanism::{ActuatorMotion, Mechanism, PoseSpace};
+use crate::units::Quantity;
+
+/// One move: a segment with its time law and its G-code line, if any.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Move<const P: usize> {
+    /// The geometry.
+    pub segment: Segment<P>,
+    /// The time law along it.
+    pub profile: Profile,
+    /// G-code line (1-based), when the move comes from a program.
+    pub line: Option<u64>,
+}
+
+/// How to sample time.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Sampling {
+    /// A fixed rate (Hz) over the whole program.
+    Rate(f64),
+    /// A number of points per move, evenly spaced in time (seed 000: 101 on the arc).
+    Points(usize),
+}
+
+/// One sample: time, pose coordinates with derivatives, actuator motion.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sample<const P: usize, const A: usize> {
+    /// Time from the program start (s).
+    pub t: f64,
+    /// G-code line of the move.
+    pub line: Option<u64>,
+    /// Pose coordinates (mm, rad).
+    pub x: SVector<f64, P>,
+    /// Their rates.
+    pub xd: SVector<f64, P>,
+    /// Their accelerations.
+    pub xdd: SVector<f64, P>,
+    /// Actuator positions, velocities, accelerations.
+    pub act: ActuatorMotion<A>,
+}
+
+/// A stretch of time over which one limit was violated.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ViolationRun {
+    /// The limit (`strut e velocity`).
+    pub limit: String,
+    /// Its family.
+    pub kind: LimitKind,
+    /// G-code line where it started.
+    pub line: Option<u64>,
+    /// First violating sample (s).
+    pub start_s: f64,
+    /// Last violating sample (s).
+    pub end_s: f64,
+    /// Worst value (user units).
+    pub worst: f64,
+    /// The bound (user units).
+    pub bound: f64,
+    /// Unit.
+    pub unit: String,
+}
+
+/// What a run of a program reports.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MotionSummary {
+    /// Per actuator (name, statistics), user units.
+    pub actuators: Vec<(String, AxisStats)>,
+    /// Per serial (Cartesian) axis, the same path on a serial machine.
+    pub serial: Vec<(String, AxisStats)>,
+    /// Serial over PKM ratios.
+    pub ratios: Ratios,
+    /// Violated limits along the path (the first 10 000 stretches).
+    pub violations: Vec<ViolationRun>,
+    /// Stretches beyond the first 10 000, not listed.
+    pub violations_not_listed: u64,
+    /// Largest factor by which every feed (and so the time scale) can be multiplied
+    /// while the actuators keep within their velocity and acceleration limits
+    /// (velocities scale with it, accelerations with its square); `None` when the
+    /// machine gives no rate limits or nothing moves.
+    pub feed_override_max: Option<f64>,
+    /// Program duration (s).
+    pub duration_s: f64,
+    /// Samples taken.
+    pub samples: u64,
+}
+
+const MAX_RUNS: usize = 10_000;
+
+/// Runs moves through a mechanism one at a time (streaming: memory stays flat).
+pub struct Runner<'m, M, const P: usize, const A: usize> {
+    m: &'m M,
+    sampling: Sampling,
+    t0: f64,
+    k: u64,
+    samples: u64,
+    first: bool,
+    act: [AxisStats; A],
+    serial: Vec<AxisStats>,
+    serial_idx: Vec<usize>,
+    runs: Vec<ViolationRun>,
+    open: Vec<(String, usize)>,
+    dropped: u64,
+    buf: Vec<Violation>,
+    k_max: f64,
+}
+
+impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A> {
+    /// A runner for mechanism `m`.
+    pub fn new(m: &'m M, sampling: Sampling) -> Result<Self> {
+        match sampling {
+            Sampling::Rate(r) if !(r > 0.0 && r.is_finite()) => {
+                return Err(Error::InvalidInput {
+                    what: "sampling rate".into(),
+                    message: format!("expected a rate > 0 Hz, got {r}"),
+                })
+            }
+            Sampling::Points(n) if n < 2 => {
+                return Err(Error::InvalidInput {
+                    what: "points per move".into(),
+                    message: format!("expected at least 2, got {n}"),
+                })
+            }
+            _ => {}
+        }
+        let serial_idx: Vec<usize> = match m.pose_space() {
+            PoseSpace::Own => (0..P).collect(),
+            _ => (0..3).collect(),
+        };
+        Ok(Runner {
+            m,
+            sampling,
+            t0: 0.0,
+            k: 0,
+            samples: 0,
+            first: true,
+            act: [AxisStats::default(); A],
+            serial: vec![AxisStats::default(); serial_idx.len()],
+            serial_idx,
+            runs: Vec::new(),
+            open: Vec::new(),
+            dropped: 0,
+            buf: Vec::new(),
+            k_max: f64::INFINITY,
+        })
+    }
+
+    /// Names of the serial axes (`X`, `Y`, `Z`, or the machine's own coordinates).
+    pub fn serial_names(&self) -> Vec<String> {
+        self.serial_idx
+            .iter()
+            .map(|&k| self.m.coordinates()[k].name.clone())
+            .collect()
+    }
+
+    /// Samples one move and passes every sample to `sink`. `last` marks the program's
+    /// final move (its end instant is sampled).
+    pub fn run_move<F>(&mut self, mv: &Move<P>, last: bool, sink: &mut F) -> Result<()>
+    where
+        F: FnMut(&Sample<P, A>) -> Result<()>,
+    {
+        let driven = self.m.driven();
+        for k in 0..P {
+            if !driven.contains(&k) && (mv.segment.end[k] - mv.segment.start[k]).abs() > 1e-12 {
+                let c = &self.m.coordinates()[k];
+                return Err(Error::NotAttainable {
+                    reason: format!(
+                        "{}the move changes {} from {:.4} to {:.4} {}, which the mechanism holds constant",
+                        mv.line.map(|l| format!("line {l}: ")).unwrap_or_default(),
+                        c.name,
+                        c.quantity.to_user(mv.segment.start[k]),
+                        c.quantity.to_user(mv.segment.end[k]),
+                        c.quantity.unit()
+                    ),
+                });
+            }
+        }
+        let dur = mv.profile.duration;
+        match self.sampling {
+            Sampling::Rate(rate) => {
+                loop {
+                    let t = self.k as f64 / rate;
+                    if t > self.t0 + dur + 1e-12 {
+                        break;
+                    }
+                    self.sample(mv, t - self.t0, sink)?;
+                    self.k += 1;
+                }
+                if last && (self.t0 + dur) > (self.k as f64 - 1.0) / rate + 1e-12 {
+                    self.sample(mv, dur, sink)?;
+                }
+            }
+            Sampling::Points(n) => {
+                let from = if self.first { 0 } else { 1 };
+                for i in from..n {
+                    self.sample(mv, dur * i as f64 / (n - 1) as f64, sink)?;
+                }
+            }
+        }
+        self.first = false;
+        self.t0 += dur;
+        Ok(())
+    }
+
+    fn sample<F>(&mut self, mv: &Move<P>, tl: f64, sink: &mut F) -> Result<()>
+    where
+        F: FnMut(&Sample<P, A>) -> Result<()>,
+    {
+        let (s, sd, sdd) = mv.profile.eval(tl);
+        let (x, xs, xss) = mv.segment.eval(s);
+        let xd = xs * sd;
+        let xdd = xss * (sd * sd) + xs * sdd;
+        let act = self.m.actuator_motion(&x, &xd, &xdd)?;
+        let t = self.t0 + tl;
+        self.samples += 1;
+        for i in 0..A {
+            let qn = self.m.actuators()[i].quantity;
+            self.act[i].add(
+                qn.to_user(act.q[i]),
+                qn.to_user(act.qd[i]),
+                qn.to_user(act.qdd[i]),
+            );
+        }
+        for (j, &k) in self.serial_idx.iter().enumerate() {
+            let qn = self.m.coordinates()[k].quantity;
+            self.serial[j].add(qn.to_user(x[k]), qn.to_user(xd[k]), qn.to_user(xdd[k]));
+        }
+        // Limits: positions (and the mechanism's own), then rates.
+        self.buf.clear();
+        self.m.check_limits(&x, &act.q, &mut self.buf);
+        for i in 0..A {
+            let a = &self.m.actuators()[i];
+            if let Some(vm) = a.max_velocity {
+                let v = act.qd[i].abs();
+                if v > vm {
+                    self.buf.push(Violation::new(
+                        format!("actuator {} velocity", a.name),
+                        LimitKind::ActuatorPosition,
+                        Side::Max,
+                        a.quantity,
+                        v,
+                        vm,
+                    ));
+                }
+                if v > 0.0 {
+                    self.k_max = self.k_max.min(vm / v);
+                }
+            }
+            if let Some(am) = a.max_acceleration {
+                let acc = act.qdd[i].abs();
+                if acc > am {
+                    self.buf.push(Violation::new(
+                        format!("actuator {} acceleration", a.name),
+                        LimitKind::ActuatorPosition,
+                        Side::Max,
+                        a.quantity,
+                        acc,
+                        am,
+                    ));
+                }
+                if acc > 0.0 {
+                    self.k_max = self.k_max.min((am / acc).sqrt());
+                }
+            }
+        }
+        self.track(t, mv.line);
+        sink(&Sample {
+            t,
+            line: mv.line,
+            x,
+            xd,
+            xdd,
+            act,
+        })
+    }
+
+    fn track(&mut self, t: f64, line: Option<u64>) {
+        // Close stretches whose limit is no longer violated.
+        let buf = &self.buf;
+        self.open
+            .retain(|(name, _)| buf.iter().any(|v| &v.limit == name));
+        for v in &self.buf {
+            match self.open.iter().find(|(n, _)| n == &v.limit) {
+                Some(&(_, idx)) => {
+                    let r = &mut self.runs[idx];
+                    r.end_s = t;
+                    if v.excess > (r.worst - r.bound).abs() {
+                        r.worst = v.value;
+                    }
+                }
+                None => {
+                    if self.runs.len() >= MAX_RUNS {
+                        self.dropped += 1;
+                        continue;
+                    }
+                    self.runs.push(ViolationRun {
+                        limit: v.limit.clone(),
+                        kind: v.kind,
+                        line,
+                        start_s: t,
+                        end_s: t,
+                        worst: v.value,
+                        bound: v.bound,
+                        unit: v.unit.to_string(),
+                    });
+                    self.open.push((v.limit.clone(), self.runs.len() - 1));
+                }
+            }
+        }
+    }
+
+    /// The summary of everything run so far.
+    pub fn finish(self) -> MotionSummary {
+        let names = self.serial_names();
+        let act: Vec<AxisStats> = self.act.to_vec();
+        let ratios = ratios(&self.serial, &act);
+        MotionSummary {
+            actuators: self
+                .m
+                .actuators()
+                .iter()
+                .map(|a| a.name.clone())
+                .zip(act)
+                .collect(),
+            serial: names.into_iter().zip(self.serial).collect(),
+            ratios,
+            violations: self.runs,
+            violations_not_listed: self.dropped,
+            feed_override_max: self.k_max.is_finite().then_some(self.k_max),
+            duration_s: self.t0,
+            samples: self.samples,
+        }
+    }
+}
+
+/// Pose coordinates of a mechanism from a spatial pose `[X, Y, Z, A, B, C]` (mm, rad):
+/// all six for a spatial machine, X, Y, Z for a position machine.
+pub fn from_spatial<const P: usize>(space: PoseSpace, v: &[f64; 6]) -> Result<SVector<f64, P>> {
+    match (space, P) {
+        (PoseSpace::Spatial, 6) | (PoseSpace::Position, 3) => {
+            Ok(SVector::<f64, P>::from_fn(|k, _| v[k]))
+        }
+        _ => Err(Error::InvalidInput {
+            what: "tool path".into(),
+            message:
+                "this machine's pose is not X, Y, Z[, A, B, C]; give moves in its own coordinates"
+                    .into(),
+        }),
+    }
+}
+
+/// Quantities of the coordinates, for [`Segment::line`].
+pub fn quantities<M: Mechanism<P, A>, const P: usize, const A: usize>(m: &M) -> [Quantity; P] {
+    std::array::from_fn(|k| m.coordinates()[k].quantity)
+}

@@ -1,0 +1,303 @@
+//! Motion: profiles, path derivatives, exact actuator velocity and acceleration, and
+//! seed 000's arc study.
+
+use nalgebra::{SVector, Vector3, Vector6};
+use pkm::machine::Model;
+use pkm::motion::gcode::Interpreter;
+use pkm::motion::program::{to_move, FeedOptions, ProfileKind};
+use pkm::motion::{Move, Profile, Runner, Sampling, Segment};
+use pkm::tripod::{CentreLegTripod, TranslationalTripod};
+use pkm::{Machine, Mechanism, Quantity};
+
+fn load(name: &str) -> Machine {
+    Machine::from_path(format!(
+        "{}/../../examples/machines/{name}",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap()
+}
+
+fn translational() -> TranslationalTripod {
+    match load("tripod-seed000.toml").model {
+        Model::TranslationalTripod(t) => t,
+        _ => panic!(),
+    }
+}
+
+fn centre_leg() -> CentreLegTripod {
+    match load("tripod-centre-leg.toml").model {
+        Model::CentreLegTripod(t) => t,
+        _ => panic!(),
+    }
+}
+
+fn check_profile(p: &Profile, vmax: f64, amax: f64) {
+    let (s_end, v_end, _) = p.eval(p.duration);
+    assert!(
+        (s_end - p.length).abs() < 1e-9 * p.length.max(1.0),
+        "{s_end} vs {}",
+        p.length
+    );
+    assert!(v_end.abs() < 1e-9 * vmax.max(1.0), "ends at rest: {v_end}");
+    let h = 1e-6 * p.duration;
+    let n = 400;
+    for i in 1..n {
+        let t = p.duration * i as f64 / n as f64;
+        let (s, v, a) = p.eval(t);
+        assert!(v <= vmax * (1.0 + 1e-9) && a.abs() <= amax * (1.0 + 1e-9));
+        assert!(s >= -1e-12 && s <= p.length + 1e-9);
+        let (sp, vp, _) = p.eval(t + h);
+        let (sm, vm, _) = p.eval(t - h);
+        assert!(((sp - sm) / (2.0 * h) - v).abs() < 1e-5 * vmax, "v at {t}");
+        // Acceleration may jump at phase ends (trapezoid); compare away from them.
+        let fd = (vp - vm) / (2.0 * h);
+        if (fd - a).abs() > 1e-3 * amax {
+            let (_, _, ap) = p.eval(t + 2.0 * h);
+            let (_, _, am) = p.eval(t - 2.0 * h);
+            assert!((ap - am).abs() > 1e-3 * amax, "a at {t}: {fd} vs {a}");
+        }
+    }
+}
+
+#[test]
+fn profiles_reach_the_end_with_bounded_rates() {
+    check_profile(
+        &Profile::trapezoid(100.0, 50.0, 500.0).unwrap(),
+        50.0,
+        500.0,
+    );
+    check_profile(&Profile::trapezoid(2.0, 50.0, 500.0).unwrap(), 50.0, 500.0); // triangular
+    check_profile(
+        &Profile::scurve(100.0, 50.0, 500.0, 10_000.0).unwrap(),
+        50.0,
+        500.0,
+    );
+    check_profile(
+        &Profile::scurve(1.0, 50.0, 500.0, 10_000.0).unwrap(),
+        50.0,
+        500.0,
+    ); // short
+    check_profile(
+        &Profile::scurve(100.0, 50.0, 500.0, 1000.0).unwrap(),
+        50.0,
+        500.0,
+    ); // no const-a phase
+    let p = Profile::trapezoid_timed(135.0, 1.0, 0.1).unwrap();
+    check_profile(&p, 150.0, 1500.0);
+    assert!((p.duration - 1.0).abs() < 1e-12);
+    assert!((p.eval(0.5).1 - 150.0).abs() < 1e-9);
+    let c = Profile::constant(64.0, 10.0).unwrap();
+    assert!((c.duration - 6.4).abs() < 1e-12);
+    assert_eq!(c.eval(3.0), (30.0, 10.0, 0.0));
+    assert!(Profile::trapezoid_timed(1.0, 1.0, 0.6).is_err());
+    assert!(Profile::constant(1.0, 0.0).is_err());
+}
+
+#[test]
+fn segment_derivatives_equal_finite_differences() {
+    let q = [
+        Quantity::Length,
+        Quantity::Length,
+        Quantity::Length,
+        Quantity::Angle,
+        Quantity::Angle,
+        Quantity::Angle,
+    ];
+    let a = Vector6::new(10.0, 0.0, -290.0, 0.0, 0.05, 0.0);
+    let b = Vector6::new(0.0, 10.0, -280.0, 0.1, 0.0, 0.0);
+    let segs = [
+        Segment::line(a, b, &q, true),
+        Segment::arc(
+            a,
+            b,
+            Vector3::new(0.0, 0.0, -290.0),
+            Vector3::x(),
+            Vector3::y(),
+            std::f64::consts::FRAC_PI_2,
+        )
+        .unwrap(),
+        Segment::arc(
+            a,
+            b,
+            Vector3::new(0.0, 0.0, -290.0),
+            Vector3::x(),
+            Vector3::y(),
+            -1.5 * std::f64::consts::PI,
+        )
+        .unwrap(),
+    ];
+    for seg in segs {
+        let (x0, _, _) = seg.eval(0.0);
+        let (x1, _, _) = seg.eval(seg.length);
+        assert!(
+            (x0 - a).amax() < 1e-9 && (x1 - b).amax() < 1e-9,
+            "{x1} vs {b}"
+        );
+        let h = 1e-4;
+        for i in 1..20 {
+            let s = seg.length * i as f64 / 20.0;
+            let (_, d1, d2) = seg.eval(s);
+            let (xp, dp, _) = seg.eval(s + h);
+            let (xm, dm, _) = seg.eval(s - h);
+            assert!(((xp - xm) / (2.0 * h) - d1).amax() < 1e-7);
+            assert!(((dp - dm) / (2.0 * h) - d2).amax() < 1e-6);
+            // Unit speed of the tool tip along the path.
+            assert!((d1.fixed_rows::<3>(0).norm() - 1.0).abs() < 1e-12);
+        }
+    }
+}
+
+/// Analytic actuator velocity and acceleration against central differences of IK
+/// positions along a smooth motion x(t), relative 1e-6.
+fn check_actuator_motion<M: Mechanism<P, A>, const P: usize, const A: usize>(
+    m: &M,
+    x: impl Fn(f64) -> SVector<f64, P>,
+) {
+    let h = 1e-4;
+    for i in 0..25 {
+        let t = 0.05 + 0.9 * i as f64 / 24.0;
+        let xd = (x(t + h) - x(t - h)) / (2.0 * h);
+        let xdd = (x(t + h) - 2.0 * x(t) + x(t - h)) / (h * h);
+        let mm = m.actuator_motion(&x(t), &xd, &xdd).unwrap();
+        let q = |t: f64| m.inverse(&x(t)).unwrap();
+        let qd_fd = (q(t + h) - q(t - h)) / (2.0 * h);
+        let qdd_fd = (q(t + h) - 2.0 * q(t) + q(t - h)) / (h * h);
+        let sv = qd_fd.amax().max(1e-3);
+        let sa = qdd_fd.amax().max(1e-3);
+        assert!((mm.q - q(t)).amax() < 1e-12);
+        assert!(
+            (mm.qd - qd_fd).amax() / sv < 1e-6,
+            "velocity at {t}: {} vs {}",
+            mm.qd,
+            qd_fd
+        );
+        assert!(
+            (mm.qdd - qdd_fd).amax() / sa < 1e-6,
+            "acceleration at {t}: {} vs {}",
+            mm.qdd,
+            qdd_fd
+        );
+    }
+}
+
+#[test]
+fn exact_actuator_rates_equal_central_differences() {
+    // x(t) is a polynomial of degree 2, so its finite differences are exact and the
+    // comparison tests the mechanism's derivatives alone.
+    let t = translational();
+    check_actuator_motion(&t, |s| {
+        Vector6::new(
+            20.0 * s - 10.0 * s * s,
+            -15.0 * s + 30.0 * s * s,
+            -290.0 + 12.0 * s * s,
+            0.1 * s - 0.05 * s * s,
+            -0.08 * s + 0.1 * s * s,
+            0.3 * s * s,
+        )
+    });
+    let c = centre_leg();
+    check_actuator_motion(&c, |s| {
+        Vector3::new(
+            30.0 * s - 10.0 * s * s,
+            -20.0 * s + 25.0 * s * s,
+            -300.0 + 15.0 * s * s,
+        )
+    });
+}
+
+fn arc_program(feed: f64) -> Vec<Move<6>> {
+    // Seed 000's study: a quarter arc of radius 64 mm in the XY plane (G17) at constant
+    // feed, from (32, -32) about the centre (-32, -32) to (-32, 32), at Z = -290.
+    let t = translational();
+    let mut g = Interpreter::new([32.0, -32.0, -290.0, 0.0, 0.0, 0.0]);
+    let gm = g
+        .line(&format!("G17 G90 G3 X-32 Y32 I-64 J0 F{feed}"), 1)
+        .unwrap()
+        .unwrap();
+    vec![to_move(
+        &t,
+        &gm,
+        &FeedOptions {
+            profile: ProfileKind::Constant,
+            ..Default::default()
+        },
+    )
+    .unwrap()]
+}
+
+fn run_arc(feed: f64) -> pkm::motion::MotionSummary {
+    let t = translational();
+    let mut r = Runner::new(&t, Sampling::Points(101)).unwrap();
+    for mv in arc_program(feed) {
+        r.run_move(&mv, true, &mut |_| Ok(())).unwrap();
+    }
+    r.finish()
+}
+
+#[test]
+fn seed000_arc_study_serial_side() {
+    for feed in [10.0, 100.0, 1000.0, 10_000.0] {
+        let s = run_arc(feed);
+        assert_eq!(s.samples, 101);
+        let v = feed / 60.0;
+        let (x, y, z) = (&s.serial[0].1, &s.serial[1].1, &s.serial[2].1);
+        for axis in [x, y] {
+            assert!((axis.travel - 64.0).abs() < 0.005 * 64.0, "{}", axis.travel);
+            assert!((axis.peak_velocity - v).abs() < 0.005 * v);
+            assert!((axis.peak_acceleration - v * v / 64.0).abs() < 0.005 * v * v / 64.0);
+        }
+        assert!(z.travel < 1e-9);
+        assert!((s.duration_s - 64.0 * std::f64::consts::FRAC_PI_2 / v).abs() < 1e-9);
+    }
+    let s = run_arc(10_000.0);
+    assert!((s.serial[0].1.peak_velocity - 166.667).abs() < 0.01);
+    assert!((s.serial[0].1.peak_acceleration - 434.03).abs() < 0.01);
+}
+
+#[test]
+fn seed000_arc_study_scaling_with_feed() {
+    let base = run_arc(10.0);
+    for feed in [100.0, 1000.0, 10_000.0] {
+        let s = run_arc(feed);
+        let k = feed / 10.0;
+        for ((_, a), (_, b)) in base.actuators.iter().zip(&s.actuators) {
+            assert!((b.travel - a.travel).abs() < 1e-9);
+            assert!(
+                (b.peak_velocity - k * a.peak_velocity).abs() < 1e-9 * k * a.peak_velocity.max(1.0)
+            );
+            assert!(
+                (b.peak_acceleration - k * k * a.peak_acceleration).abs()
+                    < 1e-8 * k * k * a.peak_acceleration.max(1.0)
+            );
+        }
+        assert!((s.ratios.travel - base.ratios.travel).abs() < 1e-9);
+    }
+    // The struts travel less than the serial axes (seed 000's point).
+    assert!(base.ratios.travel > 1.0 && base.ratios.velocity > 1.0);
+}
+
+#[test]
+fn limits_and_feed_override_along_the_path() {
+    let t = translational();
+    // At 10 000 mm/min the struts stay below 200 mm/s and 2000 mm/s^2.
+    let s = run_arc(10_000.0);
+    let k = s.feed_override_max.unwrap();
+    assert!(k > 1.0, "{k}");
+    // Scaled by the override the program just meets a limit; a bit more violates it.
+    let s = run_arc(10_000.0 * k * 1.01);
+    assert!(!s.violations.is_empty());
+    assert!(s.violations[0].limit.contains("actuator"));
+    assert_eq!(s.violations[0].line, Some(1));
+    let s = run_arc(10_000.0 * k * 0.99);
+    assert!(s.violations.is_empty(), "{:?}", s.violations);
+    // A move that changes the held orientation is refused.
+    let mut g = Interpreter::new([0.0, 0.0, -290.0, 0.0, 0.0, 0.0]);
+    let gm = g.line("G1 X1 A5 F100", 7).unwrap().unwrap();
+    let mv = to_move(&t, &gm, &FeedOptions::default()).unwrap();
+    let mut r = Runner::new(&t, Sampling::Rate(100.0)).unwrap();
+    let e = r.run_move(&mv, true, &mut |_| Ok(())).unwrap_err();
+    assert!(
+        e.to_string().contains("line 7") && e.to_string().contains("holds"),
+        "{e}"
+    );
+}
