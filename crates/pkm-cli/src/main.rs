@@ -56,6 +56,18 @@ enum Command {
         tripod) are taken from --from (default: the home pose). In a CSV batch each row\n\
         starts from the previous row's solution, as a machine moving through the states.")]
     Fk(FkArgs),
+    /// Run a tool path (G-code, or a point-to-point move) through the machine: actuator
+    /// position, velocity and acceleration over time, the same path on a serial machine,
+    /// limits along the path.
+    #[command(after_help = "Examples:\n  \
+        pkm motion examples/machines/tripod-seed000.toml --gcode examples/paths/seed000-arc.ngc --feed 10000 --points 101 --out arc\n  \
+        pkm motion examples/machines/tripod-seed000.toml --from 0,0,-290 --to 40,20,-300 --feed 3000 --profile scurve --out p2p\n  \
+        pkm motion MACHINE.toml --from POSE --to POSE --duration 1 --profile trapezoid --accel-time 0.1 --out DIR\n\n\
+        Writes DIR/actuators.csv (t, line, pose coordinates, then per actuator position,\n\
+        velocity, acceleration), DIR/summary.json and DIR/actuators.svg, DIR/serial.svg.\n\
+        A program starts at --from when given, else at the machine's home pose. Moves stop\n\
+        exactly at each segment end (no blending). Exit code 3 when a limit is violated.")]
+    Motion(MotionArgs),
     /// Validate a machine file and summarise it.
     #[command(after_help = "Example:\n  pkm check examples/machines/tripod-seed000.toml --json")]
     Check(CheckArgs),
@@ -129,6 +141,81 @@ pub struct FkArgs {
 }
 
 #[derive(Args)]
+pub struct MotionArgs {
+    /// Machine file (TOML).
+    pub machine: PathBuf,
+    /// G-code program.
+    #[arg(long, conflicts_with = "to")]
+    pub gcode: Option<PathBuf>,
+    /// Start pose (as `pkm ik --pose`); default: the home pose.
+    #[arg(long, allow_hyphen_values = true)]
+    pub from: Option<String>,
+    /// End pose of a point-to-point move.
+    #[arg(long, allow_hyphen_values = true)]
+    pub to: Option<String>,
+    /// Feed (mm/min), replacing the program's F words.
+    #[arg(long)]
+    pub feed: Option<f64>,
+    /// Velocity profile of each move.
+    #[arg(long, value_enum, default_value = "constant")]
+    pub profile: ProfileArg,
+    /// Path acceleration for trapezoid and scurve (mm/s^2).
+    #[arg(long, default_value_t = 1000.0)]
+    pub accel: f64,
+    /// Path jerk for scurve (mm/s^3).
+    #[arg(long, default_value_t = 20000.0)]
+    pub jerk: f64,
+    /// Rapid (G0) rate (mm/min).
+    #[arg(long, default_value_t = 10000.0)]
+    pub rapid: f64,
+    /// Duration of a point-to-point move (s), instead of --feed.
+    #[arg(long)]
+    pub duration: Option<f64>,
+    /// Acceleration (and deceleration) time of a timed trapezoid (s).
+    #[arg(long)]
+    pub accel_time: Option<f64>,
+    /// Sampling rate (Hz); default 1000.
+    #[arg(long, conflicts_with = "points")]
+    pub rate: Option<f64>,
+    /// Points per move instead of a rate (seed 000: 101).
+    #[arg(long)]
+    pub points: Option<usize>,
+    /// Convention of angles in --from/--to.
+    #[arg(long, default_value = "rpy", value_parser = parse_convention)]
+    pub rotation: Convention,
+    /// Output directory.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Skip actuators.csv (summary and plots only), for very long programs.
+    #[arg(long)]
+    pub summary_only: bool,
+    /// Print summary.json to stdout.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Velocity profile names on the command line.
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum ProfileArg {
+    /// Constant feed.
+    Constant,
+    /// Trapezoidal velocity.
+    Trapezoid,
+    /// Jerk-limited S-curve.
+    Scurve,
+}
+
+impl From<ProfileArg> for pkm::motion::program::ProfileKind {
+    fn from(p: ProfileArg) -> Self {
+        match p {
+            ProfileArg::Constant => Self::Constant,
+            ProfileArg::Trapezoid => Self::Trapezoid,
+            ProfileArg::Scurve => Self::Scurve,
+        }
+    }
+}
+
+#[derive(Args)]
 pub struct CheckArgs {
     /// Machine file (TOML).
     pub machine: PathBuf,
@@ -152,6 +239,7 @@ fn main() -> ExitCode {
         Command::Ik(a) => commands::ik::run(&a),
         Command::Fk(a) => commands::fk::run(&a),
         Command::Check(a) => commands::check::run(&a),
+        Command::Motion(a) => commands::motion::run(&a),
         Command::Report(a) => report::run(&a),
     };
     match res {

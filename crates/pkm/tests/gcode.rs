@@ -64,12 +64,20 @@ fn coverage_program() {
         _ => panic!(),
     }
     let m = by_n("N110");
-    assert!(matches!(m.motion, Motion::Arc { plane: Plane::YZ, .. }));
+    assert!(matches!(
+        m.motion,
+        Motion::Arc {
+            plane: Plane::YZ,
+            ..
+        }
+    ));
     let m = by_n("N120");
     assert_eq!(centre(&m)[..2], [20.0, 10.0]);
     let m = by_n("N130");
     assert_eq!(m.end[0], m.start[0] - 5.0);
-    assert!(matches!(by_n("N140").motion, Motion::Dwell { seconds } if (seconds - 0.2).abs() < 1e-12));
+    assert!(
+        matches!(by_n("N140").motion, Motion::Dwell { seconds } if (seconds - 0.2).abs() < 1e-12)
+    );
     let m = by_n("N150");
     assert!((m.end[2] + 289.56).abs() < 1e-9);
     assert!((m.feed.unwrap() - 508.0 / 60.0).abs() < 1e-9);

@@ -4,6 +4,7 @@ pub mod check;
 pub mod csvio;
 pub mod fk;
 pub mod ik;
+pub mod motion;
 
 use std::path::Path;
 

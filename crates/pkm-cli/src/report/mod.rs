@@ -2,6 +2,7 @@
 
 mod drawing;
 mod html;
+pub mod plot;
 
 use anyhow::{Context, Result};
 use pkm::verify::{check_references, CheckRow, CheckTable, ReferenceCheck};
