@@ -1,6 +1,9 @@
 //! `pkm motion`: a tool path or G-code program through the machine: actuator position,
 //! velocity and acceleration over time, the serial comparison and limits.
 
+// Parallel arrays (actuators, coordinates, sample vectors) are indexed together.
+#![allow(clippy::needless_range_loop)]
+
 use std::fs::File;
 use std::io::{BufRead, BufReader, BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -59,13 +62,13 @@ impl Traces {
         if self.stride == 0 {
             self.stride = 1;
         }
-        if self.seen % self.stride == 0 {
+        if self.seen.is_multiple_of(self.stride) {
             if self.rows.len() >= CAP {
                 let kept: Vec<Vec<f64>> = self.rows.drain(..).step_by(2).collect();
                 self.rows = kept;
                 self.stride *= 2;
             }
-            if self.seen % self.stride == 0 {
+            if self.seen.is_multiple_of(self.stride) {
                 self.rows.push(row());
             }
         }
