@@ -345,9 +345,10 @@ fn report_writes_a_self_contained_page() {
     assert!(html.contains("Seed 000 tripod"));
     assert_eq!(
         html.matches("<svg").count(),
-        6,
-        "three views at home, three at Table 1"
+        8,
+        "three views at home, two motion plots, three at Table 1"
     );
+    assert!(html.contains("seed 000's arc study"));
     assert!(html.contains("Kinematic checks"));
     assert!(html.contains("Top view") && html.contains("Front view") && html.contains("Side view"));
     assert!(

@@ -27,6 +27,10 @@ pub enum Side {
 pub enum LimitKind {
     /// Actuator position (strut length, slider position, joint angle).
     ActuatorPosition,
+    /// Actuator speed.
+    ActuatorVelocity,
+    /// Actuator acceleration.
+    ActuatorAcceleration,
     /// Tilt of the spindle / platform relative to the base.
     Tilt,
     /// Collision of a strut with the spindle (seed 000: phi <= lambda).

@@ -25,6 +25,18 @@ impl Quantity {
         }
     }
 
+    /// Unit of the `order`-th time derivative (`mm/s`, `deg/s^2`, ...).
+    pub fn rate_unit(self, order: u8) -> &'static str {
+        match (self, order) {
+            (Quantity::Length, 0) => "mm",
+            (Quantity::Length, 1) => "mm/s",
+            (Quantity::Length, _) => "mm/s^2",
+            (Quantity::Angle, 0) => "deg",
+            (Quantity::Angle, 1) => "deg/s",
+            (Quantity::Angle, _) => "deg/s^2",
+        }
+    }
+
     /// Converts an internal value (mm or rad) to the user unit (mm or deg).
     pub fn to_user(self, v: f64) -> f64 {
         match self {

@@ -307,7 +307,7 @@ pub fn plots(m: &dyn DynMechanism, o: &Outcome, title: &str) -> Result<(String, 
                 (kind.to_string(), format!("{kind} [{unit}{suffix}]"), series)
             })
             .collect();
-        panels_svg(title, &panels, (640, 760))
+        panels_svg(title, &panels, (620, 760))
     };
     let anames: Vec<(String, &str)> = a
         .iter()

@@ -57,6 +57,10 @@ pub fn build(machine: &Machine) -> Result<String> {
         "<nav><a href=\"#machine\">Machine</a> · <a href=\"#drawing\">Drawing</a> · \
          <a href=\"#checks\">Kinematic checks</a>",
     );
+    let spatial = m.pose_space() != pkm::PoseSpace::Own;
+    if spatial {
+        nav.push_str(" · <a href=\"#motion\">Motion</a>");
+    }
     if !references.is_empty() {
         nav.push_str(" · <a href=\"#references\">Reproduced references</a>");
     }
@@ -161,6 +165,10 @@ pub fn build(machine: &Machine) -> Result<String> {
     });
     h.raw(&check_table_html(machine, &table));
 
+    if spatial {
+        motion_section(&mut h, machine)?;
+    }
+
     if !references.is_empty() {
         h.h2_id("references", "Reproduced references");
         h.p(
@@ -236,6 +244,153 @@ fn check_table_html(machine: &Machine, rows: &[CheckRow]) -> String {
     Html::table_string(&head_refs, &body)
 }
 
+/// Feeds of seed 000's arc study (mm/min).
+const ARC_FEEDS: [f64; 4] = [10.0, 100.0, 1000.0, 10_000.0];
+
+/// Seed 000's arc study, for any spatial machine: a quarter arc of radius 64 mm in the
+/// XY plane at the home height, from home + (32, -32) about home + (-32, -32), at
+/// constant feed, sampled at 101 points (0.9 deg apart).
+fn motion_section(h: &mut Html, machine: &Machine) -> Result<()> {
+    use crate::commands::motion::{plots, Simulate, Source};
+    use pkm::motion::program::{FeedOptions, ProfileKind};
+    use pkm::motion::Sampling;
+    let m = machine.mechanism();
+    let home = m.home();
+    h.h2_id("motion", "Motion: seed 000's arc study");
+    h.p(&format!(
+        "The tool tip moves along a quarter arc of radius 64 mm (100.5 mm long) in the XY \
+         plane at Z = {:.3} mm, from X{:+.3} Y{:+.3} about the centre X{:+.3} Y{:+.3}, at \
+         constant feed (seed 000, fig. 5-6); 101 points, 0.9° apart. Actuator velocity and \
+         acceleration come from the Jacobian and its derivative (exact), not from \
+         differences of the points. The same path on a serial (Cartesian) machine is the \
+         tool tip's X, Y, Z. Ratios are serial over PKM: mean travel, mean peak |velocity|, \
+         mean peak |acceleration| of the moving axes.",
+        home[2],
+        home[0] + 32.0,
+        home[1] - 32.0,
+        home[0] - 32.0,
+        home[1] - 32.0
+    ));
+    let mut start = [0.0; 6];
+    start[..home.len().min(6)].copy_from_slice(&home[..home.len().min(6)]);
+    start[0] += 32.0;
+    start[1] -= 32.0;
+    let mut rows = Vec::new();
+    let mut last = None;
+    for feed in ARC_FEEDS {
+        let program = format!(
+            "G17 G21 G90 G91.1\nG3 X{} Y{} I-64 J0 F{feed}\n",
+            start[0] - 64.0,
+            start[1] + 64.0
+        );
+        let out = machine.visit(Simulate {
+            source: Source::Gcode {
+                reader: Box::new(std::io::Cursor::new(program.into_bytes())),
+                bytes: 0,
+                start,
+            },
+            feed: FeedOptions {
+                profile: ProfileKind::Constant,
+                ..Default::default()
+            },
+            sampling: Sampling::Points(101),
+            csv: None,
+            progress: false,
+        });
+        let out = match out {
+            Ok(o) => o,
+            Err(e) => {
+                h.p(&format!(
+                    "<span class=\"bad\">The arc is not attainable: {}</span>",
+                    esc(&e.to_string())
+                ));
+                return Ok(());
+            }
+        };
+        let s = &out.summary;
+        let peak = |v: &[(String, pkm::motion::AxisStats)],
+                    f: fn(&pkm::motion::AxisStats) -> f64| {
+            v.iter().map(|(_, x)| f(x)).fold(0.0, f64::max)
+        };
+        rows.push(vec![
+            format!("{feed}"),
+            sig(s.duration_s),
+            sig(peak(&s.actuators, |x| x.peak_velocity)),
+            sig(peak(&s.serial, |x| x.peak_velocity)),
+            sig(peak(&s.actuators, |x| x.peak_acceleration)),
+            sig(peak(&s.serial, |x| x.peak_acceleration)),
+            format!(
+                "{:.3} / {:.3} / {:.3}",
+                s.ratios.travel, s.ratios.velocity, s.ratios.acceleration
+            ),
+            if s.violations.is_empty() {
+                "<span class=\"ok\">none</span>".into()
+            } else {
+                format!(
+                    "<span class=\"bad\">{} (first: {} {:.3} {} beyond {:.3})</span>",
+                    s.violations.len(),
+                    esc(&s.violations[0].limit),
+                    s.violations[0].worst,
+                    s.violations[0].unit,
+                    s.violations[0].bound
+                )
+            },
+        ]);
+        last = Some(out);
+    }
+    h.table(
+        &[
+            "feed [mm/min]",
+            "duration [s]",
+            "peak actuator |v| [mm/s]",
+            "peak serial |v| [mm/s]",
+            "peak actuator |a| [mm/s²]",
+            "peak serial |a| [mm/s²]",
+            "ratios travel / v / a",
+            "limit violations",
+        ],
+        &rows,
+    );
+    if let Some(out) = last {
+        let s = &out.summary;
+        let mut axes = Vec::new();
+        for (kind, list) in [("actuator", &s.actuators), ("serial", &s.serial)] {
+            for (n, st) in list.iter() {
+                axes.push(vec![
+                    format!("{kind} {}", esc(n)),
+                    format!("{:.3}", st.travel),
+                    format!("{:.3}", st.peak_velocity),
+                    format!("{:.3}", st.mean_abs_velocity),
+                    format!("{:.3}", st.peak_acceleration),
+                    format!("{:.3}", st.mean_abs_acceleration),
+                ]);
+            }
+        }
+        h.p("Per axis at 10 000 mm/min (velocities scale with the feed, accelerations with its square; travel does not change):");
+        h.table(
+            &[
+                "axis",
+                "travel [mm]",
+                "peak |v| [mm/s]",
+                "mean |v|",
+                "peak |a| [mm/s²]",
+                "mean |a|",
+            ],
+            &axes,
+        );
+        match s.feed_override_max {
+            Some(k) => h.p(&format!(
+                "Largest feed override within the actuators' velocity and acceleration limits at 10 000 mm/min: <b>{k:.3}</b>."
+            )),
+            None => h.p("The machine file gives no actuator rate limits, so no feed override is computed."),
+        }
+        let (a, b) = plots(m, &out, "10 000 mm/min")?;
+        h.raw(&format!("<div class=\"views\">{a}{b}</div>"));
+        h.p("Seed 000 reports, for its larger tripod (whose dimensions it does not print): struts travel 3.6x, move 3.4x slower and accelerate 3.3x less than the serial axes; strut velocities 0-49 mm/s and accelerations within ±131 mm/s² at 10 000 mm/min, serial velocities 0-167 mm/s.");
+    }
+    Ok(())
+}
+
 fn references_html(h: &mut Html, machine: &Machine, r: &ReferenceCheck) -> Result<()> {
     let m = machine.mechanism();
     h.raw(&format!("<h3>{} {}</h3>", mark(r.pass), esc(&r.source)));
@@ -291,6 +446,15 @@ fn references_html(h: &mut Html, machine: &Machine, r: &ReferenceCheck) -> Resul
         h.raw(&format!("<div class=\"views\">{svgs}</div>"));
     }
     Ok(())
+}
+
+/// Four significant digits, for values spanning several decades (feeds 10 to 10 000).
+fn sig(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let digits = (3 - v.abs().log10().floor() as i32).max(0) as usize;
+    format!("{v:.digits$}")
 }
 
 fn mark(ok: bool) -> &'static str {

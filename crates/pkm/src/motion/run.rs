@@ -242,14 +242,16 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
             if let Some(vm) = a.max_velocity {
                 let v = act.qd[i].abs();
                 if v > vm {
-                    self.buf.push(Violation::new(
+                    let mut x = Violation::new(
                         format!("actuator {} velocity", a.name),
-                        LimitKind::ActuatorPosition,
+                        LimitKind::ActuatorVelocity,
                         Side::Max,
                         a.quantity,
                         v,
                         vm,
-                    ));
+                    );
+                    x.unit = a.quantity.rate_unit(1);
+                    self.buf.push(x);
                 }
                 if v > 0.0 {
                     self.k_max = self.k_max.min(vm / v);
@@ -258,14 +260,16 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
             if let Some(am) = a.max_acceleration {
                 let acc = act.qdd[i].abs();
                 if acc > am {
-                    self.buf.push(Violation::new(
+                    let mut x = Violation::new(
                         format!("actuator {} acceleration", a.name),
-                        LimitKind::ActuatorPosition,
+                        LimitKind::ActuatorAcceleration,
                         Side::Max,
                         a.quantity,
                         acc,
                         am,
-                    ));
+                    );
+                    x.unit = a.quantity.rate_unit(2);
+                    self.buf.push(x);
                 }
                 if acc > 0.0 {
                     self.k_max = self.k_max.min((am / acc).sqrt());

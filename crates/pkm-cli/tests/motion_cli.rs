@@ -1,0 +1,200 @@
+//! `pkm motion` end to end.
+
+use std::path::PathBuf;
+
+use assert_cmd::Command;
+use serde_json::Value;
+
+fn path(rel: &str) -> String {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../..")
+        .join(rel)
+        .display()
+        .to_string()
+}
+
+fn pkm() -> Command {
+    Command::cargo_bin("pkm").unwrap()
+}
+
+#[test]
+fn seed000_arc_through_the_cli() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("arc");
+    let o = pkm()
+        .args([
+            "motion",
+            &path("examples/machines/tripod-seed000.toml"),
+            "--gcode",
+            &path("examples/paths/seed000-arc.ngc"),
+            "--from",
+            "32,-32,-290",
+            "--points",
+            "101",
+            "--json",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let file: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(v, file);
+    assert_eq!(v["samples"], 101);
+    let x = &v["serial"]["X"];
+    assert!((x["travel"].as_f64().unwrap() - 64.0).abs() < 0.32);
+    assert!((x["peak_velocity"].as_f64().unwrap() - 166.667).abs() < 0.01);
+    assert!((x["peak_acceleration"].as_f64().unwrap() - 434.03).abs() < 0.01);
+    for k in [
+        "travel",
+        "peak_velocity",
+        "mean_abs_velocity",
+        "peak_acceleration",
+        "mean_abs_acceleration",
+    ] {
+        assert!(v["actuators"]["e"][k].is_number(), "{k}");
+    }
+    for k in ["travel", "velocity", "acceleration"] {
+        assert!(v["ratios"][k].as_f64().unwrap() > 1.0);
+    }
+    assert!(v["feed_override_max"].as_f64().unwrap() > 1.0);
+    assert!(v["violations"].as_array().unwrap().is_empty());
+    assert!(v["duration_s"].as_f64().unwrap() > 0.6);
+    let csv = std::fs::read_to_string(out.join("actuators.csv")).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "t_s,line,X_mm,Y_mm,Z_mm,A_deg,B_deg,C_deg,e_mm,e_mm_per_s,e_mm_per_s2,f_mm,f_mm_per_s,f_mm_per_s2,g_mm,g_mm_per_s,g_mm_per_s2"
+    );
+    assert_eq!(lines.count(), 101);
+    for f in ["actuators.svg", "serial.svg"] {
+        assert!(std::fs::read_to_string(out.join(f))
+            .unwrap()
+            .contains("<svg"));
+    }
+}
+
+#[test]
+fn coverage_program_runs_on_the_tripod() {
+    let dir = tempfile::tempdir().unwrap();
+    for profile in ["constant", "trapezoid", "scurve"] {
+        let out = dir.path().join(profile);
+        let o = pkm()
+            .args([
+                "motion",
+                &path("examples/machines/tripod-seed000.toml"),
+                "--gcode",
+                &path("examples/paths/gcode-coverage.ngc"),
+                "--profile",
+                profile,
+                "--rate",
+                "500",
+                "--out",
+            ])
+            .arg(&out)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            o.status.code() == Some(0) || o.status.code() == Some(3),
+            "{profile}: {err}"
+        );
+        let v: Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
+                .unwrap();
+        assert!(v["samples"].as_u64().unwrap() > 100);
+    }
+}
+
+#[test]
+fn violations_name_time_line_and_value() {
+    let dir = tempfile::tempdir().unwrap();
+    let g = dir.path().join("fast.ngc");
+    std::fs::write(&g, "G17 G90\nG1 X10 F600\nG1 X40 F60000\n").unwrap();
+    let out = dir.path().join("o");
+    let o = pkm()
+        .args([
+            "motion",
+            &path("examples/machines/tripod-seed000.toml"),
+            "--gcode",
+        ])
+        .arg(&g)
+        .args(["--profile", "constant", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(3));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("G-code line 3") && err.contains("velocity") && err.contains("mm/s"),
+        "{err}"
+    );
+    let v: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let first = &v["violations"][0];
+    assert_eq!(first["line"], 3);
+    assert!(first["worst"].as_f64().unwrap() > first["bound"].as_f64().unwrap());
+    assert!(v["feed_override_max"].as_f64().unwrap() < 1.0);
+}
+
+#[test]
+fn bad_programs_and_moves() {
+    let dir = tempfile::tempdir().unwrap();
+    let g = dir.path().join("bad.ngc");
+    std::fs::write(&g, "G1 X10 F600\nG1 X20\nG66 X1\n").unwrap();
+    let o = pkm()
+        .args([
+            "motion",
+            &path("examples/machines/tripod-seed000.toml"),
+            "--gcode",
+        ])
+        .arg(&g)
+        .arg("--out")
+        .arg(dir.path().join("o"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("G-code line 3") && err.contains("G66"),
+        "{err}"
+    );
+    assert!(
+        !dir.path().join("o/actuators.csv").exists(),
+        "nothing half-written"
+    );
+    // Point to point with a timed trapezoid.
+    let out = dir.path().join("p2p");
+    pkm()
+        .args([
+            "motion",
+            &path("examples/machines/tripod-centre-leg.toml"),
+            "--from",
+            "0,0,-290",
+            "--to",
+            "30,20,-310",
+            "--duration",
+            "1",
+            "--profile",
+            "trapezoid",
+            "--accel-time",
+            "0.1",
+            "--rate",
+            "1000",
+            "--out",
+        ])
+        .arg(&out)
+        .assert()
+        .success();
+    let v: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert!((v["duration_s"].as_f64().unwrap() - 1.0).abs() < 1e-9);
+    assert_eq!(v["samples"], 1001);
+}
