@@ -76,7 +76,7 @@ impl Convention {
     /// Rotation matrix from three angles (radians).
     pub fn to_matrix(self, a: [f64; 3]) -> Matrix3<f64> {
         match self {
-            Convention::Rpy => rz(a[2]) * ry(a[1]) * rx(a[0]),
+            Convention::Rpy => rpy_matrix(a[0], a[1], a[2]),
             Convention::Zyx => rz(a[0]) * ry(a[1]) * rx(a[2]),
             Convention::Zyz => rz(a[0]) * ry(a[1]) * rz(a[2]),
             Convention::Krylov => krylov_matrix(a[0], a[1], a[2]),
@@ -129,6 +129,29 @@ impl FromStr for Convention {
                 ),
             })
     }
+}
+
+/// `Rz(c) Ry(b) Rx(a)` written out (the default A, B, C convention), without matrix
+/// products: on the hot path of every spatial pose.
+#[inline]
+pub fn rpy_matrix(a: f64, b: f64, c: f64) -> Matrix3<f64> {
+    if a == 0.0 && b == 0.0 && c == 0.0 {
+        return Matrix3::identity();
+    }
+    let (sa, ca) = a.sin_cos();
+    let (sb, cb) = b.sin_cos();
+    let (sc, cc) = c.sin_cos();
+    Matrix3::new(
+        cc * cb,
+        cc * sb * sa - sc * ca,
+        cc * sb * ca + sc * sa,
+        sc * cb,
+        sc * sb * sa + cc * ca,
+        sc * sb * ca - cc * sa,
+        -sb,
+        cb * sa,
+        cb * ca,
+    )
 }
 
 /// Right-hand rotation about the X axis.

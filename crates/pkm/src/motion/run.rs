@@ -111,7 +111,9 @@ pub struct Runner<'m, M, const P: usize, const A: usize> {
     open: Vec<(String, usize)>,
     dropped: u64,
     buf: Vec<Violation>,
-    k_max: f64,
+    /// Largest |q'| / limit and |q''| / limit seen.
+    v_ratio: f64,
+    a_ratio: f64,
 }
 
 impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A> {
@@ -150,7 +152,8 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
             open: Vec::new(),
             dropped: 0,
             buf: Vec::new(),
-            k_max: f64::INFINITY,
+            v_ratio: 0.0,
+            a_ratio: 0.0,
         })
     }
 
@@ -253,9 +256,7 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
                     x.unit = a.quantity.rate_unit(1);
                     self.buf.push(x);
                 }
-                if v > 0.0 {
-                    self.k_max = self.k_max.min(vm / v);
-                }
+                self.v_ratio = self.v_ratio.max(v / vm);
             }
             if let Some(am) = a.max_acceleration {
                 let acc = act.qdd[i].abs();
@@ -271,9 +272,7 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
                     x.unit = a.quantity.rate_unit(2);
                     self.buf.push(x);
                 }
-                if acc > 0.0 {
-                    self.k_max = self.k_max.min((am / acc).sqrt());
-                }
+                self.a_ratio = self.a_ratio.max(acc / am);
             }
         }
         self.track(t, mv.line);
@@ -323,8 +322,11 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
     }
 
     /// The summary of everything run so far.
-    pub fn finish(self) -> MotionSummary {
+    pub fn finish(mut self) -> MotionSummary {
         let names = self.serial_names();
+        for s in self.act.iter_mut().chain(self.serial.iter_mut()) {
+            s.finalize();
+        }
         let act: Vec<AxisStats> = self.act.to_vec();
         let ratios = ratios(&self.serial, &act);
         MotionSummary {
@@ -339,7 +341,11 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
             ratios,
             violations: self.runs,
             violations_not_listed: self.dropped,
-            feed_override_max: self.k_max.is_finite().then_some(self.k_max),
+            feed_override_max: {
+                // Velocities scale with the override k, accelerations with k^2.
+                let k = (1.0 / self.v_ratio).min((1.0 / self.a_ratio).sqrt());
+                k.is_finite().then_some(k)
+            },
             duration_s: self.t0,
             samples: self.samples,
         }

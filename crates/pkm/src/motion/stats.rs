@@ -62,8 +62,13 @@ impl AxisStats {
         self.peak_acceleration = self.peak_acceleration.max(a.abs());
         self.sum_v += v.abs();
         self.sum_a += a.abs();
-        self.mean_abs_velocity = self.sum_v / self.n as f64;
-        self.mean_abs_acceleration = self.sum_a / self.n as f64;
+    }
+
+    /// Sets the means from the accumulated sums (call once, after the last sample).
+    pub fn finalize(&mut self) {
+        let n = self.n.max(1) as f64;
+        self.mean_abs_velocity = self.sum_v / n;
+        self.mean_abs_acceleration = self.sum_a / n;
     }
 }
 

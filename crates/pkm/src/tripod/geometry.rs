@@ -199,22 +199,39 @@ impl TripodGeometry {
             );
         }
         if let Some(max) = self.max_tilt {
-            let tilt = crate::rotation::tilt(r);
-            if tilt > max {
-                out.push(Violation::new(
-                    "spindle tilt",
-                    LimitKind::Tilt,
-                    Side::Max,
-                    Quantity::Angle,
-                    tilt,
-                    max,
-                ));
+            // tilt > max  <=>  R22 < cos(max); the angle itself only when violated.
+            if r[(2, 2)] < max.cos() {
+                let tilt = crate::rotation::tilt(r);
+                if tilt > max {
+                    out.push(Violation::new(
+                        "spindle tilt",
+                        LimitKind::Tilt,
+                        Side::Max,
+                        Quantity::Angle,
+                        tilt,
+                        max,
+                    ));
+                }
             }
         }
         if let Some(min) = self.min_strut_spindle_angle {
-            let ang = self.strut_spindle_angles(p, r);
-            for (i, &a) in ang.iter().enumerate() {
-                if a < min {
+            // Fast test: the strut's angle atan2(y, x) is >= min when (x, y) turned by
+            // -min lies in the upper half plane; the angle itself only otherwise.
+            let (sm, cm) = min.sin_cos();
+            let b = self.platform_centre(p, r);
+            let u = r.column(2).into_owned();
+            let joints = self.platform_joints(p, r);
+            let mut exact = None;
+            for i in 0..3 {
+                let rad = joints[i] - b;
+                let radial = rad - u * rad.dot(&u);
+                let s = self.struts[i].base - joints[i];
+                let (x, y) = (s.dot(&u), s.dot(&radial));
+                if y * cm - x * sm >= 0.0 && radial.norm_squared() > 1e-24 {
+                    continue;
+                }
+                let ang = *exact.get_or_insert_with(|| self.strut_spindle_angles(p, r));
+                if ang[i] < min {
                     out.push(Violation::new(
                         format!(
                             "strut {}/spindle collision (inclination relative to spindle, phi <= lambda)",
@@ -223,7 +240,7 @@ impl TripodGeometry {
                         LimitKind::StrutSpindleCollision,
                         Side::Min,
                         Quantity::Angle,
-                        a,
+                        ang[i],
                         min,
                     ));
                 }

@@ -190,11 +190,14 @@ impl Mechanism<6, 3> for TranslationalTripod {
         xdd: &Vector6<f64>,
     ) -> Result<ActuatorMotion<3>> {
         let (p, r) = Self::split(x);
-        let (w, al) = rpy_angular_motion(
-            [x[3], x[4], x[5]],
-            &xd.fixed_rows::<3>(3).into_owned(),
-            &xdd.fixed_rows::<3>(3).into_owned(),
-        );
+        let ad = xd.fixed_rows::<3>(3).into_owned();
+        let add = xdd.fixed_rows::<3>(3).into_owned();
+        // The usual case: the held orientation does not move.
+        let (w, al) = if ad == nalgebra::Vector3::zeros() && add == nalgebra::Vector3::zeros() {
+            (ad, add)
+        } else {
+            rpy_angular_motion([x[3], x[4], x[5]], &ad, &add)
+        };
         Ok(self.geometry.strut_motion(
             &p,
             &r,
