@@ -165,9 +165,9 @@ pub struct MotionArgs {
     /// Path jerk for scurve (mm/s^3).
     #[arg(long, default_value_t = 20000.0)]
     pub jerk: f64,
-    /// Rapid (G0) rate (mm/min).
-    #[arg(long, default_value_t = 10000.0)]
-    pub rapid: f64,
+    /// Rapid (G0) rate (mm/min); default: the machine file's `[motion] rapid`, else 10000.
+    #[arg(long)]
+    pub rapid: Option<f64>,
     /// Duration of a point-to-point move (s), instead of --feed.
     #[arg(long)]
     pub duration: Option<f64>,

@@ -198,3 +198,32 @@ fn bad_programs_and_moves() {
     assert!((v["duration_s"].as_f64().unwrap() - 1.0).abs() < 1e-9);
     assert_eq!(v["samples"], 1001);
 }
+
+#[test]
+fn rapid_rate_comes_from_the_machine_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let g = dir.path().join("rapid.ngc");
+    std::fs::write(&g, "G0 X10\n").unwrap();
+    let run = |extra: &[&str]| -> f64 {
+        let out = dir.path().join("o");
+        pkm()
+            .args([
+                "motion",
+                &path("examples/machines/tripod-seed000.toml"),
+                "--gcode",
+            ])
+            .arg(&g)
+            .args(extra)
+            .arg("--out")
+            .arg(&out)
+            .assert()
+            .success();
+        let v: Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
+                .unwrap();
+        v["duration_s"].as_f64().unwrap()
+    };
+    // [motion] rapid = 6000 mm/min: 10 mm in 0.1 s; --rapid overrides it.
+    assert!((run(&[]) - 0.1).abs() < 1e-12);
+    assert!((run(&["--rapid", "1200"]) - 0.5).abs() < 1e-12);
+}

@@ -354,7 +354,11 @@ pub fn run(a: &MotionArgs) -> Result<u8> {
         profile: a.profile.into(),
         acceleration: a.accel,
         jerk: a.jerk,
-        rapid: a.rapid / 60.0,
+        rapid: a
+            .rapid
+            .map(|r| r / 60.0)
+            .or(machine.rapid)
+            .unwrap_or(10_000.0 / 60.0),
         feed: a.feed.map(|f| f / 60.0),
     };
     let sampling = match (a.rate, a.points) {

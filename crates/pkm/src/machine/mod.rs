@@ -24,6 +24,31 @@ pub(crate) struct Parts {
     name: Option<String>,
     description: Option<String>,
     references: Vec<Reference>,
+    rapid: Option<f64>,
+}
+
+/// The `[motion]` table: motion settings of the machine.
+#[derive(Debug, Clone, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct MotionFile {
+    /// Rapid (G0) rate, mm/min.
+    #[serde(default)]
+    rapid: Option<f64>,
+}
+
+/// Checks `[motion]`; returns the rapid rate in mm/s.
+pub(crate) fn check_motion(src: &source::Source, m: Option<&MotionFile>) -> Result<Option<f64>> {
+    match m.and_then(|m| m.rapid) {
+        Some(r) if !(r > 0.0) => Err(src.error(
+            &[
+                source::Seg::Key("motion".into()),
+                source::Seg::Key("rapid".into()),
+            ],
+            format!("expected a rate > 0 mm/min, found {r}"),
+        )),
+        Some(r) => Ok(Some(r / 60.0)),
+        None => Ok(None),
+    }
 }
 
 /// Checks the `[[reference]]` entries' own values (tolerance, finiteness).
@@ -85,6 +110,8 @@ pub struct Machine {
     pub model: Model,
     /// Reference poses with published values to reproduce.
     pub references: Vec<Reference>,
+    /// Rapid (G0) rate from the file's `[motion]` table (mm/s).
+    pub rapid: Option<f64>,
 }
 
 /// Machine types accepted in the `type` field.
@@ -153,6 +180,7 @@ impl Machine {
             description: parts.description,
             model: parts.model,
             references: parts.references,
+            rapid: parts.rapid,
         })
     }
 

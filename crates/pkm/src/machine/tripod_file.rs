@@ -36,6 +36,8 @@ pub(super) struct TripodFile {
     centre_leg: Option<CentreLegFile>,
     #[serde(default)]
     reference: Vec<Reference>,
+    #[serde(default)]
+    motion: Option<super::MotionFile>,
 }
 
 #[derive(Debug, Deserialize, Clone, Copy, PartialEq)]
@@ -315,10 +317,12 @@ pub(super) fn build(src: &Source, f: TripodFile) -> Result<super::Parts, Error> 
         }
     };
     super::check_references(src, &f.reference)?;
+    let rapid = super::check_motion(src, f.motion.as_ref())?;
     Ok(super::Parts {
         model,
         name: f.name,
         description: f.description,
         references: f.reference,
+        rapid,
     })
 }
