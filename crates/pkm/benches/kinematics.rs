@@ -52,7 +52,7 @@ fn tripod(c: &mut Criterion) {
 }
 
 criterion_group!(benches, tripod);
-criterion_main!(benches, motion_benches);
+criterion_main!(benches, motion_benches, hexapod_benches);
 
 fn motion(c: &mut Criterion) {
     use pkm::motion::gcode::Interpreter;
@@ -88,3 +88,27 @@ fn motion(c: &mut Criterion) {
 }
 
 criterion_group!(motion_benches, motion);
+
+fn hexapod(c: &mut Criterion) {
+    let Model::Hexapod(h) = machine("hexapod-linuxcnc.toml").model else {
+        panic!()
+    };
+    let h = *h;
+    let x = Vector6::new(20.0, -10.0, 540.0, 0.05, -0.03, 0.1);
+    let (p, r) = pkm::legs::split_pose(&x);
+    c.bench_function("hexapod IK from rotation matrix", |b| {
+        b.iter(|| h.lengths(black_box(&p), black_box(&r)))
+    });
+    let q = Mechanism::<6, 6>::inverse(&h, &x).unwrap();
+    // Previous pose of a 1 kHz trajectory at 100 mm/s and 0.5 rad/s: 0.1 mm, 0.0005 rad away.
+    let prev = Vector6::new(19.9, -10.0, 540.0, 0.0495, -0.03, 0.1);
+    c.bench_function("hexapod FK from the previous 1 kHz pose", |b| {
+        b.iter(|| Mechanism::<6, 6>::forward(&h, black_box(&q), black_box(&prev)).unwrap())
+    });
+    let home = h.home;
+    c.bench_function("hexapod FK from home", |b| {
+        b.iter(|| Mechanism::<6, 6>::forward(&h, black_box(&q), black_box(&home)).unwrap())
+    });
+}
+
+criterion_group!(hexapod_benches, hexapod);

@@ -26,6 +26,8 @@
 
 pub mod dynamic;
 pub mod error;
+pub mod hexapod;
+pub mod legs;
 pub mod limits;
 pub mod linalg;
 pub mod machine;
@@ -51,3 +53,4 @@ pub use units::Quantity;
 
 impl_dyn_mechanism!(tripod::TranslationalTripod, 6, 3);
 impl_dyn_mechanism!(tripod::CentreLegTripod, 3, 3);
+impl_dyn_mechanism!(hexapod::Hexapod, 6, 6);

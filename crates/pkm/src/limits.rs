@@ -37,6 +37,10 @@ pub enum LimitKind {
     StrutSpindleCollision,
     /// Stroke of a passive joint (e.g. the telescopic centre leg of a Tricept).
     PassiveJoint,
+    /// Angle of a universal or spherical joint (cone limit).
+    JointAngle,
+    /// Two struts closer than their diameter.
+    StrutInterference,
 }
 
 /// One violated limit.

@@ -303,3 +303,34 @@ pub fn angle_between(a: &Matrix3<f64>, b: &Matrix3<f64>) -> f64 {
     );
     (0.5 * v.norm()).atan2(0.5 * (r.trace() - 1.0))
 }
+
+/// Angular velocity and acceleration of the A, B, C angles moving with rates `ad` and
+/// accelerations `add`: `w = E ad`, `al = E add + E' ad`, with `E` from
+/// [`rpy_rate_matrix`] and `E'` its time derivative.
+pub fn rpy_angular_motion(
+    a: [f64; 3],
+    ad: &Vector3<f64>,
+    add: &Vector3<f64>,
+) -> (Vector3<f64>, Vector3<f64>) {
+    let e = rpy_rate_matrix(a);
+    let w = e * ad;
+    let rzc = rz(a[2]);
+    let ez = Vector3::z();
+    let ey = Vector3::y();
+    let c0 = rzc * ry(a[1]) * Vector3::x();
+    let c1 = rzc * ey;
+    // d/dt (Rz(C) Ry(B) e_x) = C' e_z x c0 + Rz(C) (B' e_y x Ry(B) e_x); d/dt (Rz(C) e_y) = C' e_z x c1.
+    let dc0 = ez.cross(&c0) * ad[2] + rzc * (ey.cross(&(ry(a[1]) * Vector3::x())) * ad[1]);
+    let dc1 = ez.cross(&c1) * ad[2];
+    let edot = Matrix3::from_columns(&[dc0, dc1, Vector3::zeros()]);
+    (w, e * add + edot * ad)
+}
+
+/// Angular-velocity map of the A, B, C angles (`R = Rz(C) Ry(B) Rx(A)`):
+/// `w = E (A', B', C')` with columns `Rz(C) Ry(B) e_x`, `Rz(C) e_y`, `e_z`.
+pub fn rpy_rate_matrix(a: [f64; 3]) -> Matrix3<f64> {
+    let rzc = rz(a[2]);
+    let c0 = rzc * ry(a[1]) * Vector3::x();
+    let c1 = rzc * Vector3::y();
+    Matrix3::from_columns(&[c0, c1, Vector3::z()])
+}

@@ -4,6 +4,7 @@
 //! The file format is documented in `docs/machine-file.md`. Every file has a `type`
 //! field; unknown keys are rejected; errors name the file, line, column and field.
 
+mod hexapod_file;
 mod reference;
 mod source;
 mod tripod_file;
@@ -17,6 +18,54 @@ use crate::tripod::{CentreLegTripod, TranslationalTripod};
 
 pub use reference::Reference;
 pub use source::line_col;
+
+pub(crate) fn v3(a: [f64; 3]) -> nalgebra::Vector3<f64> {
+    nalgebra::Vector3::new(a[0], a[1], a[2])
+}
+
+/// Checks a `[min, max]` pair of lengths: non-negative, ordered.
+pub(crate) fn length_range(
+    src: &source::Source,
+    path: &[source::Seg],
+    r: [f64; 2],
+) -> Result<crate::limits::Range> {
+    if r[0] < 0.0 || r[1] < 0.0 {
+        return Err(src.error(
+            path,
+            format!(
+                "expected lengths >= 0 mm as [min, max], found [{}, {}]",
+                r[0], r[1]
+            ),
+        ));
+    }
+    if r[0] >= r[1] {
+        return Err(src.error(
+            path,
+            format!(
+                "expected [min, max] with min < max, found [{}, {}]",
+                r[0], r[1]
+            ),
+        ));
+    }
+    Ok(crate::limits::Range {
+        min: r[0],
+        max: r[1],
+    })
+}
+
+pub(crate) fn positive_opt(
+    src: &source::Source,
+    path: &[source::Seg],
+    v: Option<f64>,
+    unit: &str,
+) -> Result<()> {
+    match v {
+        Some(x) if x <= 0.0 => {
+            Err(src.error(path, format!("expected a value > 0 {unit}, found {x}")))
+        }
+        _ => Ok(()),
+    }
+}
 
 /// What a machine-type loader returns.
 pub(crate) struct Parts {
@@ -86,6 +135,8 @@ pub enum Model {
     TranslationalTripod(TranslationalTripod),
     /// `type = "tripod"`, `constraint = "centre-leg"`.
     CentreLegTripod(CentreLegTripod),
+    /// `type = "hexapod"`.
+    Hexapod(Box<crate::hexapod::Hexapod>),
 }
 
 /// Code generic over any mechanism, run on a machine whose type is known at run time
@@ -115,7 +166,7 @@ pub struct Machine {
 }
 
 /// Machine types accepted in the `type` field.
-pub const MACHINE_TYPES: &[&str] = &["tripod"];
+pub const MACHINE_TYPES: &[&str] = &["tripod", "hexapod"];
 
 impl Machine {
     /// Reads and validates a machine file.
@@ -164,6 +215,7 @@ impl Machine {
         };
         let parts = match kind.as_str() {
             "tripod" => tripod_file::build(&src, src.deserialize()?)?,
+            "hexapod" => hexapod_file::build(&src, src.deserialize()?)?,
             other => {
                 return Err(src.error(
                     &[source::Seg::Key("type".into())],
@@ -189,6 +241,7 @@ impl Machine {
         match &self.model {
             Model::TranslationalTripod(m) => m,
             Model::CentreLegTripod(m) => m,
+            Model::Hexapod(m) => m.as_ref(),
         }
     }
 
@@ -197,6 +250,7 @@ impl Machine {
         match &self.model {
             Model::TranslationalTripod(m) => v.visit(m),
             Model::CentreLegTripod(m) => v.visit(m),
+            Model::Hexapod(m) => v.visit(m.as_ref()),
         }
     }
 

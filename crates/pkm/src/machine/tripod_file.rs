@@ -7,9 +7,8 @@ use serde::Deserialize;
 
 use super::reference::Reference;
 use super::source::{Seg, Source};
-use super::Model;
+use super::{length_range, positive_opt, v3, Model};
 use crate::error::Error;
-use crate::limits::Range;
 use crate::mechanism::Actuator;
 use crate::rotation::Convention;
 use crate::tripod::{CentreLeg, CentreLegTripod, Strut, TranslationalTripod, TripodGeometry};
@@ -93,45 +92,6 @@ struct CentreLegFile {
 
 fn key(k: &str) -> Seg {
     Seg::Key(k.into())
-}
-
-fn v3(a: [f64; 3]) -> Vector3<f64> {
-    Vector3::new(a[0], a[1], a[2])
-}
-
-/// Checks a `[min, max]` pair of lengths: non-negative, ordered.
-fn length_range(src: &Source, path: &[Seg], r: [f64; 2]) -> Result<Range, Error> {
-    if r[0] < 0.0 || r[1] < 0.0 {
-        return Err(src.error(
-            path,
-            format!(
-                "expected lengths >= 0 mm as [min, max], found [{}, {}]",
-                r[0], r[1]
-            ),
-        ));
-    }
-    if r[0] >= r[1] {
-        return Err(src.error(
-            path,
-            format!(
-                "expected [min, max] with min < max, found [{}, {}]",
-                r[0], r[1]
-            ),
-        ));
-    }
-    Ok(Range {
-        min: r[0],
-        max: r[1],
-    })
-}
-
-fn positive_opt(src: &Source, path: &[Seg], v: Option<f64>, unit: &str) -> Result<(), Error> {
-    match v {
-        Some(x) if x <= 0.0 => {
-            Err(src.error(path, format!("expected a value > 0 {unit}, found {x}")))
-        }
-        _ => Ok(()),
-    }
 }
 
 fn check_triangle(

@@ -40,8 +40,8 @@ pub struct TripodGeometry {
     pub min_strut_spindle_angle: Option<f64>,
     /// Cached: the actuators of the three struts.
     actuators: [Actuator; 3],
-    /// Cached: platform joint minus tool tip, in the platform frame (`c_i - t`).
-    arms: [Vector3<f64>; 3],
+    /// Cached: base joints and arms (`c_i - t`) for the shared strut computations.
+    set: crate::legs::StrutSet<3>,
 }
 
 impl TripodGeometry {
@@ -54,7 +54,11 @@ impl TripodGeometry {
         min_strut_spindle_angle: Option<f64>,
     ) -> Self {
         let actuators = [0, 1, 2].map(|i| struts[i].actuator.clone());
-        let arms = [0, 1, 2].map(|i| struts[i].platform - tool);
+        let set = crate::legs::StrutSet::new(
+            [0, 1, 2].map(|i| struts[i].base),
+            [0, 1, 2].map(|i| struts[i].platform),
+            tool,
+        );
         TripodGeometry {
             name,
             struts,
@@ -62,8 +66,13 @@ impl TripodGeometry {
             max_tilt,
             min_strut_spindle_angle,
             actuators,
-            arms,
+            set,
         }
+    }
+
+    /// The shared strut geometry.
+    pub fn strut_set(&self) -> &crate::legs::StrutSet<3> {
+        &self.set
     }
 
     /// The three actuators.
@@ -75,11 +84,7 @@ impl TripodGeometry {
     /// `r` (seed 000 eq. 3-6): `P_i = p + R (c_i - t)`.
     #[inline]
     pub fn platform_joints(&self, p: &Vector3<f64>, r: &Matrix3<f64>) -> [Vector3<f64>; 3] {
-        [
-            p + r * self.arms[0],
-            p + r * self.arms[1],
-            p + r * self.arms[2],
-        ]
+        self.set.platform_joints(p, r)
     }
 
     /// Platform centre B in the base frame: `B = p - R t`.
@@ -92,12 +97,7 @@ impl TripodGeometry {
     /// Allocation-free; this is the tripod's inverse kinematics.
     #[inline]
     pub fn strut_lengths(&self, p: &Vector3<f64>, r: &Matrix3<f64>) -> Vector3<f64> {
-        let j = self.platform_joints(p, r);
-        Vector3::new(
-            (j[0] - self.struts[0].base).norm(),
-            (j[1] - self.struts[1].base).norm(),
-            (j[2] - self.struts[2].base).norm(),
-        )
+        self.set.lengths(p, r)
     }
 
     /// Jacobian of the strut lengths with respect to the tool twist `(v, w)`: tool tip
@@ -107,16 +107,7 @@ impl TripodGeometry {
     /// to the platform joint and `r_i = R (c_i - t)`, since
     /// `dL_i/dt = n_i . (v + w x r_i)`.
     pub fn twist_jacobian(&self, p: &Vector3<f64>, r: &Matrix3<f64>) -> SMatrix<f64, 3, 6> {
-        let mut j = SMatrix::<f64, 3, 6>::zeros();
-        for i in 0..3 {
-            let ri = r * self.arms[i];
-            let d = p + ri - self.struts[i].base;
-            let n = d / d.norm();
-            let m = ri.cross(&n);
-            j.fixed_view_mut::<1, 3>(i, 0).copy_from(&n.transpose());
-            j.fixed_view_mut::<1, 3>(i, 3).copy_from(&m.transpose());
-        }
-        j
+        self.set.twist_jacobian(p, r)
     }
 
     /// Exact strut lengths, rates and accelerations for a platform moving with tool-tip
@@ -134,24 +125,7 @@ impl TripodGeometry {
         a: &Vector3<f64>,
         al: &Vector3<f64>,
     ) -> crate::mechanism::ActuatorMotion<3> {
-        let mut out = crate::mechanism::ActuatorMotion {
-            q: Vector3::zeros(),
-            qd: Vector3::zeros(),
-            qdd: Vector3::zeros(),
-        };
-        for i in 0..3 {
-            let ri = r * self.arms[i];
-            let d = p + ri - self.struts[i].base;
-            let l = d.norm();
-            let n = d / l;
-            let dd = v + w.cross(&ri);
-            let ddd = a + al.cross(&ri) + w.cross(&w.cross(&ri));
-            let ld = n.dot(&dd);
-            out.q[i] = l;
-            out.qd[i] = ld;
-            out.qdd[i] = (dd.norm_squared() - ld * ld) / l + n.dot(&ddd);
-        }
-        out
+        self.set.motion(p, r, v, w, a, al)
     }
 
     /// Inclination of each strut relative to the spindle axis (rad), measured in the
@@ -285,37 +259,4 @@ impl TripodGeometry {
         s.link("tool", LinkKind::Tool, b, a);
         (s, b)
     }
-}
-
-/// Angular velocity and acceleration of the A, B, C angles moving with rates `ad` and
-/// accelerations `add`: `w = E ad`, `al = E add + E' ad`, with `E` from
-/// [`rpy_rate_matrix`] and `E'` its time derivative.
-pub fn rpy_angular_motion(
-    a: [f64; 3],
-    ad: &Vector3<f64>,
-    add: &Vector3<f64>,
-) -> (Vector3<f64>, Vector3<f64>) {
-    use crate::rotation::{ry, rz};
-    let e = rpy_rate_matrix(a);
-    let w = e * ad;
-    let rzc = rz(a[2]);
-    let ez = Vector3::z();
-    let ey = Vector3::y();
-    let c0 = rzc * ry(a[1]) * Vector3::x();
-    let c1 = rzc * ey;
-    // d/dt (Rz(C) Ry(B) e_x) = C' e_z x c0 + Rz(C) (B' e_y x Ry(B) e_x); d/dt (Rz(C) e_y) = C' e_z x c1.
-    let dc0 = ez.cross(&c0) * ad[2] + rzc * (ey.cross(&(ry(a[1]) * Vector3::x())) * ad[1]);
-    let dc1 = ez.cross(&c1) * ad[2];
-    let edot = Matrix3::from_columns(&[dc0, dc1, Vector3::zeros()]);
-    (w, e * add + edot * ad)
-}
-
-/// Angular-velocity map of the A, B, C angles (`R = Rz(C) Ry(B) Rx(A)`):
-/// `w = E (A', B', C')` with columns `Rz(C) Ry(B) e_x`, `Rz(C) e_y`, `e_z`.
-pub fn rpy_rate_matrix(a: [f64; 3]) -> Matrix3<f64> {
-    use crate::rotation::{ry, rz};
-    let rzc = rz(a[2]);
-    let c0 = rzc * ry(a[1]) * Vector3::x();
-    let c1 = rzc * Vector3::y();
-    Matrix3::from_columns(&[c0, c1, Vector3::z()])
 }

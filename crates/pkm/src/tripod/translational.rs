@@ -1,6 +1,6 @@
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3, Vector6};
 
-use super::geometry::{rpy_angular_motion, rpy_rate_matrix, TripodGeometry};
+use super::geometry::TripodGeometry;
 use crate::error::{Error, Result};
 use crate::limits::Violation;
 use crate::mechanism::{
@@ -141,13 +141,7 @@ impl Mechanism<6, 3> for TranslationalTripod {
     /// `dL/dx = J_twist diag(I, E(A, B, C))`, with `E` the angular-velocity map of the
     /// A, B, C rates.
     fn jacobian(&self, x: &Vector6<f64>) -> Result<SMatrix<f64, 3, 6>> {
-        let (p, r) = Self::split(x);
-        let jt = self.geometry.twist_jacobian(&p, &r);
-        let e = rpy_rate_matrix([x[3], x[4], x[5]]);
-        let mut j = jt;
-        let rot = jt.fixed_view::<3, 3>(0, 3) * e;
-        j.fixed_view_mut::<3, 3>(0, 3).copy_from(&rot);
-        Ok(j)
+        Ok(self.geometry.strut_set().coords_jacobian(x))
     }
 
     fn forward(&self, q: &Vector3<f64>, start: &Vector6<f64>) -> Result<Forward<6>> {
@@ -189,23 +183,7 @@ impl Mechanism<6, 3> for TranslationalTripod {
         xd: &Vector6<f64>,
         xdd: &Vector6<f64>,
     ) -> Result<ActuatorMotion<3>> {
-        let (p, r) = Self::split(x);
-        let ad = xd.fixed_rows::<3>(3).into_owned();
-        let add = xdd.fixed_rows::<3>(3).into_owned();
-        // The usual case: the held orientation does not move.
-        let (w, al) = if ad == nalgebra::Vector3::zeros() && add == nalgebra::Vector3::zeros() {
-            (ad, add)
-        } else {
-            rpy_angular_motion([x[3], x[4], x[5]], &ad, &add)
-        };
-        Ok(self.geometry.strut_motion(
-            &p,
-            &r,
-            &xd.fixed_rows::<3>(0).into_owned(),
-            &w,
-            &xdd.fixed_rows::<3>(0).into_owned(),
-            &al,
-        ))
+        Ok(self.geometry.strut_set().coords_motion(x, xd, xdd))
     }
 
     fn skeleton(&self, x: &SVector<f64, 6>) -> Result<Skeleton> {

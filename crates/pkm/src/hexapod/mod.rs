@@ -1,0 +1,406 @@
+//! The hexapod (Stewart-Gough platform) of seed 001 and of LinuxCNC's genhexkins.
+//!
+//! Six struts join base joints `a_j` (universal joints, base frame) to platform joints
+//! `b'_j` (spherical joints, platform frame): `L_j = |p + R (b'_j - t) - a_j|` (seed 001
+//! eq. 1 with the tool tip `t` as the characteristic point). Pose coordinates X, Y, Z, A,
+//! B, C of the tool tip (default convention), all six driven.
+
+// Struts, joints and sample vectors are indexed together.
+#![allow(clippy::needless_range_loop)]
+
+mod forward;
+
+use nalgebra::{Matrix3, SMatrix, Vector3, Vector6};
+
+use crate::error::Result;
+use crate::legs::{split_pose, StrutSet};
+use crate::limits::{LimitKind, Side, Violation};
+use crate::mechanism::{
+    spatial_coordinates, Actuator, ActuatorMotion, Coordinate, Forward, LinkKind, Mechanism,
+    PointRole, PoseSpace, Skeleton,
+};
+use crate::pose::{pose_from_parts, rotation_matrix, Pose};
+use crate::rotation::Convention;
+use crate::units::Quantity;
+
+pub use forward::{FkOptions, FkReport};
+
+/// A joint's allowed cone: the strut must stay within `max_angle` of `axis`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JointCone {
+    /// Unit axis (base frame for base joints, platform frame for platform joints).
+    pub axis: Vector3<f64>,
+    /// Largest angle between the strut and the axis (rad).
+    pub max_angle: f64,
+}
+
+/// One strut of a hexapod.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HexStrut {
+    /// Actuator (name, stroke, rate limits).
+    pub actuator: Actuator,
+    /// Base joint name.
+    pub base_name: String,
+    /// Platform joint name.
+    pub platform_name: String,
+    /// Base joint centre (base frame, mm).
+    pub base: Vector3<f64>,
+    /// Platform joint centre (platform frame, mm).
+    pub platform: Vector3<f64>,
+    /// Cone of the base (universal) joint.
+    pub base_cone: Option<JointCone>,
+    /// Cone of the platform (spherical) joint.
+    pub platform_cone: Option<JointCone>,
+}
+
+/// A hexapod machine.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Hexapod {
+    /// Machine name.
+    pub name: String,
+    /// The six struts.
+    pub struts: [HexStrut; 6],
+    /// Tool tip in the platform frame (mm).
+    pub tool: Vector3<f64>,
+    /// Strut diameter for strut-strut interference (mm), if checked.
+    pub strut_diameter: Option<f64>,
+    /// Home pose (X, Y, Z mm; A, B, C rad).
+    pub home: Vector6<f64>,
+    /// Length that scales rotations against translations in conditioning (mm): the
+    /// mean distance of the platform joints from the tool tip.
+    pub characteristic_length: f64,
+    set: StrutSet<6>,
+    actuators: [Actuator; 6],
+    coordinates: [Coordinate; 6],
+    /// Pairs of struts that share a joint (never checked for interference).
+    shares: [[bool; 6]; 6],
+}
+
+/// Distance between segments `p0-p1` and `q0-q1`.
+pub fn segment_distance(
+    p0: &Vector3<f64>,
+    p1: &Vector3<f64>,
+    q0: &Vector3<f64>,
+    q1: &Vector3<f64>,
+) -> f64 {
+    let d1 = p1 - p0;
+    let d2 = q1 - q0;
+    let r = p0 - q0;
+    let a = d1.dot(&d1);
+    let e = d2.dot(&d2);
+    let f = d2.dot(&r);
+    let (s, t);
+    if a <= 1e-300 && e <= 1e-300 {
+        return r.norm();
+    }
+    if a <= 1e-300 {
+        s = 0.0;
+        t = (f / e).clamp(0.0, 1.0);
+    } else {
+        let c = d1.dot(&r);
+        if e <= 1e-300 {
+            t = 0.0;
+            s = (-c / a).clamp(0.0, 1.0);
+        } else {
+            let b = d1.dot(&d2);
+            let denom = a * e - b * b;
+            let mut s0 = if denom > 1e-300 {
+                ((b * f - c * e) / denom).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let mut t0 = (b * s0 + f) / e;
+            if t0 < 0.0 {
+                t0 = 0.0;
+                s0 = (-c / a).clamp(0.0, 1.0);
+            } else if t0 > 1.0 {
+                t0 = 1.0;
+                s0 = ((b - c) / a).clamp(0.0, 1.0);
+            }
+            s = s0;
+            t = t0;
+        }
+    }
+    ((p0 + d1 * s) - (q0 + d2 * t)).norm()
+}
+
+impl Hexapod {
+    /// Assembles a hexapod.
+    pub fn new(
+        name: String,
+        struts: [HexStrut; 6],
+        tool: Vector3<f64>,
+        strut_diameter: Option<f64>,
+        home: Vector6<f64>,
+    ) -> Self {
+        let set = StrutSet::new(
+            std::array::from_fn(|i| struts[i].base),
+            std::array::from_fn(|i| struts[i].platform),
+            tool,
+        );
+        let characteristic_length = set.arms.iter().map(|a| a.norm()).sum::<f64>() / 6.0;
+        let actuators = std::array::from_fn(|i| struts[i].actuator.clone());
+        let shares = std::array::from_fn(|i| {
+            std::array::from_fn(|k| {
+                i != k
+                    && (struts[i].base_name == struts[k].base_name
+                        || struts[i].platform_name == struts[k].platform_name)
+            })
+        });
+        Hexapod {
+            name,
+            struts,
+            tool,
+            strut_diameter,
+            home,
+            characteristic_length: characteristic_length.max(1e-9),
+            set,
+            actuators,
+            coordinates: spatial_coordinates(),
+            shares,
+        }
+    }
+
+    /// The strut geometry.
+    pub fn strut_set(&self) -> &StrutSet<6> {
+        &self.set
+    }
+
+    /// Strut lengths from a tool tip and a rotation matrix (allocation-free).
+    #[inline]
+    pub fn lengths(&self, p: &Vector3<f64>, r: &Matrix3<f64>) -> Vector6<f64> {
+        self.set.lengths(p, r)
+    }
+
+    /// Twist Jacobian with the rotation columns scaled by the characteristic length, so
+    /// that its singular values are all in mm per mm: `J diag(I, I / l_c)`.
+    pub fn scaled_twist_jacobian(&self, p: &Vector3<f64>, r: &Matrix3<f64>) -> SMatrix<f64, 6, 6> {
+        let mut j = self.set.twist_jacobian(p, r);
+        for row in 0..6 {
+            for c in 3..6 {
+                j[(row, c)] /= self.characteristic_length;
+            }
+        }
+        j
+    }
+
+    /// Largest actuator rate per unit tool speed (pure translation), mm/s per mm/s: the
+    /// 2-norm of the translational block of the Jacobian.
+    pub fn velocity_transmission(&self, x: &Vector6<f64>) -> f64 {
+        let (p, r) = split_pose(x);
+        let j = self.set.twist_jacobian(&p, &r);
+        let jt: SMatrix<f64, 6, 3> = j.fixed_view::<6, 3>(0, 0).into_owned();
+        crate::linalg::singular_values(&jt)[0]
+    }
+}
+
+impl Mechanism<6, 6> for Hexapod {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn kind(&self) -> &'static str {
+        "hexapod"
+    }
+
+    fn coordinates(&self) -> &[Coordinate; 6] {
+        &self.coordinates
+    }
+
+    fn actuators(&self) -> &[Actuator; 6] {
+        &self.actuators
+    }
+
+    fn driven(&self) -> [usize; 6] {
+        [0, 1, 2, 3, 4, 5]
+    }
+
+    fn pose_space(&self) -> PoseSpace {
+        PoseSpace::Spatial
+    }
+
+    fn home(&self) -> Vector6<f64> {
+        self.home
+    }
+
+    #[inline]
+    fn inverse(&self, x: &Vector6<f64>) -> Result<Vector6<f64>> {
+        let (p, r) = split_pose(x);
+        Ok(self.set.lengths(&p, &r))
+    }
+
+    fn jacobian(&self, x: &Vector6<f64>) -> Result<SMatrix<f64, 6, 6>> {
+        Ok(self.set.coords_jacobian(x))
+    }
+
+    /// Newton on SE(3) from `start` (see [`forward::solve`]).
+    fn forward(&self, q: &Vector6<f64>, start: &Vector6<f64>) -> Result<Forward<6>> {
+        let (p0, r0) = split_pose(start);
+        let rep = forward::solve(self, q, &p0, &r0, &FkOptions::default())?;
+        let a = Convention::Rpy.from_matrix(&rep.rotation);
+        Ok(Forward {
+            pose: Vector6::new(
+                rep.position.x,
+                rep.position.y,
+                rep.position.z,
+                a[0],
+                a[1],
+                a[2],
+            ),
+            iterations: rep.iterations,
+            residual: rep.residual,
+        })
+    }
+
+    fn tool_pose(&self, x: &Vector6<f64>) -> Result<Pose> {
+        let (p, r) = split_pose(x);
+        Ok(pose_from_parts(p, &r))
+    }
+
+    fn coords_from_pose(&self, pose: &Pose, orientation_given: bool) -> Result<Vector6<f64>> {
+        let p = pose.translation.vector;
+        let a = if orientation_given {
+            Convention::Rpy.from_matrix(&rotation_matrix(pose))
+        } else {
+            [self.home[3], self.home[4], self.home[5]]
+        };
+        Ok(Vector6::new(p.x, p.y, p.z, a[0], a[1], a[2]))
+    }
+
+    fn check_limits(&self, x: &Vector6<f64>, q: &Vector6<f64>, out: &mut Vec<Violation>) {
+        let (p, r) = split_pose(x);
+        let joints = self.set.platform_joints(&p, &r);
+        for i in 0..6 {
+            let s = &self.struts[i];
+            s.actuator.range.check(
+                || format!("strut {} length", s.actuator.name),
+                LimitKind::ActuatorPosition,
+                Quantity::Length,
+                q[i],
+                out,
+            );
+            let n = (joints[i] - s.base) / q[i];
+            if let Some(c) = &s.base_cone {
+                let cos = n.dot(&c.axis);
+                if cos < c.max_angle.cos() {
+                    out.push(Violation::new(
+                        format!(
+                            "base joint {} angle (strut {})",
+                            s.base_name, s.actuator.name
+                        ),
+                        LimitKind::JointAngle,
+                        Side::Max,
+                        Quantity::Angle,
+                        cos.clamp(-1.0, 1.0).acos(),
+                        c.max_angle,
+                    ));
+                }
+            }
+            if let Some(c) = &s.platform_cone {
+                let cos = (-n).dot(&(r * c.axis));
+                if cos < c.max_angle.cos() {
+                    out.push(Violation::new(
+                        format!(
+                            "platform joint {} angle (strut {})",
+                            s.platform_name, s.actuator.name
+                        ),
+                        LimitKind::JointAngle,
+                        Side::Max,
+                        Quantity::Angle,
+                        cos.clamp(-1.0, 1.0).acos(),
+                        c.max_angle,
+                    ));
+                }
+            }
+        }
+        if let Some(dia) = self.strut_diameter {
+            for i in 0..6 {
+                for k in i + 1..6 {
+                    if self.shares[i][k] {
+                        continue;
+                    }
+                    let d = segment_distance(
+                        &self.struts[i].base,
+                        &joints[i],
+                        &self.struts[k].base,
+                        &joints[k],
+                    );
+                    if d < dia {
+                        out.push(Violation::new(
+                            format!(
+                                "struts {}/{} interference (axis distance)",
+                                self.struts[i].actuator.name, self.struts[k].actuator.name
+                            ),
+                            LimitKind::StrutInterference,
+                            Side::Min,
+                            Quantity::Length,
+                            d,
+                            dia,
+                        ));
+                    }
+                }
+            }
+        }
+    }
+
+    fn skeleton(&self, x: &Vector6<f64>) -> Result<Skeleton> {
+        let (p, r) = split_pose(x);
+        let joints = self.set.platform_joints(&p, &r);
+        let mut s = Skeleton::default();
+        let mut base_idx: Vec<(String, usize)> = Vec::new();
+        let mut plat_idx: Vec<(String, usize)> = Vec::new();
+        let idx = |s: &mut Skeleton,
+                   list: &mut Vec<(String, usize)>,
+                   name: &str,
+                   role,
+                   v: &Vector3<f64>| {
+            if let Some((_, i)) = list.iter().find(|(n, _)| n == name) {
+                return *i;
+            }
+            let i = s.point(name, role, v);
+            list.push((name.to_string(), i));
+            i
+        };
+        let mut pairs = Vec::new();
+        for i in 0..6 {
+            let st = &self.struts[i];
+            let b = idx(
+                &mut s,
+                &mut base_idx,
+                &st.base_name,
+                PointRole::BaseJoint,
+                &st.base,
+            );
+            let q = idx(
+                &mut s,
+                &mut plat_idx,
+                &st.platform_name,
+                PointRole::PlatformJoint,
+                &joints[i],
+            );
+            pairs.push((b, q));
+        }
+        for (i, (b, q)) in pairs.iter().enumerate() {
+            s.link(&self.struts[i].actuator.name, LinkKind::Strut, *b, *q);
+        }
+        for list in [(&base_idx, LinkKind::Base), (&plat_idx, LinkKind::Platform)] {
+            let n = list.0.len();
+            for k in 0..n {
+                s.link("", list.1, list.0[k].1, list.0[(k + 1) % n].1);
+            }
+        }
+        let c = s.point("P", PointRole::PlatformCentre, &(p - r * self.tool));
+        let a = s.point("tool", PointRole::Tool, &p);
+        s.link("tool", LinkKind::Tool, c, a);
+        Ok(s)
+    }
+
+    fn actuator_motion(
+        &self,
+        x: &Vector6<f64>,
+        xd: &Vector6<f64>,
+        xdd: &Vector6<f64>,
+    ) -> Result<ActuatorMotion<6>> {
+        Ok(self.set.coords_motion(x, xd, xdd))
+    }
+}

@@ -1,0 +1,143 @@
+//! N variable-length struts between base joints and platform joints: the geometry
+//! tripods (N = 3) and hexapods (N = 6) share.
+//!
+//! A strut's length is the distance between its base joint `a_i` (base frame) and its
+//! platform joint, `L_i = |p + R (b_i - t) - a_i|` with `p` the tool tip, `R` the platform
+//! rotation, `b_i` the platform joint and `t` the tool tip in the platform frame
+//! (seed 000 eq. 7, seed 001 eq. 1).
+
+use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
+
+use crate::mechanism::ActuatorMotion;
+
+/// Base joints and platform arms (platform joint minus tool tip, platform frame).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StrutSet<const N: usize> {
+    /// Base joint centres `a_i` (base frame, mm).
+    pub base: [Vector3<f64>; N],
+    /// `b_i - t` (platform frame, mm).
+    pub arms: [Vector3<f64>; N],
+}
+
+impl<const N: usize> StrutSet<N> {
+    /// From base joints, platform joints (platform frame) and the tool tip (platform frame).
+    pub fn new(base: [Vector3<f64>; N], platform: [Vector3<f64>; N], tool: Vector3<f64>) -> Self {
+        StrutSet {
+            base,
+            arms: std::array::from_fn(|i| platform[i] - tool),
+        }
+    }
+
+    /// Platform joint centres in the base frame: `p + R (b_i - t)`.
+    #[inline]
+    pub fn platform_joints(&self, p: &Vector3<f64>, r: &Matrix3<f64>) -> [Vector3<f64>; N] {
+        std::array::from_fn(|i| p + r * self.arms[i])
+    }
+
+    /// Strut lengths for any platform pose. Allocation-free.
+    #[inline]
+    pub fn lengths(&self, p: &Vector3<f64>, r: &Matrix3<f64>) -> SVector<f64, N> {
+        SVector::<f64, N>::from_fn(|i, _| (p + r * self.arms[i] - self.base[i]).norm())
+    }
+
+    /// Jacobian of the strut lengths with respect to the tool twist `(v, w)` (base
+    /// frame): row i is `[n_i^T, (r_i x n_i)^T]`, `n_i` the unit strut vector from base to
+    /// platform joint and `r_i = R (b_i - t)`, since `L_i' = n_i . (v + w x r_i)`.
+    pub fn twist_jacobian(&self, p: &Vector3<f64>, r: &Matrix3<f64>) -> SMatrix<f64, N, 6> {
+        let mut j = SMatrix::<f64, N, 6>::zeros();
+        for i in 0..N {
+            let ri = r * self.arms[i];
+            let d = p + ri - self.base[i];
+            let n = d / d.norm();
+            let m = ri.cross(&n);
+            for k in 0..3 {
+                j[(i, k)] = n[k];
+                j[(i, 3 + k)] = m[k];
+            }
+        }
+        j
+    }
+
+    /// Exact lengths, rates and accelerations for tool-tip velocity `v`, acceleration
+    /// `a`, angular velocity `w` and angular acceleration `al` (base frame):
+    /// `d' = v + w x r`, `d'' = a + al x r + w x (w x r)`, `L' = n . d'`,
+    /// `L'' = (|d'|^2 - L'^2) / L + n . d''`.
+    #[inline]
+    pub fn motion(
+        &self,
+        p: &Vector3<f64>,
+        r: &Matrix3<f64>,
+        v: &Vector3<f64>,
+        w: &Vector3<f64>,
+        a: &Vector3<f64>,
+        al: &Vector3<f64>,
+    ) -> ActuatorMotion<N> {
+        let mut out = ActuatorMotion {
+            q: SVector::zeros(),
+            qd: SVector::zeros(),
+            qdd: SVector::zeros(),
+        };
+        for i in 0..N {
+            let ri = r * self.arms[i];
+            let d = p + ri - self.base[i];
+            let l = d.norm();
+            let n = d / l;
+            let dd = v + w.cross(&ri);
+            let ddd = a + al.cross(&ri) + w.cross(&w.cross(&ri));
+            let ld = n.dot(&dd);
+            out.q[i] = l;
+            out.qd[i] = ld;
+            out.qdd[i] = (dd.norm_squared() - ld * ld) / l + n.dot(&ddd);
+        }
+        out
+    }
+}
+
+/// Tool tip and rotation of spatial pose coordinates `X, Y, Z, A, B, C`.
+#[inline]
+pub fn split_pose(x: &SVector<f64, 6>) -> (Vector3<f64>, Matrix3<f64>) {
+    (
+        Vector3::new(x[0], x[1], x[2]),
+        crate::rotation::rpy_matrix(x[3], x[4], x[5]),
+    )
+}
+
+impl<const N: usize> StrutSet<N> {
+    /// `dL/dx` for spatial coordinates `X..C`: `J_twist diag(I, E(A, B, C))`.
+    pub fn coords_jacobian(&self, x: &SVector<f64, 6>) -> SMatrix<f64, N, 6> {
+        let (p, r) = split_pose(x);
+        let mut j = self.twist_jacobian(&p, &r);
+        let e = crate::rotation::rpy_rate_matrix([x[3], x[4], x[5]]);
+        let rot = j.fixed_view::<N, 3>(0, 3) * e;
+        j.fixed_view_mut::<N, 3>(0, 3).copy_from(&rot);
+        j
+    }
+
+    /// Exact lengths, rates and accelerations for spatial coordinates `X..C` moving
+    /// with rates `xd` and accelerations `xdd`.
+    #[inline]
+    pub fn coords_motion(
+        &self,
+        x: &SVector<f64, 6>,
+        xd: &SVector<f64, 6>,
+        xdd: &SVector<f64, 6>,
+    ) -> ActuatorMotion<N> {
+        let (p, r) = split_pose(x);
+        let ad = xd.fixed_rows::<3>(3).into_owned();
+        let add = xdd.fixed_rows::<3>(3).into_owned();
+        // The usual case for held orientations: no angular motion.
+        let (w, al) = if ad == Vector3::zeros() && add == Vector3::zeros() {
+            (ad, add)
+        } else {
+            crate::rotation::rpy_angular_motion([x[3], x[4], x[5]], &ad, &add)
+        };
+        self.motion(
+            &p,
+            &r,
+            &xd.fixed_rows::<3>(0).into_owned(),
+            &w,
+            &xdd.fixed_rows::<3>(0).into_owned(),
+            &al,
+        )
+    }
+}

@@ -1,0 +1,226 @@
+//! The `type = "hexapod"` machine file.
+
+use std::collections::BTreeMap;
+
+use nalgebra::Vector6;
+use serde::Deserialize;
+
+use super::reference::Reference;
+use super::source::{Seg, Source};
+use super::{length_range, positive_opt, v3, Model};
+use crate::error::Error;
+use crate::hexapod::{HexStrut, Hexapod, JointCone};
+use crate::mechanism::Actuator;
+use crate::rotation::Convention;
+use crate::units::Quantity;
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct HexapodFile {
+    #[serde(rename = "type")]
+    _kind: String,
+    #[serde(default)]
+    name: Option<String>,
+    #[serde(default)]
+    description: Option<String>,
+    base_joints: BTreeMap<String, [f64; 3]>,
+    platform_joints: BTreeMap<String, [f64; 3]>,
+    struts: Vec<StrutFile>,
+    tool: ToolFile,
+    #[serde(default)]
+    limits: LimitsFile,
+    home: HomeFile,
+    #[serde(default)]
+    reference: Vec<Reference>,
+    #[serde(default)]
+    motion: Option<super::MotionFile>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct StrutFile {
+    name: String,
+    base: String,
+    platform: String,
+    length: [f64; 2],
+    #[serde(default)]
+    max_velocity: Option<f64>,
+    #[serde(default)]
+    max_acceleration: Option<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ToolFile {
+    tip: [f64; 3],
+}
+
+#[derive(Debug, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct LimitsFile {
+    #[serde(default)]
+    base_joint_axis: Option<[f64; 3]>,
+    #[serde(default)]
+    base_joint_max_angle: Option<f64>,
+    #[serde(default)]
+    platform_joint_axis: Option<[f64; 3]>,
+    #[serde(default)]
+    platform_joint_max_angle: Option<f64>,
+    #[serde(default)]
+    strut_diameter: Option<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct HomeFile {
+    position: [f64; 3],
+    #[serde(default)]
+    angles: Option<[f64; 3]>,
+}
+
+fn key(k: &str) -> Seg {
+    Seg::Key(k.into())
+}
+
+fn cone(
+    src: &Source,
+    axis: Option<[f64; 3]>,
+    default_axis: [f64; 3],
+    angle: Option<f64>,
+    which: &str,
+) -> Result<Option<JointCone>, Error> {
+    let Some(a) = angle else { return Ok(None) };
+    if !(a > 0.0 && a <= 180.0) {
+        return Err(src.error(
+            &[key("limits"), key(&format!("{which}_joint_max_angle"))],
+            format!("expected an angle in (0, 180] deg, found {a}"),
+        ));
+    }
+    let ax = v3(axis.unwrap_or(default_axis));
+    if ax.norm() < 1e-12 {
+        return Err(src.error(
+            &[key("limits"), key(&format!("{which}_joint_axis"))],
+            "expected a non-zero vector",
+        ));
+    }
+    Ok(Some(JointCone {
+        axis: ax.normalize(),
+        max_angle: a.to_radians(),
+    }))
+}
+
+pub(super) fn build(src: &Source, f: HexapodFile) -> Result<super::Parts, Error> {
+    if f.struts.len() != 6 {
+        return Err(src.error(
+            &[key("struts")],
+            format!("a hexapod has exactly 6 struts, found {}", f.struts.len()),
+        ));
+    }
+    let lim = &f.limits;
+    let base_cone = cone(
+        src,
+        lim.base_joint_axis,
+        [0.0, 0.0, 1.0],
+        lim.base_joint_max_angle,
+        "base",
+    )?;
+    let plat_cone = cone(
+        src,
+        lim.platform_joint_axis,
+        [0.0, 0.0, -1.0],
+        lim.platform_joint_max_angle,
+        "platform",
+    )?;
+    if let Some(d) = lim.strut_diameter {
+        if !(d > 0.0) {
+            return Err(src.error(
+                &[key("limits"), key("strut_diameter")],
+                format!("expected a diameter > 0 mm, found {d}"),
+            ));
+        }
+    }
+    let mut struts = Vec::with_capacity(6);
+    for (i, s) in f.struts.iter().enumerate() {
+        let p = |k: &str| vec![key("struts"), Seg::Index(i), key(k)];
+        if s.name.trim().is_empty() {
+            return Err(src.error(&p("name"), "expected a non-empty strut name"));
+        }
+        if f.struts[..i].iter().any(|o| o.name == s.name) {
+            return Err(src.error(&p("name"), format!("strut name `{}` is used twice", s.name)));
+        }
+        let base = f.base_joints.get(&s.base).ok_or_else(|| {
+            src.error(
+                &p("base"),
+                format!(
+                    "unknown base joint `{}`, expected one of {}",
+                    s.base,
+                    f.base_joints.keys().cloned().collect::<Vec<_>>().join(", ")
+                ),
+            )
+        })?;
+        let plat = f.platform_joints.get(&s.platform).ok_or_else(|| {
+            src.error(
+                &p("platform"),
+                format!(
+                    "unknown platform joint `{}`, expected one of {}",
+                    s.platform,
+                    f.platform_joints
+                        .keys()
+                        .cloned()
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            )
+        })?;
+        if f.struts[..i]
+            .iter()
+            .any(|o| o.base == s.base && o.platform == s.platform)
+        {
+            return Err(src.error(&p("platform"), "two struts join the same pair of joints"));
+        }
+        let range = length_range(src, &p("length"), s.length)?;
+        positive_opt(src, &p("max_velocity"), s.max_velocity, "mm/s")?;
+        positive_opt(src, &p("max_acceleration"), s.max_acceleration, "mm/s^2")?;
+        struts.push(HexStrut {
+            actuator: Actuator {
+                name: s.name.clone(),
+                quantity: Quantity::Length,
+                range,
+                max_velocity: s.max_velocity,
+                max_acceleration: s.max_acceleration,
+            },
+            base_name: s.base.clone(),
+            platform_name: s.platform.clone(),
+            base: v3(*base),
+            platform: v3(*plat),
+            base_cone,
+            platform_cone: plat_cone,
+        });
+    }
+    let struts: [HexStrut; 6] = struts.try_into().expect("six struts checked above");
+    let a = f.home.angles.unwrap_or([0.0; 3]).map(f64::to_radians);
+    let a = Convention::Rpy.from_matrix(&Convention::Rpy.to_matrix(a));
+    let hp = f.home.position;
+    let h = Hexapod::new(
+        f.name.clone().unwrap_or_else(|| "hexapod".into()),
+        struts,
+        v3(f.tool.tip),
+        lim.strut_diameter,
+        Vector6::new(hp[0], hp[1], hp[2], a[0], a[1], a[2]),
+    );
+    // The six struts must fix the platform: a regular Jacobian at home.
+    let (p, r) = crate::legs::split_pose(&h.home);
+    let rc = crate::linalg::rcond1(&h.scaled_twist_jacobian(&p, &r));
+    if rc < 1e-9 {
+        return Err(src.error(&[key("home")], format!("the hexapod is singular at its home pose (reciprocal condition {rc:.2e}): check the joints")));
+    }
+    super::check_references(src, &f.reference)?;
+    let rapid = super::check_motion(src, f.motion.as_ref())?;
+    Ok(super::Parts {
+        model: Model::Hexapod(Box::new(h)),
+        name: f.name,
+        description: f.description,
+        references: f.reference,
+        rapid,
+    })
+}

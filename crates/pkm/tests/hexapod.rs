@@ -1,0 +1,245 @@
+//! Hexapod: FK round trips over the workspace, Jacobian, singularity, limits.
+
+use nalgebra::{Matrix3, Rotation3, Unit, Vector3, Vector6};
+use pkm::hexapod::Hexapod;
+use pkm::machine::Model;
+use pkm::rotation::Convention;
+use pkm::verify::jacobian_error;
+use pkm::{Error, LimitKind, Machine, Mechanism};
+use rand::{Rng, SeedableRng};
+
+fn load(name: &str) -> Hexapod {
+    match Machine::from_path(format!(
+        "{}/../../examples/machines/{name}",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap()
+    .model
+    {
+        Model::Hexapod(h) => *h,
+        _ => panic!(),
+    }
+}
+
+fn within_limits(h: &Hexapod, x: &Vector6<f64>) -> bool {
+    let q = h.inverse(x).unwrap();
+    let mut v = Vec::new();
+    h.check_limits(x, &q, &mut v);
+    v.is_empty()
+}
+
+/// A random rotation tilting the spindle by at most `max_tilt`, with any spin about Z.
+fn random_pose(
+    rng: &mut rand::rngs::StdRng,
+    centre: &Vector3<f64>,
+    half: f64,
+    dz: f64,
+    max_tilt: f64,
+) -> Vector6<f64> {
+    let az: f64 = rng.random_range(0.0..std::f64::consts::TAU);
+    let tilt: f64 = rng.random_range(0.0..max_tilt);
+    let spin: f64 = rng.random_range(-0.5..0.5);
+    let axis = Unit::new_normalize(Vector3::new(az.cos(), az.sin(), 0.0));
+    let r: Matrix3<f64> = *(Rotation3::from_axis_angle(&axis, tilt)
+        * Rotation3::from_axis_angle(&Vector3::z_axis(), spin))
+    .matrix();
+    let a = Convention::Rpy.from_matrix(&r);
+    Vector6::new(
+        centre.x + rng.random_range(-half..half),
+        centre.y + rng.random_range(-half..half),
+        centre.z + rng.random_range(-dz..dz),
+        a[0],
+        a[1],
+        a[2],
+    )
+}
+
+fn pose_error(h: &Hexapod, a: &Vector6<f64>, b: &Vector6<f64>) -> (f64, f64) {
+    let pa = h.tool_pose(a).unwrap();
+    let pb = h.tool_pose(b).unwrap();
+    let dp = (pa.translation.vector - pb.translation.vector).norm();
+    let ra = *pa.rotation.to_rotation_matrix().matrix();
+    let rb = *pb.rotation.to_rotation_matrix().matrix();
+    (dp, pkm::rotation::angle_between(&ra, &rb))
+}
+
+/// FK(IK(p)) = p within 1e-9 mm and 1e-9 rad for 10^5 random poses within every limit
+/// (tilts up to 30 deg), from a start within 10 mm / 5 deg and from home; every solve
+/// converges to the right pose; median linear solves from the nearby start <= 4.
+#[test]
+fn round_trip_100k_poses() {
+    for (file, centre, half, dz) in [
+        (
+            "hexapod-linuxcnc.toml",
+            Vector3::new(0.0, 0.0, 560.0),
+            120.0,
+            90.0,
+        ),
+        (
+            "hexapod-seed001.toml",
+            Vector3::new(0.0, 0.0, 580.0),
+            150.0,
+            120.0,
+        ),
+    ] {
+        let h = load(file);
+        let mut rng = rand::rngs::StdRng::seed_from_u64(1);
+        let mut near_iters = Vec::new();
+        let mut n = 0;
+        let mut worst = (0.0f64, 0.0f64);
+        while n < 50_000 {
+            let x = random_pose(&mut rng, &centre, half, dz, 30f64.to_radians());
+            if !within_limits(&h, &x) {
+                continue;
+            }
+            n += 1;
+            let q = h.inverse(&x).unwrap();
+            // Nearby start: within 10 mm and 5 deg.
+            let dir = Vector3::new(
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+            );
+            let dp = dir.normalize() * rng.random_range(0.0..10.0);
+            let (p, r) = pkm::legs::split_pose(&x);
+            let axis = Unit::new_normalize(Vector3::new(
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+            ));
+            let r0 = Rotation3::from_axis_angle(&axis, rng.random_range(0.0..5f64.to_radians()))
+                .matrix()
+                * r;
+            let a0 = Convention::Rpy.from_matrix(&r0);
+            let p0 = p + dp;
+            let near = Vector6::new(p0.x, p0.y, p0.z, a0[0], a0[1], a0[2]);
+            for start in [near, h.home()] {
+                let f = h
+                    .forward(&q, &start)
+                    .unwrap_or_else(|e| panic!("{file}: {e} at {x}"));
+                let (ep, er) = pose_error(&h, &f.pose, &x);
+                worst = (worst.0.max(ep), worst.1.max(er));
+                assert!(ep < 1e-9 && er < 1e-9, "{file}: {ep} mm {er} rad at {x}");
+                if start == near {
+                    near_iters.push(f.iterations);
+                }
+            }
+        }
+        near_iters.sort();
+        let median = near_iters[near_iters.len() / 2];
+        let mean = near_iters.iter().sum::<usize>() as f64 / near_iters.len() as f64;
+        eprintln!("{file}: {n} poses, worst {:.2e} mm {:.2e} rad, median {median} solves (mean {mean:.2}) from a nearby start", worst.0, worst.1);
+        assert!(median <= 4, "{file}: median {median}");
+    }
+}
+
+#[test]
+fn jacobian_matches_finite_differences() {
+    let h = load("hexapod-linuxcnc.toml");
+    let mut rng = rand::rngs::StdRng::seed_from_u64(2);
+    for _ in 0..200 {
+        let x = random_pose(&mut rng, &Vector3::new(0.0, 0.0, 560.0), 100.0, 80.0, 0.5);
+        let e = jacobian_error(&h, &x).unwrap();
+        assert!(e < 1e-6, "{e}");
+    }
+}
+
+#[test]
+fn singular_configuration_is_reported() {
+    // Platform in the base plane: every strut horizontal, so no strut can resist a
+    // vertical force: the Jacobian loses rank (v_z, w_x, w_y columns vanish).
+    let h = load("hexapod-linuxcnc.toml");
+    let flat = Vector6::new(0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+    let q = h.inverse(&flat).unwrap();
+    let r = h.forward(&q, &flat);
+    assert!(matches!(r, Err(Error::Singular { .. })), "{r:?}");
+    // Started slightly off it, the solver does not return a pose either.
+    let near = Vector6::new(0.0, 0.0, 1.0, 0.0, 0.0, 0.0);
+    let r = h.forward(&q, &near);
+    assert!(
+        matches!(
+            r,
+            Err(Error::Singular { .. }) | Err(Error::NotConverged { .. })
+        ),
+        "{r:?}"
+    );
+    // Unreachable lengths: not converged, with the residual.
+    let r = h.forward(&Vector6::repeat(100.0), &h.home());
+    assert!(r.is_err(), "{r:?}");
+}
+
+#[test]
+fn genhexkins_home_lengths() {
+    let h = load("hexapod-linuxcnc.toml");
+    let q = h.inverse(&h.home()).unwrap();
+    for l in q.iter() {
+        assert!((l - 29.7466 * 25.4).abs() < 0.01, "{l}");
+    }
+}
+
+#[test]
+fn joint_cone_and_interference_limits() {
+    let h = load("hexapod-linuxcnc.toml");
+    // Far off to the side: the base joints tilt beyond 60 deg.
+    let x = Vector6::new(600.0, 0.0, 300.0, 0.0, 0.0, 0.0);
+    let q = h.inverse(&x).unwrap();
+    let mut v = Vec::new();
+    h.check_limits(&x, &q, &mut v);
+    assert!(v.iter().any(|v| v.kind == LimitKind::JointAngle), "{v:?}");
+    // Strut interference: at a spun pose, a diameter just above the closest approach
+    // of two struts that share no joint is violated, just below it is not.
+    let mut h = h;
+    let x = Vector6::new(0.0, 0.0, 508.0, 0.0, 0.0, 40f64.to_radians());
+    let q = h.inverse(&x).unwrap();
+    let sk = h.skeleton(&x).unwrap();
+    let strut = |i: usize| {
+        let l = &sk.links[i];
+        (
+            Vector3::from(sk.points[l.from].position),
+            Vector3::from(sk.points[l.to].position),
+        )
+    };
+    let mut dmin = f64::INFINITY;
+    for i in 0..6 {
+        for k in i + 1..6 {
+            if h.struts[i].base_name == h.struts[k].base_name
+                || h.struts[i].platform_name == h.struts[k].platform_name
+            {
+                continue;
+            }
+            let (a0, a1) = strut(i);
+            let (b0, b1) = strut(k);
+            dmin = dmin.min(pkm::hexapod::segment_distance(&a0, &a1, &b0, &b1));
+        }
+    }
+    let count = |h: &Hexapod| {
+        let mut v = Vec::new();
+        h.check_limits(&x, &q, &mut v);
+        v.iter()
+            .filter(|v| v.kind == LimitKind::StrutInterference)
+            .count()
+    };
+    h.strut_diameter = Some(dmin + 0.5);
+    assert!(count(&h) >= 1, "dmin {dmin}");
+    h.strut_diameter = Some(dmin - 0.5);
+    assert_eq!(count(&h), 0);
+}
+
+#[test]
+fn segment_distance_by_hand() {
+    use pkm::hexapod::segment_distance;
+    let d = segment_distance(
+        &Vector3::zeros(),
+        &Vector3::x(),
+        &Vector3::new(0.5, 1.0, -1.0),
+        &Vector3::new(0.5, 1.0, 1.0),
+    );
+    assert!((d - 1.0).abs() < 1e-15);
+    let d = segment_distance(
+        &Vector3::zeros(),
+        &Vector3::x(),
+        &Vector3::new(2.0, 1.0, 0.0),
+        &Vector3::new(3.0, 1.0, 0.0),
+    );
+    assert!((d - 2f64.sqrt()).abs() < 1e-15);
+}
