@@ -68,6 +68,16 @@ enum Command {
         A program starts at --from when given, else at the machine's home pose. Moves stop\n\
         exactly at each segment end (no blending). Exit code 3 when a limit is violated.")]
     Motion(MotionArgs),
+    /// Map the workspace: reachable points, the limit that binds elsewhere, and the
+    /// Jacobian's conditioning, on a grid (rayon, all cores).
+    #[command(after_help = "Examples:\n  \
+        pkm workspace examples/machines/hexapod-linuxcnc.toml --step 20 --out ws\n  \
+        pkm workspace examples/machines/hexapod-linuxcnc.toml --orientation 0,10,0 --bounds=-400,400,-400,400,300,800 --step 10 --out ws\n  \
+        pkm workspace examples/machines/hexapod-linuxcnc.toml --tilt 15 --step 25 --out total   # reachable at every tilt <= 15 deg\n  \
+        pkm workspace examples/machines/hexapod-linuxcnc.toml --at 0,0,550 --out tilt          # orientation workspace at a point\n\n\
+        Writes DIR/summary.json (volume_mm3, bounding_box, reachable_fraction, condition\n\
+        statistics, points per binding limit), DIR/points.csv, DIR/points.ply and slice heat maps.")]
+    Workspace(WorkspaceArgs),
     /// Validate a machine file and summarise it.
     #[command(after_help = "Example:\n  pkm check examples/machines/tripod-seed000.toml --json")]
     Check(CheckArgs),
@@ -216,6 +226,40 @@ impl From<ProfileArg> for pkm::motion::program::ProfileKind {
 }
 
 #[derive(Args)]
+pub struct WorkspaceArgs {
+    /// Machine file (TOML).
+    pub machine: PathBuf,
+    /// Constant orientation A,B,C (deg) of the map; default: the home orientation.
+    #[arg(long, allow_hyphen_values = true)]
+    pub orientation: Option<String>,
+    /// Grid bounds min,max per axis (X,Y,Z in mm for spatial machines).
+    #[arg(long, allow_hyphen_values = true)]
+    pub bounds: Option<String>,
+    /// Grid step (mm, or deg for angle axes); default: 1/40 of each range.
+    #[arg(long)]
+    pub step: Option<f64>,
+    /// Total orientation workspace: reachable only if reachable at tilts of this many
+    /// degrees in 8 directions as well as untilted.
+    #[arg(long)]
+    pub tilt: Option<f64>,
+    /// Orientation workspace at a point X,Y,Z: the largest reachable tilt per direction.
+    #[arg(long, allow_hyphen_values = true)]
+    pub at: Option<String>,
+    /// Largest tilt searched with --at (deg).
+    #[arg(long, default_value_t = 60.0)]
+    pub max_tilt: f64,
+    /// Convention of --orientation.
+    #[arg(long, default_value = "rpy", value_parser = parse_convention)]
+    pub rotation: Convention,
+    /// Output directory.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Print summary.json to stdout.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Args)]
 pub struct CheckArgs {
     /// Machine file (TOML).
     pub machine: PathBuf,
@@ -240,6 +284,7 @@ fn main() -> ExitCode {
         Command::Fk(a) => commands::fk::run(&a),
         Command::Check(a) => commands::check::run(&a),
         Command::Motion(a) => commands::motion::run(&a),
+        Command::Workspace(a) => commands::workspace::run(&a),
         Command::Report(a) => report::run(&a),
     };
     match res {

@@ -345,8 +345,8 @@ fn report_writes_a_self_contained_page() {
     assert!(html.contains("Seed 000 tripod"));
     assert_eq!(
         html.matches("<svg").count(),
-        8,
-        "three views at home, two motion plots, three at Table 1"
+        10,
+        "three views at home, two workspace slices, two motion plots, three at Table 1"
     );
     assert!(html.contains("seed 000's arc study"));
     assert!(html.contains("Kinematic checks"));

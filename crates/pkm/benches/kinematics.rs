@@ -52,7 +52,7 @@ fn tripod(c: &mut Criterion) {
 }
 
 criterion_group!(benches, tripod);
-criterion_main!(benches, motion_benches, hexapod_benches);
+criterion_main!(benches, motion_benches, hexapod_benches, workspace_benches);
 
 fn motion(c: &mut Criterion) {
     use pkm::motion::gcode::Interpreter;
@@ -112,3 +112,45 @@ fn hexapod(c: &mut Criterion) {
 }
 
 criterion_group!(hexapod_benches, hexapod);
+
+fn workspace(c: &mut Criterion) {
+    use pkm::workspace::{map, GridAxis};
+    let Model::Hexapod(h) = machine("hexapod-linuxcnc.toml").model else {
+        panic!()
+    };
+    let h = *h;
+    // 101^3 = 1 030 301 points, all reachable (IK, every limit, condition number).
+    let axes = [
+        GridAxis {
+            coordinate: 0,
+            min: -100.0,
+            max: 100.0,
+            step: 2.0,
+        },
+        GridAxis {
+            coordinate: 1,
+            min: -100.0,
+            max: 100.0,
+            step: 2.0,
+        },
+        GridAxis {
+            coordinate: 2,
+            min: 450.0,
+            max: 650.0,
+            step: 2.0,
+        },
+    ];
+    let mut g = c.benchmark_group("workspace");
+    g.sample_size(10);
+    g.bench_function("hexapod 1.03e6 grid points (rayon, all cores)", |b| {
+        b.iter(|| {
+            map(&h, black_box(&h.home), &axes, &[], &|_| {})
+                .unwrap()
+                .points
+                .len()
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(workspace_benches, workspace);

@@ -38,6 +38,7 @@ pub mod rotation;
 pub mod tripod;
 pub mod units;
 pub mod verify;
+pub mod workspace;
 
 pub use dynamic::DynMechanism;
 pub use error::{Error, Result};

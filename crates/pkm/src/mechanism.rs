@@ -246,6 +246,29 @@ pub trait Mechanism<const P: usize, const A: usize>: Send + Sync {
     /// Points and links of the mechanism at `x`, for drawings and joint reports.
     fn skeleton(&self, x: &SVector<f64, P>) -> Result<Skeleton>;
 
+    /// 2-norm condition number of the Jacobian's driven columns at `x`, dimensionally
+    /// consistent: the default divides angle columns (mm/rad) by
+    /// [`Mechanism::characteristic_length`] so every column is in actuator units per mm.
+    fn condition(&self, x: &SVector<f64, P>) -> Result<f64> {
+        let j = self.jacobian(x)?;
+        let d = self.driven();
+        let lc = self.characteristic_length();
+        let jd = SMatrix::<f64, A, A>::from_fn(|r, c| {
+            let k = d[c];
+            match self.coordinates()[k].quantity {
+                crate::units::Quantity::Angle => j[(r, k)] / lc,
+                crate::units::Quantity::Length => j[(r, k)],
+            }
+        });
+        Ok(crate::linalg::condition_number(&jd))
+    }
+
+    /// Length (mm) that scales rotations against translations in conditioning: a
+    /// rotation of 1 rad counts as a displacement of this many mm. Default 1 mm.
+    fn characteristic_length(&self) -> f64 {
+        1.0
+    }
+
     /// Exact actuator position, velocity and acceleration for a pose moving with
     /// coordinate rates `xd` and accelerations `xdd`: `q = IK(x)`, `q' = J x'`,
     /// `q'' = J x'' + J' x'`, computed from the mechanism's analytic derivatives (no

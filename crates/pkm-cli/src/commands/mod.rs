@@ -5,6 +5,7 @@ pub mod csvio;
 pub mod fk;
 pub mod ik;
 pub mod motion;
+pub mod workspace;
 
 use std::path::Path;
 

@@ -1,6 +1,7 @@
 //! `pkm report`: a self-contained HTML report (inline SVG, no network needed).
 
 mod drawing;
+pub mod heatmap;
 mod html;
 pub mod plot;
 
@@ -58,6 +59,7 @@ pub fn build(machine: &Machine) -> Result<String> {
          <a href=\"#checks\">Kinematic checks</a>",
     );
     let spatial = m.pose_space() != pkm::PoseSpace::Own;
+    nav.push_str(" · <a href=\"#workspace\">Workspace</a>");
     if spatial {
         nav.push_str(" · <a href=\"#motion\">Motion</a>");
     }
@@ -165,6 +167,7 @@ pub fn build(machine: &Machine) -> Result<String> {
     });
     h.raw(&check_table_html(machine, &table));
 
+    workspace_section(&mut h, machine)?;
     if spatial {
         motion_section(&mut h, machine)?;
     }
@@ -242,6 +245,79 @@ fn check_table_html(machine: &Machine, rows: &[CheckRow]) -> String {
     }
     let head_refs: Vec<&str> = head.iter().map(String::as_str).collect();
     Html::table_string(&head_refs, &body)
+}
+
+/// Workspace at the home orientation: summary, slices through home with the condition
+/// number, and the limits that bind outside.
+fn workspace_section(h: &mut Html, machine: &Machine) -> Result<()> {
+    use crate::commands::workspace::{default_axes, slices, summarise, MapJob};
+    let m = machine.mechanism();
+    let home = m.home();
+    let axes = default_axes(m, &home, None, None)?;
+    let wm = machine.visit(MapJob {
+        base: home.clone(),
+        axes: axes.clone(),
+        orientations: Vec::new(),
+        progress: false,
+    })?;
+    let s = summarise(m, &wm);
+    h.h2_id("workspace", "Workspace and conditioning");
+    let names: Vec<String> = axes
+        .iter()
+        .map(|a| m.coordinates()[a.coordinate].name.clone())
+        .collect();
+    h.p(&format!(
+        "A grid of {} points over {} around the home pose, at the home orientation: each point \
+         is reachable when inverse kinematics has a solution within every limit. The condition \
+         number is that of the Jacobian's driven columns, rotations scaled by a characteristic \
+         length of {:.1} mm (1 = isotropic).",
+        s.points,
+        names.join(", "),
+        machine.visit(CharLength)
+    ));
+    let bbox: Vec<String> = s
+        .bounding_box
+        .iter()
+        .zip(&names)
+        .map(|(b, n)| format!("{n} [{:.1}, {:.1}]", b[0], b[1]))
+        .collect();
+    let c = &s.condition;
+    h.table(
+        &[
+            "reachable",
+            "volume",
+            "reachable range",
+            "condition min / median / p95 / max",
+        ],
+        &[vec![
+            format!("{} ({:.1} %)", s.reachable, 100.0 * s.reachable_fraction),
+            format!("{:.4e} mm³", s.volume_mm3),
+            bbox.join("<br>"),
+            format!(
+                "{:.3} / {:.3} / {:.3} / {:.3}",
+                c.min, c.median, c.p95, c.max
+            ),
+        ]],
+    );
+    let svgs: String = slices(m, &wm)?.into_iter().map(|(_, s)| s).collect();
+    h.raw(&format!("<div class=\"views\">{svgs}</div>"));
+    h.p("Grey cells: a limit binds. Points per binding limit (the first violated one):");
+    let rows: Vec<Vec<String>> = s
+        .binding
+        .iter()
+        .map(|(k, n)| vec![esc(k), n.to_string()])
+        .collect();
+    h.table(&["limit", "points"], &rows);
+    Ok(())
+}
+
+struct CharLength;
+
+impl pkm::Visitor for CharLength {
+    type Output = f64;
+    fn visit<M: pkm::Mechanism<P, A>, const P: usize, const A: usize>(self, m: &M) -> f64 {
+        m.characteristic_length()
+    }
 }
 
 /// Feeds of seed 000's arc study (mm/min).

@@ -57,7 +57,8 @@ pub fn panels_svg(
             if t1 - t0 < 1e-12 {
                 t1 = t0 + 1.0;
             }
-            let pad = ((y1 - y0) * 0.08).max(1e-9 * y1.abs().max(1.0)).max(1e-6);
+            // Plotters needs a range that is not too narrow for its tick marks.
+            let pad = ((y1 - y0) * 0.08).max(1e-3 * y0.abs().max(y1.abs()).max(1.0));
             let (y0, y1) = (y0 - pad, y1 + pad);
             let mut chart = ChartBuilder::on(area)
                 .margin(8)

@@ -395,6 +395,32 @@ impl Mechanism<6, 6> for Hexapod {
         Ok(s)
     }
 
+    /// Condition number of the twist Jacobian with rotations scaled by the
+    /// characteristic length (mean platform joint distance from the tool tip): the ratio
+    /// of the largest to the smallest strut rate per unit tool twist.
+    fn condition(&self, x: &Vector6<f64>) -> Result<f64> {
+        let (p, r) = split_pose(x);
+        let j = self.scaled_twist_jacobian(&p, &r);
+        // Eigenvalues of J^T J (nalgebra's symmetric solver: faster than an SVD here),
+        // with an iteration cap (uncapped it can loop on some inputs) and our Jacobi
+        // solver as the fallback.
+        let jtj = j.transpose() * j;
+        let ev = match nalgebra::SymmetricEigen::try_new(jtj, 1e-15, 200) {
+            Some(e) if e.eigenvalues.iter().all(|v| v.is_finite()) => e.eigenvalues,
+            _ => crate::linalg::symmetric_eigenvalues(&jtj),
+        };
+        let (lo, hi) = (ev.min(), ev.max());
+        Ok(if lo > 0.0 {
+            (hi / lo).sqrt()
+        } else {
+            f64::INFINITY
+        })
+    }
+
+    fn characteristic_length(&self) -> f64 {
+        self.characteristic_length
+    }
+
     fn actuator_motion(
         &self,
         x: &Vector6<f64>,

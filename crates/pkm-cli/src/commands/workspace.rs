@@ -1,0 +1,415 @@
+//! `pkm workspace`: reachable workspace, binding limits and conditioning on a grid.
+
+use anyhow::{bail, Context, Result};
+use indicatif::{ProgressBar, ProgressStyle};
+use pkm::workspace::{flat_index, map, reachable_tilt, GridAxis, WorkspaceMap, WorkspaceSummary};
+use pkm::{DynMechanism, Machine, Mechanism, PoseSpace, Visitor};
+use serde_json::json;
+
+use super::load;
+use crate::io::write_atomic;
+use crate::poses::{parse_list, pose_from_user};
+use crate::report::heatmap::{slice_svg, Cell};
+use crate::WorkspaceArgs;
+
+/// A grid map as a [`Visitor`].
+pub struct MapJob {
+    /// Base pose (internal units).
+    pub base: Vec<f64>,
+    /// Axes.
+    pub axes: Vec<GridAxis>,
+    /// Orientation set (A, B, C rad) for the total orientation workspace.
+    pub orientations: Vec<[f64; 3]>,
+    /// Show a progress bar.
+    pub progress: bool,
+}
+
+impl Visitor for MapJob {
+    type Output = Result<WorkspaceMap>;
+    fn visit<M: Mechanism<P, A>, const P: usize, const A: usize>(
+        self,
+        m: &M,
+    ) -> Result<WorkspaceMap> {
+        let base = pkm::dynamic::fixed::<P>("base pose", &self.base)?;
+        let total: usize = self.axes.iter().map(|a| a.count()).product();
+        let bar = if self.progress && total > 200_000 {
+            let b = ProgressBar::new(total as u64);
+            b.set_style(
+                ProgressStyle::with_template("{bar:40} {pos}/{len} points {eta}")
+                    .unwrap_or_else(|_| ProgressStyle::default_bar()),
+            );
+            Some(b)
+        } else {
+            None
+        };
+        let tick = |n: u64| {
+            if let Some(b) = &bar {
+                b.inc(n);
+            }
+        };
+        let r = map(m, &base, &self.axes, &self.orientations, &tick)?;
+        if let Some(b) = bar {
+            b.finish_and_clear();
+        }
+        Ok(r)
+    }
+}
+
+/// Tilt orientation workspace at a point as a [`Visitor`] (spatial machines only).
+struct TiltJob {
+    x: Vec<f64>,
+    azimuths: Vec<f64>,
+    max: f64,
+}
+
+impl Visitor for TiltJob {
+    type Output = Result<Vec<f64>>;
+    fn visit<M: Mechanism<P, A>, const P: usize, const A: usize>(self, m: &M) -> Result<Vec<f64>> {
+        let x = pkm::dynamic::fixed::<P>("--at", &self.x)?;
+        Ok(reachable_tilt(m, &x, &self.azimuths, self.max, 1e-4)?)
+    }
+}
+
+/// Axes, base pose and labels for a machine: X, Y, Z for spatial machines (the other
+/// coordinates from `base`), else up to three of its own coordinates.
+pub fn default_axes(
+    m: &dyn DynMechanism,
+    base: &[f64],
+    bounds: Option<&[f64]>,
+    step: Option<f64>,
+) -> Result<Vec<GridAxis>> {
+    let idx: Vec<usize> = match m.pose_space() {
+        PoseSpace::Own => (0..m.coordinates().len().min(3)).collect(),
+        _ => vec![0, 1, 2],
+    };
+    let q = |k: usize| m.coordinates()[k].quantity;
+    let reach = m
+        .actuators()
+        .iter()
+        .map(|a| a.range.max.abs())
+        .fold(0.0, f64::max);
+    let mut ranges = Vec::new();
+    match bounds {
+        Some(b) => {
+            if b.len() != 2 * idx.len() {
+                bail!(
+                    "--bounds: expected {} values (min,max per axis), got {}",
+                    2 * idx.len(),
+                    b.len()
+                );
+            }
+            for (i, &k) in idx.iter().enumerate() {
+                let (lo, hi) = (q(k).from_user(b[2 * i]), q(k).from_user(b[2 * i + 1]));
+                if hi <= lo {
+                    bail!("--bounds: axis {} has max <= min", m.coordinates()[k].name);
+                }
+                ranges.push((lo, hi));
+            }
+        }
+        None => {
+            for &k in &idx {
+                let half = match q(k) {
+                    pkm::Quantity::Length => 0.6 * reach,
+                    pkm::Quantity::Angle => std::f64::consts::PI,
+                };
+                ranges.push((base[k] - half, base[k] + half));
+            }
+        }
+    }
+    let axes = idx
+        .iter()
+        .zip(&ranges)
+        .map(|(&k, &(lo, hi))| GridAxis {
+            coordinate: k,
+            min: lo,
+            max: hi,
+            step: step.map(|s| q(k).from_user(s)).unwrap_or((hi - lo) / 40.0),
+        })
+        .collect::<Vec<_>>();
+    let total: f64 = axes.iter().map(|a| a.count() as f64).product();
+    if total > 5e7 {
+        bail!("the grid has {total:.0} points; give a larger --step or smaller --bounds (at most 5e7)");
+    }
+    Ok(axes)
+}
+
+/// Summary with user units.
+pub fn summarise(m: &dyn DynMechanism, wm: &WorkspaceMap) -> WorkspaceSummary {
+    let q = |i: usize| m.coordinates()[wm.axes[i].coordinate].quantity;
+    let cell: f64 = (0..wm.axes.len())
+        .map(|i| q(i).to_user(wm.axes[i].step))
+        .product();
+    wm.summary(&|i, v| q(i).to_user(v), cell)
+}
+
+/// The two standard slices (through the base pose): first two axes, and first and last.
+pub fn slices(m: &dyn DynMechanism, wm: &WorkspaceMap) -> Result<Vec<(String, String)>> {
+    let n = wm.axes.len();
+    if n < 2 {
+        return Ok(Vec::new());
+    }
+    let pairs: Vec<(usize, usize)> = if n == 3 {
+        vec![(0, 1), (0, 2)]
+    } else {
+        vec![(0, 1)]
+    };
+    let mut out = Vec::new();
+    for (ha, va) in pairs {
+        let fixed: Vec<usize> = (0..n).filter(|i| *i != ha && *i != va).collect();
+        // Index of the base value on the fixed axis.
+        let fix_idx: Vec<usize> = fixed
+            .iter()
+            .map(|&i| {
+                let a = &wm.axes[i];
+                (((wm.base[a.coordinate] - a.min) / a.step).round().max(0.0) as usize)
+                    .min(a.count() - 1)
+            })
+            .collect();
+        let name = |i: usize| m.coordinates()[wm.axes[i].coordinate].name.clone();
+        let qn = |i: usize| m.coordinates()[wm.axes[i].coordinate].quantity;
+        let mut cells = Vec::new();
+        for ih in 0..wm.axes[ha].count() {
+            for iv in 0..wm.axes[va].count() {
+                let mut idx = vec![0; n];
+                idx[ha] = ih;
+                idx[va] = iv;
+                for (f, fi) in fixed.iter().zip(&fix_idx) {
+                    idx[*f] = *fi;
+                }
+                let p = &wm.points[flat_index(&wm.axes, &idx)];
+                cells.push(Cell {
+                    h: qn(ha).to_user(wm.axes[ha].value(ih)),
+                    v: qn(va).to_user(wm.axes[va].value(iv)),
+                    value: p.reachable.then_some(p.condition),
+                });
+            }
+        }
+        let at = fixed
+            .iter()
+            .zip(&fix_idx)
+            .map(|(&f, &fi)| {
+                format!(
+                    "{} = {:.2} {}",
+                    name(f),
+                    qn(f).to_user(wm.axes[f].value(fi)),
+                    qn(f).unit()
+                )
+            })
+            .collect::<Vec<_>>()
+            .join(", ");
+        let title = if at.is_empty() {
+            format!("{}{} slice", name(ha), name(va))
+        } else {
+            format!("{}{} slice at {at}", name(ha), name(va))
+        };
+        let svg = slice_svg(
+            &title,
+            &format!("{} [{}]", name(ha), qn(ha).unit()),
+            &format!("{} [{}]", name(va), qn(va).unit()),
+            &cells,
+            qn(ha).to_user(wm.axes[ha].step),
+            qn(va).to_user(wm.axes[va].step),
+            (560, 480),
+        )?;
+        out.push((
+            format!("slice-{}{}.svg", name(ha), name(va)).to_lowercase(),
+            svg,
+        ));
+    }
+    Ok(out)
+}
+
+pub fn run(a: &WorkspaceArgs) -> Result<u8> {
+    let machine: Machine = load(&a.machine)?;
+    let m = machine.mechanism();
+    let mut base = m.home();
+    if let Some(o) = &a.orientation {
+        if m.pose_space() != PoseSpace::Spatial {
+            bail!("--orientation needs a machine with X, Y, Z, A, B, C");
+        }
+        let v = parse_list(o, "--orientation")?;
+        let mut pose = vec![base[0], base[1], base[2]];
+        pose.extend(v);
+        base = pose_from_user(m, &pose, a.rotation)?;
+    }
+    std::fs::create_dir_all(&a.out)
+        .with_context(|| format!("cannot create {}", a.out.display()))?;
+    let inputs = [a.machine.as_path()];
+    if let Some(at) = &a.at {
+        let p = parse_list(at, "--at")?;
+        let x = pose_from_user(m, &p[..3.min(p.len())], a.rotation)?;
+        let mut x = x;
+        if x.len() == 6 {
+            x[3..6].copy_from_slice(&base[3..6]);
+        }
+        let az: Vec<f64> = (0..36).map(|k| (k as f64 * 10.0).to_radians()).collect();
+        let tilts = machine.visit(TiltJob {
+            x: x.clone(),
+            azimuths: az.clone(),
+            max: a.max_tilt.to_radians(),
+        })?;
+        let min = tilts.iter().copied().fold(f64::INFINITY, f64::min);
+        let v = json!({
+            "position": &p[..3.min(p.len())],
+            "azimuth_deg": az.iter().map(|a| a.to_degrees()).collect::<Vec<_>>(),
+            "max_tilt_deg": tilts.iter().map(|t| t.to_degrees()).collect::<Vec<_>>(),
+            "reachable_tilt_all_directions_deg": min.to_degrees(),
+        });
+        write_atomic(
+            &a.out.join("tilt.json"),
+            serde_json::to_string_pretty(&v)?.as_bytes(),
+            &inputs,
+        )?;
+        println!(
+            "reachable tilt in every direction at this point: {:.3} deg (search up to {} deg)",
+            min.to_degrees(),
+            a.max_tilt
+        );
+        return Ok(0);
+    }
+    let bounds = match &a.bounds {
+        Some(b) => Some(parse_list(b, "--bounds")?),
+        None => None,
+    };
+    let axes = default_axes(m, &base, bounds.as_deref(), a.step)?;
+    let orientations: Vec<[f64; 3]> = match a.tilt {
+        Some(t) => {
+            let t = t.to_radians();
+            let mut o = vec![[0.0; 3]];
+            for k in 0..8 {
+                let az = k as f64 * std::f64::consts::FRAC_PI_4;
+                let axis =
+                    nalgebra::Unit::new_normalize(nalgebra::Vector3::new(-az.sin(), az.cos(), 0.0));
+                let r = nalgebra::Rotation3::from_axis_angle(&axis, t);
+                o.push(pkm::Convention::Rpy.from_matrix(r.matrix()));
+            }
+            o
+        }
+        None => Vec::new(),
+    };
+    let start = std::time::Instant::now();
+    let wm = machine.visit(MapJob {
+        base: base.clone(),
+        axes: axes.clone(),
+        orientations,
+        progress: true,
+    })?;
+    let secs = start.elapsed().as_secs_f64();
+    let s = summarise(m, &wm);
+    let mut binding = serde_json::Map::new();
+    for (k, n) in &s.binding {
+        binding.insert(k.clone(), json!(n));
+    }
+    let axes_json: Vec<_> = axes
+        .iter()
+        .map(|x| {
+            let c = &m.coordinates()[x.coordinate];
+            json!({"name": c.name, "unit": c.quantity.unit(), "min": c.quantity.to_user(x.min), "max": c.quantity.to_user(x.max), "step": c.quantity.to_user(x.step), "count": x.count()})
+        })
+        .collect();
+    let summary = json!({
+        "machine": m.name(),
+        "type": m.kind(),
+        "axes": axes_json,
+        "base_pose": crate::poses::coords_json(m, &base),
+        "tilt_set_deg": a.tilt,
+        "points": s.points,
+        "reachable": s.reachable,
+        "reachable_fraction": s.reachable_fraction,
+        "volume_mm3": s.volume_mm3,
+        "bounding_box": s.bounding_box,
+        "condition": s.condition,
+        "binding": binding,
+        "seconds": secs,
+    });
+    write_atomic(
+        &a.out.join("summary.json"),
+        serde_json::to_string_pretty(&summary)?.as_bytes(),
+        &inputs,
+    )?;
+    // Point cloud: CSV of every point, PLY of the reachable ones.
+    let names: Vec<String> = axes
+        .iter()
+        .map(|x| {
+            let c = &m.coordinates()[x.coordinate];
+            format!("{}_{}", c.name, c.quantity.unit())
+        })
+        .collect();
+    let mut csv = format!("{},reachable,condition,binding\n", names.join(","));
+    let mut ply_body = String::new();
+    let mut nply = 0usize;
+    for (k, p) in wm.points.iter().enumerate() {
+        let x = wm.coords(k);
+        let vals: Vec<f64> = axes
+            .iter()
+            .map(|ax| {
+                m.coordinates()[ax.coordinate]
+                    .quantity
+                    .to_user(x[ax.coordinate])
+            })
+            .collect();
+        let v: Vec<String> = vals.iter().map(|v| format!("{v:.6}")).collect();
+        csv.push_str(&format!(
+            "{},{},{},{}\n",
+            v.join(","),
+            p.reachable,
+            if p.reachable {
+                format!("{:.6}", p.condition)
+            } else {
+                String::new()
+            },
+            super::ik::csv_text(p.binding.as_deref().unwrap_or(""))
+        ));
+        if p.reachable && vals.len() == 3 {
+            ply_body.push_str(&format!("{} {} {} {:.6}\n", v[0], v[1], v[2], p.condition));
+            nply += 1;
+        }
+    }
+    write_atomic(&a.out.join("points.csv"), csv.as_bytes(), &inputs)?;
+    if axes.len() == 3 {
+        let ply = format!(
+            "ply\nformat ascii 1.0\ncomment pkm workspace: reachable points of {}, mm\nelement vertex {nply}\nproperty float x\nproperty float y\nproperty float z\nproperty float condition\nend_header\n{ply_body}",
+            m.name()
+        );
+        write_atomic(&a.out.join("points.ply"), ply.as_bytes(), &inputs)?;
+    }
+    for (name, svg) in slices(m, &wm)? {
+        write_atomic(&a.out.join(name), svg.as_bytes(), &inputs)?;
+    }
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&summary)?);
+    } else {
+        println!(
+            "{} ({}): {} points in {:.3} s",
+            m.name(),
+            m.kind(),
+            s.points,
+            secs
+        );
+        println!(
+            "reachable  {} ({:.1} %), volume {:.4e} mm^3",
+            s.reachable,
+            100.0 * s.reachable_fraction,
+            s.volume_mm3
+        );
+        for (i, b) in s.bounding_box.iter().enumerate() {
+            let c = &m.coordinates()[axes[i].coordinate];
+            println!(
+                "range      {} [{:.3}, {:.3}] {}",
+                c.name,
+                b[0],
+                b[1],
+                c.quantity.unit()
+            );
+        }
+        println!(
+            "condition  min {:.3}, median {:.3}, p95 {:.3}, max {:.3}",
+            s.condition.min, s.condition.median, s.condition.p95, s.condition.max
+        );
+        for (k, n) in s.binding.iter().take(8) {
+            println!("binding    {n:>8} x {k}");
+        }
+        println!("wrote {}", a.out.display());
+    }
+    Ok(0)
+}

@@ -1,0 +1,138 @@
+//! Heat maps of a 2D workspace slice (SVG, plotters): condition number over the
+//! reachable cells, grey where a limit binds.
+
+use anyhow::{anyhow, Result};
+use plotters::prelude::*;
+
+/// One cell: centre (h, v) in user units, and the condition number (None: unreachable).
+pub struct Cell {
+    /// Horizontal coordinate.
+    pub h: f64,
+    /// Vertical coordinate.
+    pub v: f64,
+    /// Condition number when reachable.
+    pub value: Option<f64>,
+}
+
+fn color(t: f64) -> RGBColor {
+    // Viridis-like ramp from dark blue (well conditioned) to yellow (poor).
+    let stops = [
+        (68, 1, 84),
+        (59, 82, 139),
+        (33, 145, 140),
+        (94, 201, 98),
+        (253, 231, 37),
+    ];
+    let t = t.clamp(0.0, 1.0) * (stops.len() - 1) as f64;
+    let i = (t.floor() as usize).min(stops.len() - 2);
+    let f = t - i as f64;
+    let lerp = |a: u8, b: u8| (a as f64 + (b as f64 - a as f64) * f).round() as u8;
+    RGBColor(
+        lerp(stops[i].0, stops[i + 1].0),
+        lerp(stops[i].1, stops[i + 1].1),
+        lerp(stops[i].2, stops[i + 1].2),
+    )
+}
+
+/// Draws the slice; `dh`, `dv` are the cell sizes; colour by log10 of the condition.
+pub fn slice_svg(
+    title: &str,
+    hlabel: &str,
+    vlabel: &str,
+    cells: &[Cell],
+    dh: f64,
+    dv: f64,
+    size: (u32, u32),
+) -> Result<String> {
+    let (mut h0, mut h1, mut v0, mut v1) = (
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    );
+    let (mut c0, mut c1) = (f64::INFINITY, f64::NEG_INFINITY);
+    for c in cells {
+        h0 = h0.min(c.h - dh / 2.0);
+        h1 = h1.max(c.h + dh / 2.0);
+        v0 = v0.min(c.v - dv / 2.0);
+        v1 = v1.max(c.v + dv / 2.0);
+        if let Some(x) = c.value {
+            c0 = c0.min(x.log10());
+            c1 = c1.max(x.log10());
+        }
+    }
+    if !h0.is_finite() {
+        return Err(anyhow!("empty slice"));
+    }
+    // Plotters needs a finite, not too narrow range for its tick marks.
+    if !c0.is_finite() || !c1.is_finite() {
+        c0 = 0.0;
+        c1 = 1.0;
+    }
+    if c1 - c0 < 0.01 {
+        let mid = 0.5 * (c0 + c1);
+        c0 = mid - 0.005;
+        c1 = mid + 0.005;
+    }
+    let mut out = String::new();
+    {
+        let root = SVGBackend::with_string(&mut out, size).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| anyhow!("{e}"))?;
+        let (main, bar) = root.split_horizontally(size.0 - 90);
+        let mut chart = ChartBuilder::on(&main)
+            .margin(10)
+            .caption(title, ("sans-serif", 15))
+            .x_label_area_size(32)
+            .y_label_area_size(56)
+            .build_cartesian_2d(h0..h1, v0..v1)
+            .map_err(|e| anyhow!("{e}"))?;
+        chart
+            .configure_mesh()
+            .disable_mesh()
+            .x_desc(hlabel)
+            .y_desc(vlabel)
+            .draw()
+            .map_err(|e| anyhow!("{e}"))?;
+        chart
+            .draw_series(cells.iter().map(|c| {
+                let fill = match c.value {
+                    Some(x) => color((x.log10() - c0) / (c1 - c0)).filled(),
+                    None => RGBColor(225, 225, 225).filled(),
+                };
+                Rectangle::new(
+                    [
+                        (c.h - dh / 2.0, c.v - dv / 2.0),
+                        (c.h + dh / 2.0, c.v + dv / 2.0),
+                    ],
+                    fill,
+                )
+            }))
+            .map_err(|e| anyhow!("{e}"))?;
+        // Colour bar.
+        let mut cb = ChartBuilder::on(&bar)
+            .margin_top(40)
+            .margin_bottom(42)
+            .margin_right(8)
+            .y_label_area_size(48)
+            .build_cartesian_2d(0.0..1.0, c0..c1)
+            .map_err(|e| anyhow!("{e}"))?;
+        cb.configure_mesh()
+            .disable_mesh()
+            .disable_x_axis()
+            .y_desc("log10 condition")
+            .draw()
+            .map_err(|e| anyhow!("{e}"))?;
+        let n = 60;
+        cb.draw_series((0..n).map(|i| {
+            let a = c0 + (c1 - c0) * i as f64 / n as f64;
+            let b = c0 + (c1 - c0) * (i + 1) as f64 / n as f64;
+            Rectangle::new(
+                [(0.0, a), (1.0, b)],
+                color(i as f64 / (n - 1) as f64).filled(),
+            )
+        }))
+        .map_err(|e| anyhow!("{e}"))?;
+        root.present().map_err(|e| anyhow!("{e}"))?;
+    }
+    Ok(out)
+}

@@ -1,0 +1,340 @@
+//! The workspace engine, generic over mechanisms: grids of poses, which limit binds
+//! where, and the conditioning inside the reachable region (rayon, flat per point).
+
+use nalgebra::SVector;
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::error::{Error, Result};
+use crate::limits::Violation;
+use crate::mechanism::Mechanism;
+use crate::rotation::Convention;
+
+/// One axis of a grid: a pose coordinate swept from `min` to `max` by `step`
+/// (internal units).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct GridAxis {
+    /// Index of the pose coordinate.
+    pub coordinate: usize,
+    /// First value.
+    pub min: f64,
+    /// Last value (included when on the step).
+    pub max: f64,
+    /// Step.
+    pub step: f64,
+}
+
+impl GridAxis {
+    /// Number of grid values.
+    pub fn count(&self) -> usize {
+        ((self.max - self.min) / self.step + 1e-9).floor() as usize + 1
+    }
+
+    /// The `i`-th value.
+    pub fn value(&self, i: usize) -> f64 {
+        self.min + self.step * i as f64
+    }
+}
+
+/// What one grid point found.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PointResult {
+    /// Within every limit (for every orientation of the set).
+    pub reachable: bool,
+    /// Condition number (worst over the orientation set), when reachable.
+    pub condition: f64,
+    /// The first violated limit, when not reachable.
+    pub binding: Option<String>,
+}
+
+/// Statistics of the condition number over the reachable points.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Default)]
+pub struct ConditionStats {
+    /// Smallest.
+    pub min: f64,
+    /// Median.
+    pub median: f64,
+    /// Mean.
+    pub mean: f64,
+    /// 95th percentile.
+    pub p95: f64,
+    /// Largest.
+    pub max: f64,
+}
+
+/// A map of a grid.
+#[derive(Debug, Clone, PartialEq)]
+pub struct WorkspaceMap {
+    /// The grid axes (first varies slowest).
+    pub axes: Vec<GridAxis>,
+    /// The pose all points start from (coordinates not on an axis keep its values).
+    pub base: Vec<f64>,
+    /// Orientation offsets tested at every point (total orientation workspace), as
+    /// A, B, C (rad) added through rotation composition; empty = base orientation only.
+    pub orientations: usize,
+    /// One result per grid point, in row-major order of `axes`.
+    pub points: Vec<PointResult>,
+}
+
+/// Summary of a map.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct WorkspaceSummary {
+    /// Points in the grid.
+    pub points: usize,
+    /// Reachable points.
+    pub reachable: usize,
+    /// Reachable fraction.
+    pub reachable_fraction: f64,
+    /// Reachable volume (mm^3; area mm^2 for two length axes), cell count times cell size.
+    pub volume_mm3: f64,
+    /// Bounding box of the reachable points per axis: `[min, max]` in user units.
+    pub bounding_box: Vec<[f64; 2]>,
+    /// Condition number statistics.
+    pub condition: ConditionStats,
+    /// Points per binding limit (the first violated one), sorted by count.
+    pub binding: Vec<(String, usize)>,
+}
+
+/// Index of a grid point from its per-axis indices.
+pub fn flat_index(axes: &[GridAxis], idx: &[usize]) -> usize {
+    let mut k = 0;
+    for (a, i) in axes.iter().zip(idx) {
+        k = k * a.count() + i;
+    }
+    k
+}
+
+fn evaluate<M: Mechanism<P, A>, const P: usize, const A: usize>(
+    m: &M,
+    x: &SVector<f64, P>,
+    v: &mut Vec<Violation>,
+) -> PointResult {
+    let q = match m.inverse(x) {
+        Ok(q) => q,
+        Err(e) => {
+            return PointResult {
+                reachable: false,
+                condition: f64::NAN,
+                binding: Some(match e {
+                    Error::NotAttainable { .. } => "no solution".into(),
+                    other => other.to_string(),
+                }),
+            }
+        }
+    };
+    v.clear();
+    m.check_limits(x, &q, v);
+    if let Some(first) = v.first() {
+        return PointResult {
+            reachable: false,
+            condition: f64::NAN,
+            binding: Some(first.limit.clone()),
+        };
+    }
+    let c = m.condition(x).unwrap_or(f64::INFINITY);
+    PointResult {
+        reachable: c.is_finite(),
+        condition: c,
+        binding: if c.is_finite() {
+            None
+        } else {
+            Some("singular".into())
+        },
+    }
+}
+
+/// Maps a grid of poses: for each point the base pose with the axis coordinates set,
+/// then, for spatial machines, each orientation of `orientations` (A, B, C in rad,
+/// composed with the base orientation) — a point is reachable when every one is.
+/// `progress` is called with the number of points done (from several threads).
+pub fn map<M, const P: usize, const A: usize>(
+    m: &M,
+    base: &SVector<f64, P>,
+    axes: &[GridAxis],
+    orientations: &[[f64; 3]],
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<WorkspaceMap>
+where
+    M: Mechanism<P, A>,
+{
+    for a in axes {
+        if a.coordinate >= P || !(a.step > 0.0) || !(a.max >= a.min) {
+            return Err(Error::InvalidInput {
+                what: "workspace grid".into(),
+                message: format!("bad axis {a:?}"),
+            });
+        }
+    }
+    if !orientations.is_empty() && P != 6 {
+        return Err(Error::InvalidInput {
+            what: "orientation set".into(),
+            message: "orientation sets need a machine with X, Y, Z, A, B, C".into(),
+        });
+    }
+    let counts: Vec<usize> = axes.iter().map(|a| a.count()).collect();
+    let total: usize = counts.iter().product();
+    let base_r = if P == 6 {
+        Convention::Rpy.to_matrix([base[3], base[4], base[5]])
+    } else {
+        nalgebra::Matrix3::identity()
+    };
+    let rots: Vec<[f64; 3]> = orientations
+        .iter()
+        .map(|o| Convention::Rpy.from_matrix(&(Convention::Rpy.to_matrix(*o) * base_r)))
+        .collect();
+    let chunk = 4096;
+    let points: Vec<PointResult> = (0..total)
+        .into_par_iter()
+        .with_min_len(chunk)
+        .map_init(Vec::new, |v, k| {
+            let mut x = *base;
+            let mut rem = k;
+            for (a, n) in axes.iter().zip(&counts).rev() {
+                x[a.coordinate] = a.value(rem % n);
+                rem /= n;
+            }
+            let r = if rots.is_empty() {
+                evaluate(m, &x, v)
+            } else {
+                let mut worst = PointResult {
+                    reachable: true,
+                    condition: 0.0,
+                    binding: None,
+                };
+                for o in &rots {
+                    for (i, val) in o.iter().enumerate() {
+                        x[3 + i] = *val;
+                    }
+                    let r = evaluate(m, &x, v);
+                    if !r.reachable {
+                        worst = r;
+                        break;
+                    }
+                    worst.condition = worst.condition.max(r.condition);
+                }
+                worst
+            };
+            if k % chunk == chunk - 1 {
+                progress(chunk as u64);
+            }
+            r
+        })
+        .collect();
+    Ok(WorkspaceMap {
+        axes: axes.to_vec(),
+        base: base.as_slice().to_vec(),
+        orientations: orientations.len(),
+        points,
+    })
+}
+
+impl WorkspaceMap {
+    /// Coordinates (internal units) of the point with flat index `k`.
+    pub fn coords(&self, k: usize) -> Vec<f64> {
+        let mut x = self.base.clone();
+        let mut rem = k;
+        for a in self.axes.iter().rev() {
+            let n = a.count();
+            x[a.coordinate] = a.value(rem % n);
+            rem /= n;
+        }
+        x
+    }
+
+    /// Summary statistics; `to_user` converts a coordinate value of axis `i` to user
+    /// units; `cell` is the volume of one cell in user units.
+    pub fn summary(&self, to_user: &dyn Fn(usize, f64) -> f64, cell: f64) -> WorkspaceSummary {
+        let mut conds: Vec<f64> = Vec::new();
+        let mut bbox = vec![[f64::INFINITY, f64::NEG_INFINITY]; self.axes.len()];
+        let mut binding: std::collections::HashMap<String, usize> = Default::default();
+        for (k, p) in self.points.iter().enumerate() {
+            if p.reachable {
+                conds.push(p.condition);
+                let x = self.coords(k);
+                for (i, a) in self.axes.iter().enumerate() {
+                    let v = to_user(i, x[a.coordinate]);
+                    bbox[i][0] = bbox[i][0].min(v);
+                    bbox[i][1] = bbox[i][1].max(v);
+                }
+            } else if let Some(b) = &p.binding {
+                *binding.entry(b.clone()).or_default() += 1;
+            }
+        }
+        conds.sort_by(|a, b| a.total_cmp(b));
+        let pick = |f: f64| conds[((conds.len() - 1) as f64 * f).round() as usize];
+        let condition = if conds.is_empty() {
+            ConditionStats::default()
+        } else {
+            ConditionStats {
+                min: conds[0],
+                median: pick(0.5),
+                mean: conds.iter().sum::<f64>() / conds.len() as f64,
+                p95: pick(0.95),
+                max: conds[conds.len() - 1],
+            }
+        };
+        let mut binding: Vec<(String, usize)> = binding.into_iter().collect();
+        binding.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
+        WorkspaceSummary {
+            points: self.points.len(),
+            reachable: conds.len(),
+            reachable_fraction: conds.len() as f64 / self.points.len().max(1) as f64,
+            volume_mm3: conds.len() as f64 * cell,
+            bounding_box: bbox,
+            condition,
+            binding,
+        }
+    }
+}
+
+/// The largest tilt (rad) reachable at tool position `x` (spatial machines) towards
+/// each of `azimuths` directions, by bisection to `tol` rad up to `max_tilt`: the
+/// orientation workspace at a point. The tilt is a rotation about a horizontal axis
+/// at the azimuth, composed with the base orientation of `x`.
+pub fn reachable_tilt<M: Mechanism<P, A>, const P: usize, const A: usize>(
+    m: &M,
+    x: &SVector<f64, P>,
+    azimuths: &[f64],
+    max_tilt: f64,
+    tol: f64,
+) -> Result<Vec<f64>> {
+    if P != 6 || m.pose_space() != crate::mechanism::PoseSpace::Spatial {
+        return Err(Error::InvalidInput {
+            what: "orientation workspace".into(),
+            message: "needs a machine with X, Y, Z, A, B, C".into(),
+        });
+    }
+    let base_r = Convention::Rpy.to_matrix([x[3], x[4], x[5]]);
+    let mut v = Vec::new();
+    let ok = |az: f64, t: f64, v: &mut Vec<Violation>| {
+        let axis = nalgebra::Unit::new_normalize(nalgebra::Vector3::new(-az.sin(), az.cos(), 0.0));
+        let r = nalgebra::Rotation3::from_axis_angle(&axis, t).matrix() * base_r;
+        let a = Convention::Rpy.from_matrix(&r);
+        let mut y = *x;
+        y[3] = a[0];
+        y[4] = a[1];
+        y[5] = a[2];
+        evaluate(m, &y, v).reachable
+    };
+    Ok(azimuths
+        .iter()
+        .map(|&az| {
+            if !ok(az, 0.0, &mut v) {
+                return f64::NAN;
+            }
+            if ok(az, max_tilt, &mut v) {
+                return max_tilt;
+            }
+            let (mut lo, mut hi) = (0.0, max_tilt);
+            while hi - lo > tol {
+                let mid = 0.5 * (lo + hi);
+                if ok(az, mid, &mut v) {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            lo
+        })
+        .collect())
+}

@@ -1,0 +1,154 @@
+//! The workspace engine against direct evaluation.
+
+use nalgebra::Vector6;
+use pkm::machine::Model;
+use pkm::workspace::{flat_index, map, reachable_tilt, GridAxis};
+use pkm::{inverse_checked, Machine, Mechanism};
+
+fn machine(name: &str) -> Machine {
+    Machine::from_path(format!(
+        "{}/../../examples/machines/{name}",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap()
+}
+
+#[test]
+fn grid_points_agree_with_direct_evaluation() {
+    let Model::TranslationalTripod(t) = machine("tripod-seed000.toml").model else {
+        panic!()
+    };
+    let axes = [
+        GridAxis {
+            coordinate: 0,
+            min: -100.0,
+            max: 100.0,
+            step: 20.0,
+        },
+        GridAxis {
+            coordinate: 1,
+            min: -100.0,
+            max: 100.0,
+            step: 25.0,
+        },
+        GridAxis {
+            coordinate: 2,
+            min: -360.0,
+            max: -220.0,
+            step: 35.0,
+        },
+    ];
+    let wm = map(&t, &t.home(), &axes, &[], &|_| {}).unwrap();
+    assert_eq!(wm.points.len(), 11 * 9 * 5);
+    let mut reachable = 0;
+    for i in 0..11 {
+        for j in 0..9 {
+            for k in 0..5 {
+                let x = Vector6::new(
+                    axes[0].value(i),
+                    axes[1].value(j),
+                    axes[2].value(k),
+                    0.0,
+                    0.0,
+                    0.0,
+                );
+                let p = &wm.points[flat_index(&axes, &[i, j, k])];
+                let direct = inverse_checked(&t, &x);
+                assert_eq!(p.reachable, direct.is_ok(), "{x}");
+                if let Err(pkm::Error::Unreachable { violations }) = direct {
+                    assert_eq!(p.binding.as_deref(), Some(violations[0].limit.as_str()));
+                } else {
+                    reachable += 1;
+                    assert!((p.condition - t.condition(&x).unwrap()).abs() < 1e-12);
+                    assert_eq!(wm.coords(flat_index(&axes, &[i, j, k])), x.as_slice());
+                }
+            }
+        }
+    }
+    let s = wm.summary(&|_, v| v, 20.0 * 25.0 * 35.0);
+    assert_eq!(s.reachable, reachable);
+    assert!(reachable > 0 && reachable < wm.points.len());
+    assert_eq!(
+        s.binding.iter().map(|b| b.1).sum::<usize>() + s.reachable,
+        s.points
+    );
+    assert!((s.volume_mm3 - reachable as f64 * 17500.0).abs() < 1e-6);
+}
+
+#[test]
+fn hexapod_conditioning_is_consistent() {
+    let Model::Hexapod(h) = machine("hexapod-linuxcnc.toml").model else {
+        panic!()
+    };
+    // The symmetric home pose is well conditioned; the condition number is that of the
+    // twist Jacobian with rotations scaled by the characteristic length.
+    let c = h.condition(&h.home).unwrap();
+    assert!(c > 1.0 && c < 3.0, "{c}");
+    let (p, r) = pkm::legs::split_pose(&h.home);
+    let sv = pkm::linalg::singular_values(&h.scaled_twist_jacobian(&p, &r));
+    assert!((sv[0] / sv[5] - c).abs() < 1e-9 * c);
+    // Orientation workspace at home: every returned tilt is reachable, a bit more is not.
+    let az = [0.0, 1.0, 2.0, 3.0];
+    let tilts = reachable_tilt(h.as_ref(), &h.home, &az, 1.0, 1e-6).unwrap();
+    for (a, t) in az.iter().zip(&tilts) {
+        assert!(*t > 0.05 && *t < 1.0, "{t}");
+        let ok = |tt: f64| {
+            let axis =
+                nalgebra::Unit::new_normalize(nalgebra::Vector3::new(-a.sin(), a.cos(), 0.0));
+            let ang = pkm::Convention::Rpy
+                .from_matrix(nalgebra::Rotation3::from_axis_angle(&axis, tt).matrix());
+            let x = Vector6::new(h.home[0], h.home[1], h.home[2], ang[0], ang[1], ang[2]);
+            inverse_checked(h.as_ref(), &x).is_ok()
+        };
+        assert!(ok(t - 1e-5) && !ok(t + 1e-5));
+    }
+}
+
+#[test]
+fn total_orientation_workspace_is_smaller() {
+    let Model::Hexapod(h) = machine("hexapod-linuxcnc.toml").model else {
+        panic!()
+    };
+    let axes = [
+        GridAxis {
+            coordinate: 0,
+            min: -300.0,
+            max: 300.0,
+            step: 30.0,
+        },
+        GridAxis {
+            coordinate: 1,
+            min: -300.0,
+            max: 300.0,
+            step: 30.0,
+        },
+        GridAxis {
+            coordinate: 2,
+            min: 350.0,
+            max: 750.0,
+            step: 40.0,
+        },
+    ];
+    let plain = map(h.as_ref(), &h.home, &axes, &[], &|_| {}).unwrap();
+    let tilt = 10f64.to_radians();
+    let set: Vec<[f64; 3]> = (0..8)
+        .map(|k| {
+            let az = k as f64 * std::f64::consts::FRAC_PI_4;
+            let axis =
+                nalgebra::Unit::new_normalize(nalgebra::Vector3::new(-az.sin(), az.cos(), 0.0));
+            pkm::Convention::Rpy
+                .from_matrix(nalgebra::Rotation3::from_axis_angle(&axis, tilt).matrix())
+        })
+        .collect();
+    let total = map(h.as_ref(), &h.home, &axes, &set, &|_| {}).unwrap();
+    let n = |w: &pkm::workspace::WorkspaceMap| w.points.iter().filter(|p| p.reachable).count();
+    assert!(
+        n(&total) < n(&plain) && n(&total) > 0,
+        "{} vs {}",
+        n(&total),
+        n(&plain)
+    );
+    for (a, b) in total.points.iter().zip(&plain.points) {
+        assert!(!a.reachable || b.reachable);
+    }
+}
