@@ -8,7 +8,7 @@
 // Struts, joints and sample vectors are indexed together.
 #![allow(clippy::needless_range_loop)]
 
-mod forward;
+pub mod forward;
 
 use nalgebra::{Matrix3, SMatrix, Vector3, Vector6};
 
