@@ -67,6 +67,70 @@ pub(crate) fn positive_opt(
     }
 }
 
+/// One `[[struts]]` entry (tripods and hexapods).
+#[derive(Debug, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct StrutFile {
+    pub(crate) name: String,
+    pub(crate) base: String,
+    pub(crate) platform: String,
+    pub(crate) length: [f64; 2],
+    #[serde(default)]
+    pub(crate) max_velocity: Option<f64>,
+    #[serde(default)]
+    pub(crate) max_acceleration: Option<f64>,
+}
+
+type Joints = std::collections::BTreeMap<String, [f64; 3]>;
+
+/// Checks strut `i` of `struts` (unique non-empty name, known joints, stroke, rate
+/// limits) and returns its actuator and its base and platform joint centres.
+pub(crate) fn strut_entry(
+    src: &source::Source,
+    struts: &[StrutFile],
+    i: usize,
+    base_joints: &Joints,
+    platform_joints: &Joints,
+) -> Result<(
+    crate::mechanism::Actuator,
+    nalgebra::Vector3<f64>,
+    nalgebra::Vector3<f64>,
+)> {
+    use source::Seg;
+    let s = &struts[i];
+    let p = |k: &str| vec![Seg::Key("struts".into()), Seg::Index(i), Seg::Key(k.into())];
+    if s.name.trim().is_empty() {
+        return Err(src.error(&p("name"), "expected a non-empty strut name"));
+    }
+    if struts[..i].iter().any(|o| o.name == s.name) {
+        return Err(src.error(&p("name"), format!("strut name `{}` is used twice", s.name)));
+    }
+    let lookup = |joints: &Joints, name: &str, field: &str, what: &str| {
+        joints.get(name).map(|v| v3(*v)).ok_or_else(|| {
+            src.error(
+                &p(field),
+                format!(
+                    "unknown {what} joint `{name}`, expected one of {}",
+                    joints.keys().cloned().collect::<Vec<_>>().join(", ")
+                ),
+            )
+        })
+    };
+    let base = lookup(base_joints, &s.base, "base", "base")?;
+    let plat = lookup(platform_joints, &s.platform, "platform", "platform")?;
+    let range = length_range(src, &p("length"), s.length)?;
+    positive_opt(src, &p("max_velocity"), s.max_velocity, "mm/s")?;
+    positive_opt(src, &p("max_acceleration"), s.max_acceleration, "mm/s^2")?;
+    let actuator = crate::mechanism::Actuator {
+        name: s.name.clone(),
+        quantity: crate::units::Quantity::Length,
+        range,
+        max_velocity: s.max_velocity,
+        max_acceleration: s.max_acceleration,
+    };
+    Ok((actuator, base, plat))
+}
+
 /// What a machine-type loader returns.
 pub(crate) struct Parts {
     model: Model,

@@ -7,12 +7,10 @@ use serde::Deserialize;
 
 use super::reference::Reference;
 use super::source::{Seg, Source};
-use super::{length_range, positive_opt, v3, Model};
+use super::{length_range, v3, Model};
 use crate::error::Error;
-use crate::mechanism::Actuator;
 use crate::rotation::Convention;
 use crate::tripod::{CentreLeg, CentreLegTripod, Strut, TranslationalTripod, TripodGeometry};
-use crate::units::Quantity;
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -26,7 +24,7 @@ pub(super) struct TripodFile {
     constraint: Constraint,
     base_joints: BTreeMap<String, [f64; 3]>,
     platform_joints: BTreeMap<String, [f64; 3]>,
-    struts: Vec<StrutFile>,
+    struts: Vec<super::StrutFile>,
     tool: ToolFile,
     #[serde(default)]
     limits: LimitsFile,
@@ -44,19 +42,6 @@ pub(super) struct TripodFile {
 enum Constraint {
     Translational,
     CentreLeg,
-}
-
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct StrutFile {
-    name: String,
-    base: String,
-    platform: String,
-    length: [f64; 2],
-    #[serde(default)]
-    max_velocity: Option<f64>,
-    #[serde(default)]
-    max_acceleration: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -124,36 +109,9 @@ pub(super) fn build(src: &Source, f: TripodFile) -> Result<super::Parts, Error> 
     let mut struts = Vec::with_capacity(3);
     for (i, s) in f.struts.iter().enumerate() {
         let p = |k: &str| vec![key("struts"), Seg::Index(i), key(k)];
-        if s.name.trim().is_empty() {
-            return Err(src.error(&p("name"), "expected a non-empty strut name"));
-        }
-        if f.struts[..i].iter().any(|o| o.name == s.name) {
-            return Err(src.error(&p("name"), format!("strut name `{}` is used twice", s.name)));
-        }
-        let base = f.base_joints.get(&s.base).ok_or_else(|| {
-            src.error(
-                &p("base"),
-                format!(
-                    "unknown base joint `{}`, expected one of {}",
-                    s.base,
-                    f.base_joints.keys().cloned().collect::<Vec<_>>().join(", ")
-                ),
-            )
-        })?;
-        let plat = f.platform_joints.get(&s.platform).ok_or_else(|| {
-            src.error(
-                &p("platform"),
-                format!(
-                    "unknown platform joint `{}`, expected one of {}",
-                    s.platform,
-                    f.platform_joints
-                        .keys()
-                        .cloned()
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ),
-            )
-        })?;
+        let (actuator, base, platform) =
+            super::strut_entry(src, &f.struts, i, &f.base_joints, &f.platform_joints)?;
+        // A tripod uses each joint once.
         if f.struts[..i].iter().any(|o| o.base == s.base) {
             return Err(src.error(
                 &p("base"),
@@ -169,21 +127,12 @@ pub(super) fn build(src: &Source, f: TripodFile) -> Result<super::Parts, Error> 
                 ),
             ));
         }
-        let range = length_range(src, &p("length"), s.length)?;
-        positive_opt(src, &p("max_velocity"), s.max_velocity, "mm/s")?;
-        positive_opt(src, &p("max_acceleration"), s.max_acceleration, "mm/s^2")?;
         struts.push(Strut {
-            actuator: Actuator {
-                name: s.name.clone(),
-                quantity: Quantity::Length,
-                range,
-                max_velocity: s.max_velocity,
-                max_acceleration: s.max_acceleration,
-            },
+            actuator,
             base_name: s.base.clone(),
             platform_name: s.platform.clone(),
-            base: v3(*base),
-            platform: v3(*plat),
+            base,
+            platform,
         });
     }
     let struts: [Strut; 3] = struts.try_into().expect("three struts checked above");
