@@ -102,6 +102,28 @@ pub fn split_pose(x: &SVector<f64, 6>) -> (Vector3<f64>, Matrix3<f64>) {
     )
 }
 
+/// The tool pose of spatial coordinates `X..C`.
+pub fn spatial_tool_pose(x: &SVector<f64, 6>) -> crate::pose::Pose {
+    let (p, r) = split_pose(x);
+    crate::pose::pose_from_parts(p, &r)
+}
+
+/// Spatial coordinates `X..C` of a tool pose; without a given orientation, the angles
+/// of `home` are kept (the orientation a spatial machine holds by default).
+pub fn spatial_coords_from_pose(
+    pose: &crate::pose::Pose,
+    orientation_given: bool,
+    home: &SVector<f64, 6>,
+) -> SVector<f64, 6> {
+    let p = pose.translation.vector;
+    let a = if orientation_given {
+        crate::rotation::Convention::Rpy.from_matrix(&crate::pose::rotation_matrix(pose))
+    } else {
+        [home[3], home[4], home[5]]
+    };
+    SVector::<f64, 6>::new(p.x, p.y, p.z, a[0], a[1], a[2])
+}
+
 impl<const N: usize> StrutSet<N> {
     /// `dL/dx` for spatial coordinates `X..C`: `J_twist diag(I, E(A, B, C))`.
     pub fn coords_jacobian(&self, x: &SVector<f64, 6>) -> SMatrix<f64, N, 6> {

@@ -19,7 +19,7 @@ use crate::mechanism::{
     spatial_coordinates, Actuator, ActuatorMotion, Coordinate, Forward, LinkKind, Mechanism,
     PointRole, PoseSpace, Skeleton,
 };
-use crate::pose::{pose_from_parts, rotation_matrix, Pose};
+use crate::pose::Pose;
 use crate::rotation::Convention;
 use crate::units::Quantity;
 
@@ -253,18 +253,15 @@ impl Mechanism<6, 6> for Hexapod {
     }
 
     fn tool_pose(&self, x: &Vector6<f64>) -> Result<Pose> {
-        let (p, r) = split_pose(x);
-        Ok(pose_from_parts(p, &r))
+        Ok(crate::legs::spatial_tool_pose(x))
     }
 
     fn coords_from_pose(&self, pose: &Pose, orientation_given: bool) -> Result<Vector6<f64>> {
-        let p = pose.translation.vector;
-        let a = if orientation_given {
-            Convention::Rpy.from_matrix(&rotation_matrix(pose))
-        } else {
-            [self.home[3], self.home[4], self.home[5]]
-        };
-        Ok(Vector6::new(p.x, p.y, p.z, a[0], a[1], a[2]))
+        Ok(crate::legs::spatial_coords_from_pose(
+            pose,
+            orientation_given,
+            &self.home,
+        ))
     }
 
     fn check_limits(&self, x: &Vector6<f64>, q: &Vector6<f64>, out: &mut Vec<Violation>) {

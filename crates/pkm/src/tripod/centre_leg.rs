@@ -270,7 +270,8 @@ impl Mechanism<3, 3> for CentreLegTripod {
         let (st, w, al) = self.angular_motion(x, xd, xdd)?;
         Ok(self
             .geometry
-            .strut_motion(x, &st.rotation, xd, &w, xdd, &al))
+            .strut_set()
+            .motion(x, &st.rotation, xd, &w, xdd, &al))
     }
 
     fn skeleton(&self, x: &Vector3<f64>) -> Result<Skeleton> {

@@ -110,24 +110,6 @@ impl TripodGeometry {
         self.set.twist_jacobian(p, r)
     }
 
-    /// Exact strut lengths, rates and accelerations for a platform moving with tool-tip
-    /// velocity `v`, acceleration `a`, angular velocity `w` and angular acceleration
-    /// `al` (all base frame). With `d_i = p + r_i - F_i`, `r_i = R (c_i - t)`:
-    /// `d' = v + w x r`, `d'' = a + al x r + w x (w x r)`, `L' = n . d'`,
-    /// `L'' = (|d'|^2 - L'^2) / L + n . d''`.
-    #[allow(clippy::too_many_arguments)]
-    pub fn strut_motion(
-        &self,
-        p: &Vector3<f64>,
-        r: &Matrix3<f64>,
-        v: &Vector3<f64>,
-        w: &Vector3<f64>,
-        a: &Vector3<f64>,
-        al: &Vector3<f64>,
-    ) -> crate::mechanism::ActuatorMotion<3> {
-        self.set.motion(p, r, v, w, a, al)
-    }
-
     /// Inclination of each strut relative to the spindle axis (rad), measured in the
     /// plane through the spindle axis and the strut's platform joint, positive when the
     /// strut leans away from the axis.

@@ -7,8 +7,7 @@ use crate::mechanism::{
     spatial_coordinates, Actuator, ActuatorMotion, Coordinate, Forward, Mechanism, PoseSpace,
     Skeleton,
 };
-use crate::pose::{pose_from_parts, rotation_matrix, Pose};
-use crate::rotation::Convention;
+use crate::pose::Pose;
 
 /// A tripod whose mechanism holds the platform orientation constant (seed 000's arc
 /// study). Pose coordinates X, Y, Z, A, B, C of the tool tip (default convention); the
@@ -35,10 +34,7 @@ impl TranslationalTripod {
     /// Tool tip and rotation matrix of pose coordinates.
     #[inline]
     pub fn split(x: &Vector6<f64>) -> (Vector3<f64>, Matrix3<f64>) {
-        (
-            Vector3::new(x[0], x[1], x[2]),
-            Convention::Rpy.to_matrix([x[3], x[4], x[5]]),
-        )
+        crate::legs::split_pose(x)
     }
 
     /// Forward kinematics in closed form for a given platform rotation: the tool tip
@@ -158,18 +154,15 @@ impl Mechanism<6, 3> for TranslationalTripod {
     }
 
     fn tool_pose(&self, x: &Vector6<f64>) -> Result<Pose> {
-        let (p, r) = Self::split(x);
-        Ok(pose_from_parts(p, &r))
+        Ok(crate::legs::spatial_tool_pose(x))
     }
 
     fn coords_from_pose(&self, pose: &Pose, orientation_given: bool) -> Result<Vector6<f64>> {
-        let p = pose.translation.vector;
-        let a = if orientation_given {
-            Convention::Rpy.from_matrix(&rotation_matrix(pose))
-        } else {
-            [self.home[3], self.home[4], self.home[5]]
-        };
-        Ok(Vector6::new(p.x, p.y, p.z, a[0], a[1], a[2]))
+        Ok(crate::legs::spatial_coords_from_pose(
+            pose,
+            orientation_given,
+            &self.home,
+        ))
     }
 
     fn check_limits(&self, x: &Vector6<f64>, q: &Vector3<f64>, out: &mut Vec<Violation>) {
