@@ -53,6 +53,10 @@ pub trait DynMechanism: Send + Sync {
     fn check_limits(&self, x: &[f64], q: &[f64]) -> Result<Vec<Violation>>;
     /// See [`crate::Mechanism::skeleton`].
     fn skeleton(&self, x: &[f64]) -> Result<Skeleton>;
+    /// See [`crate::Mechanism::condition`] (dimensionally consistent).
+    fn condition(&self, x: &[f64]) -> Result<f64>;
+    /// See [`crate::Mechanism::characteristic_length`].
+    fn characteristic_length(&self) -> f64;
 }
 
 /// Copies a slice into a fixed vector, checking its length and finiteness.
@@ -148,6 +152,13 @@ macro_rules! impl_dyn_mechanism {
             fn skeleton(&self, x: &[f64]) -> $crate::Result<$crate::Skeleton> {
                 let x = $crate::dynamic::fixed::<$p>("pose", x)?;
                 $crate::Mechanism::<$p, $a>::skeleton(self, &x)
+            }
+            fn condition(&self, x: &[f64]) -> $crate::Result<f64> {
+                let x = $crate::dynamic::fixed::<$p>("pose", x)?;
+                $crate::Mechanism::<$p, $a>::condition(self, &x)
+            }
+            fn characteristic_length(&self) -> f64 {
+                $crate::Mechanism::<$p, $a>::characteristic_length(self)
             }
         }
     };

@@ -106,7 +106,9 @@ pub struct CheckRow {
     pub error: Option<String>,
 }
 
-/// Condition number (2-norm) of the driven columns of the Jacobian.
+/// Condition number (2-norm) of the driven columns of the Jacobian, dimensionally
+/// consistent ([`Mechanism::condition`]: angle columns divided by the mechanism's
+/// characteristic length).
 pub fn driven_condition<M, const P: usize, const A: usize>(
     m: &M,
     x: &SVector<f64, P>,
@@ -114,11 +116,7 @@ pub fn driven_condition<M, const P: usize, const A: usize>(
 where
     M: Mechanism<P, A> + ?Sized,
 {
-    let j = m.jacobian(x)?;
-    let d = m.driven();
-    let jd = nalgebra::DMatrix::from_fn(A, A, |r, c| j[(r, d[c])]);
-    let sv = jd.singular_values();
-    Ok(sv.max() / sv.min())
+    m.condition(x)
 }
 
 /// The check table: the home pose, then each driven coordinate moved by +-`step_len`

@@ -16,11 +16,9 @@ pub fn run(a: &CheckArgs) -> Result<u8> {
     let q = m.inverse(&home)?;
     let violations = m.check_limits(&home, &q)?;
     let tool = tool_json(m, &home, Convention::Rpy)?;
-    let jac = m.jacobian(&home)?;
+    let cond = m.condition(&home)?;
+    let lc = m.characteristic_length();
     let driven: Vec<usize> = m.driven();
-    let jd = nalgebra::DMatrix::from_fn(jac.nrows(), driven.len(), |r, c| jac[(r, driven[c])]);
-    let sv = jd.singular_values();
-    let cond = sv.max() / sv.min();
     let references = check_references(&machine);
     if a.json {
         let actuators: Vec<_> = m
@@ -64,6 +62,7 @@ pub fn run(a: &CheckArgs) -> Result<u8> {
                 "actuators": actuators_json(m, &q),
                 "violations": violations,
                 "jacobian_condition": cond,
+                "characteristic_length_mm": lc,
             },
             "references": references,
         });
@@ -103,7 +102,9 @@ pub fn run(a: &CheckArgs) -> Result<u8> {
             println!("{line}");
         }
         println!("home        {}", coords_text(m, &home));
-        println!("jacobian    condition number {cond:.3} at home (driven columns, 2-norm)");
+        println!(
+            "jacobian    condition number {cond:.3} at home (driven columns, 2-norm; 1 rad counted as {lc:.3} mm)"
+        );
         if violations.is_empty() {
             println!("home limits all satisfied");
         } else {

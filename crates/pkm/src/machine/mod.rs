@@ -5,6 +5,7 @@
 //! field; unknown keys are rejected; errors name the file, line, column and field.
 
 mod hexapod_file;
+mod p3rp_file;
 mod reference;
 mod source;
 mod tripod_file;
@@ -201,6 +202,10 @@ pub enum Model {
     CentreLegTripod(CentreLegTripod),
     /// `type = "hexapod"`.
     Hexapod(Box<crate::hexapod::Hexapod>),
+    /// `type = "p3rp"` without `[table]`: the P3RP spindle head of seed 004.
+    P3rpHead(Box<crate::p3rp::P3rpHead>),
+    /// `type = "p3rp"` with `[table]`: the 4-axis hybrid machine of seed 004.
+    P3rpHybrid(Box<crate::p3rp::HybridMachine>),
 }
 
 /// Code generic over any mechanism, run on a machine whose type is known at run time
@@ -230,7 +235,7 @@ pub struct Machine {
 }
 
 /// Machine types accepted in the `type` field.
-pub const MACHINE_TYPES: &[&str] = &["tripod", "hexapod"];
+pub const MACHINE_TYPES: &[&str] = &["tripod", "hexapod", "p3rp"];
 
 impl Machine {
     /// Reads and validates a machine file.
@@ -280,6 +285,7 @@ impl Machine {
         let parts = match kind.as_str() {
             "tripod" => tripod_file::build(&src, src.deserialize()?)?,
             "hexapod" => hexapod_file::build(&src, src.deserialize()?)?,
+            "p3rp" => p3rp_file::build(&src, src.deserialize()?)?,
             other => {
                 return Err(src.error(
                     &[source::Seg::Key("type".into())],
@@ -306,6 +312,8 @@ impl Machine {
             Model::TranslationalTripod(m) => m,
             Model::CentreLegTripod(m) => m,
             Model::Hexapod(m) => m.as_ref(),
+            Model::P3rpHead(m) => m.as_ref(),
+            Model::P3rpHybrid(m) => m.as_ref(),
         }
     }
 
@@ -315,6 +323,8 @@ impl Machine {
             Model::TranslationalTripod(m) => v.visit(m),
             Model::CentreLegTripod(m) => v.visit(m),
             Model::Hexapod(m) => v.visit(m.as_ref()),
+            Model::P3rpHead(m) => v.visit(m.as_ref()),
+            Model::P3rpHybrid(m) => v.visit(m.as_ref()),
         }
     }
 

@@ -1,0 +1,236 @@
+//! The 4-axis hybrid machine of seed 004: a serial XY cross table under the P3RP head.
+
+use nalgebra::{SMatrix, Vector2, Vector3, Vector4, Vector6};
+
+use super::head::{head_motion, head_skeleton, HeadGeometry};
+use crate::error::{Error, Result};
+use crate::limits::{LimitKind, Range, Violation};
+use crate::mechanism::{
+    spatial_coordinates, Actuator, ActuatorMotion, Coordinate, Forward, LinkKind, Mechanism,
+    PointRole, PoseSpace, Skeleton,
+};
+use crate::pose::{rotation_matrix, Pose};
+use crate::rotation::{angle_between, rx};
+use crate::units::Quantity;
+
+/// The hybrid machine: tool tip X, Y, Z relative to the part (table frame, origin on
+/// the table surface under the spindle at X = Y = 0) and the spindle deflection A
+/// (rotation about X, the head's theta); B and C are always 0.
+///
+/// Actuators `X`, `Y` (table axes, valued as the tool's position relative to the part,
+/// as CNC axes are) and the head's sliders `U`, `V`:
+///
+/// ```text
+/// X_t = X,  Y_t = Y - L sin A,  z = Z + L cos A,  (U, V) = head IK(z, A)
+/// ```
+///
+/// with `L` the head's tool length: the head tilts the tool tip sideways by
+/// `L sin A` and lifts it by `L (1 - cos A)`, which the table and the U slider
+/// compensate.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HybridMachine {
+    /// Machine name.
+    pub name: String,
+    /// The head's geometry and limits.
+    pub head: HeadGeometry,
+    /// Home pose X, Y, Z, A, B, C (B = C = 0).
+    pub home: Vector6<f64>,
+    actuators: [Actuator; 4],
+    coordinates: [Coordinate; 6],
+}
+
+impl HybridMachine {
+    /// New hybrid machine; `actuators` are `X`, `Y` (table) and `U`, `V` (head).
+    pub fn new(
+        name: String,
+        head: HeadGeometry,
+        actuators: [Actuator; 4],
+        home: Vector6<f64>,
+    ) -> Self {
+        HybridMachine {
+            name,
+            head,
+            home,
+            actuators,
+            coordinates: spatial_coordinates(),
+        }
+    }
+
+    /// Head pose `(z, theta)` of a machine pose.
+    fn head_pose(&self, x: &Vector6<f64>) -> Vector2<f64> {
+        Vector2::new(x[2] + self.head.tool_length * x[3].cos(), x[3])
+    }
+}
+
+impl Mechanism<6, 4> for HybridMachine {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn kind(&self) -> &'static str {
+        "p3rp/hybrid"
+    }
+
+    fn coordinates(&self) -> &[Coordinate; 6] {
+        &self.coordinates
+    }
+
+    fn actuators(&self) -> &[Actuator; 4] {
+        &self.actuators
+    }
+
+    fn driven(&self) -> [usize; 4] {
+        [0, 1, 2, 3]
+    }
+
+    fn pose_space(&self) -> PoseSpace {
+        PoseSpace::Spatial
+    }
+
+    fn home(&self) -> Vector6<f64> {
+        self.home
+    }
+
+    fn inverse(&self, x: &Vector6<f64>) -> Result<Vector4<f64>> {
+        let h = self.head_pose(x);
+        let q = self.head.inverse(h[0], h[1])?;
+        Ok(Vector4::new(
+            x[0],
+            x[1] - self.head.tool_length * x[3].sin(),
+            q[0],
+            q[1],
+        ))
+    }
+
+    /// `d(X_t, Y_t, U, V)/d(X, Y, Z, A, B, C)`: rows `[1 0 0 0 0 0]`,
+    /// `[0 1 0 -L cos A 0 0]`, `[0 0 1 -L sin A 0 0]`, `[0 0 1 g' - L sin A 0 0]`.
+    fn jacobian(&self, x: &Vector6<f64>) -> Result<SMatrix<f64, 4, 6>> {
+        let l = self.head.tool_length;
+        let (s, c) = x[3].sin_cos();
+        let dg = self.head.separation(x[3])?.dg;
+        let mut j = SMatrix::<f64, 4, 6>::zeros();
+        j[(0, 0)] = 1.0;
+        j[(1, 1)] = 1.0;
+        j[(1, 3)] = -l * c;
+        j[(2, 2)] = 1.0;
+        j[(2, 3)] = -l * s;
+        j[(3, 2)] = 1.0;
+        j[(3, 3)] = dg - l * s;
+        Ok(j)
+    }
+
+    /// Closed form: the head's forward solution on the branch of `start`, then the
+    /// table; B and C are taken from `start` (held).
+    fn forward(&self, q: &Vector4<f64>, start: &Vector6<f64>) -> Result<Forward<6>> {
+        let branch = self.head.branch_of(start[3]).unwrap_or(self.head.branch);
+        let h = self.head.forward(q[2], q[3], branch)?;
+        let l = self.head.tool_length;
+        let (s, c) = h[1].sin_cos();
+        let pose = Vector6::new(q[0], q[1] + l * s, h[0] - l * c, h[1], start[4], start[5]);
+        let residual = (self.inverse(&pose)? - q).amax();
+        Ok(Forward {
+            pose,
+            iterations: 0,
+            residual,
+        })
+    }
+
+    fn tool_pose(&self, x: &Vector6<f64>) -> Result<Pose> {
+        Ok(crate::legs::spatial_tool_pose(x))
+    }
+
+    fn coords_from_pose(&self, pose: &Pose, orientation_given: bool) -> Result<Vector6<f64>> {
+        let p = pose.translation.vector;
+        let a = if orientation_given {
+            let r = rotation_matrix(pose);
+            let a = r[(2, 1)].atan2(r[(1, 1)]);
+            let off = angle_between(&rx(a), &r);
+            if off > 1e-6 {
+                return Err(Error::NotAttainable {
+                    reason: format!(
+                        "the machine turns the spindle about X only: the orientation is \
+                         {:.4} deg from any rotation about X",
+                        off.to_degrees()
+                    ),
+                });
+            }
+            a
+        } else {
+            self.home[3]
+        };
+        Ok(Vector6::new(p.x, p.y, p.z, a, 0.0, 0.0))
+    }
+
+    fn check_limits(&self, x: &Vector6<f64>, q: &Vector4<f64>, out: &mut Vec<Violation>) {
+        for i in 0..2 {
+            let a = &self.actuators[i];
+            a.range.check(
+                || format!("table axis {} position", a.name),
+                LimitKind::ActuatorPosition,
+                Quantity::Length,
+                q[i],
+                out,
+            );
+        }
+        self.head
+            .check_limits(&self.actuators[2..], x[3], &q.as_slice()[2..], out);
+        for (k, n) in [(4, "B"), (5, "C")] {
+            Range { min: 0.0, max: 0.0 }.check(
+                || format!("spindle angle {n} (the head turns about X only)"),
+                LimitKind::Tilt,
+                Quantity::Angle,
+                x[k],
+                out,
+            );
+        }
+    }
+
+    fn skeleton(&self, x: &Vector6<f64>) -> Result<Skeleton> {
+        let q = self.inverse(x)?;
+        let h = self.head_pose(x);
+        let (mut s, _) = head_skeleton(&self.head, &self.actuators[2..], h[0], h[1])?;
+        let o = s.point(
+            "O (spindle axis on the table)",
+            PointRole::Other,
+            &Vector3::zeros(),
+        );
+        let part = s.point(
+            "part origin",
+            PointRole::Other,
+            &Vector3::new(-q[0], -q[1], 0.0),
+        );
+        s.link("table", LinkKind::Base, o, part);
+        Ok(s)
+    }
+
+    /// The head's crank length `l1`.
+    fn characteristic_length(&self) -> f64 {
+        self.head.l1
+    }
+
+    fn actuator_motion(
+        &self,
+        x: &Vector6<f64>,
+        xd: &Vector6<f64>,
+        xdd: &Vector6<f64>,
+    ) -> Result<ActuatorMotion<4>> {
+        let l = self.head.tool_length;
+        let (s, c) = x[3].sin_cos();
+        let (a1, a2) = (xd[3], xdd[3]);
+        // z = Z + L cos A and Y_t = Y - L sin A, differentiated twice.
+        let h = Vector2::new(x[2] + l * c, x[3]);
+        let hd = Vector2::new(xd[2] - l * s * a1, a1);
+        let hdd = Vector2::new(xdd[2] - l * c * a1 * a1 - l * s * a2, a2);
+        let m = head_motion(&self.head, &h, &hd, &hdd)?;
+        Ok(ActuatorMotion {
+            q: Vector4::new(x[0], x[1] - l * s, m.q[0], m.q[1]),
+            qd: Vector4::new(xd[0], xd[1] - l * c * a1, m.qd[0], m.qd[1]),
+            qdd: Vector4::new(
+                xdd[0],
+                xdd[1] + l * s * a1 * a1 - l * c * a2,
+                m.qdd[0],
+                m.qdd[1],
+            ),
+        })
+    }
+}
