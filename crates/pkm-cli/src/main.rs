@@ -251,6 +251,21 @@ pub struct WorkspaceArgs {
     /// Convention of --orientation.
     #[arg(long, default_value = "rpy", value_parser = parse_convention)]
     pub rotation: Convention,
+    /// Performance atlas: largest rate of every pose coordinate (mm/s, deg/s), one value
+    /// per coordinate; writes atlas.csv and maps of the actuator positions and of the
+    /// actuator velocities and accelerations these capacities need.
+    #[arg(long, allow_hyphen_values = true)]
+    pub atlas_velocity: Option<String>,
+    /// Performance atlas: largest acceleration of every pose coordinate (mm/s^2, deg/s^2).
+    #[arg(long, allow_hyphen_values = true)]
+    pub atlas_acceleration: Option<String>,
+    /// Forward workspace: forward kinematics over a grid of the actuator strokes
+    /// (machines with at most 3 actuators); writes forward.csv and maps of the pose.
+    #[arg(long)]
+    pub forward: bool,
+    /// Step of the --forward grid (mm or deg); default 1/40 of each stroke.
+    #[arg(long)]
+    pub forward_step: Option<f64>,
     /// Output directory.
     #[arg(long)]
     pub out: PathBuf,

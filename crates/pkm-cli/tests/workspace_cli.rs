@@ -154,3 +154,90 @@ fn hexapod_ik_fk_round_trip_through_the_cli() {
     assert_eq!(o.status.code(), Some(3));
     assert!(String::from_utf8_lossy(&o.stderr).contains("singular"));
 }
+
+#[test]
+fn atlas_and_forward_maps_of_the_p3rp_head() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("p3");
+    let o = pkm()
+        .args([
+            "workspace",
+            &path("examples/machines/p3rp-seed004.toml"),
+            "--bounds",
+            "200,520,0,90",
+            "--step",
+            "5",
+            "--atlas-velocity",
+            "150,57.29577951308232",
+            "--atlas-acceleration",
+            "9806.65,0",
+            "--forward",
+            "--json",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let s: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let v = &s["atlas"]["actuators"]["V"];
+    // V' = z' + g'(theta) theta': 150 mm/s plus the largest g' (about 110 mm/rad at
+    // theta near 0.9 rad) at 1 rad/s — the paper's 0.26 m/s peak.
+    let vmax = v["max_velocity_needed"].as_f64().unwrap();
+    assert!((vmax / 260.0 - 1.0).abs() < 0.01, "{vmax}");
+    // No theta acceleration: only 1 g plus the velocity term g'' theta'^2.
+    let amax = v["max_acceleration_needed"].as_f64().unwrap();
+    assert!(amax > 9806.65 && amax < 9806.65 + 100.0, "{amax}");
+    assert_eq!(s["atlas"]["actuators"]["U"]["max_velocity_needed"], 150.0);
+    let f = &s["forward"];
+    assert_eq!(f["points"], 41 * 41);
+    let th = f["pose_ranges"]["theta"]["range"].as_array().unwrap();
+    assert!(th[0].as_f64().unwrap() >= 0.0 && th[1].as_f64().unwrap() <= 90.0);
+    for name in [
+        "atlas.csv",
+        "forward.csv",
+        "atlas-v-velocity-ztheta.svg",
+        "atlas-u-position-ztheta.svg",
+        "forward-theta-uv.svg",
+        "forward-z-uv.svg",
+    ] {
+        assert!(out.join(name).exists(), "{name}");
+    }
+    let csv = std::fs::read_to_string(out.join("atlas.csv")).unwrap();
+    assert!(csv
+        .starts_with("z_mm,theta_deg,reachable,U_mm,U_velocity_mm/s,U_acceleration_mm/s^2,V_mm,"));
+    // Wrong counts and machines with too many actuators are named errors.
+    let o = pkm()
+        .args([
+            "workspace",
+            &path("examples/machines/p3rp-seed004.toml"),
+            "--atlas-velocity",
+            "1,2,3",
+            "--out",
+        ])
+        .arg(dir.path().join("bad"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr)
+        .contains("expected 2 values (one per coordinate: z,theta)"));
+    let o = pkm()
+        .args([
+            "workspace",
+            &path("examples/machines/hexapod-linuxcnc.toml"),
+            "--step",
+            "100",
+            "--forward",
+            "--out",
+        ])
+        .arg(dir.path().join("hex"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("6 actuators"));
+}

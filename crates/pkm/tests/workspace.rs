@@ -152,3 +152,100 @@ fn total_orientation_workspace_is_smaller() {
         assert!(!a.reachable || b.reachable);
     }
 }
+
+fn axis(coordinate: usize, min: f64, max: f64, step: f64) -> GridAxis {
+    GridAxis {
+        coordinate,
+        min,
+        max,
+        step,
+    }
+}
+
+#[test]
+fn atlas_rates_are_the_worst_case_over_the_capacity_box() {
+    use nalgebra::Vector2;
+    use pkm::workspace::atlas::{atlas, Capacity};
+    let Model::P3rpHead(h) = machine("p3rp-seed004.toml").model else {
+        panic!()
+    };
+    let cap = Capacity {
+        velocity: Vector2::new(150.0, 1.0),
+        acceleration: Vector2::new(9806.65, 30.0),
+    };
+    let axes = [axis(0, 200.0, 520.0, 40.0), axis(1, 0.0, 1.57, 0.157)];
+    let a = atlas(h.as_ref(), &h.home(), &axes, &cap, &|_| {}).unwrap();
+    assert_eq!(a.points.len(), 9 * 11);
+    for (k, p) in a.points.iter().enumerate() {
+        let x = Vector2::new(axes[0].value(k / 11), axes[1].value(k % 11));
+        // Brute force over the vertices of both boxes (the worst case is at one).
+        let (mut v, mut acc) = (Vector2::<f64>::zeros(), Vector2::<f64>::zeros());
+        for s in 0..16 {
+            let sg = |b: u32| if s >> b & 1 == 1 { -1.0 } else { 1.0 };
+            let xd = Vector2::new(sg(0) * 150.0, sg(1) * 1.0);
+            let xdd = Vector2::new(sg(2) * 9806.65, sg(3) * 30.0);
+            let m = h.actuator_motion(&x, &xd, &xdd).unwrap();
+            v = v.sup(&m.qd.abs());
+            acc = acc.sup(&m.qdd.abs());
+        }
+        assert!((p.velocity - v).amax() < 1e-9, "{x:?}");
+        assert!((p.acceleration - acc).amax() < 1e-9, "{x:?}");
+        assert!((p.q - h.inverse(&x).unwrap()).amax() < 1e-12);
+        // Slider U follows z: its needs are the z capacity itself.
+        assert!((p.velocity[0] - 150.0).abs() < 1e-12);
+        assert!((p.acceleration[0] - 9806.65).abs() < 1e-9);
+        let mut viol = Vec::new();
+        h.check_limits(&x, &p.q, &mut viol);
+        assert_eq!(p.reachable, viol.is_empty());
+    }
+}
+
+#[test]
+fn forward_map_poses_close_the_loop() {
+    use nalgebra::{Vector2, Vector3};
+    use pkm::workspace::forward::forward_map;
+    let Model::P3rpHead(h) = machine("p3rp-seed004.toml").model else {
+        panic!()
+    };
+    let axes = [axis(0, 190.0, 530.0, 10.0), axis(1, 480.0, 840.0, 10.0)];
+    let f = forward_map(h.as_ref(), &Vector2::zeros(), &axes, &h.home(), &|_| {}).unwrap();
+    let mut reachable = 0;
+    for (k, p) in f.points.iter().enumerate() {
+        let q = Vector2::new(axes[0].value(k / 37), axes[1].value(k % 37));
+        match &p.pose {
+            Some(x) => {
+                assert!((h.inverse(x).unwrap() - q).amax() < 1e-9);
+                let mut v = Vec::new();
+                h.check_limits(x, &q, &mut v);
+                assert_eq!(p.reachable, v.is_empty());
+                reachable += p.reachable as usize;
+            }
+            None => assert!(!p.reachable && p.binding.is_some()),
+        }
+    }
+    // The reachable slider region is the band V - U in [g(0), g(1.57)] inside the
+    // strokes: a substantial part of the grid, not all of it.
+    assert!(
+        reachable > 200 && reachable < f.points.len() - 200,
+        "{reachable}"
+    );
+    // Generic: a spatial tripod over its three strut lengths.
+    let Model::TranslationalTripod(t) = machine("tripod-seed000.toml").model else {
+        panic!()
+    };
+    let q0 = t.inverse(&t.home()).unwrap();
+    let axes: Vec<GridAxis> = (0..3)
+        .map(|i| axis(i, q0[i] - 20.0, q0[i] + 20.0, 10.0))
+        .collect();
+    let f = forward_map(&t, &Vector3::zeros(), &axes, &t.home(), &|_| {}).unwrap();
+    assert_eq!(f.points.len(), 125);
+    for (k, p) in f.points.iter().enumerate() {
+        let q = Vector3::new(
+            axes[0].value(k / 25),
+            axes[1].value(k / 5 % 5),
+            axes[2].value(k % 5),
+        );
+        let x = p.pose.unwrap();
+        assert!((t.inverse(&x).unwrap() - q).amax() < 1e-9, "{q:?}");
+    }
+}

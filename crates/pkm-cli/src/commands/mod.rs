@@ -1,5 +1,6 @@
 //! The subcommands.
 
+pub mod atlas;
 pub mod check;
 pub mod csvio;
 pub mod fk;

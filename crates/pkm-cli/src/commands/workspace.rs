@@ -9,7 +9,7 @@ use serde_json::json;
 use super::load;
 use crate::io::write_atomic;
 use crate::poses::{parse_list, pose_from_user};
-use crate::report::heatmap::{slice_svg, Cell};
+use crate::report::heatmap::{slice_svg, Cell, Scale};
 use crate::WorkspaceArgs;
 
 /// A grid map as a [`Visitor`].
@@ -142,77 +142,119 @@ pub fn summarise(m: &dyn DynMechanism, wm: &WorkspaceMap) -> WorkspaceSummary {
     wm.summary(&|i, v| q(i).to_user(v), cell)
 }
 
-/// The two standard slices (through the base pose): first two axes, and first and last.
-pub fn slices(m: &dyn DynMechanism, wm: &WorkspaceMap) -> Result<Vec<(String, String)>> {
-    let n = wm.axes.len();
-    if n < 2 {
-        return Ok(Vec::new());
+/// The (horizontal, vertical) axis pairs of the standard slices: the first two axes,
+/// and for 3D grids also the first and last.
+pub fn slice_pairs(n: usize) -> Vec<(usize, usize)> {
+    match n {
+        0 | 1 => Vec::new(),
+        3 => vec![(0, 1), (0, 2)],
+        _ => vec![(0, 1)],
     }
-    let pairs: Vec<(usize, usize)> = if n == 3 {
-        vec![(0, 1), (0, 2)]
+}
+
+/// Cells of the slice of a grid over axes `ha`, `va` through `base` (other axes fixed at
+/// the grid value nearest the base), with the value of each flat grid index, and the
+/// "at ..." text naming the fixed axes. `coord` gives each axis' name and quantity.
+pub fn slice_cells(
+    axes: &[GridAxis],
+    base: &[f64],
+    coord: &dyn Fn(usize) -> (String, pkm::Quantity),
+    ha: usize,
+    va: usize,
+    value: &dyn Fn(usize) -> Option<f64>,
+) -> (Vec<Cell>, String) {
+    let n = axes.len();
+    let fixed: Vec<usize> = (0..n).filter(|i| *i != ha && *i != va).collect();
+    let fix_idx: Vec<usize> = fixed
+        .iter()
+        .map(|&i| {
+            let a = &axes[i];
+            (((base[a.coordinate] - a.min) / a.step).round().max(0.0) as usize).min(a.count() - 1)
+        })
+        .collect();
+    let mut cells = Vec::new();
+    for ih in 0..axes[ha].count() {
+        for iv in 0..axes[va].count() {
+            let mut idx = vec![0; n];
+            idx[ha] = ih;
+            idx[va] = iv;
+            for (f, fi) in fixed.iter().zip(&fix_idx) {
+                idx[*f] = *fi;
+            }
+            cells.push(Cell {
+                h: coord(ha).1.to_user(axes[ha].value(ih)),
+                v: coord(va).1.to_user(axes[va].value(iv)),
+                value: value(flat_index(axes, &idx)),
+            });
+        }
+    }
+    let at = fixed
+        .iter()
+        .zip(&fix_idx)
+        .map(|(&f, &fi)| {
+            let (name, q) = coord(f);
+            format!("{name} = {:.2} {}", q.to_user(axes[f].value(fi)), q.unit())
+        })
+        .collect::<Vec<_>>()
+        .join(", ");
+    (cells, at)
+}
+
+/// Draws one slice heat map: name of the file, SVG.
+#[allow(clippy::too_many_arguments)]
+pub fn slice_plot(
+    axes: &[GridAxis],
+    base: &[f64],
+    coord: &dyn Fn(usize) -> (String, pkm::Quantity),
+    (ha, va): (usize, usize),
+    what: &str,
+    scale: Scale,
+    value: &dyn Fn(usize) -> Option<f64>,
+) -> Result<String> {
+    let (cells, at) = slice_cells(axes, base, coord, ha, va, value);
+    let (hn, hq) = coord(ha);
+    let (vn, vq) = coord(va);
+    let title = if at.is_empty() {
+        what.to_string()
     } else {
-        vec![(0, 1)]
+        format!("{what} at {at}")
+    };
+    slice_svg(
+        &title,
+        &format!("{hn} [{}]", hq.unit()),
+        &format!("{vn} [{}]", vq.unit()),
+        scale,
+        &cells,
+        hq.to_user(axes[ha].step),
+        vq.to_user(axes[va].step),
+        (580, 480),
+    )
+}
+
+/// The standard condition-number slices (through the base pose): file name, SVG.
+pub fn slices(m: &dyn DynMechanism, wm: &WorkspaceMap) -> Result<Vec<(String, String)>> {
+    let coord = |i: usize| {
+        let c = &m.coordinates()[wm.axes[i].coordinate];
+        (c.name.clone(), c.quantity)
     };
     let mut out = Vec::new();
-    for (ha, va) in pairs {
-        let fixed: Vec<usize> = (0..n).filter(|i| *i != ha && *i != va).collect();
-        // Index of the base value on the fixed axis.
-        let fix_idx: Vec<usize> = fixed
-            .iter()
-            .map(|&i| {
-                let a = &wm.axes[i];
-                (((wm.base[a.coordinate] - a.min) / a.step).round().max(0.0) as usize)
-                    .min(a.count() - 1)
-            })
-            .collect();
-        let name = |i: usize| m.coordinates()[wm.axes[i].coordinate].name.clone();
-        let qn = |i: usize| m.coordinates()[wm.axes[i].coordinate].quantity;
-        let mut cells = Vec::new();
-        for ih in 0..wm.axes[ha].count() {
-            for iv in 0..wm.axes[va].count() {
-                let mut idx = vec![0; n];
-                idx[ha] = ih;
-                idx[va] = iv;
-                for (f, fi) in fixed.iter().zip(&fix_idx) {
-                    idx[*f] = *fi;
-                }
-                let p = &wm.points[flat_index(&wm.axes, &idx)];
-                cells.push(Cell {
-                    h: qn(ha).to_user(wm.axes[ha].value(ih)),
-                    v: qn(va).to_user(wm.axes[va].value(iv)),
-                    value: p.reachable.then_some(p.condition),
-                });
-            }
-        }
-        let at = fixed
-            .iter()
-            .zip(&fix_idx)
-            .map(|(&f, &fi)| {
-                format!(
-                    "{} = {:.2} {}",
-                    name(f),
-                    qn(f).to_user(wm.axes[f].value(fi)),
-                    qn(f).unit()
-                )
-            })
-            .collect::<Vec<_>>()
-            .join(", ");
-        let title = if at.is_empty() {
-            format!("{}{} slice", name(ha), name(va))
-        } else {
-            format!("{}{} slice at {at}", name(ha), name(va))
+    for (ha, va) in slice_pairs(wm.axes.len()) {
+        let value = |k: usize| {
+            let p = &wm.points[k];
+            p.reachable.then_some(p.condition)
         };
-        let svg = slice_svg(
-            &title,
-            &format!("{} [{}]", name(ha), qn(ha).unit()),
-            &format!("{} [{}]", name(va), qn(va).unit()),
-            &cells,
-            qn(ha).to_user(wm.axes[ha].step),
-            qn(va).to_user(wm.axes[va].step),
-            (560, 480),
+        let what = format!("{}{} slice", coord(ha).0, coord(va).0);
+        let svg = slice_plot(
+            &wm.axes,
+            &wm.base,
+            &coord,
+            (ha, va),
+            &what,
+            Scale::Log10("condition"),
+            &value,
         )?;
         out.push((
-            format!("slice-{}{}.svg", name(ha), name(va)).to_lowercase(),
+            format!("slice-{}{}.svg", coord(ha).0, coord(va).0).to_lowercase(),
             svg,
         ));
     }
@@ -307,7 +349,55 @@ pub fn run(a: &WorkspaceArgs) -> Result<u8> {
             json!({"name": c.name, "unit": c.quantity.unit(), "min": c.quantity.to_user(x.min), "max": c.quantity.to_user(x.max), "step": c.quantity.to_user(x.step), "count": x.count()})
         })
         .collect();
-    let summary = json!({
+    let mut extra = serde_json::Map::new();
+    if a.atlas_velocity.is_some() || a.atlas_acceleration.is_some() {
+        let list = |o: &Option<String>, flag: &str| -> Result<Option<Vec<f64>>> {
+            o.as_ref().map(|s| parse_list(s, flag)).transpose()
+        };
+        let v = list(&a.atlas_velocity, "--atlas-velocity")?;
+        let acc = list(&a.atlas_acceleration, "--atlas-acceleration")?;
+        let job = super::atlas::AtlasJob {
+            base: base.clone(),
+            axes: axes.clone(),
+            velocity: super::atlas::capacity(m, v.as_deref(), "--atlas-velocity")?,
+            acceleration: super::atlas::capacity(m, acc.as_deref(), "--atlas-acceleration")?,
+        };
+        let at = machine.visit(job)?;
+        let coords_user = |k: usize| {
+            let x = wm.coords(k);
+            axes.iter()
+                .map(|ax| {
+                    m.coordinates()[ax.coordinate]
+                        .quantity
+                        .to_user(x[ax.coordinate])
+                })
+                .collect::<Vec<f64>>()
+        };
+        let o = super::atlas::atlas_outputs(m, &axes, &base, &at, &coords_user)?;
+        write_atomic(&a.out.join("atlas.csv"), o.csv.as_bytes(), &inputs)?;
+        for (name, svg) in o.plots {
+            write_atomic(&a.out.join(name), svg.as_bytes(), &inputs)?;
+        }
+        extra.insert(
+            "atlas".into(),
+            json!({"velocity": v, "acceleration": acc, "actuators": o.summary}),
+        );
+    }
+    if a.forward {
+        let faxes = super::atlas::forward_axes(m, a.forward_step)?;
+        let fm = machine.visit(super::atlas::ForwardJob {
+            axes: faxes.clone(),
+            start: base.clone(),
+        })?;
+        let base_q = m.inverse(&base)?;
+        let o = super::atlas::forward_outputs(m, &faxes, &base_q, &fm)?;
+        write_atomic(&a.out.join("forward.csv"), o.csv.as_bytes(), &inputs)?;
+        for (name, svg) in o.plots {
+            write_atomic(&a.out.join(name), svg.as_bytes(), &inputs)?;
+        }
+        extra.insert("forward".into(), o.summary);
+    }
+    let mut summary = json!({
         "machine": m.name(),
         "type": m.kind(),
         "axes": axes_json,
@@ -322,6 +412,9 @@ pub fn run(a: &WorkspaceArgs) -> Result<u8> {
         "binding": binding,
         "seconds": secs,
     });
+    if let Some(o) = summary.as_object_mut() {
+        o.extend(extra);
+    }
     write_atomic(
         &a.out.join("summary.json"),
         serde_json::to_string_pretty(&summary)?.as_bytes(),

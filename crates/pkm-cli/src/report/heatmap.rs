@@ -1,5 +1,6 @@
-//! Heat maps of a 2D workspace slice (SVG, plotters): condition number over the
-//! reachable cells, grey where a limit binds.
+//! Heat maps of a 2D workspace slice (SVG, plotters): a value (condition number,
+//! actuator position or rate, pose coordinate) over the reachable cells, grey where a
+//! limit binds.
 
 use anyhow::{anyhow, Result};
 use plotters::prelude::*;
@@ -10,7 +11,7 @@ pub struct Cell {
     pub h: f64,
     /// Vertical coordinate.
     pub v: f64,
-    /// Condition number when reachable.
+    /// The value when reachable.
     pub value: Option<f64>,
 }
 
@@ -34,16 +35,31 @@ fn color(t: f64) -> RGBColor {
     )
 }
 
-/// Draws the slice; `dh`, `dv` are the cell sizes; colour by log10 of the condition.
+/// How values map to colours.
+#[derive(Clone, Copy)]
+pub enum Scale<'a> {
+    /// Colour by log10 of the value (condition numbers); the label names the value.
+    Log10(&'a str),
+    /// Colour by the value itself.
+    Linear(&'a str),
+}
+
+/// Draws the slice; `dh`, `dv` are the cell sizes.
+#[allow(clippy::too_many_arguments)]
 pub fn slice_svg(
     title: &str,
     hlabel: &str,
     vlabel: &str,
+    scale: Scale,
     cells: &[Cell],
     dh: f64,
     dv: f64,
     size: (u32, u32),
 ) -> Result<String> {
+    let (tf, bar_label): (fn(f64) -> f64, String) = match scale {
+        Scale::Log10(l) => (f64::log10, format!("log10 {l}")),
+        Scale::Linear(l) => (|x| x, l.to_string()),
+    };
     let (mut h0, mut h1, mut v0, mut v1) = (
         f64::INFINITY,
         f64::NEG_INFINITY,
@@ -56,9 +72,9 @@ pub fn slice_svg(
         h1 = h1.max(c.h + dh / 2.0);
         v0 = v0.min(c.v - dv / 2.0);
         v1 = v1.max(c.v + dv / 2.0);
-        if let Some(x) = c.value {
-            c0 = c0.min(x.log10());
-            c1 = c1.max(x.log10());
+        if let Some(x) = c.value.map(tf).filter(|v| v.is_finite()) {
+            c0 = c0.min(x);
+            c1 = c1.max(x);
         }
     }
     if !h0.is_finite() {
@@ -69,16 +85,17 @@ pub fn slice_svg(
         c0 = 0.0;
         c1 = 1.0;
     }
-    if c1 - c0 < 0.01 {
+    let min_span = 0.01 * c0.abs().max(c1.abs()).max(1.0);
+    if c1 - c0 < min_span {
         let mid = 0.5 * (c0 + c1);
-        c0 = mid - 0.005;
-        c1 = mid + 0.005;
+        c0 = mid - 0.5 * min_span;
+        c1 = mid + 0.5 * min_span;
     }
     let mut out = String::new();
     {
         let root = SVGBackend::with_string(&mut out, size).into_drawing_area();
         root.fill(&WHITE).map_err(|e| anyhow!("{e}"))?;
-        let (main, bar) = root.split_horizontally(size.0 - 90);
+        let (main, bar) = root.split_horizontally(size.0 - 100);
         let mut chart = ChartBuilder::on(&main)
             .margin(10)
             .caption(title, ("sans-serif", 15))
@@ -95,8 +112,8 @@ pub fn slice_svg(
             .map_err(|e| anyhow!("{e}"))?;
         chart
             .draw_series(cells.iter().map(|c| {
-                let fill = match c.value {
-                    Some(x) => color((x.log10() - c0) / (c1 - c0)).filled(),
+                let fill = match c.value.map(tf).filter(|v| v.is_finite()) {
+                    Some(x) => color((x - c0) / (c1 - c0)).filled(),
                     None => RGBColor(225, 225, 225).filled(),
                 };
                 Rectangle::new(
@@ -113,13 +130,16 @@ pub fn slice_svg(
             .margin_top(40)
             .margin_bottom(42)
             .margin_right(8)
-            .y_label_area_size(48)
+            .y_label_area_size(58)
             .build_cartesian_2d(0.0..1.0, c0..c1)
             .map_err(|e| anyhow!("{e}"))?;
         cb.configure_mesh()
             .disable_mesh()
             .disable_x_axis()
-            .y_desc("log10 condition")
+            .y_label_style(("sans-serif", 11))
+            .axis_desc_style(("sans-serif", 12))
+            .y_labels(6)
+            .y_desc(bar_label.as_str())
             .draw()
             .map_err(|e| anyhow!("{e}"))?;
         let n = 60;

@@ -1,5 +1,11 @@
 //! The workspace engine, generic over mechanisms: grids of poses, which limit binds
-//! where, and the conditioning inside the reachable region (rayon, flat per point).
+//! where, and the conditioning inside the reachable region (rayon, flat per point);
+//! performance atlases (actuator positions, and the actuator rates a given pose
+//! rate/acceleration capacity needs, [`atlas`]); forward workspaces over the actuator
+//! strokes ([`forward`]).
+
+pub mod atlas;
+pub mod forward;
 
 use nalgebra::SVector;
 use rayon::prelude::*;
@@ -104,7 +110,7 @@ pub fn flat_index(axes: &[GridAxis], idx: &[usize]) -> usize {
     k
 }
 
-fn evaluate<M: Mechanism<P, A>, const P: usize, const A: usize>(
+pub(crate) fn evaluate<M: Mechanism<P, A>, const P: usize, const A: usize>(
     m: &M,
     x: &SVector<f64, P>,
     v: &mut Vec<Violation>,
@@ -143,6 +149,37 @@ fn evaluate<M: Mechanism<P, A>, const P: usize, const A: usize>(
     }
 }
 
+/// The grid point with flat index `k` (row-major over `axes`, `counts` their sizes):
+/// `base` with the axis coordinates set.
+#[inline]
+pub(crate) fn grid_point<const N: usize>(
+    base: &SVector<f64, N>,
+    axes: &[GridAxis],
+    counts: &[usize],
+    k: usize,
+) -> SVector<f64, N> {
+    let mut x = *base;
+    let mut rem = k;
+    for (a, n) in axes.iter().zip(counts).rev() {
+        x[a.coordinate] = a.value(rem % n);
+        rem /= n;
+    }
+    x
+}
+
+/// Checks grid axes against `n` coordinates.
+pub(crate) fn check_axes(axes: &[GridAxis], n: usize) -> Result<()> {
+    for a in axes {
+        if a.coordinate >= n || !(a.step > 0.0) || !(a.max >= a.min) {
+            return Err(Error::InvalidInput {
+                what: "workspace grid".into(),
+                message: format!("bad axis {a:?}"),
+            });
+        }
+    }
+    Ok(())
+}
+
 /// Maps a grid of poses: for each point the base pose with the axis coordinates set,
 /// then, for spatial machines, each orientation of `orientations` (A, B, C in rad,
 /// composed with the base orientation) — a point is reachable when every one is.
@@ -157,14 +194,7 @@ pub fn map<M, const P: usize, const A: usize>(
 where
     M: Mechanism<P, A>,
 {
-    for a in axes {
-        if a.coordinate >= P || !(a.step > 0.0) || !(a.max >= a.min) {
-            return Err(Error::InvalidInput {
-                what: "workspace grid".into(),
-                message: format!("bad axis {a:?}"),
-            });
-        }
-    }
+    check_axes(axes, P)?;
     if !orientations.is_empty() && P != 6 {
         return Err(Error::InvalidInput {
             what: "orientation set".into(),
@@ -187,12 +217,7 @@ where
         .into_par_iter()
         .with_min_len(chunk)
         .map_init(Vec::new, |v, k| {
-            let mut x = *base;
-            let mut rem = k;
-            for (a, n) in axes.iter().zip(&counts).rev() {
-                x[a.coordinate] = a.value(rem % n);
-                rem /= n;
-            }
+            let x = grid_point(base, axes, &counts, k);
             let r = if rots.is_empty() {
                 evaluate(m, &x, v)
             } else {
@@ -201,6 +226,7 @@ where
                     condition: 0.0,
                     binding: None,
                 };
+                let mut x = x;
                 for o in &rots {
                     for (i, val) in o.iter().enumerate() {
                         x[3 + i] = *val;

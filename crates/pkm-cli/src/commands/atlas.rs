@@ -1,0 +1,381 @@
+//! `pkm workspace --atlas-velocity/--atlas-acceleration` (performance atlas) and
+//! `pkm workspace --forward` (forward workspace over the actuator strokes).
+
+use anyhow::{bail, Result};
+use pkm::workspace::atlas::{atlas, Capacity};
+use pkm::workspace::forward::forward_map;
+use pkm::workspace::GridAxis;
+use pkm::{DynMechanism, Mechanism, Visitor};
+use serde_json::json;
+
+use super::workspace::{slice_pairs, slice_plot};
+use crate::report::heatmap::Scale;
+
+/// One atlas point with run-time sizes, user units.
+pub struct AtlasRow {
+    /// Within every limit.
+    pub reachable: bool,
+    /// Actuator positions.
+    pub q: Vec<f64>,
+    /// Actuator velocities needed.
+    pub velocity: Vec<f64>,
+    /// Actuator accelerations needed.
+    pub acceleration: Vec<f64>,
+}
+
+impl AtlasRow {
+    fn get(&self, sel: usize, i: usize) -> f64 {
+        match sel {
+            0 => self.q[i],
+            1 => self.velocity[i],
+            _ => self.acceleration[i],
+        }
+    }
+}
+
+/// Atlas results with run-time sizes, user units.
+pub struct DynAtlas {
+    /// One row per grid point.
+    pub points: Vec<AtlasRow>,
+}
+
+/// What an atlas or forward map writes: CSV text, plots (file name, SVG) and its part
+/// of summary.json.
+pub struct Outputs {
+    /// The CSV table.
+    pub csv: String,
+    /// Plots.
+    pub plots: Vec<(String, String)>,
+    /// Summary.
+    pub summary: serde_json::Value,
+}
+
+/// The atlas of a grid as a [`Visitor`].
+pub struct AtlasJob {
+    /// Base pose (internal units).
+    pub base: Vec<f64>,
+    /// Grid axes over pose coordinates.
+    pub axes: Vec<GridAxis>,
+    /// Largest pose rates (internal units).
+    pub velocity: Vec<f64>,
+    /// Largest pose accelerations (internal units).
+    pub acceleration: Vec<f64>,
+}
+
+impl Visitor for AtlasJob {
+    type Output = Result<DynAtlas>;
+    fn visit<M: Mechanism<P, A>, const P: usize, const A: usize>(self, m: &M) -> Result<DynAtlas> {
+        let base = pkm::dynamic::fixed::<P>("base pose", &self.base)?;
+        let cap = Capacity {
+            velocity: pkm::dynamic::fixed::<P>("--atlas-velocity", &self.velocity)?,
+            acceleration: pkm::dynamic::fixed::<P>("--atlas-acceleration", &self.acceleration)?,
+        };
+        let a = atlas(m, &base, &self.axes, &cap, &|_| {})?;
+        let acts = m.actuators();
+        let user = |v: &nalgebra::SVector<f64, A>| -> Vec<f64> {
+            (0..A).map(|i| acts[i].quantity.to_user(v[i])).collect()
+        };
+        Ok(DynAtlas {
+            points: a
+                .points
+                .into_iter()
+                .map(|p| AtlasRow {
+                    reachable: p.reachable,
+                    q: user(&p.q),
+                    velocity: user(&p.velocity),
+                    acceleration: user(&p.acceleration),
+                })
+                .collect(),
+        })
+    }
+}
+
+/// Forward-map results with run-time sizes: per point reachable, binding, pose (user
+/// units) when found.
+pub struct DynForwardMap {
+    /// Points in row-major order of the actuator axes.
+    pub points: Vec<(bool, Option<String>, Option<Vec<f64>>)>,
+}
+
+/// The forward map as a [`Visitor`].
+pub struct ForwardJob {
+    /// Grid axes over actuators.
+    pub axes: Vec<GridAxis>,
+    /// Start pose of every forward solution (internal units).
+    pub start: Vec<f64>,
+}
+
+impl Visitor for ForwardJob {
+    type Output = Result<DynForwardMap>;
+    fn visit<M: Mechanism<P, A>, const P: usize, const A: usize>(
+        self,
+        m: &M,
+    ) -> Result<DynForwardMap> {
+        let start = pkm::dynamic::fixed::<P>("start pose", &self.start)?;
+        let base = m.inverse(&start)?;
+        let f = forward_map(m, &base, &self.axes, &start, &|_| {})?;
+        let c = m.coordinates();
+        Ok(DynForwardMap {
+            points: f
+                .points
+                .into_iter()
+                .map(|p| {
+                    let pose = p
+                        .pose
+                        .map(|x| (0..P).map(|k| c[k].quantity.to_user(x[k])).collect());
+                    (p.reachable, p.binding, pose)
+                })
+                .collect(),
+        })
+    }
+}
+
+/// Converts a list of per-coordinate capacities from user units.
+pub fn capacity(m: &dyn DynMechanism, list: Option<&[f64]>, flag: &str) -> Result<Vec<f64>> {
+    let n = m.coordinates().len();
+    match list {
+        None => Ok(vec![0.0; n]),
+        Some(v) if v.len() != n => bail!(
+            "{flag}: expected {n} values (one per coordinate: {}), got {}",
+            m.coordinates()
+                .iter()
+                .map(|c| c.name.as_str())
+                .collect::<Vec<_>>()
+                .join(","),
+            v.len()
+        ),
+        Some(v) => {
+            if let Some(x) = v.iter().find(|x| !x.is_finite() || **x < 0.0) {
+                bail!("{flag}: expected magnitudes >= 0, found {x}");
+            }
+            Ok(v.iter()
+                .zip(m.coordinates())
+                .map(|(x, c)| c.quantity.from_user(*x))
+                .collect())
+        }
+    }
+}
+
+/// Atlas outputs: CSV text, plots (file, SVG) and the summary JSON.
+pub fn atlas_outputs(
+    m: &dyn DynMechanism,
+    axes: &[GridAxis],
+    base: &[f64],
+    a: &DynAtlas,
+    coords_user: &dyn Fn(usize) -> Vec<f64>,
+) -> Result<Outputs> {
+    let acts = m.actuators();
+    let coord = |i: usize| {
+        let c = &m.coordinates()[axes[i].coordinate];
+        (c.name.clone(), c.quantity)
+    };
+    let mut head: Vec<String> = (0..axes.len())
+        .map(|i| format!("{}_{}", coord(i).0, coord(i).1.unit()))
+        .collect();
+    head.push("reachable".into());
+    for x in acts {
+        let q = x.quantity;
+        head.push(format!("{}_{}", x.name, q.unit()));
+        head.push(format!("{}_velocity_{}", x.name, q.rate_unit(1)));
+        head.push(format!("{}_acceleration_{}", x.name, q.rate_unit(2)));
+    }
+    let mut csv = head.join(",") + "\n";
+    for (k, p) in a.points.iter().enumerate() {
+        let mut row: Vec<String> = coords_user(k).iter().map(|v| format!("{v:.6}")).collect();
+        row.push(p.reachable.to_string());
+        for i in 0..acts.len() {
+            for x in [p.q[i], p.velocity[i], p.acceleration[i]] {
+                row.push(if x.is_finite() {
+                    format!("{x:.6}")
+                } else {
+                    String::new()
+                });
+            }
+        }
+        csv.push_str(&row.join(","));
+        csv.push('\n');
+    }
+    let mut plots = Vec::new();
+    let mut summary = serde_json::Map::new();
+    for (i, x) in acts.iter().enumerate() {
+        let q = x.quantity;
+        let peak = |sel: usize, sign: f64| {
+            a.points
+                .iter()
+                .filter(|p| p.reachable)
+                .map(|p| sign * p.get(sel, i))
+                .fold(f64::NAN, f64::max)
+                * sign
+        };
+        let range = [peak(0, -1.0), peak(0, 1.0)];
+        summary.insert(
+            x.name.clone(),
+            json!({
+                "unit": q.unit(),
+                "range_reachable": range,
+                "max_velocity_needed": peak(1, 1.0),
+                "velocity_unit": q.rate_unit(1),
+                "max_acceleration_needed": peak(2, 1.0),
+                "acceleration_unit": q.rate_unit(2),
+            }),
+        );
+        for (ha, va) in slice_pairs(axes.len()) {
+            for (what, unit, sel) in [
+                ("position", q.unit(), 0usize),
+                ("velocity", q.rate_unit(1), 1),
+                ("acceleration", q.rate_unit(2), 2),
+            ] {
+                let value = |k: usize| {
+                    let p = &a.points[k];
+                    let v = p.get(sel, i);
+                    (p.reachable && v.is_finite()).then_some(v)
+                };
+                let title = if sel == 0 {
+                    format!("{} {what}", x.name)
+                } else {
+                    format!("{} {what} needed", x.name)
+                };
+                let label = format!("{} {what} [{unit}]", x.name);
+                let svg = slice_plot(
+                    axes,
+                    base,
+                    &coord,
+                    (ha, va),
+                    &title,
+                    Scale::Linear(&label),
+                    &value,
+                )?;
+                plots.push((
+                    format!("atlas-{}-{what}-{}{}.svg", x.name, coord(ha).0, coord(va).0)
+                        .to_lowercase(),
+                    svg,
+                ));
+            }
+        }
+    }
+    Ok(Outputs {
+        csv,
+        plots,
+        summary: serde_json::Value::Object(summary),
+    })
+}
+
+/// Grid axes over the actuator strokes (at most 3 actuators).
+pub fn forward_axes(m: &dyn DynMechanism, step: Option<f64>) -> Result<Vec<GridAxis>> {
+    let acts = m.actuators();
+    if acts.len() > 3 {
+        bail!(
+            "--forward grids every actuator stroke: this machine has {} actuators (at most 3)",
+            acts.len()
+        );
+    }
+    Ok(acts
+        .iter()
+        .enumerate()
+        .map(|(i, x)| GridAxis {
+            coordinate: i,
+            min: x.range.min,
+            max: x.range.max,
+            step: step
+                .map(|s| x.quantity.from_user(s))
+                .unwrap_or((x.range.max - x.range.min) / 40.0),
+        })
+        .collect())
+}
+
+/// Forward-map outputs: CSV text, plots and the summary JSON.
+pub fn forward_outputs(
+    m: &dyn DynMechanism,
+    axes: &[GridAxis],
+    base_q: &[f64],
+    f: &DynForwardMap,
+) -> Result<Outputs> {
+    let acts = m.actuators();
+    let coords = m.coordinates();
+    let act = |i: usize| (acts[i].name.clone(), acts[i].quantity);
+    let mut head: Vec<String> = acts
+        .iter()
+        .map(|x| format!("{}_{}", x.name, x.quantity.unit()))
+        .collect();
+    head.push("reachable".into());
+    head.push("binding".into());
+    head.extend(
+        coords
+            .iter()
+            .map(|c| format!("{}_{}", c.name, c.quantity.unit())),
+    );
+    let mut csv = head.join(",") + "\n";
+    let counts: Vec<usize> = axes.iter().map(|a| a.count()).collect();
+    for (k, (ok, why, pose)) in f.points.iter().enumerate() {
+        let mut rem = k;
+        let mut q = vec![0.0; axes.len()];
+        for (i, n) in counts.iter().enumerate().rev() {
+            q[i] = acts[i].quantity.to_user(axes[i].value(rem % n));
+            rem /= n;
+        }
+        let mut row: Vec<String> = q.iter().map(|v| format!("{v:.6}")).collect();
+        row.push(ok.to_string());
+        row.push(super::ik::csv_text(why.as_deref().unwrap_or("")));
+        match pose {
+            Some(p) => row.extend(p.iter().map(|v| format!("{v:.6}"))),
+            None => row.extend(coords.iter().map(|_| String::new())),
+        }
+        csv.push_str(&row.join(","));
+        csv.push('\n');
+    }
+    let mut plots = Vec::new();
+    let mut ranges = serde_json::Map::new();
+    for (j, c) in coords.iter().enumerate() {
+        let vals: Vec<f64> = f
+            .points
+            .iter()
+            .filter(|p| p.0)
+            .filter_map(|p| p.2.as_ref().map(|x| x[j]))
+            .collect();
+        let lo = vals.iter().copied().fold(f64::NAN, f64::min);
+        let hi = vals.iter().copied().fold(f64::NAN, f64::max);
+        ranges.insert(
+            c.name.clone(),
+            json!({"unit": c.quantity.unit(), "range": [lo, hi]}),
+        );
+        if (hi - lo).is_nan() || hi - lo <= 1e-9 {
+            continue; // a coordinate the actuators do not move
+        }
+        for (ha, va) in slice_pairs(axes.len()) {
+            let value = |k: usize| {
+                let p = &f.points[k];
+                if p.0 {
+                    p.2.as_ref().map(|x| x[j])
+                } else {
+                    None
+                }
+            };
+            let label = format!("{} [{}]", c.name, c.quantity.unit());
+            let svg = slice_plot(
+                axes,
+                base_q,
+                &act,
+                (ha, va),
+                &format!("forward workspace: {}", c.name),
+                Scale::Linear(&label),
+                &value,
+            )?;
+            plots.push((
+                format!("forward-{}-{}{}.svg", c.name, act(ha).0, act(va).0).to_lowercase(),
+                svg,
+            ));
+        }
+    }
+    let reachable = f.points.iter().filter(|p| p.0).count();
+    let summary = json!({
+        "points": f.points.len(),
+        "reachable": reachable,
+        "reachable_fraction": reachable as f64 / f.points.len().max(1) as f64,
+        "pose_ranges": ranges,
+    });
+    Ok(Outputs {
+        csv,
+        plots,
+        summary,
+    })
+}
