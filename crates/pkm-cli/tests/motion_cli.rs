@@ -227,3 +227,103 @@ fn rapid_rate_comes_from_the_machine_file() {
     assert!((run(&[]) - 0.1).abs() < 1e-12);
     assert!((run(&["--rapid", "1200"]) - 0.5).abs() < 1e-12);
 }
+
+#[test]
+fn seed004_move_and_report() {
+    // The command: the head's fig. 7 move.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("p3");
+    let o = pkm()
+        .args([
+            "motion",
+            &path("examples/machines/p3rp-seed004.toml"),
+            "--from",
+            "200,0",
+            "--to",
+            "335,51.566",
+            "--duration",
+            "1",
+            "--profile",
+            "trapezoid",
+            "--accel-time",
+            "0.1",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let s: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let v = &s["actuators"]["V"];
+    let pv = v["peak_velocity"].as_f64().unwrap();
+    let pa = v["peak_acceleration"].as_f64().unwrap();
+    assert!((pv / 260.0 - 1.0).abs() < 0.03, "{pv}");
+    assert!((pa / 2600.0 - 1.0).abs() < 0.03, "{pa}");
+    assert_eq!(s["duration_s"], 1.0);
+    for f in ["actuators.csv", "actuators.svg", "serial.svg"] {
+        assert!(out.join(f).exists(), "{f}");
+    }
+    // The hybrid machine runs G-code with an A word (table and head together).
+    let prog = dir.path().join("a.ngc");
+    std::fs::write(&prog, "G90 G1 X20 Y10 Z180 A30 F3000\nG1 X-20 A0\n").unwrap();
+    let o = pkm()
+        .args([
+            "motion",
+            &path("examples/machines/p3rp-hybrid-seed004.toml"),
+            "--gcode",
+        ])
+        .arg(&prog)
+        .arg("--out")
+        .arg(dir.path().join("hy"))
+        .arg("--json")
+        .output()
+        .unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let s: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(s["type"], "p3rp/hybrid");
+    assert!(
+        s["violations"].as_array().unwrap().is_empty(),
+        "{}",
+        s["violations"]
+    );
+    // Table Y takes back the tool's sideways swing L sin A = 150 sin 30 = 75 mm.
+    let y = &s["actuators"]["Y"];
+    assert!(
+        (y["min"].as_f64().unwrap() - (10.0 - 75.0)).abs() < 1e-6,
+        "{y}"
+    );
+    // The report carries the seed-004 section for both files.
+    for file in ["p3rp-seed004.toml", "p3rp-hybrid-seed004.toml"] {
+        let rep = dir.path().join(format!("rep-{file}"));
+        let o = pkm()
+            .args([
+                "report",
+                &path(&format!("examples/machines/{file}")),
+                "--out",
+            ])
+            .arg(&rep)
+            .output()
+            .unwrap();
+        assert_eq!(
+            o.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let html = std::fs::read_to_string(rep.join("index.html")).unwrap();
+        assert!(html.contains("seed 004 reproduced"));
+        assert!(html.contains("slider V peak velocity in the fig. 7 move"));
+        assert!(html.contains("Forward workspace (fig. 5)"));
+    }
+}

@@ -399,3 +399,26 @@ fn machine_file_errors_name_the_field() {
         assert!(e.starts_with("head.toml:"), "{e}");
     }
 }
+
+#[test]
+fn reproduction_table() {
+    let h = head();
+    let rows = pkm::p3rp::seed004::reproduction(&h).unwrap();
+    assert_eq!(rows.len(), 10);
+    for r in &rows {
+        if r.quantity.starts_with("slider E range at theta = 1.57") {
+            // The paper's 600 mm is a plot reading that contradicts its D range.
+            assert!((r.pkm[0] - 660.0).abs() < 0.1 && (r.pkm[1] - 825.0).abs() < 0.1);
+            assert!(r.note.is_some());
+        } else if r.unit == "mm" {
+            for (a, b) in r.paper.iter().zip(&r.pkm) {
+                assert!((a - b).abs() < 0.1, "{}: {a} vs {b}", r.quantity);
+            }
+        } else if !r.paper.is_empty() {
+            assert!(r.deviation < 0.03, "{}: {:?}", r.quantity, r.pkm);
+        }
+    }
+    let q = rows.last().unwrap();
+    assert!(q.quantity.starts_with("singular configuration Q"));
+    assert!(q.pkm[0] > 100.0 && q.pkm[0] < 180.0, "{:?}", q.pkm);
+}

@@ -3,6 +3,7 @@
 mod drawing;
 pub mod heatmap;
 mod html;
+mod p3rp;
 pub mod plot;
 
 use anyhow::{Context, Result};
@@ -62,6 +63,10 @@ pub fn build(machine: &Machine) -> Result<String> {
     nav.push_str(" · <a href=\"#workspace\">Workspace</a>");
     if spatial {
         nav.push_str(" · <a href=\"#motion\">Motion</a>");
+    }
+    let head = p3rp::head_of(machine);
+    if head.is_some() {
+        nav.push_str(" · <a href=\"#seed004\">Seed 004</a>");
     }
     if !references.is_empty() {
         nav.push_str(" · <a href=\"#references\">Reproduced references</a>");
@@ -170,6 +175,9 @@ pub fn build(machine: &Machine) -> Result<String> {
     workspace_section(&mut h, machine)?;
     if spatial {
         motion_section(&mut h, machine)?;
+    }
+    if let Some(head) = &head {
+        p3rp::section(&mut h, head)?;
     }
 
     if !references.is_empty() {

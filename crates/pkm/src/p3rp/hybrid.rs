@@ -56,6 +56,17 @@ impl HybridMachine {
         }
     }
 
+    /// The head alone (pose `(z, theta)` of its output point, sliders U and V), at the
+    /// home pose's head configuration: for the head's own analyses (seed 004's maps).
+    pub fn head_mechanism(&self) -> super::P3rpHead {
+        super::P3rpHead::new(
+            format!("{} (head)", self.name),
+            self.head.clone(),
+            [self.actuators[2].clone(), self.actuators[3].clone()],
+            self.head_pose(&self.home),
+        )
+    }
+
     /// Head pose `(z, theta)` of a machine pose.
     fn head_pose(&self, x: &Vector6<f64>) -> Vector2<f64> {
         Vector2::new(x[2] + self.head.tool_length * x[3].cos(), x[3])

@@ -26,6 +26,7 @@
 
 mod head;
 mod hybrid;
+pub mod seed004;
 
 pub use head::{Branch, HeadGeometry, P3rpHead, Separation};
 pub use hybrid::HybridMachine;
