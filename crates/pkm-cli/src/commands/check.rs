@@ -102,9 +102,15 @@ pub fn run(a: &CheckArgs) -> Result<u8> {
             println!("{line}");
         }
         println!("home        {}", coords_text(m, &home));
-        println!(
-            "jacobian    condition number {cond:.3} at home (driven columns, 2-norm; 1 rad counted as {lc:.3} mm)"
-        );
+        let angles = driven
+            .iter()
+            .any(|&k| m.coordinates()[k].quantity == pkm::Quantity::Angle);
+        let scale = if angles {
+            format!("; 1 rad counted as {lc:.3} mm")
+        } else {
+            String::new()
+        };
+        println!("jacobian    condition number {cond:.3} at home (driven columns, 2-norm{scale})");
         if violations.is_empty() {
             println!("home limits all satisfied");
         } else {
