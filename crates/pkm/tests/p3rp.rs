@@ -145,6 +145,16 @@ fn jacobians_equal_finite_differences() {
         let p = Vector6::new(12.0, -30.0, x[0] - 200.0, x[1], 0.0, 0.0);
         assert!(jacobian_error(&m, &p).unwrap() < 1e-6);
     }
+    // J_t' against central differences of J_t along theta(t) = theta0 + w t.
+    for x in workspace_grid().step_by(5) {
+        let w = 0.7;
+        let d = 1e-6;
+        let g = &h.geometry;
+        let jd =
+            (g.jacobian(x[1] + w * d).unwrap() - g.jacobian(x[1] - w * d).unwrap()) / (2.0 * d);
+        let an = g.jacobian_derivative(x[1], w).unwrap();
+        assert!((jd - an).amax() < 1e-6 * an.amax().max(1.0), "{jd} {an}");
+    }
     // g' and g'' against central differences of g.
     let g = &h.geometry;
     for k in 0..=30 {

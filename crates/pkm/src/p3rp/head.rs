@@ -145,6 +145,14 @@ impl HeadGeometry {
         Ok(Matrix2::new(1.0, 0.0, 1.0, sep.dg))
     }
 
+    /// Time derivative of [`HeadGeometry::jacobian`] for a deflection rate `theta_dot`:
+    /// `J_t' = [[0, 0], [0, g''(theta) theta']]`, so that
+    /// `(z1'', z2'') = J_t (z'', theta'') + J_t' (z', theta')`.
+    pub fn jacobian_derivative(&self, theta: f64, theta_dot: f64) -> Result<Matrix2<f64>> {
+        let sep = self.separation(theta)?;
+        Ok(Matrix2::new(0.0, 0.0, 0.0, sep.ddg * theta_dot))
+    }
+
     /// Rod angle phi: from the vertical through C counter-clockwise to BC (rad).
     pub fn rod_angle(&self, theta: f64) -> Result<f64> {
         let (_, _, s, h) = self.rod(theta)?;
