@@ -6,6 +6,9 @@
 //! rotation, `b_i` the platform joint and `t` the tool tip in the platform frame
 //! (seed 000 eq. 7, seed 001 eq. 1).
 
+// Parallel fixed-size arrays (struts, rows, columns) are indexed together.
+#![allow(clippy::needless_range_loop)]
+
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
 use crate::mechanism::ActuatorMotion;
@@ -90,6 +93,82 @@ impl<const N: usize> StrutSet<N> {
             out.qdd[i] = (dd.norm_squared() - ld * ld) / l + n.dot(&ddd);
         }
         out
+    }
+}
+
+/// The same geometry laid out by coordinate (structure of arrays) for the hot length
+/// computation: the six strut lengths of a pose vectorise over struts (SSE2 by
+/// default, wider with `-C target-cpu=native`) instead of working on 3-vectors.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StrutSoa<const N: usize> {
+    ax: [f64; N],
+    ay: [f64; N],
+    az: [f64; N],
+    bx: [f64; N],
+    by: [f64; N],
+    bz: [f64; N],
+}
+
+impl<const N: usize> From<&StrutSet<N>> for StrutSoa<N> {
+    fn from(s: &StrutSet<N>) -> Self {
+        StrutSoa {
+            ax: std::array::from_fn(|i| s.arms[i].x),
+            ay: std::array::from_fn(|i| s.arms[i].y),
+            az: std::array::from_fn(|i| s.arms[i].z),
+            bx: std::array::from_fn(|i| s.base[i].x),
+            by: std::array::from_fn(|i| s.base[i].y),
+            bz: std::array::from_fn(|i| s.base[i].z),
+        }
+    }
+}
+
+impl<const N: usize> StrutSoa<N> {
+    /// Strut lengths `|p + R arm_i - base_i|` (the same as [`StrutSet::lengths`]).
+    #[inline]
+    pub fn lengths(&self, p: &Vector3<f64>, r: &Matrix3<f64>) -> SVector<f64, N> {
+        let mut out = [0.0; N];
+        for i in 0..N {
+            let (x, y, z) = (self.ax[i], self.ay[i], self.az[i]);
+            let dx = r[(0, 0)] * x + r[(0, 1)] * y + r[(0, 2)] * z + (p.x - self.bx[i]);
+            let dy = r[(1, 0)] * x + r[(1, 1)] * y + r[(1, 2)] * z + (p.y - self.by[i]);
+            let dz = r[(2, 0)] * x + r[(2, 1)] * y + r[(2, 2)] * z + (p.z - self.bz[i]);
+            out[i] = (dx * dx + dy * dy + dz * dz).sqrt();
+        }
+        SVector::<f64, N>::from(out)
+    }
+
+    /// Strut lengths and the twist Jacobian (rotation columns divided by `lc`) in one
+    /// pass: row i is `[n_i^T, (R arm_i x n_i)^T / lc]`, as [`StrutSet::twist_jacobian`].
+    #[inline]
+    pub fn lengths_and_jacobian(
+        &self,
+        p: &Vector3<f64>,
+        r: &Matrix3<f64>,
+        lc: f64,
+    ) -> (SVector<f64, N>, SMatrix<f64, N, 6>) {
+        let mut l = [0.0; N];
+        let mut j = SMatrix::<f64, N, 6>::zeros();
+        let inv_lc = 1.0 / lc;
+        for i in 0..N {
+            let (x, y, z) = (self.ax[i], self.ay[i], self.az[i]);
+            let rx = r[(0, 0)] * x + r[(0, 1)] * y + r[(0, 2)] * z;
+            let ry = r[(1, 0)] * x + r[(1, 1)] * y + r[(1, 2)] * z;
+            let rz = r[(2, 0)] * x + r[(2, 1)] * y + r[(2, 2)] * z;
+            let dx = rx + (p.x - self.bx[i]);
+            let dy = ry + (p.y - self.by[i]);
+            let dz = rz + (p.z - self.bz[i]);
+            let len = (dx * dx + dy * dy + dz * dz).sqrt();
+            l[i] = len;
+            let inv = 1.0 / len;
+            let (nx, ny, nz) = (dx * inv, dy * inv, dz * inv);
+            j[(i, 0)] = nx;
+            j[(i, 1)] = ny;
+            j[(i, 2)] = nz;
+            j[(i, 3)] = (ry * nz - rz * ny) * inv_lc;
+            j[(i, 4)] = (rz * nx - rx * nz) * inv_lc;
+            j[(i, 5)] = (rx * ny - ry * nx) * inv_lc;
+        }
+        (SVector::<f64, N>::from(l), j)
     }
 }
 

@@ -6,8 +6,14 @@
 //! update of roll/pitch/yaw by an angular-velocity step (genhexkins). The step `t` is
 //! halved until the residual decreases. A (nearly) singular Jacobian is reported as
 //! [`Error::Singular`], never returned as a pose.
+//!
+//! Once a full step is small (below [`FkOptions::chord_step`]) the factorised Jacobian
+//! is kept for the following steps (simplified Newton): near the solution it changes by
+//! about the step over the strut length, so each kept step still gains three to four
+//! digits, and it saves the factorisation that dominates a step's cost. A kept step
+//! that does not reduce the residual tenfold triggers a fresh Jacobian.
 
-use nalgebra::{Matrix3, Rotation3, Vector3, Vector6};
+use nalgebra::{Matrix3, Vector3, Vector6};
 
 use super::Hexapod;
 use crate::error::{Error, Result};
@@ -26,6 +32,9 @@ pub struct FkOptions {
     /// Largest pose uncertainty (mm, from the residual times `|J^-1|`) accepted at
     /// convergence; beyond it the configuration is reported as singular.
     pub max_pose_uncertainty: f64,
+    /// A full Newton step shorter than this (mm, rotation scaled by the characteristic
+    /// length) keeps the factorised Jacobian for the next steps; 0 = always Newton.
+    pub chord_step: f64,
 }
 
 impl Default for FkOptions {
@@ -35,6 +44,7 @@ impl Default for FkOptions {
             tolerance: 1e-11,
             min_rcond: 1e-9,
             max_pose_uncertainty: 1e-8,
+            chord_step: 0.5,
         }
     }
 }
@@ -52,6 +62,27 @@ pub struct FkReport {
     pub residual: f64,
 }
 
+/// `exp([w]x)` by Rodrigues' formula (a proper rotation for any `w`).
+#[inline]
+fn exp_so3(w: &Vector3<f64>) -> Matrix3<f64> {
+    let t2 = w.norm_squared();
+    let k = Matrix3::new(0.0, -w.z, w.y, w.z, 0.0, -w.x, -w.y, w.x, 0.0);
+    let (a, b) = if t2 < 1e-6 {
+        // sin t / t and (1 - cos t) / t^2 by their series, to rounding for |t| < 1e-3
+        // (the next terms are below t^6 / 5040): the small steps near convergence
+        // skip the sine and cosine.
+        (
+            1.0 - t2 / 6.0 * (1.0 - t2 / 20.0),
+            0.5 - t2 / 24.0 * (1.0 - t2 / 30.0),
+        )
+    } else {
+        let t = t2.sqrt();
+        let (s, c) = t.sin_cos();
+        (s / t, (1.0 - c) / t2)
+    };
+    Matrix3::identity() + k * a + k * k * b
+}
+
 /// Newton on SE(3) from `(p0, r0)` to strut lengths `q`.
 pub fn solve(
     h: &Hexapod,
@@ -60,12 +91,23 @@ pub fn solve(
     r0: &Matrix3<f64>,
     o: &FkOptions,
 ) -> Result<FkReport> {
+    let singular = |p: &Vector3<f64>, rc: f64| Error::Singular {
+        what: format!(
+            "hexapod forward kinematics: the Jacobian is singular near X={:.3} Y={:.3} Z={:.3} mm",
+            p.x, p.y, p.z
+        ),
+        rcond: rc,
+    };
     let mut p = *p0;
     let mut r = *r0;
-    let mut res_v = h.lengths(&p, &r) - q;
-    let mut res = res_v.amax();
     let lc = h.characteristic_length;
-    // Smallest LU pivot of the last step: the pose uncertainty is about
+    let soa = h.soa();
+    let (l0, mut j) = soa.lengths_and_jacobian(&p, &r, lc);
+    let mut res_v = l0 - q;
+    let mut res = res_v.amax();
+    let mut fresh = true; // j is the Jacobian at the current pose
+    let mut lu: Option<SmallLu<6>> = None;
+    // Smallest LU pivot of the factorisation in use: the pose uncertainty is about
     // 6 * residual / pivot (cheap); the exact |J^-1| is computed only when that is large.
     let mut min_pivot = 0.0;
     for it in 0..o.max_iterations {
@@ -99,34 +141,38 @@ pub fn solve(
                 residual: res,
             });
         }
-        let j = h.scaled_twist_jacobian(&p, &r);
-        let lu = SmallLu::new(&j);
-        let (lo, hi) = lu.map(|l| l.pivot_range()).unwrap_or((0.0, 1.0));
-        min_pivot = lo;
-        let rc = if hi > 0.0 { lo / hi } else { 0.0 };
-        let lu = match lu {
-            Some(lu) if rc >= o.min_rcond => lu,
-            _ => {
-                return Err(Error::Singular {
-                    what: format!(
-                        "hexapod forward kinematics: the Jacobian is singular near X={:.3} Y={:.3} Z={:.3} mm",
-                        p.x, p.y, p.z
-                    ),
-                    rcond: rc,
-                })
+        let chord = lu.is_some(); // the factorisation is kept from an earlier pose
+        if lu.is_none() {
+            if !fresh {
+                j = soa.lengths_and_jacobian(&p, &r, lc).1;
             }
-        };
-        let d = lu.solve(&res_v);
+            let f = SmallLu::new(&j);
+            let (lo, hi) = f.map(|l| l.pivot_range()).unwrap_or((0.0, 1.0));
+            let rc = if hi > 0.0 { lo / hi } else { 0.0 };
+            match f {
+                Some(f) if rc >= o.min_rcond => {
+                    lu = Some(f);
+                    min_pivot = lo;
+                }
+                _ => return Err(singular(&p, rc)),
+            }
+        }
+        let d = lu.as_ref().map(|f| f.solve(&res_v)).unwrap_or_default();
         let dv = Vector3::new(d[0], d[1], d[2]);
         let dw = Vector3::new(d[3], d[4], d[5]) / lc;
         let mut t = 1.0;
         let mut accepted = false;
+        let res_before = res;
         for _ in 0..30 {
             let pn = p - dv * t;
-            let rn = Rotation3::new(-dw * t).matrix() * r;
+            let rn = exp_so3(&(-dw * t)) * r;
             let vn = h.lengths(&pn, &rn) - q;
             let resn = vn.amax();
             if resn < res || resn <= o.tolerance {
+                // A kept Jacobian must still pay: otherwise refresh it and retry.
+                if chord && t == 1.0 && resn > 0.1 * res && resn > o.tolerance {
+                    break;
+                }
                 p = pn;
                 r = rn;
                 res_v = vn;
@@ -134,14 +180,28 @@ pub fn solve(
                 accepted = true;
                 break;
             }
+            if chord {
+                break;
+            }
             t *= 0.5;
         }
+        fresh = false;
         if !accepted {
+            if chord {
+                // Retry this iteration with a fresh Jacobian.
+                lu = None;
+                continue;
+            }
             return Err(Error::NotConverged {
                 solver: "hexapod forward kinematics",
                 iterations: it + 1,
                 residual: res,
             });
+        }
+        // Keep the factorisation only after a small full step that cut the residual
+        // tenfold (Newton's quadratic regime), or after a chord step that did.
+        if !(t == 1.0 && d.norm() <= o.chord_step && res <= 0.1 * res_before) {
+            lu = None;
         }
     }
     if res <= o.tolerance {

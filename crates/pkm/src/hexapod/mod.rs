@@ -70,6 +70,7 @@ pub struct Hexapod {
     /// mean distance of the platform joints from the tool tip.
     pub characteristic_length: f64,
     set: StrutSet<6>,
+    soa: crate::legs::StrutSoa<6>,
     actuators: [Actuator; 6],
     coordinates: [Coordinate; 6],
     /// Pairs of struts that share a joint (never checked for interference).
@@ -154,6 +155,7 @@ impl Hexapod {
             strut_diameter,
             home,
             characteristic_length: characteristic_length.max(1e-9),
+            soa: (&set).into(),
             set,
             actuators,
             coordinates: spatial_coordinates(),
@@ -166,10 +168,15 @@ impl Hexapod {
         &self.set
     }
 
+    /// The strut geometry laid out for the hot length computation.
+    pub fn soa(&self) -> &crate::legs::StrutSoa<6> {
+        &self.soa
+    }
+
     /// Strut lengths from a tool tip and a rotation matrix (allocation-free).
     #[inline]
     pub fn lengths(&self, p: &Vector3<f64>, r: &Matrix3<f64>) -> Vector6<f64> {
-        self.set.lengths(p, r)
+        self.soa.lengths(p, r)
     }
 
     /// Twist Jacobian with the rotation columns scaled by the characteristic length, so
@@ -226,7 +233,7 @@ impl Mechanism<6, 6> for Hexapod {
     #[inline]
     fn inverse(&self, x: &Vector6<f64>) -> Result<Vector6<f64>> {
         let (p, r) = split_pose(x);
-        Ok(self.set.lengths(&p, &r))
+        Ok(self.lengths(&p, &r))
     }
 
     fn jacobian(&self, x: &Vector6<f64>) -> Result<SMatrix<f64, 6, 6>> {
@@ -398,14 +405,11 @@ impl Mechanism<6, 6> for Hexapod {
     fn condition(&self, x: &Vector6<f64>) -> Result<f64> {
         let (p, r) = split_pose(x);
         let j = self.scaled_twist_jacobian(&p, &r);
-        // Eigenvalues of J^T J (nalgebra's symmetric solver: faster than an SVD here),
-        // with an iteration cap (uncapped it can loop on some inputs) and our Jacobi
-        // solver as the fallback.
+        // Eigenvalues of J^T J by tridiagonal QL (much faster than an SVD or nalgebra's
+        // symmetric solver with eigenvectors), with the Jacobi method as the fallback.
         let jtj = j.transpose() * j;
-        let ev = match nalgebra::SymmetricEigen::try_new(jtj, 1e-15, 200) {
-            Some(e) if e.eigenvalues.iter().all(|v| v.is_finite()) => e.eigenvalues,
-            _ => crate::linalg::symmetric_eigenvalues(&jtj),
-        };
+        let ev = crate::linalg::symmetric_eigenvalues_ql(&jtj)
+            .unwrap_or_else(|| crate::linalg::symmetric_eigenvalues(&jtj));
         let (lo, hi) = (ev.min(), ev.max());
         Ok(if lo > 0.0 {
             (hi / lo).sqrt()
