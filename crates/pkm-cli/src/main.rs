@@ -140,6 +140,10 @@ pub struct FkArgs {
     /// Starting pose (same form as `pkm ik --pose`); default: the home pose.
     #[arg(long, allow_hyphen_values = true)]
     pub from: Option<String>,
+    /// Also search for other assembly modes: solve from this many starting poses spread
+    /// around home (and mirrored through the base plane) and list every distinct pose.
+    #[arg(long, conflicts_with = "input")]
+    pub assembly_modes: Option<usize>,
     /// CSV of many actuator sets (header row naming the actuators).
     #[arg(long, requires = "output")]
     pub input: Option<PathBuf>,

@@ -241,3 +241,48 @@ fn atlas_and_forward_maps_of_the_p3rp_head() {
     assert_eq!(o.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&o.stderr).contains("6 actuators"));
 }
+
+#[test]
+fn hexapod_assembly_modes_and_transmission() {
+    let o = pkm()
+        .args([
+            "fk",
+            &path("examples/machines/hexapod-linuxcnc.toml"),
+            "--actuators",
+            "755.56,755.56,755.56,755.56,755.56,755.56",
+            "--assembly-modes",
+            "200",
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let modes = v["assembly_modes"].as_array().unwrap();
+    assert!(modes.len() >= 2, "{}", modes.len());
+    assert_eq!(modes[0]["reachable"], true);
+    // The mirror image through the base plane is among them, beyond the limits.
+    assert!(modes
+        .iter()
+        .any(|m| m["position"][2].as_f64().unwrap() < -500.0 && m["reachable"] == false));
+    let o = pkm()
+        .args([
+            "ik",
+            &path("examples/machines/hexapod-linuxcnc.toml"),
+            "--pose",
+            "10,0,520,0,5,0",
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let t = &v["transmission"];
+    assert!(t["velocity"].as_f64().unwrap() > 0.4);
+    assert!(t["distance_to_singularity"].as_f64().unwrap() > 0.1);
+    assert!(t["condition"].as_f64().unwrap() >= 1.0);
+}

@@ -421,3 +421,104 @@ where
         Err(Error::Unreachable { violations: v })
     }
 }
+
+/// The `i`-th point of the Halton sequence in base `b` (in `[0, 1)`).
+fn halton(mut i: usize, b: usize) -> f64 {
+    let (mut f, mut r) = (1.0, 0.0);
+    while i > 0 {
+        f /= b as f64;
+        r += f * (i % b) as f64;
+        i /= b;
+    }
+    r
+}
+
+/// `n` deterministic starting poses spread around the home pose for
+/// [`assembly_modes`]: the home pose first, then Halton points with lengths within
+/// `+-2` characteristic lengths (at least 100 mm) of home and angles anywhere; for
+/// spatial machines the orientation is a rotation vector of any direction up to 180 deg
+/// and every other start is mirrored through the base plane (Z -> -Z), where the
+/// mirror-image assembly modes of parallel machines lie.
+pub fn spread_starts<M, const P: usize, const A: usize>(m: &M, n: usize) -> Vec<SVector<f64, P>>
+where
+    M: Mechanism<P, A> + ?Sized,
+{
+    const PRIMES: [usize; 8] = [2, 3, 5, 7, 11, 13, 17, 19];
+    let home = m.home();
+    let span = (2.0 * m.characteristic_length()).max(100.0);
+    let spatial = m.pose_space() == PoseSpace::Spatial && P == 6;
+    let mut out = vec![home];
+    for i in 1..n {
+        let u = |k: usize| halton(i, PRIMES[k % PRIMES.len()]) - 0.5;
+        let mut x = home;
+        if spatial {
+            for k in 0..3 {
+                x[k] = home[k] + 2.0 * span * u(k);
+            }
+            if i % 2 == 1 {
+                x[2] = -x[2];
+            }
+            let w = nalgebra::Vector3::new(u(3), u(4), u(5));
+            let w = if w.norm() > 1e-12 {
+                w.normalize() * (2.0 * std::f64::consts::PI * u(6).abs())
+            } else {
+                w
+            };
+            let r = nalgebra::Rotation3::new(w).matrix()
+                * crate::rotation::rpy_matrix(home[3], home[4], home[5]);
+            let a = crate::rotation::Convention::Rpy.from_matrix(&r);
+            x[3] = a[0];
+            x[4] = a[1];
+            x[5] = a[2];
+        } else {
+            for k in 0..P {
+                x[k] = match m.coordinates()[k].quantity {
+                    crate::units::Quantity::Length => home[k] + 2.0 * span * u(k),
+                    crate::units::Quantity::Angle => 2.0 * std::f64::consts::PI * u(k),
+                };
+            }
+        }
+        out.push(x);
+    }
+    out
+}
+
+/// Distinct forward solutions (assembly modes) for actuators `q`, found by solving
+/// from every pose of `starts` (e.g. [`spread_starts`]); two solutions are the same
+/// when their tool poses are within `tol` (mm and rad). Sorted by distance of the tool
+/// tip from the first start's. Starts that fail (no convergence, singular) are skipped.
+pub fn assembly_modes<M, const P: usize, const A: usize>(
+    m: &M,
+    q: &SVector<f64, A>,
+    starts: &[SVector<f64, P>],
+    tol: f64,
+) -> Vec<Forward<P>>
+where
+    M: Mechanism<P, A> + ?Sized,
+{
+    let mut found: Vec<(Forward<P>, Pose)> = Vec::new();
+    for s in starts {
+        let Ok(f) = m.forward(q, s) else { continue };
+        let Ok(pose) = m.tool_pose(&f.pose) else {
+            continue;
+        };
+        let same = found.iter().any(|(_, p)| {
+            (p.translation.vector - pose.translation.vector).norm() <= tol
+                && p.rotation.angle_to(&pose.rotation) <= tol
+        });
+        if !same {
+            found.push((f, pose));
+        }
+    }
+    let origin = starts
+        .first()
+        .and_then(|s| m.tool_pose(s).ok())
+        .map(|p| p.translation.vector)
+        .unwrap_or_default();
+    found.sort_by(|a, b| {
+        let da = (a.1.translation.vector - origin).norm();
+        let db = (b.1.translation.vector - origin).norm();
+        da.total_cmp(&db)
+    });
+    found.into_iter().map(|(f, _)| f).collect()
+}

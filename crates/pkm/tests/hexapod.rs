@@ -243,3 +243,53 @@ fn segment_distance_by_hand() {
     );
     assert!((d - 2f64.sqrt()).abs() < 1e-15);
 }
+
+#[test]
+fn assembly_modes_from_several_starts() {
+    use pkm::mechanism::{assembly_modes, spread_starts};
+    let h = load("hexapod-linuxcnc.toml");
+    let x = h.home();
+    let q = h.inverse(&x).unwrap();
+    let starts = spread_starts(&h, 300);
+    let modes = assembly_modes(&h, &q, &starts, 1e-6);
+    // The home pose comes first; its mirror image through the base plane (all base
+    // joints at Z = 0) is another assembly with the same strut lengths.
+    assert!(modes.len() >= 2, "{} modes", modes.len());
+    assert!((modes[0].pose - x).amax() < 1e-9);
+    assert!(modes
+        .iter()
+        .any(|f| (f.pose[2] + x[2]).abs() < 1e-6 && f.pose[0].abs() < 1e-6));
+    for f in &modes {
+        assert!((h.inverse(&f.pose).unwrap() - q).amax() < 1e-9);
+    }
+    eprintln!(
+        "LinuxCNC hexapod at home: {} assembly modes from 300 starts",
+        modes.len()
+    );
+}
+
+#[test]
+fn transmission_figures_of_the_hexapod() {
+    let h = load("hexapod-linuxcnc.toml");
+    let x = h.home();
+    let t = pkm::transmission::transmission(&h, &x).unwrap();
+    // At zero angles the coordinate Jacobian is the twist Jacobian.
+    assert!((t.velocity.unwrap() - h.velocity_transmission(&x)).abs() < 1e-9);
+    assert!((t.condition - h.condition(&x).unwrap()).abs() < 1e-6 * t.condition);
+    // Force transmission: the largest strut force per unit tool force is at least
+    // 1/sqrt(6) (six struts share it) and finite.
+    let f = t.force.unwrap();
+    assert!(f >= 1.0 / 6f64.sqrt() - 1e-12 && f.is_finite(), "{f}");
+    // Approaching the flat singular configuration the distance to singularity
+    // vanishes.
+    let mut prev = t.distance_to_singularity;
+    for z in [300.0, 100.0, 30.0, 10.0] {
+        let y = Vector6::new(0.0, 0.0, z, 0.0, 0.0, 0.0);
+        let d = pkm::transmission::transmission(&h, &y)
+            .unwrap()
+            .distance_to_singularity;
+        assert!(d < prev, "{z}: {d} vs {prev}");
+        prev = d;
+    }
+    assert!(prev < 0.05, "{prev}");
+}

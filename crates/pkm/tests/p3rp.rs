@@ -432,3 +432,33 @@ fn reproduction_table() {
     assert!(q.quantity.starts_with("singular configuration Q"));
     assert!(q.pkm[0] > 100.0 && q.pkm[0] < 180.0, "{:?}", q.pkm);
 }
+
+#[test]
+fn assembly_modes_are_the_two_branches() {
+    use pkm::mechanism::{assembly_modes, spread_starts};
+    let h = head();
+    let q = h.inverse(&Vector2::new(300.0, 0.6)).unwrap();
+    let modes = assembly_modes(&h, &q, &spread_starts(&h, 50), 1e-9);
+    assert_eq!(modes.len(), 2);
+    assert!((modes[0].pose - Vector2::new(300.0, 0.6)).amax() < 1e-9);
+    let g = &h.geometry;
+    assert_eq!(g.branch_of(modes[1].pose[1]).unwrap(), Branch::Negative);
+}
+
+#[test]
+fn transmission_figures_of_the_head() {
+    // J = [[1, 0], [1, g']]: a tool speed along z moves both sliders (sqrt 2 per unit),
+    // a deflection rate moves V by g'; a vertical tool force loads slider U only
+    // (J^-T = [[1, -1/g'], [0, 1/g']]), a moment both by 1/g'.
+    let h = head();
+    for x in workspace_grid().step_by(11) {
+        let t = pkm::transmission::transmission(&h, &x).unwrap();
+        let dg = h.geometry.separation(x[1]).unwrap().dg;
+        assert!((t.velocity.unwrap() - 2f64.sqrt()).abs() < 1e-12);
+        assert!((t.angular_velocity.unwrap() - dg.abs()).abs() < 1e-9);
+        assert!((t.force.unwrap() - 1.0).abs() < 1e-12);
+        assert!((t.moment.unwrap() - 2f64.sqrt() / dg.abs()).abs() < 1e-12);
+        assert!((t.condition - h.condition(&x).unwrap()).abs() < 1e-9 * t.condition);
+        assert!(t.distance_to_singularity > 0.0);
+    }
+}

@@ -27,6 +27,28 @@ fn start_pose(m: &dyn DynMechanism, a: &FkArgs) -> Result<Vec<f64>> {
     }
 }
 
+/// Every assembly mode found from `n` spread starts, as a [`pkm::Visitor`].
+struct ModesJob {
+    q: Vec<f64>,
+    n: usize,
+}
+
+impl pkm::Visitor for ModesJob {
+    type Output = Result<Vec<pkm::dynamic::DynForward>>;
+    fn visit<M: pkm::Mechanism<P, A>, const P: usize, const A: usize>(self, m: &M) -> Self::Output {
+        let q = pkm::dynamic::fixed::<A>("actuators", &self.q)?;
+        let starts = pkm::mechanism::spread_starts(m, self.n.max(1));
+        Ok(pkm::mechanism::assembly_modes(m, &q, &starts, 1e-6)
+            .into_iter()
+            .map(|f| pkm::dynamic::DynForward {
+                pose: f.pose.as_slice().to_vec(),
+                iterations: f.iterations,
+                residual: f.residual,
+            })
+            .collect())
+    }
+}
+
 pub fn run(a: &FkArgs) -> Result<u8> {
     let machine = load(&a.machine)?;
     let m = machine.mechanism();
@@ -39,6 +61,10 @@ pub fn run(a: &FkArgs) -> Result<u8> {
     let q = actuators_from_user(m, &vals)?;
     let f = m.forward(&q, &start)?;
     let violations = m.check_limits(&f.pose, &q)?;
+    let modes = match a.assembly_modes {
+        Some(n) => Some(machine.visit(ModesJob { q: q.clone(), n })?),
+        None => None,
+    };
     if a.opts.json {
         let mut v = tool_json(m, &f.pose, conv)?;
         let o = v.as_object_mut().expect("object");
@@ -50,6 +76,19 @@ pub fn run(a: &FkArgs) -> Result<u8> {
         o.insert("residual".into(), json!(f.residual));
         o.insert("violations".into(), json!(violations));
         o.insert("reachable".into(), json!(violations.is_empty()));
+        if let Some(modes) = &modes {
+            let mut list = Vec::new();
+            for f in modes {
+                let mut t = tool_json(m, &f.pose, conv)?;
+                let viol = m.check_limits(&f.pose, &q)?;
+                let to = t.as_object_mut().expect("object");
+                to.insert("pose".into(), coords_json(m, &f.pose));
+                to.insert("reachable".into(), json!(viol.is_empty()));
+                to.insert("violations".into(), json!(viol));
+                list.push(t);
+            }
+            o.insert("assembly_modes".into(), json!(list));
+        }
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else {
         let pose = m.tool_pose(&f.pose)?;
@@ -78,6 +117,22 @@ pub fn run(a: &FkArgs) -> Result<u8> {
         }
         for v in &violations {
             println!("limit      VIOLATED: {v}");
+        }
+        if let Some(modes) = &modes {
+            println!(
+                "assembly   {} distinct poses with these actuators from {} starts:",
+                modes.len(),
+                a.assembly_modes.unwrap_or(0)
+            );
+            for (i, f) in modes.iter().enumerate() {
+                let viol = m.check_limits(&f.pose, &q)?;
+                let status = if viol.is_empty() {
+                    "within limits".to_string()
+                } else {
+                    format!("{} limits violated (first: {})", viol.len(), viol[0].limit)
+                };
+                println!("  mode {:<3} {}  {status}", i + 1, coords_text(m, &f.pose));
+            }
         }
     }
     if violations.is_empty() {

@@ -30,6 +30,33 @@ pub fn solve(m: &dyn DynMechanism, x: Vec<f64>) -> Result<IkResult> {
     Ok(IkResult { x, q, violations })
 }
 
+/// Transmission figures at a pose, as a [`pkm::Visitor`].
+struct TransmissionJob<'a>(&'a [f64]);
+
+impl pkm::Visitor for TransmissionJob<'_> {
+    type Output = pkm::Result<pkm::transmission::Transmission>;
+    fn visit<M: pkm::Mechanism<P, A>, const P: usize, const A: usize>(self, m: &M) -> Self::Output {
+        let x = pkm::dynamic::fixed::<P>("pose", self.0)?;
+        pkm::transmission::transmission(m, &x)
+    }
+}
+
+fn transmission_json(machine: &Machine, x: &[f64]) -> Value {
+    match machine.visit(TransmissionJob(x)) {
+        Ok(t) => json!({
+            "velocity": t.velocity,
+            "angular_velocity": t.angular_velocity,
+            "force": t.force,
+            "moment": t.moment,
+            "distance_to_singularity": t.distance_to_singularity,
+            "condition": t.condition,
+            "characteristic_length_mm": t.characteristic_length,
+            "units": "velocity: actuator mm/s per tool mm/s; angular_velocity: mm/s per rad/s; force: actuator N per tool N; moment: N per N mm; distance_to_singularity: smallest singular value of the driven Jacobian with rotations scaled by the characteristic length (0 = singular)",
+        }),
+        Err(e) => json!({ "error": e.to_string() }),
+    }
+}
+
 /// JSON of a solution (the `pkm ik --json` contract).
 pub fn to_json(machine: &Machine, r: &IkResult, conv: pkm::Convention) -> Result<Value> {
     let m = machine.mechanism();
@@ -46,6 +73,7 @@ pub fn to_json(machine: &Machine, r: &IkResult, conv: pkm::Convention) -> Result
         "joints": joints,
         "violations": r.violations,
         "reachable": r.violations.is_empty(),
+        "transmission": transmission_json(machine, &r.x),
     }))
 }
 
@@ -82,6 +110,26 @@ pub fn run(a: &IkArgs) -> Result<u8> {
                 "joint      {:<8} {:>10.4} {:>10.4} {:>10.4} mm",
                 p.name, p.position[0], p.position[1], p.position[2]
             );
+        }
+        match machine.visit(TransmissionJob(&r.x)) {
+            Ok(t) => {
+                let f = |v: Option<f64>, unit: &str| {
+                    v.map(|v| format!("{v:.4} {unit}"))
+                        .unwrap_or_else(|| "-".into())
+                };
+                println!(
+                    "transmit   velocity {}, angular {}, force {}, moment {}",
+                    f(t.velocity, "(mm/s)/(mm/s)"),
+                    f(t.angular_velocity.map(|v| v.to_radians()), "(mm/s)/(deg/s)"),
+                    f(t.force, "N/N"),
+                    f(t.moment, "N/(N mm)")
+                );
+                println!(
+                    "singular   distance {:.4} (smallest scaled singular value; 0 = singular), condition {:.3}",
+                    t.distance_to_singularity, t.condition
+                );
+            }
+            Err(e) => println!("transmit   {e}"),
         }
         if r.violations.is_empty() {
             println!("limits     all satisfied");

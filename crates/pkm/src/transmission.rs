@@ -1,0 +1,105 @@
+//! Velocity and force transmission of a mechanism at a pose, and its distance to a
+//! singularity, from the driven columns of the inverse Jacobian `J = dq/dx`.
+//!
+//! With `q' = J x'` (driven coordinates) and, by virtual work, actuator forces
+//! `tau = J^-T w` for a generalised tool load `w` (N on length coordinates, N mm on
+//! angle coordinates):
+//!
+//! * velocity transmission: the largest actuator rate per unit tool speed,
+//!   `s_max(J_L)` over the length columns `J_L` ((mm/s) per (mm/s)); per unit angular
+//!   rate, `s_max(J_R)` over the angle columns ((mm/s) per (rad/s));
+//! * force transmission: the largest actuator force per unit tool force,
+//!   `s_max((J^-T)_L)` (N per N), and per unit tool moment (N per N mm);
+//! * distance to singularity: the smallest singular value of the driven Jacobian with
+//!   angle columns divided by the characteristic length (dimensionless: actuator mm per
+//!   tool mm; 0 at a singularity), beside the condition number.
+//!
+//! Coordinates the mechanism holds are not in these figures. Not a hot path: dynamic
+//! matrices (the split into length and angle columns varies by machine).
+
+use nalgebra::{DMatrix, SVector};
+use serde::Serialize;
+
+use crate::error::{Error, Result};
+use crate::mechanism::Mechanism;
+use crate::units::Quantity;
+
+/// Transmission figures at one pose (`None` where the machine has no driven
+/// coordinate of that kind).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Transmission {
+    /// Largest actuator rate per unit tool speed (mm/s per mm/s).
+    pub velocity: Option<f64>,
+    /// Largest actuator rate per unit angular rate (mm/s per rad/s).
+    pub angular_velocity: Option<f64>,
+    /// Largest actuator force per unit tool force (N per N).
+    pub force: Option<f64>,
+    /// Largest actuator force per unit tool moment (N per N mm).
+    pub moment: Option<f64>,
+    /// Smallest singular value of the scaled driven Jacobian (0 at a singularity).
+    pub distance_to_singularity: f64,
+    /// Condition number of the scaled driven Jacobian.
+    pub condition: f64,
+    /// The characteristic length the angle columns are scaled by (mm).
+    pub characteristic_length: f64,
+}
+
+fn smax(m: &DMatrix<f64>) -> Option<f64> {
+    if m.ncols() == 0 {
+        return None;
+    }
+    m.singular_values().iter().copied().reduce(f64::max)
+}
+
+/// Transmission figures at pose `x`.
+pub fn transmission<M, const P: usize, const A: usize>(
+    m: &M,
+    x: &SVector<f64, P>,
+) -> Result<Transmission>
+where
+    M: Mechanism<P, A> + ?Sized,
+{
+    let j = m.jacobian(x)?;
+    let d = m.driven();
+    let jd = DMatrix::from_fn(A, A, |r, c| j[(r, d[c])]);
+    let lc = m.characteristic_length();
+    let is_angle = |c: usize| m.coordinates()[d[c]].quantity == Quantity::Angle;
+    let cols = |mat: &DMatrix<f64>, angle: bool| -> DMatrix<f64> {
+        let idx: Vec<usize> = (0..A).filter(|&c| is_angle(c) == angle).collect();
+        DMatrix::from_fn(mat.nrows(), idx.len(), |r, k| mat[(r, idx[k])])
+    };
+    let scaled = DMatrix::from_fn(A, A, |r, c| {
+        if is_angle(c) {
+            jd[(r, c)] / lc
+        } else {
+            jd[(r, c)]
+        }
+    });
+    let sv = scaled.singular_values();
+    let smin = sv.iter().copied().fold(f64::INFINITY, f64::min);
+    let smax_all = sv.iter().copied().fold(0.0, f64::max);
+    let inv_t = jd.clone().try_inverse().map(|i| i.transpose());
+    let (force, moment) = match &inv_t {
+        Some(it) => (smax(&cols(it, false)), smax(&cols(it, true))),
+        None if smin <= 0.0 => (Some(f64::INFINITY), Some(f64::INFINITY)),
+        None => {
+            return Err(Error::Singular {
+                what: "inverse Jacobian (force transmission)".into(),
+                rcond: smin / smax_all,
+            })
+        }
+    };
+    Ok(Transmission {
+        velocity: smax(&cols(&jd, false)),
+        angular_velocity: smax(&cols(&jd, true)),
+        force,
+        moment,
+        distance_to_singularity: smin,
+        condition: if smin > 0.0 {
+            smax_all / smin
+        } else {
+            f64::INFINITY
+        },
+        characteristic_length: lc,
+    })
+}
