@@ -137,6 +137,60 @@ impl<const N: usize> StrutSoa<N> {
         SVector::<f64, N>::from(out)
     }
 
+    /// Strut lengths of many poses (tool tips `p`, rotations `r`) into `out`, computed
+    /// eight poses at a time across SIMD lanes (the poses are transposed into lanes,
+    /// so the arithmetic and the square roots vectorise over poses).
+    ///
+    /// # Panics
+    /// When the three slices differ in length.
+    pub fn lengths_batch(
+        &self,
+        p: &[Vector3<f64>],
+        r: &[Matrix3<f64>],
+        out: &mut [SVector<f64, N>],
+    ) {
+        const L: usize = 8;
+        assert!(
+            p.len() == r.len() && p.len() == out.len(),
+            "batch slices differ in length"
+        );
+        let n = p.len();
+        let mut k0 = 0;
+        while k0 + L <= n {
+            // Pose scalars by lane: 3 of p and 9 of R.
+            let mut pv = [[0.0; L]; 3];
+            let mut rv = [[0.0; L]; 9];
+            for l in 0..L {
+                let (pp, rr) = (&p[k0 + l], &r[k0 + l]);
+                for c in 0..3 {
+                    pv[c][l] = pp[c];
+                }
+                for e in 0..9 {
+                    rv[e][l] = rr[(e % 3, e / 3)];
+                }
+            }
+            for i in 0..N {
+                let (x, y, z) = (self.ax[i], self.ay[i], self.az[i]);
+                let (bx, by, bz) = (self.bx[i], self.by[i], self.bz[i]);
+                let mut len = [0.0; L];
+                for l in 0..L {
+                    // rv[e] holds R(e % 3, e / 3): column-major.
+                    let dx = rv[0][l] * x + rv[3][l] * y + rv[6][l] * z + (pv[0][l] - bx);
+                    let dy = rv[1][l] * x + rv[4][l] * y + rv[7][l] * z + (pv[1][l] - by);
+                    let dz = rv[2][l] * x + rv[5][l] * y + rv[8][l] * z + (pv[2][l] - bz);
+                    len[l] = (dx * dx + dy * dy + dz * dz).sqrt();
+                }
+                for l in 0..L {
+                    out[k0 + l][i] = len[l];
+                }
+            }
+            k0 += L;
+        }
+        for k in k0..n {
+            out[k] = self.lengths(&p[k], &r[k]);
+        }
+    }
+
     /// Strut lengths and the twist Jacobian (rotation columns divided by `lc`) in one
     /// pass: row i is `[n_i^T, (R arm_i x n_i)^T / lc]`, as [`StrutSet::twist_jacobian`].
     #[inline]

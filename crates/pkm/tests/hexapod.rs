@@ -293,3 +293,20 @@ fn transmission_figures_of_the_hexapod() {
     }
     assert!(prev < 0.05, "{prev}");
 }
+
+#[test]
+fn batch_lengths_equal_single_pose_lengths() {
+    let h = load("hexapod-seed001.toml");
+    let mut rng = rand::rngs::StdRng::seed_from_u64(7);
+    let n = 1000 + 5; // not a multiple of the lane count
+    let poses: Vec<Vector6<f64>> = (0..n)
+        .map(|_| random_pose(&mut rng, &Vector3::new(0.0, 0.0, 580.0), 150.0, 120.0, 0.5))
+        .collect();
+    let (ps, rs): (Vec<_>, Vec<_>) = poses.iter().map(pkm::legs::split_pose).unzip();
+    let mut out = vec![Vector6::zeros(); n];
+    h.soa().lengths_batch(&ps, &rs, &mut out);
+    for (k, x) in poses.iter().enumerate() {
+        let q = h.inverse(x).unwrap();
+        assert!((out[k] - q).amax() < 1e-12, "{k}");
+    }
+}
