@@ -310,3 +310,89 @@ fn batch_lengths_equal_single_pose_lengths() {
         assert!((out[k] - q).amax() < 1e-12, "{k}");
     }
 }
+
+#[test]
+fn per_joint_cone_axes() {
+    let path = format!(
+        "{}/../../examples/machines/hexapod-seed001.toml",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let text = std::fs::read_to_string(&path).unwrap();
+    let with = |extra: &str| {
+        let t = text.replacen(
+            "strut_diameter = 60.0",
+            &format!("strut_diameter = 60.0\n{extra}"),
+            1,
+        );
+        Machine::from_toml_str(&t, "hex.toml")
+    };
+    let violations = |m: &Machine| {
+        let Model::Hexapod(h) = &m.model else {
+            panic!()
+        };
+        let x = h.home();
+        let q = h.inverse(&x).unwrap();
+        let mut v = Vec::new();
+        h.check_limits(&x, &q, &mut v);
+        v
+    };
+    assert!(violations(&with("").unwrap()).is_empty());
+    // Joint A1's own axis lies horizontal: its strut is far outside its 50 deg cone,
+    // the other base joints keep the common vertical axis.
+    let m = with("base_joint_axes = { A1 = [1.0, 0.0, 0.0] }").unwrap();
+    let v = violations(&m);
+    assert!(!v.is_empty());
+    assert!(
+        v.iter()
+            .all(|v| v.kind == LimitKind::JointAngle && v.limit.contains("A1")),
+        "{v:?}"
+    );
+    // Each joint's axis along its strut at home: every angle is zero there.
+    let Model::Hexapod(h) = &with("").unwrap().model else {
+        panic!()
+    };
+    let (p, r) = pkm::legs::split_pose(&h.home());
+    let joints = h.strut_set().platform_joints(&p, &r);
+    let axes: Vec<String> = (0..6)
+        .map(|i| {
+            let d = (joints[i] - h.struts[i].base).normalize();
+            format!("{} = [{}, {}, {}]", h.struts[i].base_name, d.x, d.y, d.z)
+        })
+        .collect();
+    // Struts share no base joint in this file, so every joint gets one axis.
+    let m = with(&format!(
+        "base_joint_max_angle_unused = 0\nbase_joint_axes = {{ {} }}",
+        axes.join(", ")
+    ));
+    assert!(m
+        .unwrap_err()
+        .to_string()
+        .contains("base_joint_max_angle_unused"));
+    let t = text.replacen(
+        "base_joint_max_angle = 50.0",
+        "base_joint_max_angle = 1.0",
+        1,
+    );
+    let t = t.replacen(
+        "strut_diameter = 60.0",
+        &format!(
+            "strut_diameter = 60.0\nbase_joint_axes = {{ {} }}",
+            axes.join(", ")
+        ),
+        1,
+    );
+    let m = Machine::from_toml_str(&t, "hex.toml").unwrap();
+    assert!(violations(&m).is_empty(), "{:?}", violations(&m));
+    // Errors name the field.
+    let e = with("base_joint_axes = { Z9 = [0.0, 0.0, 1.0] }")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("limits.base_joint_axes.Z9") && e.contains("unknown base joint"),
+        "{e}"
+    );
+    let e = with("platform_joint_axes = { B1 = [0.0, 0.0, 0.0] }")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("non-zero"), "{e}");
+}

@@ -52,6 +52,10 @@ struct LimitsFile {
     #[serde(default)]
     platform_joint_max_angle: Option<f64>,
     #[serde(default)]
+    base_joint_axes: BTreeMap<String, [f64; 3]>,
+    #[serde(default)]
+    platform_joint_axes: BTreeMap<String, [f64; 3]>,
+    #[serde(default)]
     strut_diameter: Option<f64>,
 }
 
@@ -124,6 +128,53 @@ pub(super) fn build(src: &Source, f: HexapodFile) -> Result<super::Parts, Error>
             ));
         }
     }
+    // Per-joint axes (a universal joint is mounted along its own axis on a real
+    // machine) override the common one; they need the angle and a known joint.
+    let per_joint = |which: &str,
+                     axes: &BTreeMap<String, [f64; 3]>,
+                     joints: &BTreeMap<String, [f64; 3]>,
+                     common: Option<JointCone>|
+     -> Result<BTreeMap<String, JointCone>, Error> {
+        let field = format!("{which}_joint_axes");
+        let mut out = BTreeMap::new();
+        for (name, a) in axes {
+            let at = [key("limits"), key(&field), key(name)];
+            let Some(c) = common else {
+                return Err(src.error(
+                    &at,
+                    format!("a joint axis needs `limits.{which}_joint_max_angle`"),
+                ));
+            };
+            if !joints.contains_key(name) {
+                return Err(src.error(
+                    &at,
+                    format!(
+                        "unknown {which} joint `{name}`, expected one of {}",
+                        joints.keys().cloned().collect::<Vec<_>>().join(", ")
+                    ),
+                ));
+            }
+            let v = v3(*a);
+            if v.norm() < 1e-12 {
+                return Err(src.error(&at, "expected a non-zero vector"));
+            }
+            out.insert(
+                name.clone(),
+                JointCone {
+                    axis: v.normalize(),
+                    max_angle: c.max_angle,
+                },
+            );
+        }
+        Ok(out)
+    };
+    let base_axes = per_joint("base", &lim.base_joint_axes, &f.base_joints, base_cone)?;
+    let plat_axes = per_joint(
+        "platform",
+        &lim.platform_joint_axes,
+        &f.platform_joints,
+        plat_cone,
+    )?;
     let mut struts = Vec::with_capacity(6);
     for (i, s) in f.struts.iter().enumerate() {
         let (actuator, base, platform) =
@@ -143,8 +194,8 @@ pub(super) fn build(src: &Source, f: HexapodFile) -> Result<super::Parts, Error>
             platform_name: s.platform.clone(),
             base,
             platform,
-            base_cone,
-            platform_cone: plat_cone,
+            base_cone: base_axes.get(&s.base).copied().or(base_cone),
+            platform_cone: plat_axes.get(&s.platform).copied().or(plat_cone),
         });
     }
     let struts: [HexStrut; 6] = struts.try_into().expect("six struts checked above");
