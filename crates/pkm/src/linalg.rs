@@ -15,6 +15,9 @@ use nalgebra::{SMatrix, SVector};
 pub struct SmallLu<const N: usize> {
     lu: [[f64; N]; N],
     perm: [usize; N],
+    /// `1 / U(k, k)`: solves multiply instead of divide (division latency dominates
+    /// the substitution chains of a small system).
+    inv_diag: [f64; N],
 }
 
 impl<const N: usize> SmallLu<N> {
@@ -23,6 +26,7 @@ impl<const N: usize> SmallLu<N> {
     pub fn new(m: &SMatrix<f64, N, N>) -> Option<Self> {
         let mut lu: [[f64; N]; N] = std::array::from_fn(|r| std::array::from_fn(|c| m[(r, c)]));
         let mut perm: [usize; N] = std::array::from_fn(|i| i);
+        let mut inv_diag = [0.0; N];
         for k in 0..N {
             let mut piv = k;
             let mut best = lu[k][k].abs();
@@ -42,6 +46,7 @@ impl<const N: usize> SmallLu<N> {
             }
             let pivot_row = lu[k];
             let inv = 1.0 / pivot_row[k];
+            inv_diag[k] = inv;
             for row in lu.iter_mut().skip(k + 1) {
                 let f = row[k] * inv;
                 row[k] = f;
@@ -50,7 +55,7 @@ impl<const N: usize> SmallLu<N> {
                 }
             }
         }
-        Some(SmallLu { lu, perm })
+        Some(SmallLu { lu, perm, inv_diag })
     }
 
     /// Smallest and largest |pivot| of the factorisation: a cheap conditioning estimate
@@ -66,23 +71,24 @@ impl<const N: usize> SmallLu<N> {
         (lo, hi)
     }
 
-    /// Solves `M x = b`.
+    /// Solves `M x = b`. Column-oriented substitutions: once `x[c]` is known, every
+    /// later row is updated independently, so the dependency chain is one update per
+    /// unknown instead of one per matrix entry.
     #[inline]
     pub fn solve(&self, b: &SVector<f64, N>) -> SVector<f64, N> {
         let mut x: [f64; N] = std::array::from_fn(|i| b[self.perm[i]]);
-        for r in 0..N {
-            let mut v = x[r];
-            for c in 0..r {
-                v -= self.lu[r][c] * x[c];
+        for c in 0..N {
+            let xc = x[c];
+            for r in c + 1..N {
+                x[r] -= self.lu[r][c] * xc;
             }
-            x[r] = v;
         }
-        for r in (0..N).rev() {
-            let mut v = x[r];
-            for c in r + 1..N {
-                v -= self.lu[r][c] * x[c];
+        for c in (0..N).rev() {
+            let xc = x[c] * self.inv_diag[c];
+            x[c] = xc;
+            for r in 0..c {
+                x[r] -= self.lu[r][c] * xc;
             }
-            x[r] = v / self.lu[r][r];
         }
         SVector::<f64, N>::from(x)
     }

@@ -72,8 +72,8 @@ fn exp_so3(w: &Vector3<f64>) -> Matrix3<f64> {
         // (the next terms are below t^6 / 5040): the small steps near convergence
         // skip the sine and cosine.
         (
-            1.0 - t2 / 6.0 * (1.0 - t2 / 20.0),
-            0.5 - t2 / 24.0 * (1.0 - t2 / 30.0),
+            1.0 - t2 * (1.0 / 6.0) * (1.0 - t2 * (1.0 / 20.0)),
+            0.5 - t2 * (1.0 / 24.0) * (1.0 - t2 * (1.0 / 30.0)),
         )
     } else {
         let t = t2.sqrt();
@@ -101,6 +101,7 @@ pub fn solve(
     let mut p = *p0;
     let mut r = *r0;
     let lc = h.characteristic_length;
+    let inv_lc = 1.0 / lc;
     let soa = h.soa();
     let (l0, mut j) = soa.lengths_and_jacobian(&p, &r, lc);
     let mut res_v = l0 - q;
@@ -159,7 +160,7 @@ pub fn solve(
         }
         let d = lu.as_ref().map(|f| f.solve(&res_v)).unwrap_or_default();
         let dv = Vector3::new(d[0], d[1], d[2]);
-        let dw = Vector3::new(d[3], d[4], d[5]) / lc;
+        let dw = Vector3::new(d[3], d[4], d[5]) * inv_lc;
         let mut t = 1.0;
         let mut accepted = false;
         let res_before = res;
