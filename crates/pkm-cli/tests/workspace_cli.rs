@@ -286,3 +286,74 @@ fn hexapod_assembly_modes_and_transmission() {
     assert!(t["distance_to_singularity"].as_f64().unwrap() > 0.1);
     assert!(t["condition"].as_f64().unwrap() >= 1.0);
 }
+
+#[test]
+fn hexapod_csv_round_trip_through_the_tracking_fk() {
+    // IK of a 1 kHz stretch of a path, then FK of the lengths as a batch (rows are a
+    // stream: the hexapod batch uses the tracking solver).
+    let dir = tempfile::tempdir().unwrap();
+    let m = path("examples/machines/hexapod-linuxcnc.toml");
+    let mut poses = String::from("X,Y,Z,A,B,C\n");
+    for k in 0..200 {
+        let t = k as f64 * 1e-3;
+        poses.push_str(&format!(
+            "{},{},{},{},{},0\n",
+            20.0 * (3.0 * t).sin(),
+            0.1 * k as f64,
+            520.0 + 5.0 * t,
+            2.0 * t,
+            -1.0 * t
+        ));
+    }
+    let pin = dir.path().join("poses.csv");
+    std::fs::write(&pin, &poses).unwrap();
+    let lout = dir.path().join("lengths.csv");
+    pkm()
+        .args(["ik", &m, "--input"])
+        .arg(&pin)
+        .arg("--output")
+        .arg(&lout)
+        .assert()
+        .success();
+    let text = std::fs::read_to_string(&lout).unwrap();
+    let mut lengths = String::new();
+    for (i, line) in text.lines().enumerate() {
+        let c: Vec<&str> = line.split(',').collect();
+        lengths.push_str(&c[6..12].join(","));
+        lengths.push('\n');
+        if i == 0 {
+            assert!(c[6].ends_with("_mm"), "{line}");
+        }
+    }
+    let lin = dir.path().join("l.csv");
+    // Header: the actuator names without units.
+    let lengths = lengths.replacen("_mm", "", 6);
+    std::fs::write(&lin, lengths).unwrap();
+    let fout = dir.path().join("fk.csv");
+    let o = pkm()
+        .args(["fk", &m, "--input"])
+        .arg(&lin)
+        .arg("--output")
+        .arg(&fout)
+        .output()
+        .unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let back = std::fs::read_to_string(&fout).unwrap();
+    for (a, b) in poses.lines().skip(1).zip(back.lines().skip(1)) {
+        let x: Vec<f64> = a.split(',').map(|v| v.parse().unwrap()).collect();
+        let y: Vec<f64> = b
+            .split(',')
+            .skip(6)
+            .take(6)
+            .map(|v| v.parse().unwrap())
+            .collect();
+        for k in 0..6 {
+            assert!((x[k] - y[k]).abs() < 1e-6, "{a} vs {b}");
+        }
+    }
+}

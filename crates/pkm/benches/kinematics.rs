@@ -124,6 +124,41 @@ fn hexapod(c: &mut Criterion) {
     c.bench_function("hexapod FK from the previous 1 kHz pose", |b| {
         b.iter(|| Mechanism::<6, 6>::forward(&h, black_box(&q), black_box(&prev)).unwrap())
     });
+    // A stream of strut lengths at 1 kHz (circle of radius 40 mm at 100 mm/s with a
+    // slow tilt), solved by the tracking FK: start predicted from the last two poses,
+    // factorised Jacobian kept across samples.
+    let traj: Vec<Vector6<f64>> = (0..1000)
+        .map(|k| {
+            let t = k as f64 * 1e-3;
+            let a = 2.5 * t;
+            let hm = h.home;
+            Vector6::new(
+                hm[0] + 40.0 * a.cos() - 40.0,
+                hm[1] + 40.0 * a.sin(),
+                hm[2] + 10.0 * t,
+                0.05 * (3.0 * t).sin(),
+                0.04 * t,
+                hm[5] + 0.02 * t,
+            )
+        })
+        .collect();
+    let qs: Vec<Vector6<f64>> = traj
+        .iter()
+        .map(|x| Mechanism::<6, 6>::inverse(&h, x).unwrap())
+        .collect();
+    let mut g = c.benchmark_group("hexapod FK tracking");
+    g.throughput(criterion::Throughput::Elements(qs.len() as u64));
+    g.bench_function("1 kHz stream of 1000 samples (FkTracker)", |b| {
+        b.iter(|| {
+            let mut tr = pkm::hexapod::FkTracker::new(&traj[0], Default::default());
+            let mut last = 0.0;
+            for q in &qs {
+                last = tr.track(&h, black_box(q)).unwrap().position.x;
+            }
+            last
+        })
+    });
+    g.finish();
     let home = h.home;
     c.bench_function("hexapod FK from home", |b| {
         b.iter(|| Mechanism::<6, 6>::forward(&h, black_box(&q), black_box(&home)).unwrap())

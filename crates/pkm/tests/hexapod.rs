@@ -396,3 +396,59 @@ fn per_joint_cone_axes() {
         .to_string();
     assert!(e.contains("non-zero"), "{e}");
 }
+
+#[test]
+fn tracking_fk_follows_a_trajectory_and_survives_jumps() {
+    use pkm::hexapod::{FkOptions, FkTracker};
+    for file in ["hexapod-linuxcnc.toml", "hexapod-seed001.toml"] {
+        let h = load(file);
+        let home = h.home();
+        // 2 s at 1 kHz: a circle of radius 40 mm at 100 mm/s with a slow tilt.
+        let pose = |k: usize| {
+            let t = k as f64 * 1e-3;
+            let a = 2.5 * t;
+            Vector6::new(
+                home[0] + 40.0 * a.cos() - 40.0,
+                home[1] + 40.0 * a.sin(),
+                home[2] + 10.0 * t,
+                0.05 * (3.0 * t).sin(),
+                0.04 * t,
+                home[5] + 0.02 * t,
+            )
+        };
+        let mut tr = FkTracker::new(&pose(0), FkOptions::default());
+        let mut solves = 0;
+        for k in 0..2000 {
+            let x = pose(k);
+            let q = h.inverse(&x).unwrap();
+            let rep = tr.track(&h, &q).unwrap();
+            solves += rep.iterations;
+            let (ep, er) = {
+                let (p, r) = pkm::legs::split_pose(&x);
+                (
+                    (rep.position - p).norm(),
+                    pkm::rotation::angle_between(&rep.rotation, &r),
+                )
+            };
+            assert!(
+                ep < 1e-9 && er < 1e-9,
+                "{file} sample {k}: {ep} mm {er} rad"
+            );
+        }
+        let mean = solves as f64 / 2000.0;
+        assert!(mean <= 4.0, "{file}: mean {mean} solves");
+        // A jump of 60 mm and 10 deg: still the right pose.
+        let x = Vector6::new(
+            home[0] + 60.0,
+            home[1] - 20.0,
+            home[2] + 30.0,
+            0.17,
+            -0.1,
+            home[5],
+        );
+        let rep = tr.track(&h, &h.inverse(&x).unwrap()).unwrap();
+        let (p, _) = pkm::legs::split_pose(&x);
+        assert!((rep.position - p).norm() < 1e-9);
+        eprintln!("{file}: tracking FK, mean {mean:.2} linear solves per sample");
+    }
+}

@@ -55,7 +55,7 @@ pub fn run(a: &FkArgs) -> Result<u8> {
     let conv = a.opts.rotation;
     let start = start_pose(m, a)?;
     if let (Some(input), Some(output)) = (&a.input, &a.output) {
-        return batch(m, a, start, input, output);
+        return batch(&machine, a, start, input, output);
     }
     let vals = parse_list(a.actuators.as_deref().unwrap_or_default(), "--actuators")?;
     let q = actuators_from_user(m, &vals)?;
@@ -144,12 +144,13 @@ pub fn run(a: &FkArgs) -> Result<u8> {
 }
 
 fn batch(
-    m: &dyn DynMechanism,
+    machine: &pkm::Machine,
     a: &FkArgs,
     start: Vec<f64>,
     input: &Path,
     output: &Path,
 ) -> Result<u8> {
+    let m = machine.mechanism();
     let conv = a.opts.rotation;
     let names: Vec<String> = m.actuators().iter().map(|a| a.name.clone()).collect();
     let table = read_table(input, &[names])?;
@@ -167,12 +168,37 @@ fn batch(
     }
     header.extend(["iterations", "residual", "reachable", "status"].map(String::from));
     let mut out = header.join(",") + "\n";
+    let mut tracker = match &machine.model {
+        pkm::machine::Model::Hexapod(h) => Some((
+            h.as_ref(),
+            pkm::hexapod::FkTracker::new(
+                &pkm::dynamic::fixed::<6>("start pose", &start)?,
+                Default::default(),
+            ),
+        )),
+        _ => None,
+    };
     let mut last = start;
     let mut failed = 0usize;
     for (line, vals) in &table.rows {
         let mut cells: Vec<String> = vals.iter().map(|v| num(*v)).collect();
         let res = actuators_from_user(m, vals).and_then(|q| {
-            let f = m.forward(&q, &last)?;
+            let f = match tracker.as_mut() {
+                // A hexapod's rows are a stream: the tracking solver predicts the next
+                // pose and keeps its factorised Jacobian (same poses, less work).
+                Some((h, tr)) => {
+                    let qv = pkm::dynamic::fixed::<6>("actuators", &q)?;
+                    let rep = tr.track(h, &qv)?;
+                    let a = pkm::Convention::Rpy.from_matrix(&rep.rotation);
+                    let p = rep.position;
+                    pkm::dynamic::DynForward {
+                        pose: vec![p.x, p.y, p.z, a[0], a[1], a[2]],
+                        iterations: rep.iterations,
+                        residual: rep.residual,
+                    }
+                }
+                None => m.forward(&q, &last)?,
+            };
             let v = m.check_limits(&f.pose, &q)?;
             Ok((f, v))
         });

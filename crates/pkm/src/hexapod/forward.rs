@@ -62,6 +62,15 @@ pub struct FkReport {
     pub residual: f64,
 }
 
+/// The nearest proper rotation to an almost-orthonormal `m` (Gram-Schmidt on the
+/// first two columns, the third their cross product).
+fn orthonormalize(m: &Matrix3<f64>) -> Matrix3<f64> {
+    let c0 = m.column(0).normalize();
+    let c1 = m.column(1) - c0 * c0.dot(&m.column(1));
+    let c1 = c1.normalize();
+    Matrix3::from_columns(&[c0, c1, c0.cross(&c1)])
+}
+
 /// `exp([w]x)` by Rodrigues' formula (a proper rotation for any `w`).
 #[inline]
 fn exp_so3(w: &Vector3<f64>) -> Matrix3<f64> {
@@ -91,6 +100,77 @@ pub fn solve(
     r0: &Matrix3<f64>,
     o: &FkOptions,
 ) -> Result<FkReport> {
+    solve_from(h, q, p0, r0, None, o).map(|(r, _)| r)
+}
+
+/// Forward kinematics along a stream of strut lengths (a trajectory sampled at a
+/// controller's rate, encoder readings): the per-stream scratch state of
+/// [`FkTracker::track`], kept by the caller while the model stays shared.
+///
+/// Each solve starts from the previous pose with the previous solve's factorised
+/// Jacobian (the Jacobian changes by about the pose step over the strut length, so
+/// kept-Jacobian steps converge at once); a step that does not cut the residual
+/// tenfold refactorises, so a jump in the stream costs a full Newton solve, never a
+/// wrong pose.
+#[derive(Debug, Clone)]
+pub struct FkTracker {
+    p: Vector3<f64>,
+    r: Matrix3<f64>,
+    /// The pose before, for a linear prediction of the next one.
+    prev: Option<(Vector3<f64>, Matrix3<f64>)>,
+    lu: Option<(SmallLu<6>, f64)>,
+    options: FkOptions,
+}
+
+impl FkTracker {
+    /// A tracker starting at pose coordinates `start` (X..C).
+    pub fn new(start: &Vector6<f64>, options: FkOptions) -> Self {
+        let (p, r) = crate::legs::split_pose(start);
+        FkTracker {
+            p,
+            r,
+            prev: None,
+            lu: None,
+            options,
+        }
+    }
+
+    /// The pose for strut lengths `q`, started from the last pose found moved on by
+    /// the last step (a linear prediction: at a controller's rate the next pose is
+    /// closer to it than to the last one), or from the last pose after a large step.
+    pub fn track(&mut self, h: &Hexapod, q: &Vector6<f64>) -> Result<FkReport> {
+        let (p0, r0) = match self.prev {
+            Some((pp, rp)) if (self.p - pp).norm() < 5.0 => {
+                let dr = self.r * rp.transpose();
+                // Products of rotations drift from orthonormality, and the solver keeps
+                // whatever drift its start has: re-orthonormalise the prediction.
+                (2.0 * self.p - pp, orthonormalize(&(dr * self.r)))
+            }
+            _ => (self.p, self.r),
+        };
+        let (rep, lu) = match solve_from(h, q, &p0, &r0, self.lu, &self.options) {
+            Ok(x) => x,
+            // A prediction can overshoot at a sharp turn: retry from the last pose.
+            Err(_) => solve_from(h, q, &self.p, &self.r, None, &self.options)?,
+        };
+        self.prev = Some((self.p, self.r));
+        self.p = rep.position;
+        self.r = rep.rotation;
+        self.lu = lu;
+        Ok(rep)
+    }
+}
+
+/// [`solve`] with an optional factorisation (and its smallest pivot) to start with;
+/// returns the factorisation in use at the end.
+fn solve_from(
+    h: &Hexapod,
+    q: &Vector6<f64>,
+    p0: &Vector3<f64>,
+    r0: &Matrix3<f64>,
+    lu0: Option<(SmallLu<6>, f64)>,
+    o: &FkOptions,
+) -> Result<(FkReport, Option<(SmallLu<6>, f64)>)> {
     let singular = |p: &Vector3<f64>, rc: f64| Error::Singular {
         what: format!(
             "hexapod forward kinematics: the Jacobian is singular near X={:.3} Y={:.3} Z={:.3} mm",
@@ -107,10 +187,12 @@ pub fn solve(
     let mut res_v = l0 - q;
     let mut res = res_v.amax();
     let mut fresh = true; // j is the Jacobian at the current pose
-    let mut lu: Option<SmallLu<6>> = None;
+    let mut lu: Option<SmallLu<6>> = lu0.map(|l| l.0);
     // Smallest LU pivot of the factorisation in use: the pose uncertainty is about
     // 6 * residual / pivot (cheap); the exact |J^-1| is computed only when that is large.
-    let mut min_pivot = 0.0;
+    let mut min_pivot = lu0.map(|l| l.1).unwrap_or(0.0);
+    // A kept factorisation that converged slowly: not worth keeping for the next solve.
+    let mut stale = false;
     for it in 0..o.max_iterations {
         if res <= o.tolerance {
             let tol = o.tolerance.max(res);
@@ -135,12 +217,15 @@ pub fn solve(
                     rcond: rcond1(&j),
                 });
             }
-            return Ok(FkReport {
-                position: p,
-                rotation: r,
-                iterations: it,
-                residual: res,
-            });
+            return Ok((
+                FkReport {
+                    position: p,
+                    rotation: r,
+                    iterations: it,
+                    residual: res,
+                },
+                lu.filter(|_| !stale).map(|l| (l, min_pivot)),
+            ));
         }
         let chord = lu.is_some(); // the factorisation is kept from an earlier pose
         if lu.is_none() {
@@ -174,6 +259,10 @@ pub fn solve(
                 if chord && t == 1.0 && resn > 0.1 * res && resn > o.tolerance {
                     break;
                 }
+                if chord && resn > 1e-3 * res && resn > o.tolerance {
+                    // Still converging, but the kept Jacobian is getting old.
+                    stale = true;
+                }
                 p = pn;
                 r = rn;
                 res_v = vn;
@@ -206,12 +295,15 @@ pub fn solve(
         }
     }
     if res <= o.tolerance {
-        Ok(FkReport {
-            position: p,
-            rotation: r,
-            iterations: o.max_iterations,
-            residual: res,
-        })
+        Ok((
+            FkReport {
+                position: p,
+                rotation: r,
+                iterations: o.max_iterations,
+                residual: res,
+            },
+            lu.map(|l| (l, min_pivot)),
+        ))
     } else {
         Err(Error::NotConverged {
             solver: "hexapod forward kinematics",

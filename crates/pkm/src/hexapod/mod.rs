@@ -23,7 +23,7 @@ use crate::pose::Pose;
 use crate::rotation::Convention;
 use crate::units::Quantity;
 
-pub use forward::{FkOptions, FkReport};
+pub use forward::{FkOptions, FkReport, FkTracker};
 
 /// A joint's allowed cone: the strut must stay within `max_angle` of `axis`.
 #[derive(Debug, Clone, Copy, PartialEq)]
