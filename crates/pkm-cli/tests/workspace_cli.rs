@@ -302,7 +302,7 @@ fn hexapod_csv_round_trip_through_the_tracking_fk() {
             0.1 * k as f64,
             520.0 + 5.0 * t,
             2.0 * t,
-            -1.0 * t
+            -t
         ));
     }
     let pin = dir.path().join("poses.csv");
