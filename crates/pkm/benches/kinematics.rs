@@ -96,8 +96,12 @@ fn hexapod(c: &mut Criterion) {
     let h = *h;
     let x = Vector6::new(20.0, -10.0, 540.0, 0.05, -0.03, 0.1);
     let (p, r) = pkm::legs::split_pose(&x);
+    // The fastest kernel of this CPU (AVX-512 when present), and the portable code.
     c.bench_function("hexapod IK from rotation matrix", |b| {
         b.iter(|| h.lengths(black_box(&p), black_box(&r)))
+    });
+    c.bench_function("hexapod IK from rotation matrix (portable code)", |b| {
+        b.iter(|| h.lengths_portable(black_box(&p), black_box(&r)))
     });
     // Batches of 1024 poses (a tool path, a workspace row).
     let n = 1024;
@@ -111,6 +115,12 @@ fn hexapod(c: &mut Criterion) {
     let mut g = c.benchmark_group("hexapod IK batch");
     g.throughput(criterion::Throughput::Elements(n as u64));
     g.bench_function("1024 poses from rotation matrices", |b| {
+        b.iter(|| {
+            h.lengths_batch(black_box(&ps), black_box(&rs), &mut out);
+            out[n - 1][0]
+        })
+    });
+    g.bench_function("1024 poses from rotation matrices (portable code)", |b| {
         b.iter(|| {
             h.soa()
                 .lengths_batch(black_box(&ps), black_box(&rs), &mut out);

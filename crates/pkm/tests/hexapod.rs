@@ -304,7 +304,7 @@ fn batch_lengths_equal_single_pose_lengths() {
         .collect();
     let (ps, rs): (Vec<_>, Vec<_>) = poses.iter().map(pkm::legs::split_pose).unzip();
     let mut out = vec![Vector6::zeros(); n];
-    h.soa().lengths_batch(&ps, &rs, &mut out);
+    h.lengths_batch(&ps, &rs, &mut out);
     for (k, x) in poses.iter().enumerate() {
         let q = h.inverse(x).unwrap();
         assert!((out[k] - q).amax() < 1e-12, "{k}");
@@ -450,5 +450,27 @@ fn tracking_fk_follows_a_trajectory_and_survives_jumps() {
         let (p, _) = pkm::legs::split_pose(&x);
         assert!((rep.position - p).norm() < 1e-9);
         eprintln!("{file}: tracking FK, mean {mean:.2} linear solves per sample");
+    }
+}
+
+#[test]
+fn simd_lengths_equal_portable_lengths() {
+    // On a CPU with AVX-512F, lengths use the rsqrt14 + Newton kernel: within a few
+    // units in the last place of the portable sqrt.
+    for file in ["hexapod-linuxcnc.toml", "hexapod-seed001.toml"] {
+        let h = load(file);
+        eprintln!("{file}: AVX-512 lengths {}", h.simd_lengths());
+        let mut rng = rand::rngs::StdRng::seed_from_u64(3);
+        let mut worst = 0.0f64;
+        for _ in 0..100_000 {
+            let x = random_pose(&mut rng, &Vector3::new(0.0, 0.0, 560.0), 400.0, 300.0, 1.0);
+            let (p, r) = pkm::legs::split_pose(&x);
+            let a = h.lengths(&p, &r);
+            let b = h.lengths_portable(&p, &r);
+            for i in 0..6 {
+                worst = worst.max((a[i] - b[i]).abs() / b[i]);
+            }
+        }
+        assert!(worst <= 1e-15, "{file}: {worst:e}");
     }
 }

@@ -9,6 +9,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod forward;
+mod simd;
 
 use nalgebra::{Matrix3, SMatrix, Vector3, Vector6};
 
@@ -71,6 +72,7 @@ pub struct Hexapod {
     pub characteristic_length: f64,
     set: StrutSet<6>,
     soa: crate::legs::StrutSoa<6>,
+    lanes: simd::Lanes,
     actuators: [Actuator; 6],
     coordinates: [Coordinate; 6],
     /// Pairs of struts that share a joint (never checked for interference).
@@ -156,6 +158,7 @@ impl Hexapod {
             home,
             characteristic_length: characteristic_length.max(1e-9),
             soa: (&set).into(),
+            lanes: simd::Lanes::new(&set.arms, &set.base),
             set,
             actuators,
             coordinates: spatial_coordinates(),
@@ -176,7 +179,35 @@ impl Hexapod {
     /// Strut lengths from a tool tip and a rotation matrix (allocation-free).
     #[inline]
     pub fn lengths(&self, p: &Vector3<f64>, r: &Matrix3<f64>) -> Vector6<f64> {
+        match self.lanes.lengths(p, r) {
+            Some(l) => l,
+            None => self.soa.lengths(p, r),
+        }
+    }
+
+    /// Strut lengths by the portable code only (the reference the AVX-512 kernel is
+    /// tested against).
+    pub fn lengths_portable(&self, p: &Vector3<f64>, r: &Matrix3<f64>) -> Vector6<f64> {
         self.soa.lengths(p, r)
+    }
+
+    /// Whether [`Hexapod::lengths`] runs the AVX-512 kernel on this CPU.
+    pub fn simd_lengths(&self) -> bool {
+        self.lanes.available
+    }
+
+    /// Strut lengths of many poses into `out` (the fastest kernel this CPU has).
+    ///
+    /// # Panics
+    /// When the slices differ in length.
+    pub fn lengths_batch(&self, p: &[Vector3<f64>], r: &[Matrix3<f64>], out: &mut [Vector6<f64>]) {
+        assert!(
+            p.len() == r.len() && p.len() == out.len(),
+            "batch slices differ in length"
+        );
+        if !self.lanes.lengths_batch(p, r, out) {
+            self.soa.lengths_batch(p, r, out);
+        }
     }
 
     /// Twist Jacobian with the rotation columns scaled by the characteristic length, so

@@ -1,0 +1,158 @@
+//! Strut lengths with AVX-512, dispatched at run time (the library is built for the
+//! baseline x86-64 target; this kernel runs only on CPUs that have AVX-512F).
+//!
+//! The six lengths of a pose are one 8-lane vector. The square root — the bound of
+//! the portable code, six per pose at a few cycles per double — is replaced by the
+//! 14-bit reciprocal square-root estimate refined by one Newton step for
+//! `1 / sqrt(d2)` and one Heron step for `sqrt(d2)`: relative error within a few
+//! units in the last place (tested against the portable code over 10^5 poses: within
+//! 1e-15 relative, i.e. 5e-13 mm on a 500 mm strut; the FK tolerance is 1e-11 mm).
+
+use nalgebra::{Matrix3, Vector3, Vector6};
+
+/// Strut geometry padded to eight lanes (the two spare lanes hold a copy of strut 0,
+/// so every lane computes a finite, positive length).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Lanes {
+    ax: [f64; 8],
+    ay: [f64; 8],
+    az: [f64; 8],
+    bx: [f64; 8],
+    by: [f64; 8],
+    bz: [f64; 8],
+    /// The CPU has AVX-512F (checked once, when the machine is built).
+    pub(crate) available: bool,
+}
+
+impl Lanes {
+    pub(crate) fn new(arms: &[Vector3<f64>; 6], base: &[Vector3<f64>; 6]) -> Self {
+        let pad = |f: &dyn Fn(usize) -> f64| -> [f64; 8] {
+            std::array::from_fn(|i| f(if i < 6 { i } else { 0 }))
+        };
+        Lanes {
+            ax: pad(&|i| arms[i].x),
+            ay: pad(&|i| arms[i].y),
+            az: pad(&|i| arms[i].z),
+            bx: pad(&|i| base[i].x),
+            by: pad(&|i| base[i].y),
+            bz: pad(&|i| base[i].z),
+            available: detect(),
+        }
+    }
+
+    /// The six strut lengths `|p + R arm_i - base_i|`; `None` when AVX-512F is not
+    /// available (the caller uses the portable code).
+    #[inline]
+    pub(crate) fn lengths(&self, p: &Vector3<f64>, r: &Matrix3<f64>) -> Option<Vector6<f64>> {
+        #[cfg(target_arch = "x86_64")]
+        {
+            if self.available {
+                // SAFETY: `available` is true only when the running CPU reported
+                // AVX-512F (`detect`), the one feature the kernel is compiled with.
+                let l = unsafe { lengths_avx512(self, p, r) };
+                return Some(Vector6::new(l[0], l[1], l[2], l[3], l[4], l[5]));
+            }
+        }
+        let _ = (p, r);
+        None
+    }
+}
+
+impl Lanes {
+    /// Lengths of many poses; `false` when AVX-512F is not available (nothing
+    /// written). The loop runs inside the AVX-512 function, so poses pipeline.
+    pub(crate) fn lengths_batch(
+        &self,
+        p: &[Vector3<f64>],
+        r: &[Matrix3<f64>],
+        out: &mut [Vector6<f64>],
+    ) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        {
+            if self.available {
+                // SAFETY: as in `lengths`: the CPU reported AVX-512F.
+                unsafe { batch_avx512(self, p, r, out) };
+                return true;
+            }
+        }
+        let _ = (p, r, out);
+        false
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+unsafe fn batch_avx512(
+    s: &Lanes,
+    p: &[Vector3<f64>],
+    r: &[Matrix3<f64>],
+    out: &mut [Vector6<f64>],
+) {
+    use std::arch::x86_64::*;
+    for ((o, p), r) in out.iter_mut().zip(p).zip(r) {
+        // SAFETY: same feature as this function's; the masked store writes lanes 0..6
+        // only, the six contiguous f64 of `o`.
+        unsafe {
+            let l = lengths_zmm(s, p, r);
+            _mm512_mask_storeu_pd(o.as_mut_slice().as_mut_ptr(), 0b0011_1111, l);
+        }
+    }
+}
+
+fn detect() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::arch::is_x86_feature_detected!("avx512f")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+#[inline]
+unsafe fn lengths_avx512(s: &Lanes, p: &Vector3<f64>, r: &Matrix3<f64>) -> [f64; 8] {
+    let mut out = [0.0; 8];
+    // SAFETY: same feature; the store writes the 8 f64 of `out`.
+    unsafe {
+        std::arch::x86_64::_mm512_storeu_pd(out.as_mut_ptr(), lengths_zmm(s, p, r));
+    }
+    out
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+#[inline]
+unsafe fn lengths_zmm(s: &Lanes, p: &Vector3<f64>, r: &Matrix3<f64>) -> std::arch::x86_64::__m512d {
+    use std::arch::x86_64::*;
+    // SAFETY (whole body): the loads read 8 f64 from arrays of exactly 8 f64
+    // (unaligned forms); everything else is register arithmetic.
+    unsafe {
+        let ld = |a: &[f64; 8]| _mm512_loadu_pd(a.as_ptr());
+        let (ax, ay, az) = (ld(&s.ax), ld(&s.ay), ld(&s.az));
+        let b = |v: f64| _mm512_set1_pd(v);
+        let row = |i: usize, base: &[f64; 8], pc: f64| {
+            // r(i,0) ax + r(i,1) ay + r(i,2) az + (p_i - base_i)
+            let t = _mm512_sub_pd(b(pc), ld(base));
+            let t = _mm512_fmadd_pd(b(r[(i, 2)]), az, t);
+            let t = _mm512_fmadd_pd(b(r[(i, 1)]), ay, t);
+            _mm512_fmadd_pd(b(r[(i, 0)]), ax, t)
+        };
+        let dx = row(0, &s.bx, p.x);
+        let dy = row(1, &s.by, p.y);
+        let dz = row(2, &s.bz, p.z);
+        let d2 = _mm512_fmadd_pd(dz, dz, _mm512_fmadd_pd(dy, dy, _mm512_mul_pd(dx, dx)));
+        // y ~ 1/sqrt(d2): the 14-bit estimate, one Newton step y (1.5 - 0.5 d2 y^2)
+        // (28 bits); the Heron step below squares the error again (56 bits).
+        let half = _mm512_mul_pd(d2, b(0.5));
+        let y0 = _mm512_rsqrt14_pd(d2);
+        let yy = _mm512_mul_pd(y0, y0);
+        let y = _mm512_mul_pd(y0, _mm512_fnmadd_pd(half, yy, b(1.5)));
+        // l = d2 y, then one Heron step l <- l + (d2 - l^2) y / 2.
+        let l = _mm512_mul_pd(d2, y);
+        let e = _mm512_fnmadd_pd(l, l, d2);
+        _mm512_fmadd_pd(e, _mm512_mul_pd(y, b(0.5)), l)
+    }
+}
