@@ -36,6 +36,7 @@ pub mod motion;
 pub mod p3rp;
 pub mod pose;
 pub mod rotation;
+pub mod serial;
 pub mod transmission;
 pub mod tripod;
 pub mod units;

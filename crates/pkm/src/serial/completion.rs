@@ -1,0 +1,207 @@
+//! Completion of a link's angular deviations (seed 003 eq. 3): from three measured
+//! angular deviations, the six others that keep the direction-cosine block
+//! orthonormal.
+//!
+//! The unknowns are the six cosines `m_ab = cos(phi_ab + alpha_ab)`; the equations are
+//! the independent orthonormality conditions of the block's columns — three unit norms
+//! and three mutual orthogonalities (the paper prints one orthogonality twice and mixes
+//! a row norm in; `M^T M = I` is the set used here). They are solved by damped Newton
+//! from starts around the nominal block; every root found is kept and the one nearest
+//! the nominal (smallest `sum alpha^2`) is returned.
+//!
+//! Two properties of the paper's parametrisation a user should know:
+//! * the angle between two nominally aligned axes (`phi = 0` or `180 deg`) is not
+//!   signed: `cos(phi + alpha) = cos(phi - alpha)`, so pkm reports such a deviation as
+//!   `alpha >= 0` (aligned) or `alpha <= 0` (opposed), i.e. `acos(m) - phi`;
+//! * for the same reason three measured angles can leave a sign open (two mirror roots
+//!   at the same distance from nominal): the root with the larger cosines first, in
+//!   row-major order, is chosen, and [`Completion::ambiguous`] says so.
+
+use nalgebra::{Matrix3, SMatrix, SVector};
+
+use crate::error::{Error, Result};
+use crate::linalg::SmallLu;
+
+/// A completed block.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Completion {
+    /// All nine angular deviations (rad), the measured ones as given.
+    pub alpha: Matrix3<f64>,
+    /// The orthonormal block `cos(phi + alpha)`.
+    pub block: Matrix3<f64>,
+    /// Largest `|M^T M - I|` entry.
+    pub residual: f64,
+    /// Another root lies as near the nominal as this one (see the module text).
+    pub ambiguous: bool,
+}
+
+fn equations(m: &Matrix3<f64>) -> SVector<f64, 6> {
+    let c = |j: usize| m.column(j).into_owned();
+    let (c0, c1, c2) = (c(0), c(1), c(2));
+    SVector::<f64, 6>::from([
+        c0.dot(&c0) - 1.0,
+        c1.dot(&c1) - 1.0,
+        c2.dot(&c2) - 1.0,
+        c0.dot(&c1),
+        c0.dot(&c2),
+        c1.dot(&c2),
+    ])
+}
+
+/// `d equations / d m_ab` for the unknown entries.
+fn jacobian(m: &Matrix3<f64>, unknown: &[(usize, usize); 6]) -> SMatrix<f64, 6, 6> {
+    let pairs = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
+    SMatrix::<f64, 6, 6>::from_fn(|e, u| {
+        let (a, b) = unknown[u];
+        let (j, k) = pairs[e];
+        // d (c_j . c_k) / d m_ab = [b == j] c_k[a] + [b == k] c_j[a]
+        let mut v = 0.0;
+        if b == j {
+            v += m[(a, k)];
+        }
+        if b == k {
+            v += m[(a, j)];
+        }
+        v
+    })
+}
+
+/// Completes the angular deviations of a link whose nominal direction cosines are
+/// `nominal`, given the deviations at the three `measured` positions (row: axis of
+/// `S_i`, column: axis of `S_i*`), e.g. the angles of `X*` with `X` and `Y` and of
+/// `Z*` with `Z`: `[((0, 0), a1), ((1, 0), a2), ((2, 2), a3)]`.
+///
+/// Fails with [`Error::InvalidInput`] for repeated positions and with
+/// [`Error::NotAttainable`] when no orthonormal block has those angles (inconsistent
+/// measurements, e.g. a column whose two measured cosines already exceed unit length).
+pub fn complete(
+    nominal: &Matrix3<f64>,
+    measured: &[((usize, usize), f64); 3],
+) -> Result<Completion> {
+    let mut known = [[false; 3]; 3];
+    for ((r, c), _) in measured {
+        if *r > 2 || *c > 2 || known[*r][*c] {
+            return Err(Error::InvalidInput {
+                what: "measured angular deviations".into(),
+                message: "three distinct positions (row, column) in 0..3 are needed".into(),
+            });
+        }
+        known[*r][*c] = true;
+    }
+    let mut unknown = [(0, 0); 6];
+    let free = (0..9)
+        .map(|e| (e / 3, e % 3))
+        .filter(|&(r, c)| !known[r][c]);
+    for (slot, rc) in unknown.iter_mut().zip(free) {
+        *slot = rc;
+    }
+    let phi = nominal.map(|c| c.clamp(-1.0, 1.0).acos());
+    let mut m0 = *nominal;
+    for ((r, c), a) in measured {
+        m0[(*r, *c)] = (phi[(*r, *c)] + a).cos();
+    }
+    let solve = |start: Matrix3<f64>| -> Option<Matrix3<f64>> {
+        let mut m = start;
+        let mut f = equations(&m);
+        for _ in 0..60 {
+            if f.amax() < 1e-15 {
+                return Some(m);
+            }
+            let j = jacobian(&m, &unknown);
+            // Levenberg-Marquardt damping: the Jacobian is singular at the nominal
+            // block when a measured axis pair is aligned.
+            let jt = j.transpose();
+            let mut a = jt * j;
+            let lambda = 1e-12 + 1e-3 * f.norm_squared();
+            for d in 0..6 {
+                a[(d, d)] += lambda;
+            }
+            let step = SmallLu::new(&a)?.solve(&(jt * f));
+            let mut t = 1.0;
+            let mut ok = false;
+            for _ in 0..20 {
+                let mut mn = m;
+                for (u, (r, c)) in unknown.iter().enumerate() {
+                    mn[(*r, *c)] = (m[(*r, *c)] - t * step[u]).clamp(-1.0, 1.0);
+                }
+                let fnew = equations(&mn);
+                if fnew.norm() < f.norm() {
+                    m = mn;
+                    f = fnew;
+                    ok = true;
+                    break;
+                }
+                t *= 0.5;
+            }
+            if !ok {
+                break;
+            }
+        }
+        (f.amax() < 1e-13).then_some(m)
+    };
+    // Starts: the nominal block with the measured cosines, nudged both ways on every
+    // unknown (a root can sit on either side of a nominal zero).
+    let mut roots: Vec<Matrix3<f64>> = Vec::new();
+    let nudge = (1.0 - m0.iter().fold(1.0f64, |a, v| a.min(v.abs().max(1e-300)))).max(1e-6);
+    let size = measured
+        .iter()
+        .map(|(_, a)| a.abs())
+        .fold(1e-6, f64::max)
+        .max(nudge.min(1e-3));
+    for pattern in 0..(1u32 << 6) {
+        let mut s = m0;
+        for (u, (r, c)) in unknown.iter().enumerate() {
+            let sign = if pattern >> u & 1 == 1 { -1.0 } else { 1.0 };
+            s[(*r, *c)] = (s[(*r, *c)] + sign * size).clamp(-1.0, 1.0);
+        }
+        if let Some(m) = solve(s) {
+            // M^T M = I also has reflections: keep proper rotations only.
+            if m.determinant() > 0.0 && !roots.iter().any(|x| (x - m).amax() < 1e-9) {
+                roots.push(m);
+            }
+        }
+    }
+    let alpha_of = |m: &Matrix3<f64>| {
+        Matrix3::from_fn(|r, c| {
+            if known[r][c] {
+                measured
+                    .iter()
+                    .find(|((a, b), _)| *a == r && *b == c)
+                    .map(|x| x.1)
+                    .unwrap_or(0.0)
+            } else {
+                m[(r, c)].clamp(-1.0, 1.0).acos() - phi[(r, c)]
+            }
+        })
+    };
+    let dist = |m: &Matrix3<f64>| (m - nominal).norm_squared();
+    roots.sort_by(|a, b| {
+        dist(a).total_cmp(&dist(b)).then_with(|| {
+            b.as_slice()
+                .partial_cmp(a.as_slice())
+                .unwrap_or(std::cmp::Ordering::Equal)
+        })
+    });
+    let Some(best) = roots.first().copied() else {
+        return Err(Error::NotAttainable {
+            reason: format!(
+                "no orthonormal direction-cosine block has the measured angular deviations \
+                 {:?} (inconsistent measurements)",
+                measured
+                    .iter()
+                    .map(|(p, a)| (*p, a.to_degrees()))
+                    .collect::<Vec<_>>()
+            ),
+        });
+    };
+    let ambiguous = roots
+        .get(1)
+        .is_some_and(|m| (dist(m) - dist(&best)).abs() <= 1e-12 * (1.0 + dist(&best)));
+    let residual = (best.transpose() * best - Matrix3::identity()).amax();
+    Ok(Completion {
+        alpha: alpha_of(&best),
+        block: best,
+        residual,
+        ambiguous,
+    })
+}

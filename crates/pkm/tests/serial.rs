@@ -1,0 +1,185 @@
+//! Serial chains with primary deviations (seed 003).
+
+use nalgebra::{Matrix3, Matrix4, Rotation3, Vector3};
+use pkm::serial::completion::complete;
+use pkm::serial::{joint_transform, Chain, Joint, JointKind, Link, LinkDeviation};
+use pkm::{Error, Range};
+
+fn small_rotation(w: [f64; 3]) -> Matrix3<f64> {
+    *Rotation3::new(Vector3::from(w)).matrix()
+}
+
+#[test]
+fn completion_recovers_a_true_block_from_three_angles() {
+    // Nominal blocks with 90 deg angles at the measured positions (signed: unique).
+    let perm = Matrix3::new(0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0);
+    for w in [
+        [1e-3, -2e-3, 5e-4],
+        [3e-2, 1e-2, -2e-2],
+        [-1e-4, 2e-4, 3e-4],
+    ] {
+        let truth = perm * small_rotation(w);
+        let phi = perm.map(|c: f64| c.clamp(-1.0, 1.0).acos());
+        let alpha = |r: usize, c: usize| truth[(r, c)].clamp(-1.0, 1.0).acos() - phi[(r, c)];
+        // Positions whose nominal angle is 90 deg: (0,0), (1,1), (2,2) of a permutation.
+        let meas = [
+            ((0, 0), alpha(0, 0)),
+            ((1, 1), alpha(1, 1)),
+            ((0, 1), alpha(0, 1)),
+        ];
+        let c = complete(&perm, &meas).unwrap();
+        assert!(c.residual < 1e-12, "{}", c.residual);
+        assert!(
+            (c.block - truth).amax() < 1e-9,
+            "{w:?}: {} vs {truth}",
+            c.block
+        );
+        for r in 0..3 {
+            for k in 0..3 {
+                assert!((c.alpha[(r, k)] - alpha(r, k)).abs() < 1e-9);
+            }
+        }
+    }
+}
+
+#[test]
+fn completion_with_aligned_axes_is_orthonormal_and_flags_the_sign() {
+    // The paper's example: the angles of X* with X and Y, and of Z* with Z, for a link
+    // whose frames are nominally parallel. The X*-X and Z*-Z angles carry no sign.
+    let truth = small_rotation([2e-3, -1e-3, 3e-3]);
+    let id = Matrix3::identity();
+    let phi = id.map(|c: f64| c.acos());
+    let alpha = |r: usize, c: usize| truth[(r, c)].clamp(-1.0, 1.0).acos() - phi[(r, c)];
+    let c = complete(
+        &id,
+        &[
+            ((0, 0), alpha(0, 0)),
+            ((1, 0), alpha(1, 0)),
+            ((2, 2), alpha(2, 2)),
+        ],
+    )
+    .unwrap();
+    assert!(c.residual < 1e-12);
+    assert!((c.block.determinant() - 1.0).abs() < 1e-12);
+    // The measured angles are reproduced by the completed block.
+    for (r, k) in [(0, 0), (1, 0), (2, 2)] {
+        assert!((c.block[(r, k)] - truth[(r, k)]).abs() < 1e-12);
+    }
+    // Either the true block or a mirror root at the same distance, flagged.
+    assert!(
+        (c.block - truth).amax() < 1e-9 || c.ambiguous,
+        "{}",
+        c.block
+    );
+}
+
+#[test]
+fn completion_rejects_inconsistent_measurements() {
+    let id = Matrix3::identity();
+    // X* at 0 deg from X but 60 deg (not 90) from Y: no unit vector has both.
+    let e = complete(&id, &[((0, 0), 0.0), ((1, 0), -0.5236), ((2, 2), 0.0)]).unwrap_err();
+    assert!(matches!(e, Error::NotAttainable { .. }), "{e}");
+    let e = complete(&id, &[((0, 0), 0.0), ((0, 0), 0.1), ((2, 2), 0.0)]).unwrap_err();
+    assert!(matches!(e, Error::InvalidInput { .. }), "{e}");
+}
+
+fn prismatic(name: &str) -> Option<Joint> {
+    Some(Joint {
+        name: name.into(),
+        kind: JointKind::Prismatic,
+        range: Range {
+            min: -500.0,
+            max: 500.0,
+        },
+    })
+}
+
+/// A Cartesian X, Y, Z chain: each link turns the next joint's Z onto the next axis.
+fn xyz_chain() -> Chain {
+    // Link 0 (bed) orients S_0* so that the first joint slides along world X:
+    // columns of the block = axes of S_0* in S_0; Z* = world X.
+    let to_x = Matrix3::new(0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0); // x*=Y, y*=Z, z*=X
+    let to_next = Matrix3::new(0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0);
+    Chain {
+        name: "tool".into(),
+        links: vec![
+            Link {
+                name: "bed".into(),
+                joint: None,
+                translation: Vector3::new(0.0, 0.0, 100.0),
+                rotation: to_x,
+            },
+            Link {
+                name: "1 slide".into(),
+                joint: prismatic("X"),
+                translation: Vector3::new(0.0, 0.0, 0.0),
+                rotation: to_next,
+            },
+            Link {
+                name: "2 column".into(),
+                joint: prismatic("Y"),
+                translation: Vector3::zeros(),
+                rotation: to_next,
+            },
+            Link {
+                name: "3 spindle".into(),
+                joint: prismatic("Z"),
+                translation: Vector3::new(0.0, 0.0, -50.0),
+                rotation: Matrix3::identity(),
+            },
+        ],
+    }
+}
+
+#[test]
+fn zero_deviations_give_the_nominal_pose_and_each_kind_moves_the_tool_as_expected() {
+    let c = xyz_chain();
+    let q = [10.0, 20.0, 30.0];
+    let t = c.pose(&q, &[], &[]).unwrap();
+    let t0 = c
+        .pose(&q, &[0.0; 3], &vec![LinkDeviation::default(); 4])
+        .unwrap();
+    assert_eq!(t, t0);
+    // Hand construction: the slides move along world X, Y, Z.
+    let p = t.fixed_view::<3, 1>(0, 3).into_owned();
+    let p_home = c
+        .pose(&[0.0; 3], &[], &[])
+        .unwrap()
+        .fixed_view::<3, 1>(0, 3)
+        .into_owned();
+    assert!(
+        (p - p_home - Vector3::new(10.0, 20.0, 30.0)).amax() < 1e-12,
+        "{p} {p_home}"
+    );
+    // A positioning deviation dq of the Y axis moves the tool by dq along Y.
+    let t1 = c.pose(&q, &[0.0, 0.01, 0.0], &[]).unwrap();
+    let d = (t1 - t).fixed_view::<3, 1>(0, 3).into_owned();
+    assert!((d - Vector3::new(0.0, 0.01, 0.0)).amax() < 1e-12);
+    // A linear deviation delta_z of link 1 (along its Z*, world X after the bed turn)
+    // moves the tool by the same amount along world X... through link 1's S_1 frame.
+    let mut dev = vec![LinkDeviation::default(); 4];
+    dev[1].delta = Vector3::new(0.0, 0.0, 0.02);
+    let t2 = c.pose(&q, &[], &dev).unwrap();
+    let d = (t2 - t).fixed_view::<3, 1>(0, 3).into_owned();
+    // S_1 axes in world: the bed's block maps S_0* (= S_1 at q) z to world X.
+    assert!((d - Vector3::new(0.02, 0.0, 0.0)).amax() < 1e-12, "{d}");
+    // A small angular deviation (a consistent rotation by e about its own X*) of link
+    // 2 turns everything after S_2*: the tool, 30 - 50 = -20 mm along S_2* Z from its
+    // origin, moves by 20 e. (An angular deviation of the last link turns the tool
+    // frame only: the tool point is that frame's origin.)
+    let e = 1e-4;
+    let nominal = c.links[2].rotation;
+    let rot = nominal * small_rotation([e, 0.0, 0.0]);
+    let phi = c.links[2].angles();
+    dev = vec![LinkDeviation::default(); 4];
+    dev[2].alpha = Matrix3::from_fn(|r, k| rot[(r, k)].clamp(-1.0, 1.0).acos() - phi[(r, k)]);
+    let t3 = c.pose(&q, &[], &dev).unwrap();
+    let d = (t3 - t).fixed_view::<3, 1>(0, 3).into_owned();
+    assert!((d.norm() - 20.0 * e).abs() < 1e-9, "{d}");
+    let mut dev3 = vec![LinkDeviation::default(); 4];
+    dev3[3].alpha = dev[2].alpha;
+    let t4 = c.pose(&q, &[], &dev3).unwrap();
+    assert!((t4 - t).fixed_view::<3, 1>(0, 3).amax() < 1e-15);
+    assert!((t4 - t).fixed_view::<3, 3>(0, 0).amax() > 0.5 * e);
+    let _ = joint_transform(JointKind::Revolute, 0.0) * Matrix4::<f64>::identity();
+}
