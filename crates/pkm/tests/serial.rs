@@ -77,7 +77,15 @@ fn completion_with_aligned_axes_is_orthonormal_and_flags_the_sign() {
 fn completion_rejects_inconsistent_measurements() {
     let id = Matrix3::identity();
     // X* at 0 deg from X but 60 deg (not 90) from Y: no unit vector has both.
-    let e = complete(&id, &[((0, 0), 0.0), ((1, 0), -0.5236), ((2, 2), 0.0)]).unwrap_err();
+    let e = complete(
+        &id,
+        &[
+            ((0, 0), 0.0),
+            ((1, 0), -std::f64::consts::FRAC_PI_6),
+            ((2, 2), 0.0),
+        ],
+    )
+    .unwrap_err();
     assert!(matches!(e, Error::NotAttainable { .. }), "{e}");
     let e = complete(&id, &[((0, 0), 0.0), ((0, 0), 0.1), ((2, 2), 0.0)]).unwrap_err();
     assert!(matches!(e, Error::InvalidInput { .. }), "{e}");
