@@ -191,3 +191,128 @@ fn zero_deviations_give_the_nominal_pose_and_each_kind_moves_the_tool_as_expecte
     assert!((t4 - t).fixed_view::<3, 3>(0, 0).amax() > 0.5 * e);
     let _ = joint_transform(JointKind::Revolute, 0.0) * Matrix4::<f64>::identity();
 }
+
+fn revolute(name: &str) -> Option<Joint> {
+    Some(Joint {
+        name: name.into(),
+        kind: JointKind::Revolute,
+        range: Range {
+            min: -3.2,
+            max: 3.2,
+        },
+    })
+}
+
+/// A 5-axis machine like seed 003's MC-300: tool chain X, Y, Z; workpiece chain B, C.
+fn five_axis() -> pkm::serial::accuracy::SerialMachine {
+    let to_y = Matrix3::new(0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0); // z* = world Y
+    let back = to_y.transpose();
+    pkm::serial::accuracy::SerialMachine {
+        name: "5-axis".into(),
+        tool: xyz_chain(),
+        workpiece: Some(Chain {
+            name: "workpiece".into(),
+            links: vec![
+                Link {
+                    name: "table mount".into(),
+                    joint: None,
+                    translation: Vector3::new(0.0, 0.0, -200.0),
+                    rotation: to_y,
+                },
+                Link {
+                    name: "4 tilting table".into(),
+                    joint: revolute("B"),
+                    translation: Vector3::new(0.0, 80.0, 0.0),
+                    rotation: back,
+                },
+                Link {
+                    name: "5 face plate".into(),
+                    joint: revolute("C"),
+                    translation: Vector3::new(0.0, 0.0, 40.0),
+                    rotation: Matrix3::identity(),
+                },
+            ],
+        }),
+    }
+}
+
+#[test]
+fn sensitivities_equal_central_differences() {
+    use pkm::serial::accuracy::{ChainDeviations, Parameter};
+    let m = five_axis();
+    let (qt, qw) = ([35.0, -20.0, 60.0], [0.4, -1.1]);
+    // A deviated state (derivatives are checked there, not only at nominal).
+    let mut dev = vec![
+        ChainDeviations {
+            links: vec![LinkDeviation::default(); 4],
+            dq: vec![0.01, -0.02, 0.005],
+        },
+        ChainDeviations {
+            links: vec![LinkDeviation::default(); 3],
+            dq: vec![1e-4, -2e-4],
+        },
+    ];
+    for (c, d) in dev.iter_mut().enumerate() {
+        for (l, ld) in d.links.iter_mut().enumerate() {
+            ld.delta = Vector3::new(0.01 * (l + 1) as f64, -0.02, 0.005 * c as f64);
+            ld.alpha = Matrix3::from_fn(|r, k| 1e-4 * ((r * 3 + k + l) % 5) as f64 - 2e-4);
+        }
+    }
+    let params = m.all_parameters();
+    assert_eq!(params.len(), 4 * 12 + 3 + 3 * 12 + 2);
+    let s = m.sensitivities(&qt, &qw, &dev, &params).unwrap();
+    let perturb = |p: &Parameter, h: f64| {
+        let mut d = dev.clone();
+        match *p {
+            Parameter::Delta { chain, link, axis } => d[chain].links[link].delta[axis] += h,
+            Parameter::Alpha {
+                chain,
+                link,
+                row,
+                col,
+            } => d[chain].links[link].alpha[(row, col)] += h,
+            Parameter::Dq { chain, joint } => d[chain].dq[joint] += h,
+        }
+        m.pose(&qt, &qw, &d).unwrap()
+    };
+    let t0 = m.pose(&qt, &qw, &dev).unwrap();
+    let r0 = t0.fixed_view::<3, 3>(0, 0).into_owned();
+    for (p, (dp, w)) in params.iter().zip(&s) {
+        let h = 1e-6;
+        let (a, b) = (perturb(p, h), perturb(p, -h));
+        let fd = (a - b) / (2.0 * h);
+        let fdp = fd.fixed_view::<3, 1>(0, 3).into_owned();
+        let dr = fd.fixed_view::<3, 3>(0, 0) * r0.transpose();
+        let fdw = Vector3::new(
+            0.5 * (dr[(2, 1)] - dr[(1, 2)]),
+            0.5 * (dr[(0, 2)] - dr[(2, 0)]),
+            0.5 * (dr[(1, 0)] - dr[(0, 1)]),
+        );
+        let name = m.parameter_name(p);
+        assert!(
+            (dp - fdp).amax() <= 1e-6 * fdp.amax().max(1.0),
+            "{name}: {dp} vs {fdp}"
+        );
+        assert!(
+            (w - fdw).amax() <= 1e-6 * fdw.amax().max(1.0),
+            "{name}: {w} vs {fdw}"
+        );
+    }
+    // Names in seed 003's notation.
+    assert_eq!(m.parameter_name(&params[0]), "delta_x(bed)");
+    assert!(params
+        .iter()
+        .any(|p| m.parameter_name(p) == "alpha_xz(4 tilting table)"));
+    assert!(params.iter().any(|p| m.parameter_name(p) == "dq(C)"));
+    // A positioning deviation of X moves the tool 1:1 along the workpiece's frame X
+    // at B = C = 0.
+    let s0 = m
+        .sensitivities(
+            &qt,
+            &[0.0, 0.0],
+            &[],
+            &[Parameter::Dq { chain: 0, joint: 0 }],
+        )
+        .unwrap();
+    assert!((s0[0].0.norm() - 1.0).abs() < 1e-12 && s0[0].1.norm() < 1e-12);
+}

@@ -16,6 +16,7 @@
 //! rotation. [`completion::complete`] derives the six dependent angular deviations
 //! from three measured ones (eq. 3) so that it does.
 
+pub mod accuracy;
 pub mod completion;
 
 use nalgebra::{Matrix3, Matrix4, Vector3};
