@@ -316,3 +316,62 @@ fn sensitivities_equal_central_differences() {
         .unwrap();
     assert!((s0[0].0.norm() - 1.0).abs() < 1e-12 && s0[0].1.norm() < 1e-12);
 }
+
+#[test]
+fn monte_carlo_converges_to_the_first_order_prediction() {
+    use pkm::serial::accuracy::Parameter;
+    use pkm::serial::tolerance::{budget, monte_carlo, Distribution, Tolerance};
+    let m = five_axis();
+    let (qt, qw) = ([35.0, -20.0, 60.0], [0.4, -1.1]);
+    let tol: Vec<Tolerance> = m
+        .all_parameters()
+        .into_iter()
+        .enumerate()
+        .map(|(i, p)| Tolerance {
+            parameter: p,
+            value: match p {
+                Parameter::Alpha { .. } => 2e-5,
+                _ => 5e-3,
+            },
+            distribution: if i % 2 == 0 {
+                Distribution::Uniform
+            } else {
+                Distribution::Normal
+            },
+        })
+        .collect();
+    let params: Vec<Parameter> = tol.iter().map(|t| t.parameter).collect();
+    let s = m.sensitivities(&qt, &qw, &[], &params).unwrap();
+    let mut var = Vector3::zeros();
+    for (t, (dp, _)) in tol.iter().zip(&s) {
+        var += dp.component_mul(dp) * t.std().powi(2);
+    }
+    let predicted = var.map(f64::sqrt);
+    let n = 40_000;
+    let mc = monte_carlo(&m, &qt, &qw, &tol, n, 7).unwrap();
+    for k in 0..3 {
+        let rel = mc.std_vector[k] / predicted[k] - 1.0;
+        assert!(
+            rel.abs() < 0.03,
+            "component {k}: {} vs {}",
+            mc.std_vector[k],
+            predicted[k]
+        );
+        assert!(mc.mean_vector[k].abs() < 4.0 * predicted[k] / (n as f64).sqrt() + 1e-9);
+    }
+    assert!(mc.p95 <= mc.p99 && mc.p99 <= mc.max && mc.mean > 0.0);
+    assert_eq!(mc.histogram.iter().map(|h| h.1).sum::<usize>(), n);
+    // Seeded: the same result again.
+    assert_eq!(
+        monte_carlo(&m, &qt, &qw, &tol, 5000, 7).unwrap(),
+        monte_carlo(&m, &qt, &qw, &tol, 5000, 7).unwrap()
+    );
+    // Budget: sorted, worst case >= RSS >= largest item; the RSS of the budget is the
+    // norm of the first-order std vector times sqrt 3 for all-uniform... here simply
+    // consistent with its items.
+    let b = budget(&m, &qt, &qw, &tol).unwrap();
+    assert!(b.items.windows(2).all(|w| w[0].position >= w[1].position));
+    assert!(b.worst_case >= b.rss && b.rss >= b.items[0].position);
+    let dq_x = b.items.iter().find(|i| i.name == "dq(X)").unwrap();
+    assert!((dq_x.position - 5e-3).abs() < 1e-12, "{}", dq_x.position);
+}

@@ -18,6 +18,7 @@
 
 pub mod accuracy;
 pub mod completion;
+pub mod tolerance;
 
 use nalgebra::{Matrix3, Matrix4, Vector3};
 use serde::Serialize;
