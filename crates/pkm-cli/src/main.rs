@@ -78,6 +78,17 @@ enum Command {
         Writes DIR/summary.json (volume_mm3, bounding_box, reachable_fraction, condition\n\
         statistics, points per binding limit), DIR/points.csv, DIR/points.ply and slice heat maps.")]
     Workspace(WorkspaceArgs),
+    /// Accuracy of a serial machine (seed 003): the tool-point error with given primary
+    /// deviations, the sensitivity to every deviation, the error budget of the file's
+    /// tolerances and a Monte Carlo of them.
+    #[command(after_help = "Examples:\n  \
+        pkm errors examples/machines/mc300.toml --actuators 100,-50,-80,30,45 --out err\n  \
+        pkm errors examples/machines/mc300.toml --actuators 100,-50,-80,30,45 --monte-carlo 100000 --json --out err\n  \
+        pkm errors examples/machines/mc300.toml --deviations devs.toml --out err   # devs.toml: \"delta_x(1 slide)\" = 0.01\n\n\
+        Writes DIR/errors.json (position_error, orientation_error, sensitivities, budget,\n\
+        monte_carlo), DIR/budget.svg and DIR/monte-carlo.svg. Units: mm; deg for angular\n\
+        deviations and rotary axes.")]
+    Errors(ErrorsArgs),
     /// Validate a machine file and summarise it.
     #[command(after_help = "Example:\n  pkm check examples/machines/tripod-seed000.toml --json")]
     Check(CheckArgs),
@@ -279,6 +290,30 @@ pub struct WorkspaceArgs {
 }
 
 #[derive(Args)]
+pub struct ErrorsArgs {
+    /// Machine file (TOML, type = "serial").
+    pub machine: PathBuf,
+    /// Axis values (mm, deg), in the file's joint order; default: home.
+    #[arg(long, allow_hyphen_values = true)]
+    pub actuators: Option<String>,
+    /// TOML file of deviation values by name (mm; deg for angles).
+    #[arg(long)]
+    pub deviations: Option<PathBuf>,
+    /// Monte Carlo of the file's tolerances with this many machines.
+    #[arg(long)]
+    pub monte_carlo: Option<usize>,
+    /// Seed of the Monte Carlo.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Output directory.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Print errors.json to stdout.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(clap::Args, Debug)]
 pub struct CheckArgs {
     /// Machine file (TOML).
     pub machine: PathBuf,
@@ -304,6 +339,7 @@ fn main() -> ExitCode {
         Command::Check(a) => commands::check::run(&a),
         Command::Motion(a) => commands::motion::run(&a),
         Command::Workspace(a) => commands::workspace::run(&a),
+        Command::Errors(a) => commands::errors::run(&a),
         Command::Report(a) => report::run(&a),
     };
     match res {

@@ -3,6 +3,7 @@
 pub mod atlas;
 pub mod check;
 pub mod csvio;
+pub mod errors;
 pub mod fk;
 pub mod ik;
 pub mod motion;

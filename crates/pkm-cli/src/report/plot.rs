@@ -95,3 +95,94 @@ pub fn panels_svg(
     }
     Ok(out)
 }
+
+/// Horizontal bar chart (largest first, as given): labels and values.
+pub fn bars_svg(title: &str, xlabel: &str, items: &[(String, f64)], width: u32) -> Result<String> {
+    let n = items.len().max(1);
+    let height = 80 + 22 * n as u32;
+    let vmax = items.iter().map(|i| i.1).fold(0.0, f64::max);
+    let vmax = if vmax > 0.0 { vmax * 1.05 } else { 1.0 };
+    let mut out = String::new();
+    {
+        let root = SVGBackend::with_string(&mut out, (width, height)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| anyhow!("{e}"))?;
+        let mut chart = ChartBuilder::on(&root)
+            .margin(10)
+            .caption(title, ("sans-serif", 15))
+            .x_label_area_size(32)
+            .y_label_area_size(200)
+            .build_cartesian_2d(0.0..vmax, 0.0..n as f64)
+            .map_err(|e| anyhow!("{e}"))?;
+        chart
+            .configure_mesh()
+            .disable_y_mesh()
+            .disable_y_axis()
+            .x_desc(xlabel)
+            .draw()
+            .map_err(|e| anyhow!("{e}"))?;
+        // Labels beside their bars, right-aligned in the label area.
+        let style = TextStyle::from(("sans-serif", 12).into_font()).pos(
+            plotters::style::text_anchor::Pos::new(
+                plotters::style::text_anchor::HPos::Right,
+                plotters::style::text_anchor::VPos::Center,
+            ),
+        );
+        for (k, (label, _)) in items.iter().enumerate() {
+            let (px, py) = chart.backend_coord(&(0.0, (n - 1 - k) as f64 + 0.5));
+            root.draw(&Text::new(label.clone(), (px - 6, py), style.clone()))
+                .map_err(|e| anyhow!("{e}"))?;
+        }
+        chart
+            .draw_series(items.iter().enumerate().map(|(k, (_, v))| {
+                let y = (n - 1 - k) as f64;
+                Rectangle::new([(0.0, y + 0.15), (*v, y + 0.85)], COLORS[0].filled())
+            }))
+            .map_err(|e| anyhow!("{e}"))?;
+        root.present().map_err(|e| anyhow!("{e}"))?;
+    }
+    Ok(out)
+}
+
+/// Histogram from `(lower edge, count)` bins of equal width.
+pub fn histogram_svg(
+    title: &str,
+    xlabel: &str,
+    bins: &[(f64, usize)],
+    size: (u32, u32),
+) -> Result<String> {
+    let w = if bins.len() > 1 {
+        bins[1].0 - bins[0].0
+    } else {
+        1.0
+    };
+    let w = if w > 0.0 { w } else { 1.0 };
+    let x1 = bins.last().map(|b| b.0 + w).unwrap_or(1.0);
+    let cmax = bins.iter().map(|b| b.1).max().unwrap_or(1).max(1) as f64 * 1.05;
+    let mut out = String::new();
+    {
+        let root = SVGBackend::with_string(&mut out, size).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| anyhow!("{e}"))?;
+        let mut chart = ChartBuilder::on(&root)
+            .margin(10)
+            .caption(title, ("sans-serif", 15))
+            .x_label_area_size(32)
+            .y_label_area_size(56)
+            .build_cartesian_2d(0.0..x1, 0.0..cmax)
+            .map_err(|e| anyhow!("{e}"))?;
+        chart
+            .configure_mesh()
+            .x_desc(xlabel)
+            .y_desc("samples")
+            .draw()
+            .map_err(|e| anyhow!("{e}"))?;
+        chart
+            .draw_series(
+                bins.iter().map(|(x, c)| {
+                    Rectangle::new([(*x, 0.0), (*x + w, *c as f64)], COLORS[0].filled())
+                }),
+            )
+            .map_err(|e| anyhow!("{e}"))?;
+        root.present().map_err(|e| anyhow!("{e}"))?;
+    }
+    Ok(out)
+}

@@ -7,6 +7,7 @@
 mod hexapod_file;
 mod p3rp_file;
 mod reference;
+mod serial_file;
 mod source;
 mod tripod_file;
 
@@ -206,6 +207,8 @@ pub enum Model {
     P3rpHead(Box<crate::p3rp::P3rpHead>),
     /// `type = "p3rp"` with `[table]`: the 4-axis hybrid machine of seed 004.
     P3rpHybrid(Box<crate::p3rp::HybridMachine>),
+    /// `type = "serial"`: tool and workpiece chains with primary deviations (seed 003).
+    Serial(Box<crate::serial::SerialModel>),
 }
 
 /// Code generic over any mechanism, run on a machine whose type is known at run time
@@ -235,7 +238,7 @@ pub struct Machine {
 }
 
 /// Machine types accepted in the `type` field.
-pub const MACHINE_TYPES: &[&str] = &["tripod", "hexapod", "p3rp"];
+pub const MACHINE_TYPES: &[&str] = &["tripod", "hexapod", "p3rp", "serial"];
 
 impl Machine {
     /// Reads and validates a machine file.
@@ -286,6 +289,7 @@ impl Machine {
             "tripod" => tripod_file::build(&src, src.deserialize()?)?,
             "hexapod" => hexapod_file::build(&src, src.deserialize()?)?,
             "p3rp" => p3rp_file::build(&src, src.deserialize()?)?,
+            "serial" => serial_file::build(&src, src.deserialize()?)?,
             other => {
                 return Err(src.error(
                     &[source::Seg::Key("type".into())],
@@ -314,6 +318,7 @@ impl Machine {
             Model::Hexapod(m) => m.as_ref(),
             Model::P3rpHead(m) => m.as_ref(),
             Model::P3rpHybrid(m) => m.as_ref(),
+            Model::Serial(s) => crate::with_serial!(&s.mechanism, m => m),
         }
     }
 
@@ -325,6 +330,7 @@ impl Machine {
             Model::Hexapod(m) => v.visit(m.as_ref()),
             Model::P3rpHead(m) => v.visit(m.as_ref()),
             Model::P3rpHybrid(m) => v.visit(m.as_ref()),
+            Model::Serial(s) => crate::with_serial!(&s.mechanism, m => v.visit(m)),
         }
     }
 

@@ -18,9 +18,19 @@
 
 pub mod accuracy;
 pub mod completion;
+pub mod mechanism;
 pub mod tolerance;
 
 use nalgebra::{Matrix3, Matrix4, Vector3};
+
+/// A serial machine loaded from a file: the mechanism and its tolerances.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SerialModel {
+    /// The machine as a mechanism (joint count fixed at load time).
+    pub mechanism: mechanism::SerialAny,
+    /// Tolerances of primary deviations from the file (`[[tolerance]]`).
+    pub tolerances: Vec<tolerance::Tolerance>,
+}
 use serde::Serialize;
 
 use crate::error::{Error, Result};

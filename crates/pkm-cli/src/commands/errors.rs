@@ -1,0 +1,226 @@
+//! `pkm errors`: the accuracy of a serial machine (seed 003) at one axis position — the
+//! deviated tool pose, the sensitivity to every deviation, the error budget and the
+//! Monte Carlo distribution of the tool-point error.
+
+use anyhow::{bail, Context, Result};
+use pkm::machine::Model;
+use pkm::serial::accuracy::Parameter;
+use pkm::serial::tolerance::{budget, deviations_from, monte_carlo, pose_error};
+use pkm::serial::SerialModel;
+use serde_json::json;
+
+use super::load;
+use crate::io::write_atomic;
+use crate::poses::parse_list;
+use crate::report::plot::{bars_svg, histogram_svg};
+use crate::ErrorsArgs;
+
+/// Deviation values by name from a TOML file (`"delta_x(1 slide)" = 0.01`; mm, deg for
+/// angles and revolute dq), converted to internal units.
+fn read_deviations(s: &SerialModel, path: &std::path::Path) -> Result<Vec<(Parameter, f64)>> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let table: toml::Table = text
+        .parse()
+        .map_err(|e: toml::de::Error| anyhow::anyhow!("{}: {e}", path.display()))?;
+    let m = s.mechanism.machine();
+    let params = m.all_parameters();
+    let mut out = Vec::new();
+    for (name, v) in &table {
+        let Some(p) = params.iter().find(|p| m.parameter_name(p) == *name) else {
+            bail!(
+                "{}: unknown deviation `{name}`: expected delta_x|y|z(LINK), alpha_ab(LINK) or dq(JOINT), e.g. {}",
+                path.display(),
+                params.iter().take(3).map(|p| m.parameter_name(p)).collect::<Vec<_>>().join(", ")
+            );
+        };
+        let val = v
+            .as_float()
+            .or_else(|| v.as_integer().map(|i| i as f64))
+            .with_context(|| format!("{}: `{name}`: expected a number", path.display()))?;
+        out.push((
+            *p,
+            if is_angle(s, p) {
+                val.to_radians()
+            } else {
+                val
+            },
+        ));
+    }
+    Ok(out)
+}
+
+fn is_angle(s: &SerialModel, p: &Parameter) -> bool {
+    let m = s.mechanism.machine();
+    match p {
+        Parameter::Alpha { .. } => true,
+        Parameter::Delta { .. } => false,
+        Parameter::Dq { chain, joint } => {
+            let ch = if *chain == 0 {
+                Some(&m.tool)
+            } else {
+                m.workpiece.as_ref()
+            };
+            ch.and_then(|c| c.joints().nth(*joint))
+                .map(|j| j.kind == pkm::serial::JointKind::Revolute)
+                .unwrap_or(false)
+        }
+    }
+}
+
+pub fn run(a: &ErrorsArgs) -> Result<u8> {
+    let machine = load(&a.machine)?;
+    let Model::Serial(s) = &machine.model else {
+        bail!(
+            "{}: `pkm errors` needs a serial machine (type = \"serial\"); this is a {} machine",
+            a.machine.display(),
+            machine.kind()
+        );
+    };
+    let mech = machine.mechanism();
+    let m = s.mechanism.machine();
+    let vals = match &a.actuators {
+        Some(v) => parse_list(v, "--actuators")?,
+        None => mech
+            .home()
+            .iter()
+            .zip(mech.coordinates())
+            .map(|(v, c)| c.quantity.to_user(*v))
+            .collect(),
+    };
+    let x = crate::poses::actuators_from_user(mech, &vals)?;
+    let nt = m.tool.dof();
+    let (qt, qw) = (&x[..nt], &x[nt..]);
+    let devs = match &a.deviations {
+        Some(p) => read_deviations(s, p)?,
+        None => Vec::new(),
+    };
+    let dev = deviations_from(m, &devs);
+    let (dp, dw) = pose_error(m, qt, qw, &dev)?;
+    let tol = &s.tolerances;
+    std::fs::create_dir_all(&a.out)
+        .with_context(|| format!("cannot create {}", a.out.display()))?;
+    let inputs: Vec<&std::path::Path> = std::iter::once(a.machine.as_path())
+        .chain(a.deviations.as_deref())
+        .collect();
+    // Sensitivity table of every toleranced deviation (or every deviation).
+    let params: Vec<Parameter> = if tol.is_empty() {
+        m.all_parameters()
+    } else {
+        tol.iter().map(|t| t.parameter).collect()
+    };
+    let sens = m.sensitivities(qt, qw, &dev, &params)?;
+    let unit = |p: &Parameter| if is_angle(s, p) { "deg" } else { "mm" };
+    let per_user = |p: &Parameter, v: f64| if is_angle(s, p) { v.to_radians() } else { v };
+    let sens_json: Vec<_> = params
+        .iter()
+        .zip(&sens)
+        .map(|(p, (d, w))| {
+            let k = per_user(p, 1.0);
+            json!({
+                "deviation": m.parameter_name(p),
+                "unit": unit(p),
+                "position_mm_per_unit": [d.x * k, d.y * k, d.z * k],
+                "orientation_rad_per_unit": [w.x * k, w.y * k, w.z * k],
+            })
+        })
+        .collect();
+    let mut out = json!({
+        "machine": m.name,
+        "axes": mech.coordinates().iter().zip(&vals).map(|(c, v)| json!({"name": c.name, "value": v, "unit": c.quantity.unit()})).collect::<Vec<_>>(),
+        "deviations_given": devs.len(),
+        "position_error": [dp.x, dp.y, dp.z],
+        "position_error_norm": dp.norm(),
+        "orientation_error": [dw.x, dw.y, dw.z],
+        "sensitivities": sens_json,
+    });
+    let o = out.as_object_mut().expect("object");
+    if !tol.is_empty() {
+        let b = budget(m, qt, qw, tol)?;
+        let mut map = serde_json::Map::new();
+        for i in &b.items {
+            map.insert(i.name.clone(), json!(i.position));
+        }
+        o.insert("budget".into(), serde_json::Value::Object(map));
+        o.insert("budget_worst_case".into(), json!(b.worst_case));
+        o.insert("budget_rss".into(), json!(b.rss));
+        let top: Vec<(String, f64)> = b
+            .items
+            .iter()
+            .take(25)
+            .map(|i| (i.name.clone(), 1000.0 * i.position))
+            .collect();
+        let svg = bars_svg(
+            &format!("error budget: tool-point error at each tolerance (worst case {:.2} um, RSS {:.2} um)", 1000.0 * b.worst_case, 1000.0 * b.rss),
+            "contribution [um]",
+            &top,
+            760,
+        )?;
+        write_atomic(&a.out.join("budget.svg"), svg.as_bytes(), &inputs)?;
+        if let Some(n) = a.monte_carlo {
+            if n == 0 {
+                bail!("--monte-carlo: expected a number of samples > 0");
+            }
+            let mc = monte_carlo(m, qt, qw, tol, n, a.seed)?;
+            o.insert(
+                "monte_carlo".into(),
+                json!({
+                    "samples": mc.samples, "seed": a.seed,
+                    "mean": mc.mean, "std": mc.std, "p95": mc.p95, "p99": mc.p99, "max": mc.max,
+                    "mean_vector": mc.mean_vector, "std_vector": mc.std_vector,
+                }),
+            );
+            let bins: Vec<(f64, usize)> =
+                mc.histogram.iter().map(|(x, c)| (1000.0 * x, *c)).collect();
+            let svg = histogram_svg(
+                &format!(
+                    "Monte Carlo, {} machines: tool-point error (mean {:.2} um, p95 {:.2} um)",
+                    mc.samples,
+                    1000.0 * mc.mean,
+                    1000.0 * mc.p95
+                ),
+                "|error| [um]",
+                &bins,
+                (640, 400),
+            )?;
+            write_atomic(&a.out.join("monte-carlo.svg"), svg.as_bytes(), &inputs)?;
+        }
+    } else if a.monte_carlo.is_some() {
+        bail!("--monte-carlo needs tolerances: add [[tolerance]] entries to the machine file");
+    }
+    let text = serde_json::to_string_pretty(&out)?;
+    write_atomic(&a.out.join("errors.json"), text.as_bytes(), &inputs)?;
+    if a.json {
+        println!("{text}");
+    } else {
+        println!("{} (serial)", m.name);
+        println!(
+            "position error   dx={:+.6} dy={:+.6} dz={:+.6} mm (|e| = {:.6} mm, workpiece frame)",
+            dp.x,
+            dp.y,
+            dp.z,
+            dp.norm()
+        );
+        println!(
+            "orientation      rx={:+.3e} ry={:+.3e} rz={:+.3e} rad",
+            dw.x, dw.y, dw.z
+        );
+        if let Some(b) = out.get("budget_worst_case") {
+            println!(
+                "budget           worst case {:.4} mm, RSS {:.4} mm ({} toleranced deviations)",
+                b.as_f64().unwrap_or(0.0),
+                out["budget_rss"].as_f64().unwrap_or(0.0),
+                tol.len()
+            );
+        }
+        if let Some(mc) = out.get("monte_carlo") {
+            println!(
+                "monte carlo      {} samples: mean {:.4}, std {:.4}, p95 {:.4}, p99 {:.4}, max {:.4} mm",
+                mc["samples"], mc["mean"].as_f64().unwrap_or(0.0), mc["std"].as_f64().unwrap_or(0.0),
+                mc["p95"].as_f64().unwrap_or(0.0), mc["p99"].as_f64().unwrap_or(0.0), mc["max"].as_f64().unwrap_or(0.0)
+            );
+        }
+        println!("wrote {}", a.out.display());
+    }
+    Ok(0)
+}

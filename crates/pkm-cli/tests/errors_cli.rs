@@ -1,0 +1,96 @@
+//! `pkm errors` end to end on the MC-300-like example.
+
+use std::path::PathBuf;
+
+use assert_cmd::Command;
+use serde_json::Value;
+
+fn path(rel: &str) -> String {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../..")
+        .join(rel)
+        .display()
+        .to_string()
+}
+
+fn pkm() -> Command {
+    Command::cargo_bin("pkm").unwrap()
+}
+
+#[test]
+fn errors_json_contract_and_plots() {
+    let dir = tempfile::tempdir().unwrap();
+    let devs = dir.path().join("devs.toml");
+    // dq of X moves the tool 1:1 along the part's X at B = C = 0; delta_z of the
+    // spindle link (its S* origin along its Z, world Z) lifts the tool tip.
+    std::fs::write(&devs, "\"dq(X)\" = 0.01\n\"delta_z(3 spindle)\" = 0.02\n").unwrap();
+    let out = dir.path().join("err");
+    let o = pkm()
+        .args([
+            "errors",
+            &path("examples/machines/mc300.toml"),
+            "--actuators",
+            "100,-50,-80,0,0",
+            "--deviations",
+        ])
+        .arg(&devs)
+        .args(["--monte-carlo", "20000", "--json", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let e: Vec<f64> = v["position_error"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    assert!(
+        (e[0] - 0.01).abs() < 1e-12 && e[1].abs() < 1e-12 && (e[2] - 0.02).abs() < 1e-12,
+        "{e:?}"
+    );
+    assert_eq!(v["orientation_error"].as_array().unwrap().len(), 3);
+    let budget = v["budget"].as_object().unwrap();
+    assert_eq!(budget.len(), 41);
+    assert!((budget["dq(X)"].as_f64().unwrap() - 0.004).abs() < 1e-12);
+    let mc = &v["monte_carlo"];
+    for k in ["mean", "std", "p95", "p99", "max"] {
+        assert!(mc[k].as_f64().unwrap() > 0.0, "{k}");
+    }
+    assert!(mc["p95"].as_f64().unwrap() <= v["budget_worst_case"].as_f64().unwrap());
+    for f in ["errors.json", "budget.svg", "monte-carlo.svg"] {
+        assert!(out.join(f).exists(), "{f}");
+    }
+    // Named errors.
+    std::fs::write(&devs, "\"delta_q(9 arm)\" = 0.01\n").unwrap();
+    let o = pkm()
+        .args([
+            "errors",
+            &path("examples/machines/mc300.toml"),
+            "--deviations",
+        ])
+        .arg(&devs)
+        .arg("--out")
+        .arg(dir.path().join("bad"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("unknown deviation `delta_q(9 arm)`"));
+    let o = pkm()
+        .args([
+            "errors",
+            &path("examples/machines/tripod-seed000.toml"),
+            "--out",
+        ])
+        .arg(dir.path().join("bad2"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("needs a serial machine"));
+}

@@ -1,0 +1,303 @@
+//! The `type = "serial"` machine file: a tool chain and an optional workpiece chain of
+//! links with seed 003's two frames per link, and tolerances of primary deviations.
+
+use nalgebra::{Matrix3, Vector3};
+use serde::Deserialize;
+
+use super::reference::Reference;
+use super::source::{Seg, Source};
+use super::{v3, Model};
+use crate::error::Error;
+use crate::limits::Range;
+use crate::serial::accuracy::{Parameter, SerialMachine};
+use crate::serial::mechanism::SerialAny;
+use crate::serial::tolerance::{Distribution, Tolerance};
+use crate::serial::{Chain, Joint, JointKind, Link};
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct SerialFile {
+    #[serde(rename = "type")]
+    _kind: String,
+    #[serde(default)]
+    name: Option<String>,
+    #[serde(default)]
+    description: Option<String>,
+    tool_chain: Vec<LinkFile>,
+    #[serde(default)]
+    workpiece_chain: Vec<LinkFile>,
+    #[serde(default)]
+    home: Option<HomeFile>,
+    #[serde(default)]
+    tolerance: Vec<ToleranceFile>,
+    #[serde(default)]
+    reference: Vec<Reference>,
+    #[serde(default)]
+    motion: Option<super::MotionFile>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LinkFile {
+    name: String,
+    #[serde(default)]
+    joint: Option<JointFile>,
+    #[serde(default)]
+    translation: [f64; 3],
+    #[serde(default)]
+    rotation: Option<[[f64; 3]; 3]>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct JointFile {
+    name: String,
+    #[serde(rename = "type")]
+    kind: String,
+    range: [f64; 2],
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct HomeFile {
+    joints: Vec<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ToleranceFile {
+    deviation: String,
+    value: f64,
+    #[serde(default)]
+    distribution: Option<String>,
+}
+
+fn key(k: &str) -> Seg {
+    Seg::Key(k.into())
+}
+
+fn chain(
+    src: &Source,
+    field: &str,
+    links: &[LinkFile],
+    names: &mut Vec<String>,
+) -> Result<Chain, Error> {
+    let mut out = Vec::new();
+    for (i, l) in links.iter().enumerate() {
+        let at = |k: &str| vec![key(field), Seg::Index(i), key(k)];
+        let rotation = match l.rotation {
+            None => Matrix3::identity(),
+            Some(r) => {
+                let m = Matrix3::from_fn(|a, b| r[a][b]);
+                let err = (m.transpose() * m - Matrix3::identity()).amax();
+                if err > 1e-9 || m.determinant() < 0.0 {
+                    return Err(src.error(
+                        &at("rotation"),
+                        format!(
+                            "expected a proper rotation (direction cosines, rows: axes of S, columns: axes of S*); |R^T R - I| = {err:.2e}, det = {:.4}",
+                            m.determinant()
+                        ),
+                    ));
+                }
+                m
+            }
+        };
+        let joint = match &l.joint {
+            None => None,
+            Some(j) => {
+                let kind =
+                    match j.kind.as_str() {
+                        "revolute" => JointKind::Revolute,
+                        "prismatic" => JointKind::Prismatic,
+                        other => return Err(src.error(
+                            &[key(field), Seg::Index(i), key("joint"), key("type")],
+                            format!(
+                                "unknown joint type `{other}`, expected `revolute` or `prismatic`"
+                            ),
+                        )),
+                    };
+                if i == 0 {
+                    return Err(src.error(
+                        &at("joint"),
+                        "the first link of a chain is fixed (the bed or the chain's mount): no joint",
+                    ));
+                }
+                if names.contains(&j.name) {
+                    return Err(src.error(
+                        &[key(field), Seg::Index(i), key("joint"), key("name")],
+                        format!("joint name `{}` is used twice", j.name),
+                    ));
+                }
+                names.push(j.name.clone());
+                if !(j.range[0] < j.range[1]) {
+                    return Err(src.error(
+                        &[key(field), Seg::Index(i), key("joint"), key("range")],
+                        format!(
+                            "expected [min, max] with min < max, found [{}, {}]",
+                            j.range[0], j.range[1]
+                        ),
+                    ));
+                }
+                let conv = |v: f64| match kind {
+                    JointKind::Revolute => v.to_radians(),
+                    JointKind::Prismatic => v,
+                };
+                Some(Joint {
+                    name: j.name.clone(),
+                    kind,
+                    range: Range {
+                        min: conv(j.range[0]),
+                        max: conv(j.range[1]),
+                    },
+                })
+            }
+        };
+        out.push(Link {
+            name: l.name.clone(),
+            joint,
+            translation: v3(l.translation),
+            rotation,
+        });
+    }
+    Ok(Chain {
+        name: field.trim_end_matches("_chain").into(),
+        links: out,
+    })
+}
+
+pub(super) fn build(src: &Source, f: SerialFile) -> Result<super::Parts, Error> {
+    if f.tool_chain.is_empty() {
+        return Err(src.error(&[key("tool_chain")], "expected at least one link"));
+    }
+    let mut names = Vec::new();
+    let tool = chain(src, "tool_chain", &f.tool_chain, &mut names)?;
+    let workpiece = if f.workpiece_chain.is_empty() {
+        None
+    } else {
+        Some(chain(
+            src,
+            "workpiece_chain",
+            &f.workpiece_chain,
+            &mut names,
+        )?)
+    };
+    let machine = SerialMachine {
+        name: f.name.clone().unwrap_or_else(|| "serial machine".into()),
+        tool,
+        workpiece,
+    };
+    let kinds: Vec<JointKind> = machine
+        .tool
+        .joints()
+        .chain(machine.workpiece.iter().flat_map(|w| w.joints()))
+        .map(|j| j.kind)
+        .collect();
+    let home: Vec<f64> = match &f.home {
+        None => vec![0.0; kinds.len()],
+        Some(h) => {
+            if h.joints.len() != kinds.len() {
+                return Err(src.error(
+                    &[key("home"), key("joints")],
+                    format!(
+                        "expected {} joint values (mm, deg), found {}",
+                        kinds.len(),
+                        h.joints.len()
+                    ),
+                ));
+            }
+            h.joints
+                .iter()
+                .zip(&kinds)
+                .map(|(v, k)| match k {
+                    JointKind::Revolute => v.to_radians(),
+                    JointKind::Prismatic => *v,
+                })
+                .collect()
+        }
+    };
+    if kinds.is_empty() || kinds.len() > 8 {
+        return Err(src.error(
+            &[key("tool_chain")],
+            format!(
+                "a serial machine needs 1 to 8 joints, found {}",
+                kinds.len()
+            ),
+        ));
+    }
+    // Tolerances by name, in the units of the deviation (mm; deg for angles and
+    // revolute dq).
+    let params = machine.all_parameters();
+    let mut tolerances = Vec::new();
+    for (i, t) in f.tolerance.iter().enumerate() {
+        let at = |k: &str| vec![key("tolerance"), Seg::Index(i), key(k)];
+        let Some(p) = params
+            .iter()
+            .find(|p| machine.parameter_name(p) == t.deviation)
+        else {
+            let examples: Vec<String> = params
+                .iter()
+                .take(4)
+                .map(|p| machine.parameter_name(p))
+                .collect();
+            return Err(src.error(
+                &at("deviation"),
+                format!(
+                    "unknown deviation `{}`: expected delta_x|y|z(LINK), alpha_ab(LINK) with a, b in x, y, z, or dq(JOINT), e.g. {}",
+                    t.deviation,
+                    examples.join(", ")
+                ),
+            ));
+        };
+        if !(t.value > 0.0) {
+            return Err(src.error(
+                &at("value"),
+                format!("expected a tolerance > 0, found {}", t.value),
+            ));
+        }
+        let angle = match p {
+            Parameter::Alpha { .. } => true,
+            Parameter::Dq { chain, joint } => {
+                let ch = if *chain == 0 {
+                    &machine.tool
+                } else {
+                    machine.workpiece.as_ref().expect("chain")
+                };
+                ch.joints()
+                    .nth(*joint)
+                    .map(|j| j.kind == JointKind::Revolute)
+                    .unwrap_or(false)
+            }
+            Parameter::Delta { .. } => false,
+        };
+        let distribution = match t.distribution.as_deref() {
+            None | Some("uniform") => Distribution::Uniform,
+            Some("normal") => Distribution::Normal,
+            Some(other) => {
+                return Err(src.error(
+                    &at("distribution"),
+                    format!("unknown distribution `{other}`, expected `uniform` or `normal`"),
+                ))
+            }
+        };
+        tolerances.push(Tolerance {
+            parameter: *p,
+            value: if angle { t.value.to_radians() } else { t.value },
+            distribution,
+        });
+    }
+    let mechanism =
+        SerialAny::new(machine, &home).map_err(|e| src.error(&[key("home")], e.to_string()))?;
+    super::check_references(src, &f.reference)?;
+    let rapid = super::check_motion(src, f.motion.as_ref())?;
+    let _ = Vector3::<f64>::zeros();
+    Ok(super::Parts {
+        model: Model::Serial(Box::new(crate::serial::SerialModel {
+            mechanism,
+            tolerances,
+        })),
+        name: f.name,
+        description: f.description,
+        references: f.reference,
+        rapid,
+    })
+}

@@ -1,0 +1,284 @@
+//! A serial machine as a [`Mechanism`]: its pose coordinates are the joint values (the
+//! axes a CNC program or a robot controller commands), its actuators the same joints,
+//! and its tool pose the tool relative to the workpiece.
+//!
+//! The joint count is a const parameter (`N` = tool joints + workpiece joints), so the
+//! hot paths stay fixed-size; [`SerialAny`] holds the sizes pkm loads from files.
+
+use nalgebra::{Isometry3, Matrix3, SMatrix, SVector, Translation3, UnitQuaternion, Vector3};
+
+use super::accuracy::SerialMachine;
+use super::JointKind;
+use crate::error::{Error, Result};
+use crate::limits::{LimitKind, Violation};
+use crate::mechanism::{
+    Actuator, ActuatorMotion, Coordinate, LinkKind, Mechanism, PointRole, PoseSpace, Skeleton,
+};
+use crate::pose::Pose;
+use crate::units::Quantity;
+
+/// A serial machine with `N` joints in all.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SerialMechanism<const N: usize> {
+    /// The chains and their geometry.
+    pub machine: SerialMachine,
+    /// Home joint values.
+    pub home: SVector<f64, N>,
+    coordinates: [Coordinate; N],
+    actuators: [Actuator; N],
+    /// Joints of the tool chain (the first ones).
+    tool_joints: usize,
+}
+
+impl<const N: usize> SerialMechanism<N> {
+    /// Wraps a machine with `N` joints; `home` in internal units.
+    pub fn new(machine: SerialMachine, home: SVector<f64, N>) -> Result<Self> {
+        let joints: Vec<_> = machine
+            .tool
+            .joints()
+            .chain(machine.workpiece.iter().flat_map(|w| w.joints()))
+            .cloned()
+            .collect();
+        if joints.len() != N {
+            return Err(Error::InvalidInput {
+                what: "serial machine".into(),
+                message: format!("{} joints, expected {N}", joints.len()),
+            });
+        }
+        let quantity = |k: JointKind| match k {
+            JointKind::Revolute => Quantity::Angle,
+            JointKind::Prismatic => Quantity::Length,
+        };
+        let coordinates = std::array::from_fn(|i| Coordinate {
+            name: joints[i].name.clone(),
+            quantity: quantity(joints[i].kind),
+        });
+        let actuators = std::array::from_fn(|i| Actuator {
+            name: joints[i].name.clone(),
+            quantity: quantity(joints[i].kind),
+            range: joints[i].range,
+            max_velocity: None,
+            max_acceleration: None,
+        });
+        Ok(SerialMechanism {
+            tool_joints: machine.tool.dof(),
+            machine,
+            home,
+            coordinates,
+            actuators,
+        })
+    }
+
+    fn split(&self, x: &SVector<f64, N>) -> (Vec<f64>, Vec<f64>) {
+        let s = x.as_slice();
+        (
+            s[..self.tool_joints].to_vec(),
+            s[self.tool_joints..].to_vec(),
+        )
+    }
+
+    /// Joint values of tool and workpiece chains for pose coordinates `x`.
+    pub fn joint_split(&self, x: &SVector<f64, N>) -> (Vec<f64>, Vec<f64>) {
+        self.split(x)
+    }
+}
+
+impl<const N: usize> Mechanism<N, N> for SerialMechanism<N> {
+    fn name(&self) -> &str {
+        &self.machine.name
+    }
+
+    fn kind(&self) -> &'static str {
+        "serial"
+    }
+
+    fn coordinates(&self) -> &[Coordinate; N] {
+        &self.coordinates
+    }
+
+    fn actuators(&self) -> &[Actuator; N] {
+        &self.actuators
+    }
+
+    fn driven(&self) -> [usize; N] {
+        std::array::from_fn(|i| i)
+    }
+
+    fn pose_space(&self) -> PoseSpace {
+        PoseSpace::Own
+    }
+
+    fn home(&self) -> SVector<f64, N> {
+        self.home
+    }
+
+    /// The joints are the pose coordinates: identity.
+    fn inverse(&self, x: &SVector<f64, N>) -> Result<SVector<f64, N>> {
+        Ok(*x)
+    }
+
+    fn jacobian(&self, _x: &SVector<f64, N>) -> Result<SMatrix<f64, N, N>> {
+        Ok(SMatrix::<f64, N, N>::identity())
+    }
+
+    fn forward(
+        &self,
+        q: &SVector<f64, N>,
+        _start: &SVector<f64, N>,
+    ) -> Result<crate::mechanism::Forward<N>> {
+        Ok(crate::mechanism::Forward {
+            pose: *q,
+            iterations: 0,
+            residual: 0.0,
+        })
+    }
+
+    /// The nominal tool pose relative to the workpiece.
+    fn tool_pose(&self, x: &SVector<f64, N>) -> Result<Pose> {
+        let (qt, qw) = self.split(x);
+        let t = self.machine.pose(&qt, &qw, &[])?;
+        let r: Matrix3<f64> = t.fixed_view::<3, 3>(0, 0).into_owned();
+        let rot = UnitQuaternion::from_matrix(&r);
+        Ok(Isometry3::from_parts(
+            Translation3::from(Vector3::new(t[(0, 3)], t[(1, 3)], t[(2, 3)])),
+            rot,
+        ))
+    }
+
+    fn coords_from_pose(&self, _pose: &Pose, _orientation_given: bool) -> Result<SVector<f64, N>> {
+        Err(Error::InvalidInput {
+            what: "pose".into(),
+            message: "a serial machine's pose is its joint values".into(),
+        })
+    }
+
+    fn check_limits(&self, x: &SVector<f64, N>, _q: &SVector<f64, N>, out: &mut Vec<Violation>) {
+        for (a, v) in self.actuators.iter().zip(x.iter()) {
+            a.range.check(
+                || format!("axis {} position", a.name),
+                LimitKind::ActuatorPosition,
+                a.quantity,
+                *v,
+                out,
+            );
+        }
+    }
+
+    /// Frame origins of both chains (bed frame), consecutive ones linked.
+    fn skeleton(&self, x: &SVector<f64, N>) -> Result<Skeleton> {
+        let (qt, qw) = self.split(x);
+        let mut s = Skeleton::default();
+        let chains = std::iter::once((&self.machine.tool, qt))
+            .chain(self.machine.workpiece.iter().map(|w| (w, qw.clone())));
+        for (ci, (ch, q)) in chains.enumerate() {
+            let mut prev = s.point(
+                &format!("{} base", ch.name),
+                PointRole::BaseJoint,
+                &Vector3::zeros(),
+            );
+            let mut t = nalgebra::Matrix4::identity();
+            let mut k = 0;
+            for link in &ch.links {
+                if let Some(j) = &link.joint {
+                    t *= super::joint_transform(j.kind, q[k]);
+                    k += 1;
+                }
+                t *= super::link_transform(link, &Default::default());
+                let p = Vector3::new(t[(0, 3)], t[(1, 3)], t[(2, 3)]);
+                let last = std::ptr::eq(link, ch.links.last().expect("links"));
+                let role = if last && ci == 0 {
+                    PointRole::Tool
+                } else {
+                    PointRole::Other
+                };
+                let i = s.point(&link.name, role, &p);
+                s.link(&link.name, LinkKind::Passive, prev, i);
+                prev = i;
+            }
+        }
+        Ok(s)
+    }
+
+    fn condition(&self, _x: &SVector<f64, N>) -> Result<f64> {
+        Ok(1.0)
+    }
+
+    fn actuator_motion(
+        &self,
+        x: &SVector<f64, N>,
+        xd: &SVector<f64, N>,
+        xdd: &SVector<f64, N>,
+    ) -> Result<ActuatorMotion<N>> {
+        Ok(ActuatorMotion {
+            q: *x,
+            qd: *xd,
+            qdd: *xdd,
+        })
+    }
+}
+
+/// A serial machine of any joint count pkm loads (1 to 8).
+#[derive(Debug, Clone, PartialEq)]
+#[allow(missing_docs)]
+pub enum SerialAny {
+    J1(SerialMechanism<1>),
+    J2(SerialMechanism<2>),
+    J3(SerialMechanism<3>),
+    J4(SerialMechanism<4>),
+    J5(SerialMechanism<5>),
+    J6(SerialMechanism<6>),
+    J7(SerialMechanism<7>),
+    J8(SerialMechanism<8>),
+}
+
+/// Applies `$body` to the `SerialMechanism<N>` inside a [`SerialAny`].
+#[macro_export]
+macro_rules! with_serial {
+    ($any:expr, $m:ident => $body:expr) => {
+        match $any {
+            $crate::serial::mechanism::SerialAny::J1($m) => $body,
+            $crate::serial::mechanism::SerialAny::J2($m) => $body,
+            $crate::serial::mechanism::SerialAny::J3($m) => $body,
+            $crate::serial::mechanism::SerialAny::J4($m) => $body,
+            $crate::serial::mechanism::SerialAny::J5($m) => $body,
+            $crate::serial::mechanism::SerialAny::J6($m) => $body,
+            $crate::serial::mechanism::SerialAny::J7($m) => $body,
+            $crate::serial::mechanism::SerialAny::J8($m) => $body,
+        }
+    };
+}
+
+impl SerialAny {
+    /// Wraps a machine with its home joint values (internal units).
+    pub fn new(machine: SerialMachine, home: &[f64]) -> Result<Self> {
+        macro_rules! mk {
+            ($n:literal, $v:ident) => {
+                SerialAny::$v(SerialMechanism::<$n>::new(
+                    machine,
+                    crate::dynamic::fixed::<$n>("home", home)?,
+                )?)
+            };
+        }
+        Ok(match home.len() {
+            1 => mk!(1, J1),
+            2 => mk!(2, J2),
+            3 => mk!(3, J3),
+            4 => mk!(4, J4),
+            5 => mk!(5, J5),
+            6 => mk!(6, J6),
+            7 => mk!(7, J7),
+            8 => mk!(8, J8),
+            n => {
+                return Err(Error::InvalidInput {
+                    what: "serial machine".into(),
+                    message: format!("{n} joints: pkm handles 1 to 8"),
+                })
+            }
+        })
+    }
+
+    /// The machine's chains.
+    pub fn machine(&self) -> &SerialMachine {
+        with_serial!(self, m => &m.machine)
+    }
+}
