@@ -52,7 +52,13 @@ fn tripod(c: &mut Criterion) {
 }
 
 criterion_group!(benches, tripod);
-criterion_main!(benches, motion_benches, hexapod_benches, workspace_benches);
+criterion_main!(
+    benches,
+    motion_benches,
+    hexapod_benches,
+    workspace_benches,
+    serial_benches
+);
 
 fn motion(c: &mut Criterion) {
     use pkm::motion::gcode::Interpreter;
@@ -218,3 +224,72 @@ fn workspace(c: &mut Criterion) {
 }
 
 criterion_group!(workspace_benches, workspace);
+
+fn serial(c: &mut Criterion) {
+    use nalgebra::{Matrix3, Vector3};
+    use pkm::serial::{Chain, Joint, JointKind, Link, LinkDeviation, PreparedChain};
+    // A 6R arm (KR 30-like proportions) with deviations on every link.
+    let links: Vec<Link> = (0..7)
+        .map(|i| Link {
+            name: format!("{i}"),
+            joint: (i > 0).then(|| Joint {
+                name: format!("A{i}"),
+                kind: JointKind::Revolute,
+                range: pkm::Range {
+                    min: -3.0,
+                    max: 3.0,
+                },
+            }),
+            translation: Vector3::new(35.0 * (i % 2) as f64, 0.0, 150.0 + 50.0 * i as f64),
+            rotation: if i % 2 == 0 {
+                Matrix3::identity()
+            } else {
+                Matrix3::new(1.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 1.0, 0.0)
+            },
+        })
+        .collect();
+    let chain = Chain {
+        name: "arm".into(),
+        links,
+    };
+    let dev: Vec<LinkDeviation> = (0..7)
+        .map(|i| LinkDeviation {
+            delta: Vector3::new(0.01, -0.02, 0.003 * i as f64),
+            alpha: Matrix3::from_fn(|r, k| 1e-4 * ((r + 2 * k + i) % 4) as f64),
+        })
+        .collect();
+    let dq = [1e-3, -2e-3, 5e-4, 0.0, 1e-4, -1e-4];
+    let q = [0.3, -0.7, 1.1, 0.2, -0.4, 0.9];
+    let prepared = PreparedChain::new(&chain, &dq, &dev);
+    c.bench_function("serial 6R FK with deviations (prepared chain)", |b| {
+        b.iter(|| prepared.pose(black_box(&q)))
+    });
+    c.bench_function(
+        "serial 6R FK with deviations (general, deviations applied per call)",
+        |b| b.iter(|| chain.pose(black_box(&q), &dq, &dev).unwrap()),
+    );
+    let Model::Serial(s) = machine("mc300.toml").model else {
+        panic!()
+    };
+    let m = s.mechanism.machine().clone();
+    let (qt, qw) = ([100.0, -50.0, -80.0], [0.52, 0.79]);
+    let params = m.all_parameters();
+    c.bench_function("MC-300 sensitivities of all 89 deviations", |b| {
+        b.iter(|| m.sensitivities(black_box(&qt), &qw, &[], &params).unwrap())
+    });
+    let mut g = c.benchmark_group("serial monte carlo");
+    g.sample_size(10);
+    g.bench_function(
+        "MC-300 1e6 machines, 41 tolerances (rayon, all cores)",
+        |b| {
+            b.iter(|| {
+                pkm::serial::tolerance::monte_carlo(&m, &qt, &qw, &s.tolerances, 1_000_000, 1)
+                    .unwrap()
+                    .mean
+            })
+        },
+    );
+    g.finish();
+}
+
+criterion_group!(serial_benches, serial);

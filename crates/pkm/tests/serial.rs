@@ -375,3 +375,43 @@ fn monte_carlo_converges_to_the_first_order_prediction() {
     let dq_x = b.items.iter().find(|i| i.name == "dq(X)").unwrap();
     assert!((dq_x.position - 5e-3).abs() < 1e-12, "{}", dq_x.position);
 }
+
+#[test]
+fn prepared_chain_equals_the_general_pose() {
+    use pkm::serial::PreparedChain;
+    // A 6R arm with deviations on every link.
+    let links: Vec<Link> = (0..7)
+        .map(|i| Link {
+            name: format!("{i}"),
+            joint: if i == 0 {
+                None
+            } else {
+                revolute(&format!("A{i}"))
+            },
+            translation: Vector3::new(10.0 * i as f64, -5.0, 100.0 + 20.0 * i as f64),
+            rotation: if i % 2 == 0 {
+                Matrix3::identity()
+            } else {
+                Matrix3::new(1.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 1.0, 0.0)
+            },
+        })
+        .collect();
+    let c = Chain {
+        name: "arm".into(),
+        links,
+    };
+    let dev: Vec<LinkDeviation> = (0..7)
+        .map(|i| LinkDeviation {
+            delta: Vector3::new(0.01, -0.02 * i as f64, 0.003),
+            alpha: Matrix3::from_fn(|r, k| 1e-4 * ((r + 2 * k + i) % 4) as f64),
+        })
+        .collect();
+    let dq = [1e-3, -2e-3, 5e-4, 0.0, 1e-4, -1e-4];
+    let p = PreparedChain::new(&c, &dq, &dev);
+    for k in 0..20 {
+        let q: Vec<f64> = (0..6).map(|j| 0.3 * (k as f64) - 0.7 * j as f64).collect();
+        let a = c.pose(&q, &dq, &dev).unwrap();
+        let b = p.pose(&q);
+        assert!((a - b).amax() < 1e-12, "{}", (a - b).amax());
+    }
+}

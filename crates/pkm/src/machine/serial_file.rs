@@ -105,17 +105,18 @@ fn chain(
         let joint = match &l.joint {
             None => None,
             Some(j) => {
-                let kind =
-                    match j.kind.as_str() {
-                        "revolute" => JointKind::Revolute,
-                        "prismatic" => JointKind::Prismatic,
-                        other => return Err(src.error(
+                let kind = match j.kind.as_str() {
+                    "revolute" => JointKind::Revolute,
+                    "prismatic" => JointKind::Prismatic,
+                    other => {
+                        return Err(src.error(
                             &[key(field), Seg::Index(i), key("joint"), key("type")],
                             format!(
                                 "unknown joint type `{other}`, expected `revolute` or `prismatic`"
                             ),
-                        )),
-                    };
+                        ))
+                    }
+                };
                 if i == 0 {
                     return Err(src.error(
                         &at("joint"),

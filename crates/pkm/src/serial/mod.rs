@@ -185,3 +185,84 @@ impl Chain {
         Ok(t)
     }
 }
+
+/// A chain with one deviation set applied, prepared for fast repeated evaluation: the
+/// deviated link transforms are computed once, and each joint is applied as the
+/// column operation it is (a turn mixes two columns, a slide adds to the translation).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PreparedChain {
+    steps: Vec<Step>,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+enum Step {
+    Joint(JointKind, f64),
+    Link(Matrix4<f64>),
+}
+
+impl PreparedChain {
+    /// Prepares `chain` with positioning deviations `dq` and link deviations `dev`
+    /// (empty slices: none).
+    pub fn new(chain: &Chain, dq: &[f64], dev: &[LinkDeviation]) -> Self {
+        let zero = LinkDeviation::default();
+        let mut steps = Vec::with_capacity(2 * chain.links.len());
+        let mut k = 0;
+        for (i, link) in chain.links.iter().enumerate() {
+            if let Some(j) = &link.joint {
+                steps.push(Step::Joint(j.kind, dq.get(k).copied().unwrap_or(0.0)));
+                k += 1;
+            }
+            steps.push(Step::Link(link_transform(
+                link,
+                dev.get(i).unwrap_or(&zero),
+            )));
+        }
+        PreparedChain { steps }
+    }
+
+    /// The chain's pose at joint values `q` (exactly [`Chain::pose`] with the prepared
+    /// deviations). `q` must hold one value per joint.
+    #[inline]
+    pub fn pose(&self, q: &[f64]) -> Matrix4<f64> {
+        let mut t = Matrix4::identity();
+        let mut k = 0;
+        for s in &self.steps {
+            match s {
+                Step::Joint(kind, dq) => {
+                    let v = q[k] + dq;
+                    k += 1;
+                    match kind {
+                        JointKind::Revolute => {
+                            let (sn, cs) = v.sin_cos();
+                            for r in 0..3 {
+                                let (a, b) = (t[(r, 0)], t[(r, 1)]);
+                                t[(r, 0)] = cs * a + sn * b;
+                                t[(r, 1)] = cs * b - sn * a;
+                            }
+                        }
+                        JointKind::Prismatic => {
+                            for r in 0..3 {
+                                t[(r, 3)] += v * t[(r, 2)];
+                            }
+                        }
+                    }
+                }
+                Step::Link(m) => {
+                    // Affine product: the bottom rows are (0, 0, 0, 1).
+                    let mut n = Matrix4::identity();
+                    for r in 0..3 {
+                        for c in 0..4 {
+                            let mut acc = if c == 3 { t[(r, 3)] } else { 0.0 };
+                            for j in 0..3 {
+                                acc += t[(r, j)] * m[(j, c)];
+                            }
+                            n[(r, c)] = acc;
+                        }
+                    }
+                    t = n;
+                }
+            }
+        }
+        t
+    }
+}
