@@ -94,3 +94,22 @@ fn errors_json_contract_and_plots() {
     assert_eq!(o.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&o.stderr).contains("needs a serial machine"));
 }
+
+#[test]
+fn report_has_an_accuracy_section_for_serial_machines() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = pkm()
+        .args(["report", &path("examples/machines/mc300.toml"), "--out"])
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let html = std::fs::read_to_string(dir.path().join("index.html")).unwrap();
+    assert!(html.contains("Accuracy: primary deviations (seed 003)"));
+    assert!(html.contains("delta_z(1 slide)"));
+}

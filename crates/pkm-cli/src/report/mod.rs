@@ -1,5 +1,6 @@
 //! `pkm report`: a self-contained HTML report (inline SVG, no network needed).
 
+mod accuracy;
 mod drawing;
 pub mod heatmap;
 mod html;
@@ -63,6 +64,13 @@ pub fn build(machine: &Machine) -> Result<String> {
     nav.push_str(" · <a href=\"#workspace\">Workspace</a>");
     if spatial {
         nav.push_str(" · <a href=\"#motion\">Motion</a>");
+    }
+    let serial = match &machine.model {
+        pkm::machine::Model::Serial(s) => Some(s.as_ref()),
+        _ => None,
+    };
+    if serial.is_some() {
+        nav.push_str(" · <a href=\"#accuracy\">Accuracy</a>");
     }
     let head = p3rp::head_of(machine);
     if head.is_some() {
@@ -178,6 +186,9 @@ pub fn build(machine: &Machine) -> Result<String> {
     }
     if let Some(head) = &head {
         p3rp::section(&mut h, head)?;
+    }
+    if let Some(s) = serial {
+        accuracy::section(&mut h, s, m)?;
     }
 
     if !references.is_empty() {
