@@ -415,3 +415,64 @@ fn prepared_chain_equals_the_general_pose() {
         assert!((a - b).amax() < 1e-12, "{}", (a - b).amax());
     }
 }
+
+#[test]
+fn dh_table_equals_the_hand_built_product() {
+    use nalgebra::Matrix4;
+    let m = pkm::Machine::from_path(format!(
+        "{}/../../examples/machines/kr30-dh.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let pkm::machine::Model::Serial(s) = &m.model else {
+        panic!()
+    };
+    let chain = &s.mechanism.machine().tool;
+    // (a, alpha, d, theta) from the file.
+    let dh = [
+        (350.0f64, -90.0f64, 815.0f64, 0.0f64),
+        (850.0, 0.0, 0.0, -90.0),
+        (145.0, -90.0, 0.0, 0.0),
+        (0.0, 90.0, 820.0, 0.0),
+        (0.0, -90.0, 0.0, 0.0),
+        (0.0, 0.0, 170.0, 0.0),
+    ];
+    let rz = |t: f64| {
+        let (s, c) = t.sin_cos();
+        Matrix4::new(
+            c, -s, 0.0, 0.0, s, c, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+        )
+    };
+    let rx = |t: f64| {
+        let (s, c) = t.sin_cos();
+        Matrix4::new(
+            1.0, 0.0, 0.0, 0.0, 0.0, c, -s, 0.0, 0.0, s, c, 0.0, 0.0, 0.0, 0.0, 1.0,
+        )
+    };
+    let tr = |x: f64, y: f64, z: f64| {
+        let mut m = Matrix4::identity();
+        m[(0, 3)] = x;
+        m[(1, 3)] = y;
+        m[(2, 3)] = z;
+        m
+    };
+    for k in 0..50 {
+        let q: Vec<f64> = (0..6)
+            .map(|j| ((k * 7 + j * 3) % 11) as f64 * 0.3 - 1.5)
+            .collect();
+        let mut t = Matrix4::identity();
+        for (j, (a, al, d, th)) in dh.iter().enumerate() {
+            t = t
+                * rz(q[j] + f64::to_radians(*th))
+                * tr(0.0, 0.0, *d)
+                * tr(*a, 0.0, 0.0)
+                * rx(f64::to_radians(*al));
+        }
+        t *= tr(0.0, 0.0, 100.0); // dh_tool
+        let p = chain.pose(&q, &[], &[]).unwrap();
+        assert!((p - t).amax() < 1e-9, "{k}: {}", (p - t).amax());
+    }
+    // Zero is the home posture: upper arm up, forearm forward.
+    let p = chain.pose(&[0.0; 6], &[], &[]).unwrap();
+    assert!((p[(0, 3)] - 1440.0).abs() < 1e-9 && (p[(2, 3)] - 1810.0).abs() < 1e-9);
+}

@@ -23,7 +23,14 @@ pub(super) struct SerialFile {
     name: Option<String>,
     #[serde(default)]
     description: Option<String>,
+    #[serde(default)]
     tool_chain: Vec<LinkFile>,
+    /// Standard Denavit-Hartenberg rows for the tool chain, instead of `tool_chain`.
+    #[serde(default)]
+    dh: Vec<DhFile>,
+    /// Fixed transform from the last DH frame to the tool (flange -> tool tip).
+    #[serde(default)]
+    dh_tool: Option<DhToolFile>,
     #[serde(default)]
     workpiece_chain: Vec<LinkFile>,
     #[serde(default)]
@@ -36,7 +43,7 @@ pub(super) struct SerialFile {
     motion: Option<super::MotionFile>,
 }
 
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Deserialize, Clone)]
 #[serde(deny_unknown_fields)]
 struct LinkFile {
     name: String,
@@ -49,6 +56,67 @@ struct LinkFile {
 }
 
 #[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct DhFile {
+    joint: JointFile,
+    a: f64,
+    alpha: f64,
+    d: f64,
+    #[serde(default)]
+    theta: f64,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct DhToolFile {
+    #[serde(default)]
+    translation: [f64; 3],
+    #[serde(default)]
+    rotation: Option<[[f64; 3]; 3]>,
+}
+
+/// Standard Denavit-Hartenberg rows as seed-003 links: joint `i` turns about (or slides
+/// along) Z, then `Rz(theta) Tz(d) Tx(a) Rx(alpha)` is the link's fixed transform
+/// (`theta` the joint's zero offset, `d` the offset of a prismatic joint): block
+/// `Rz(theta) Rx(alpha)`, translation `(a cos theta, a sin theta, d)`.
+fn dh_links(rows: &[DhFile], tool: Option<&DhToolFile>) -> Vec<LinkFile> {
+    let mut links = vec![LinkFile {
+        name: "base".into(),
+        joint: None,
+        translation: [0.0; 3],
+        rotation: None,
+    }];
+    for (i, r) in rows.iter().enumerate() {
+        let (st, ct) = r.theta.to_radians().sin_cos();
+        let (sa, ca) = r.alpha.to_radians().sin_cos();
+        let rot = [
+            [ct, -st * ca, st * sa],
+            [st, ct * ca, -ct * sa],
+            [0.0, sa, ca],
+        ];
+        links.push(LinkFile {
+            name: format!("link {}", i + 1),
+            joint: Some(JointFile {
+                name: r.joint.name.clone(),
+                kind: r.joint.kind.clone(),
+                range: r.joint.range,
+            }),
+            translation: [r.a * ct, r.a * st, r.d],
+            rotation: Some(rot),
+        });
+    }
+    if let Some(t) = tool {
+        links.push(LinkFile {
+            name: "tool".into(),
+            joint: None,
+            translation: t.translation,
+            rotation: t.rotation,
+        });
+    }
+    links
+}
+
+#[derive(Debug, Deserialize, Clone)]
 #[serde(deny_unknown_fields)]
 struct JointFile {
     name: String,
@@ -76,14 +144,18 @@ fn key(k: &str) -> Seg {
     Seg::Key(k.into())
 }
 
+/// Checks and builds a chain; `skip` leading links have no entry of their own in the
+/// file (the base link DH rows get), so entry `i` of the file is link `i + skip`.
 fn chain(
     src: &Source,
     field: &str,
     links: &[LinkFile],
     names: &mut Vec<String>,
+    skip: usize,
 ) -> Result<Chain, Error> {
     let mut out = Vec::new();
-    for (i, l) in links.iter().enumerate() {
+    for (li, l) in links.iter().enumerate() {
+        let i = li.saturating_sub(skip);
         let at = |k: &str| vec![key(field), Seg::Index(i), key(k)];
         let rotation = match l.rotation {
             None => Matrix3::identity(),
@@ -117,7 +189,7 @@ fn chain(
                         ))
                     }
                 };
-                if i == 0 {
+                if li == 0 {
                     return Err(src.error(
                         &at("joint"),
                         "the first link of a chain is fixed (the bed or the chain's mount): no joint",
@@ -167,11 +239,27 @@ fn chain(
 }
 
 pub(super) fn build(src: &Source, f: SerialFile) -> Result<super::Parts, Error> {
-    if f.tool_chain.is_empty() {
-        return Err(src.error(&[key("tool_chain")], "expected at least one link"));
+    if !f.dh.is_empty() && !f.tool_chain.is_empty() {
+        return Err(src.error(
+            &[key("dh")],
+            "give the tool chain as `tool_chain` links or as `dh` rows, not both",
+        ));
+    }
+    if f.tool_chain.is_empty() && f.dh.is_empty() {
+        return Err(src.error(
+            &[key("tool_chain")],
+            "expected at least one link (or `dh` rows)",
+        ));
     }
     let mut names = Vec::new();
-    let tool = chain(src, "tool_chain", &f.tool_chain, &mut names)?;
+    let tool = if f.dh.is_empty() {
+        chain(src, "tool_chain", &f.tool_chain, &mut names, 0)?
+    } else {
+        let links = dh_links(&f.dh, f.dh_tool.as_ref());
+        let mut c = chain(src, "dh", &links, &mut names, 1)?;
+        c.name = "tool".into();
+        c
+    };
     let workpiece = if f.workpiece_chain.is_empty() {
         None
     } else {
@@ -180,6 +268,7 @@ pub(super) fn build(src: &Source, f: SerialFile) -> Result<super::Parts, Error> 
             "workpiece_chain",
             &f.workpiece_chain,
             &mut names,
+            0,
         )?)
     };
     let machine = SerialMachine {
