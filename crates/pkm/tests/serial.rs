@@ -476,3 +476,88 @@ fn dh_table_equals_the_hand_built_product() {
     let p = chain.pose(&[0.0; 6], &[], &[]).unwrap();
     assert!((p[(0, 3)] - 1440.0).abs() < 1e-9 && (p[(2, 3)] - 1810.0).abs() < 1e-9);
 }
+
+fn kr30() -> pkm::serial::accuracy::SerialMachine {
+    let m = pkm::Machine::from_path(format!(
+        "{}/../../examples/machines/kr30-dh.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let pkm::machine::Model::Serial(s) = &m.model else {
+        panic!()
+    };
+    s.mechanism.machine().clone()
+}
+
+#[test]
+fn tool_jacobian_equals_finite_differences() {
+    let m = kr30();
+    for k in 0..20 {
+        let q: Vec<f64> = (0..6)
+            .map(|j| ((k * 5 + j * 7) % 13) as f64 * 0.2 - 1.2)
+            .collect();
+        let j = m.tool_jacobian(&q, &[]).unwrap();
+        let t0 = m.pose(&q, &[], &[]).unwrap();
+        let r0 = t0.fixed_view::<3, 3>(0, 0).into_owned();
+        for c in 0..6 {
+            let h = 1e-7;
+            let mut qp = q.clone();
+            let mut qm = q.clone();
+            qp[c] += h;
+            qm[c] -= h;
+            let fd = (m.pose(&qp, &[], &[]).unwrap() - m.pose(&qm, &[], &[]).unwrap()) / (2.0 * h);
+            let dr = fd.fixed_view::<3, 3>(0, 0) * r0.transpose();
+            let w = Vector3::new(dr[(2, 1)], dr[(0, 2)], dr[(1, 0)]);
+            for r in 0..3 {
+                assert!(
+                    (j[(r, c)] - fd[(r, 3)]).abs()
+                        < 1e-5 * fd.fixed_view::<3, 1>(0, 3).amax().max(1.0),
+                    "{k} {c}"
+                );
+                assert!((j[(r + 3, c)] - w[r]).abs() < 1e-6, "{k} {c}");
+            }
+        }
+    }
+}
+
+#[test]
+fn numeric_inverse_kinematics_round_trip() {
+    use pkm::serial::ik::{inverse, IkOptions};
+    let m = kr30();
+    let mut iters = Vec::new();
+    for k in 0..200 {
+        // Joint sets inside the ranges, wrist away from its singularity (A5 = 0).
+        let q: Vec<f64> = (0..6)
+            .map(|j| {
+                let v = ((k * 37 + j * 11) % 17) as f64 / 17.0 - 0.5;
+                match j {
+                    1 => 0.2 + 0.8 * v,
+                    2 => -0.6 + 0.8 * v,
+                    4 => 0.5 + 0.6 * v.abs(),
+                    _ => 1.5 * v,
+                }
+            })
+            .collect();
+        let target = m.pose(&q, &[], &[]).unwrap();
+        let start: Vec<f64> = q
+            .iter()
+            .enumerate()
+            .map(|(j, v)| v + 0.1 * if j % 2 == 0 { 1.0 } else { -1.0 })
+            .collect();
+        let (sol, it) = inverse(&m, &target, &start, &[], &IkOptions::default()).unwrap();
+        let t = m.pose(&sol, &[], &[]).unwrap();
+        assert!((t - target).fixed_view::<3, 1>(0, 3).amax() < 1e-8, "{k}");
+        assert!((t - target).fixed_view::<3, 3>(0, 0).amax() < 1e-10, "{k}");
+        iters.push(it);
+    }
+    iters.sort();
+    eprintln!(
+        "serial DLS IK: median {} iterations, max {}",
+        iters[100], iters[199]
+    );
+    // Out of reach: reported with its residual, not returned.
+    let mut far = m.pose(&[0.0; 6], &[], &[]).unwrap();
+    far[(0, 3)] = 5000.0;
+    let e = inverse(&m, &far, &[0.0; 6], &[], &IkOptions::default()).unwrap_err();
+    assert!(matches!(e, pkm::Error::NotConverged { .. }), "{e}");
+}

@@ -18,6 +18,7 @@
 
 pub mod accuracy;
 pub mod completion;
+pub mod ik;
 pub mod mechanism;
 pub mod tolerance;
 
