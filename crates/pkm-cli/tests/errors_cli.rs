@@ -113,3 +113,47 @@ fn report_has_an_accuracy_section_for_serial_machines() {
     assert!(html.contains("Accuracy: primary deviations (seed 003)"));
     assert!(html.contains("delta_z(1 slide)"));
 }
+
+#[test]
+fn fk_works_directly_on_a_urdf_file() {
+    let o = pkm()
+        .args([
+            "fk",
+            &path("examples/robots/ur5-like.urdf"),
+            "--actuators",
+            "0,0,0,0,0,0",
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    // The UR5's zero pose: x = a2 + a3, y = -(d4 + d6), z = d1 - d5 (mm).
+    let p: Vec<f64> = v["position"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    assert!(
+        (p[0] + 817.25).abs() < 1e-9 && (p[1] + 191.45).abs() < 1e-9 && (p[2] + 5.491).abs() < 1e-9,
+        "{p:?}"
+    );
+    // A broken URDF names the file.
+    let dir = tempfile::tempdir().unwrap();
+    let bad = dir.path().join("bad.urdf");
+    std::fs::write(&bad, "<robot name=\"x\"><link name=\"a\"/></robot>").unwrap();
+    let o = pkm()
+        .args(["fk"])
+        .arg(&bad)
+        .args(["--actuators", "0"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("bad.urdf"));
+}

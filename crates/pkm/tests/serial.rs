@@ -561,3 +561,75 @@ fn numeric_inverse_kinematics_round_trip() {
     let e = inverse(&m, &far, &[0.0; 6], &[], &IkOptions::default()).unwrap_err();
     assert!(matches!(e, pkm::Error::NotConverged { .. }), "{e}");
 }
+
+#[test]
+fn urdf_import_equals_the_hand_built_chain() {
+    use nalgebra::Matrix4;
+    let m = pkm::Machine::from_path(format!(
+        "{}/../../examples/robots/ur5-like.urdf",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let pkm::machine::Model::Serial(s) = &m.model else {
+        panic!()
+    };
+    let sm = s.mechanism.machine();
+    assert_eq!(sm.tool.dof(), 6);
+    // Standard DH of the same arm in mm: (a, alpha, d).
+    let dh = [
+        (0.0f64, std::f64::consts::FRAC_PI_2, 89.159f64),
+        (-425.0, 0.0, 0.0),
+        (-392.25, 0.0, 0.0),
+        (0.0, std::f64::consts::FRAC_PI_2, 109.15),
+        (0.0, -std::f64::consts::FRAC_PI_2, 94.65),
+        (0.0, 0.0, 82.3),
+    ];
+    let rz = |t: f64| {
+        let (s, c) = t.sin_cos();
+        Matrix4::new(
+            c, -s, 0.0, 0.0, s, c, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+        )
+    };
+    let rx = |t: f64| {
+        let (s, c) = t.sin_cos();
+        Matrix4::new(
+            1.0, 0.0, 0.0, 0.0, 0.0, c, -s, 0.0, 0.0, s, c, 0.0, 0.0, 0.0, 0.0, 1.0,
+        )
+    };
+    let tr = |x: f64, z: f64| {
+        let mut m = Matrix4::identity();
+        m[(0, 3)] = x;
+        m[(2, 3)] = z;
+        m
+    };
+    for k in 0..50 {
+        let q: Vec<f64> = (0..6)
+            .map(|j| ((k * 3 + j * 5) % 9) as f64 * 0.5 - 2.0)
+            .collect();
+        let mut t = Matrix4::identity();
+        for (j, (a, al, d)) in dh.iter().enumerate() {
+            // The URDF writes joint 2 about -Y with rotated origins: the same motion
+            // as DH's joint 2 about its Z.
+            t = t * rz(q[j]) * tr(0.0, *d) * tr(*a, 0.0) * rx(*al);
+        }
+        let p = sm.pose(&q, &[], &[]).unwrap();
+        assert!((p - t).amax() < 1e-9, "{k}: {}", (p - t).amax());
+    }
+    // Limits converted, names kept; the tool Jacobian equals differences there too.
+    let j = sm.tool.joints().nth(2).unwrap();
+    assert_eq!(j.name, "elbow");
+    assert!((j.range.max - 3.1416).abs() < 1e-12);
+    let q = [0.3, -0.8, 1.2, -0.4, 0.9, 0.2];
+    let jac = sm.tool_jacobian(&q, &[]).unwrap();
+    let h = 1e-7;
+    for c in 0..6 {
+        let mut qp = q.to_vec();
+        let mut qm = q.to_vec();
+        qp[c] += h;
+        qm[c] -= h;
+        let fd = (sm.pose(&qp, &[], &[]).unwrap() - sm.pose(&qm, &[], &[]).unwrap()) / (2.0 * h);
+        for r in 0..3 {
+            assert!((jac[(r, c)] - fd[(r, 3)]).abs() < 1e-4, "{c}");
+        }
+    }
+}

@@ -10,6 +10,7 @@ mod reference;
 mod serial_file;
 mod source;
 mod tripod_file;
+mod urdf_file;
 
 use std::path::Path;
 
@@ -252,7 +253,27 @@ impl Machine {
             field: String::new(),
             message: format!("cannot read: {e}"),
         })?;
+        if path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("urdf"))
+        {
+            return Machine::from_urdf_str(&text, &name);
+        }
         Machine::from_toml_str(&text, &name)
+    }
+
+    /// Reads a robot from URDF text: the serial chain from the root link to the
+    /// deepest leaf, in millimetres (see `docs/serial.md`).
+    pub fn from_urdf_str(text: &str, file: &str) -> Result<Machine> {
+        let parts = urdf_file::build(text, file)?;
+        Ok(Machine {
+            source: file.into(),
+            name: parts.name,
+            description: parts.description,
+            model: parts.model,
+            references: parts.references,
+            rapid: parts.rapid,
+        })
     }
 
     /// Parses and validates a machine description; `file` names it in errors.
