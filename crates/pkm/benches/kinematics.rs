@@ -268,6 +268,19 @@ fn serial(c: &mut Criterion) {
         "serial 6R FK with deviations (general, deviations applied per call)",
         |b| b.iter(|| chain.pose(black_box(&q), &dq, &dev).unwrap()),
     );
+    c.bench_function(
+        "serial 6R pose + geometric Jacobian (prepared chain)",
+        |b| b.iter(|| prepared.jacobian(black_box(&q))),
+    );
+    let serial_m = pkm::serial::accuracy::SerialMachine {
+        name: "arm".into(),
+        tool: chain.clone(),
+        workpiece: None,
+    };
+    c.bench_function(
+        "serial 6R tool Jacobian (6 x 6, from the sensitivities)",
+        |b| b.iter(|| serial_m.tool_jacobian(black_box(&q), &[]).unwrap()),
+    );
     let Model::Serial(s) = machine("mc300.toml").model else {
         panic!()
     };

@@ -633,3 +633,24 @@ fn urdf_import_equals_the_hand_built_chain() {
         }
     }
 }
+
+#[test]
+fn prepared_jacobian_equals_the_tool_jacobian() {
+    use pkm::serial::PreparedChain;
+    let m = kr30();
+    let p = PreparedChain::new(&m.tool, &[], &[]);
+    for k in 0..20 {
+        let q: [f64; 6] = std::array::from_fn(|j| ((k * 5 + j * 3) % 11) as f64 * 0.3 - 1.4);
+        let (t, j) = p.jacobian(&q);
+        let reference = m.tool_jacobian(&q, &[]).unwrap();
+        assert!((t - m.pose(&q, &[], &[]).unwrap()).amax() < 1e-9);
+        for r in 0..6 {
+            for c in 0..6 {
+                assert!(
+                    (j[(r, c)] - reference[(r, c)]).abs() < 1e-9,
+                    "{k} ({r},{c})"
+                );
+            }
+        }
+    }
+}

@@ -221,15 +221,59 @@ impl PreparedChain {
         PreparedChain { steps }
     }
 
+    /// The pose and the geometric Jacobian (`6 x N`: tool-point velocity over angular
+    /// velocity, base frame) at joint values `q`, in one pass: a revolute joint with
+    /// axis `z_i` through `o_i` contributes `[z_i x (p - o_i); z_i]`, a prismatic one
+    /// `[z_i; 0]` (allocation-free; `N` must be the joint count).
+    #[inline]
+    pub fn jacobian<const N: usize>(
+        &self,
+        q: &[f64; N],
+    ) -> (Matrix4<f64>, nalgebra::SMatrix<f64, 6, N>) {
+        let mut axes = [(Vector3::zeros(), Vector3::zeros(), JointKind::Prismatic); N];
+        let mut k = 0;
+        let t = self.walk(q, |t: &Matrix4<f64>, kind| {
+            if k < N {
+                axes[k] = (
+                    Vector3::new(t[(0, 2)], t[(1, 2)], t[(2, 2)]),
+                    Vector3::new(t[(0, 3)], t[(1, 3)], t[(2, 3)]),
+                    kind,
+                );
+            }
+            k += 1;
+        });
+        let p = Vector3::new(t[(0, 3)], t[(1, 3)], t[(2, 3)]);
+        let mut j = nalgebra::SMatrix::<f64, 6, N>::zeros();
+        for (c, (z, o, kind)) in axes.iter().enumerate() {
+            let (v, w) = match kind {
+                JointKind::Revolute => (z.cross(&(p - o)), *z),
+                JointKind::Prismatic => (*z, Vector3::zeros()),
+            };
+            for r in 0..3 {
+                j[(r, c)] = v[r];
+                j[(r + 3, c)] = w[r];
+            }
+        }
+        (t, j)
+    }
+
     /// The chain's pose at joint values `q` (exactly [`Chain::pose`] with the prepared
     /// deviations). `q` must hold one value per joint.
     #[inline]
     pub fn pose(&self, q: &[f64]) -> Matrix4<f64> {
+        self.walk(q, |_, _| {})
+    }
+
+    /// Runs through the chain, calling `at_joint` with the frame of each joint (before
+    /// its motion) and its kind.
+    #[inline]
+    fn walk<F: FnMut(&Matrix4<f64>, JointKind)>(&self, q: &[f64], mut at_joint: F) -> Matrix4<f64> {
         let mut t = Matrix4::identity();
         let mut k = 0;
         for s in &self.steps {
             match s {
                 Step::Joint(kind, dq) => {
+                    at_joint(&t, *kind);
                     let v = q[k] + dq;
                     k += 1;
                     match kind {
