@@ -38,6 +38,7 @@ pub mod pose;
 pub mod rotation;
 pub mod serial;
 pub mod transmission;
+pub mod trig;
 pub mod tripod;
 pub mod units;
 pub mod verify;

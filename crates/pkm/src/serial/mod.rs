@@ -268,6 +268,19 @@ impl PreparedChain {
     /// its motion) and its kind.
     #[inline]
     fn walk<F: FnMut(&Matrix4<f64>, JointKind)>(&self, q: &[f64], mut at_joint: F) -> Matrix4<f64> {
+        // The joints' sines and cosines first: independent of each other and of the
+        // matrix products, they overlap instead of sitting on the products' chain.
+        const TRIG: [(f64, f64); 12] = [(0.0, 1.0); 12];
+        let mut trig = TRIG;
+        let mut j = 0;
+        for s in &self.steps {
+            if let Step::Joint(kind, dq) = s {
+                if j < TRIG.len() && *kind == JointKind::Revolute {
+                    trig[j] = crate::trig::sin_cos(q[j] + dq);
+                }
+                j += 1;
+            }
+        }
         let mut t = Matrix4::identity();
         let mut k = 0;
         for s in &self.steps {
@@ -278,7 +291,11 @@ impl PreparedChain {
                     k += 1;
                     match kind {
                         JointKind::Revolute => {
-                            let (sn, cs) = v.sin_cos();
+                            let (sn, cs) = if k <= TRIG.len() {
+                                trig[k - 1]
+                            } else {
+                                v.sin_cos()
+                            };
                             for r in 0..3 {
                                 let (a, b) = (t[(r, 0)], t[(r, 1)]);
                                 t[(r, 0)] = cs * a + sn * b;
