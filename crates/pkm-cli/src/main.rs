@@ -305,6 +305,13 @@ pub struct ErrorsArgs {
     /// Seed of the Monte Carlo.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Error map over two axes (names, e.g. X,Y) across their travel, the other axes
+    /// at --actuators: the first-order RSS and worst case of the tolerances per point.
+    #[arg(long)]
+    pub map: Option<String>,
+    /// Points per axis of the error map.
+    #[arg(long, default_value_t = 41)]
+    pub map_points: usize,
     /// Output directory.
     #[arg(long)]
     pub out: PathBuf,

@@ -157,3 +157,72 @@ fn fk_works_directly_on_a_urdf_file() {
     assert_eq!(o.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&o.stderr).contains("bad.urdf"));
 }
+
+#[test]
+fn error_map_over_two_axes() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("map");
+    let o = pkm()
+        .args([
+            "errors",
+            &path("examples/machines/mc300.toml"),
+            "--actuators",
+            "0,0,-100,30,45",
+            "--map",
+            "X,B",
+            "--map-points",
+            "11",
+            "--json",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["error_map"]["points"], 121);
+    let csv = std::fs::read_to_string(out.join("error-map.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 122);
+    assert!(csv.starts_with("X_mm,B_deg,rss_mm,worst_case_mm"));
+    // Each row's RSS is the budget's RSS at that point: the centre row equals a
+    // direct `pkm errors` there.
+    let centre: Vec<f64> = csv
+        .lines()
+        .nth(1 + 5 * 11 + 5)
+        .unwrap()
+        .split(',')
+        .map(|x| x.parse().unwrap())
+        .collect();
+    let o = pkm()
+        .args([
+            "errors",
+            &path("examples/machines/mc300.toml"),
+            "--actuators",
+        ])
+        .arg(format!("{},0,-100,{},45", centre[0], centre[1]))
+        .args(["--json", "--out"])
+        .arg(dir.path().join("one"))
+        .output()
+        .unwrap();
+    let w: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!((w["budget_rss"].as_f64().unwrap() - centre[2]).abs() < 1e-8);
+    assert!(out.join("error-map.svg").exists());
+    let o = pkm()
+        .args([
+            "errors",
+            &path("examples/machines/mc300.toml"),
+            "--map",
+            "X,Q",
+            "--out",
+        ])
+        .arg(dir.path().join("bad"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("unknown axis `Q`"));
+}

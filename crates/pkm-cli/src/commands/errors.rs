@@ -185,8 +185,90 @@ pub fn run(a: &ErrorsArgs) -> Result<u8> {
             )?;
             write_atomic(&a.out.join("monte-carlo.svg"), svg.as_bytes(), &inputs)?;
         }
-    } else if a.monte_carlo.is_some() {
-        bail!("--monte-carlo needs tolerances: add [[tolerance]] entries to the machine file");
+    } else if a.monte_carlo.is_some() || a.map.is_some() {
+        bail!("--monte-carlo and --map need tolerances: add [[tolerance]] entries to the machine file");
+    }
+    if let Some(spec) = &a.map {
+        let names: Vec<&str> = spec.split(',').map(str::trim).collect();
+        let coords = mech.coordinates();
+        let idx: Vec<usize> = names
+            .iter()
+            .map(|n| {
+                coords.iter().position(|c| c.name == *n).with_context(|| {
+                    format!(
+                        "--map: unknown axis `{n}`, expected two of {}",
+                        coords
+                            .iter()
+                            .map(|c| c.name.as_str())
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    )
+                })
+            })
+            .collect::<Result<_>>()?;
+        if idx.len() != 2 || idx[0] == idx[1] {
+            bail!("--map: expected two different axes, e.g. X,Y");
+        }
+        if a.map_points < 2 || a.map_points > 401 {
+            bail!("--map-points: expected 2 to 401");
+        }
+        let n = a.map_points;
+        let acts = mech.actuators();
+        let axis = |k: usize| pkm::workspace::GridAxis {
+            coordinate: idx[k],
+            min: acts[idx[k]].range.min,
+            max: acts[idx[k]].range.max,
+            step: (acts[idx[k]].range.max - acts[idx[k]].range.min) / (n - 1) as f64,
+        };
+        let axes = [axis(0), axis(1)];
+        let mut csv = format!(
+            "{}_{},{}_{},rss_mm,worst_case_mm\n",
+            coords[idx[0]].name,
+            coords[idx[0]].quantity.unit(),
+            coords[idx[1]].name,
+            coords[idx[1]].quantity.unit()
+        );
+        let mut rss = Vec::with_capacity(n * n);
+        let mut worst_all: f64 = 0.0;
+        for i in 0..axes[0].count() {
+            for k in 0..axes[1].count() {
+                let mut y = x.clone();
+                y[idx[0]] = axes[0].value(i);
+                y[idx[1]] = axes[1].value(k);
+                let b = budget(m, &y[..nt], &y[nt..], tol)?;
+                worst_all = worst_all.max(b.rss);
+                csv.push_str(&format!(
+                    "{:.6},{:.6},{:.9},{:.9}\n",
+                    coords[idx[0]].quantity.to_user(y[idx[0]]),
+                    coords[idx[1]].quantity.to_user(y[idx[1]]),
+                    b.rss,
+                    b.worst_case
+                ));
+                rss.push(b.rss);
+            }
+        }
+        write_atomic(&a.out.join("error-map.csv"), csv.as_bytes(), &inputs)?;
+        let coord = |k: usize| {
+            (
+                coords[axes[k].coordinate].name.clone(),
+                coords[axes[k].coordinate].quantity,
+            )
+        };
+        let value = |flat: usize| Some(1e3 * rss[flat]);
+        let svg = super::workspace::slice_plot(
+            &axes,
+            &x,
+            &coord,
+            (0, 1),
+            "first-order RSS of the tolerances over the travel",
+            crate::report::heatmap::Scale::Linear("RSS [µm]"),
+            &value,
+        )?;
+        write_atomic(&a.out.join("error-map.svg"), svg.as_bytes(), &inputs)?;
+        o.insert(
+            "error_map".into(),
+            json!({"axes": names, "points": n * n, "max_rss": worst_all, "file": "error-map.csv"}),
+        );
     }
     let text = serde_json::to_string_pretty(&out)?;
     write_atomic(&a.out.join("errors.json"), text.as_bytes(), &inputs)?;
