@@ -84,7 +84,8 @@ enum Command {
     #[command(after_help = "Examples:\n  \
         pkm errors examples/machines/mc300.toml --actuators 100,-50,-80,30,45 --out err\n  \
         pkm errors examples/machines/mc300.toml --actuators 100,-50,-80,30,45 --monte-carlo 100000 --json --out err\n  \
-        pkm errors examples/machines/mc300.toml --deviations devs.toml --out err   # devs.toml: \"delta_x(1 slide)\" = 0.01\n\n\
+        pkm errors examples/machines/mc300.toml --deviations devs.toml --out err   # devs.toml: \"delta_x(1 slide)\" = 0.01\n  \
+        pkm errors examples/machines/mc300.toml --tolerances tight.toml --map X,Y --out map\n\n\
         Writes DIR/errors.json (position_error, orientation_error, sensitivities, budget,\n\
         monte_carlo), DIR/budget.svg and DIR/monte-carlo.svg. Units: mm; deg for angular\n\
         deviations and rotary axes.")]
@@ -299,7 +300,11 @@ pub struct ErrorsArgs {
     /// TOML file of deviation values by name (mm; deg for angles).
     #[arg(long)]
     pub deviations: Option<PathBuf>,
-    /// Monte Carlo of the file's tolerances with this many machines.
+    /// Tolerances file (`[[tolerance]]` entries, as in a serial machine file) instead of
+    /// the machine file's.
+    #[arg(long)]
+    pub tolerances: Option<PathBuf>,
+    /// Monte Carlo of the tolerances with this many machines.
     #[arg(long)]
     pub monte_carlo: Option<usize>,
     /// Seed of the Monte Carlo.

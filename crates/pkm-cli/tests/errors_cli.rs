@@ -226,3 +226,49 @@ fn error_map_over_two_axes() {
     assert_eq!(o.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&o.stderr).contains("unknown axis `Q`"));
 }
+
+#[test]
+fn tolerances_from_a_separate_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let tol = dir.path().join("tight.toml");
+    std::fs::write(&tol, "[[tolerance]]\ndeviation = \"dq(X)\"\nvalue = 0.001\n[[tolerance]]\ndeviation = \"dq(B)\"\nvalue = 0.001\ndistribution = \"normal\"\n").unwrap();
+    let o = pkm()
+        .args([
+            "errors",
+            &path("examples/machines/mc300.toml"),
+            "--tolerances",
+        ])
+        .arg(&tol)
+        .args(["--json", "--out"])
+        .arg(dir.path().join("t"))
+        .output()
+        .unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let b = v["budget"].as_object().unwrap();
+    assert_eq!(b.len(), 2);
+    assert!((b["dq(X)"].as_f64().unwrap() - 0.001).abs() < 1e-12);
+    std::fs::write(&tol, "[[tolerance]]\ndeviation = \"dq(X)\"\nvalue = -1\n").unwrap();
+    let o = pkm()
+        .args([
+            "errors",
+            &path("examples/machines/mc300.toml"),
+            "--tolerances",
+        ])
+        .arg(&tol)
+        .arg("--out")
+        .arg(dir.path().join("t2"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains("tight.toml:3:") && e.contains("tolerance[0].value"),
+        "{e}"
+    );
+}

@@ -97,11 +97,21 @@ pub fn run(a: &ErrorsArgs) -> Result<u8> {
     };
     let dev = deviations_from(m, &devs);
     let (dp, dw) = pose_error(m, qt, qw, &dev)?;
-    let tol = &s.tolerances;
+    let own;
+    let tol = match &a.tolerances {
+        Some(p) => {
+            let text = std::fs::read_to_string(p)
+                .with_context(|| format!("cannot read {}", p.display()))?;
+            own = pkm::machine::read_tolerances(m, &text, &p.display().to_string())?;
+            &own
+        }
+        None => &s.tolerances,
+    };
     std::fs::create_dir_all(&a.out)
         .with_context(|| format!("cannot create {}", a.out.display()))?;
     let inputs: Vec<&std::path::Path> = std::iter::once(a.machine.as_path())
         .chain(a.deviations.as_deref())
+        .chain(a.tolerances.as_deref())
         .collect();
     // Sensitivity table of every toleranced deviation (or every deviation).
     let params: Vec<Parameter> = if tol.is_empty() {

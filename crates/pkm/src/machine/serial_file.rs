@@ -314,11 +314,34 @@ pub(super) fn build(src: &Source, f: SerialFile) -> Result<super::Parts, Error> 
             ),
         ));
     }
-    // Tolerances by name, in the units of the deviation (mm; deg for angles and
-    // revolute dq).
+    let tolerances = tolerances(src, &machine, &f.tolerance)?;
+    let mechanism =
+        SerialAny::new(machine, &home).map_err(|e| src.error(&[key("home")], e.to_string()))?;
+    super::check_references(src, &f.reference)?;
+    let rapid = super::check_motion(src, f.motion.as_ref())?;
+    let _ = Vector3::<f64>::zeros();
+    Ok(super::Parts {
+        model: Model::Serial(Box::new(crate::serial::SerialModel {
+            mechanism,
+            tolerances,
+        })),
+        name: f.name,
+        description: f.description,
+        references: f.reference,
+        rapid,
+    })
+}
+
+/// `[[tolerance]]` entries by name, in the units of the deviation (mm; deg for angles
+/// and revolute dq).
+fn tolerances(
+    src: &Source,
+    machine: &SerialMachine,
+    entries: &[ToleranceFile],
+) -> Result<Vec<Tolerance>, Error> {
     let params = machine.all_parameters();
     let mut tolerances = Vec::new();
-    for (i, t) in f.tolerance.iter().enumerate() {
+    for (i, t) in entries.iter().enumerate() {
         let at = |k: &str| vec![key("tolerance"), Seg::Index(i), key(k)];
         let Some(p) = params
             .iter()
@@ -375,19 +398,24 @@ pub(super) fn build(src: &Source, f: SerialFile) -> Result<super::Parts, Error> 
             distribution,
         });
     }
-    let mechanism =
-        SerialAny::new(machine, &home).map_err(|e| src.error(&[key("home")], e.to_string()))?;
-    super::check_references(src, &f.reference)?;
-    let rapid = super::check_motion(src, f.motion.as_ref())?;
-    let _ = Vector3::<f64>::zeros();
-    Ok(super::Parts {
-        model: Model::Serial(Box::new(crate::serial::SerialModel {
-            mechanism,
-            tolerances,
-        })),
-        name: f.name,
-        description: f.description,
-        references: f.reference,
-        rapid,
-    })
+    Ok(tolerances)
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TolerancesOnly {
+    tolerance: Vec<ToleranceFile>,
+}
+
+/// Reads a tolerances file (`[[tolerance]]` entries as in a serial machine file) for
+/// `machine`; errors name the file, line and field.
+pub fn read_tolerances(
+    machine: &SerialMachine,
+    text: &str,
+    file: &str,
+) -> Result<Vec<Tolerance>, Error> {
+    let src = Source::parse(file, text)?;
+    src.check_finite()?;
+    let f: TolerancesOnly = src.deserialize()?;
+    tolerances(&src, machine, &f.tolerance)
 }
