@@ -1,21 +1,9 @@
 //! `pkm errors` end to end on the MC-300-like example.
 
-use std::path::PathBuf;
-
-use assert_cmd::Command;
 use serde_json::Value;
 
-fn path(rel: &str) -> String {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../..")
-        .join(rel)
-        .display()
-        .to_string()
-}
-
-fn pkm() -> Command {
-    Command::cargo_bin("pkm").unwrap()
-}
+mod common;
+use common::{path, pkm};
 
 #[test]
 fn errors_json_contract_and_plots() {

@@ -1,21 +1,9 @@
 //! `pkm workspace` and the hexapod through the CLI.
 
-use std::path::PathBuf;
-
-use assert_cmd::Command;
 use serde_json::Value;
 
-fn path(rel: &str) -> String {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../..")
-        .join(rel)
-        .display()
-        .to_string()
-}
-
-fn pkm() -> Command {
-    Command::cargo_bin("pkm").unwrap()
-}
+mod common;
+use common::{path, pkm};
 
 #[test]
 fn workspace_outputs() {

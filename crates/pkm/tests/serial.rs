@@ -9,6 +9,29 @@ fn small_rotation(w: [f64; 3]) -> Matrix3<f64> {
     *Rotation3::new(Vector3::from(w)).matrix()
 }
 
+/// Homogeneous rotations and translations for hand-built chains.
+fn rz4(t: f64) -> Matrix4<f64> {
+    let (s, c) = t.sin_cos();
+    Matrix4::new(
+        c, -s, 0.0, 0.0, s, c, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+    )
+}
+
+fn rx4(t: f64) -> Matrix4<f64> {
+    let (s, c) = t.sin_cos();
+    Matrix4::new(
+        1.0, 0.0, 0.0, 0.0, 0.0, c, -s, 0.0, 0.0, s, c, 0.0, 0.0, 0.0, 0.0, 1.0,
+    )
+}
+
+fn tr4(x: f64, y: f64, z: f64) -> Matrix4<f64> {
+    let mut m = Matrix4::identity();
+    m[(0, 3)] = x;
+    m[(1, 3)] = y;
+    m[(2, 3)] = z;
+    m
+}
+
 #[test]
 fn completion_recovers_a_true_block_from_three_angles() {
     // Nominal blocks with 90 deg angles at the measured positions (signed: unique).
@@ -418,7 +441,6 @@ fn prepared_chain_equals_the_general_pose() {
 
 #[test]
 fn dh_table_equals_the_hand_built_product() {
-    use nalgebra::Matrix4;
     let m = pkm::Machine::from_path(format!(
         "{}/../../examples/machines/kr30-dh.toml",
         env!("CARGO_MANIFEST_DIR")
@@ -437,25 +459,6 @@ fn dh_table_equals_the_hand_built_product() {
         (0.0, -90.0, 0.0, 0.0),
         (0.0, 0.0, 170.0, 0.0),
     ];
-    let rz = |t: f64| {
-        let (s, c) = t.sin_cos();
-        Matrix4::new(
-            c, -s, 0.0, 0.0, s, c, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
-        )
-    };
-    let rx = |t: f64| {
-        let (s, c) = t.sin_cos();
-        Matrix4::new(
-            1.0, 0.0, 0.0, 0.0, 0.0, c, -s, 0.0, 0.0, s, c, 0.0, 0.0, 0.0, 0.0, 1.0,
-        )
-    };
-    let tr = |x: f64, y: f64, z: f64| {
-        let mut m = Matrix4::identity();
-        m[(0, 3)] = x;
-        m[(1, 3)] = y;
-        m[(2, 3)] = z;
-        m
-    };
     for k in 0..50 {
         let q: Vec<f64> = (0..6)
             .map(|j| ((k * 7 + j * 3) % 11) as f64 * 0.3 - 1.5)
@@ -463,12 +466,12 @@ fn dh_table_equals_the_hand_built_product() {
         let mut t = Matrix4::identity();
         for (j, (a, al, d, th)) in dh.iter().enumerate() {
             t = t
-                * rz(q[j] + f64::to_radians(*th))
-                * tr(0.0, 0.0, *d)
-                * tr(*a, 0.0, 0.0)
-                * rx(f64::to_radians(*al));
+                * rz4(q[j] + f64::to_radians(*th))
+                * tr4(0.0, 0.0, *d)
+                * tr4(*a, 0.0, 0.0)
+                * rx4(f64::to_radians(*al));
         }
-        t *= tr(0.0, 0.0, 100.0); // dh_tool
+        t *= tr4(0.0, 0.0, 100.0); // dh_tool
         let p = chain.pose(&q, &[], &[]).unwrap();
         assert!((p - t).amax() < 1e-9, "{k}: {}", (p - t).amax());
     }
@@ -564,7 +567,6 @@ fn numeric_inverse_kinematics_round_trip() {
 
 #[test]
 fn urdf_import_equals_the_hand_built_chain() {
-    use nalgebra::Matrix4;
     let m = pkm::Machine::from_path(format!(
         "{}/../../examples/robots/ur5-like.urdf",
         env!("CARGO_MANIFEST_DIR")
@@ -584,24 +586,6 @@ fn urdf_import_equals_the_hand_built_chain() {
         (0.0, -std::f64::consts::FRAC_PI_2, 94.65),
         (0.0, 0.0, 82.3),
     ];
-    let rz = |t: f64| {
-        let (s, c) = t.sin_cos();
-        Matrix4::new(
-            c, -s, 0.0, 0.0, s, c, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
-        )
-    };
-    let rx = |t: f64| {
-        let (s, c) = t.sin_cos();
-        Matrix4::new(
-            1.0, 0.0, 0.0, 0.0, 0.0, c, -s, 0.0, 0.0, s, c, 0.0, 0.0, 0.0, 0.0, 1.0,
-        )
-    };
-    let tr = |x: f64, z: f64| {
-        let mut m = Matrix4::identity();
-        m[(0, 3)] = x;
-        m[(2, 3)] = z;
-        m
-    };
     for k in 0..50 {
         let q: Vec<f64> = (0..6)
             .map(|j| ((k * 3 + j * 5) % 9) as f64 * 0.5 - 2.0)
@@ -610,7 +594,7 @@ fn urdf_import_equals_the_hand_built_chain() {
         for (j, (a, al, d)) in dh.iter().enumerate() {
             // The URDF writes joint 2 about -Y with rotated origins: the same motion
             // as DH's joint 2 about its Z.
-            t = t * rz(q[j]) * tr(0.0, *d) * tr(*a, 0.0) * rx(*al);
+            t = t * rz4(q[j]) * tr4(0.0, 0.0, *d) * tr4(*a, 0.0, 0.0) * rx4(*al);
         }
         let p = sm.pose(&q, &[], &[]).unwrap();
         assert!((p - t).amax() < 1e-9, "{k}: {}", (p - t).amax());
