@@ -254,6 +254,9 @@ fn seed004_move_and_report() {
     assert!((pv / 260.0 - 1.0).abs() < 0.03, "{pv}");
     assert!((pa / 2600.0 - 1.0).abs() < 0.03, "{pa}");
     assert_eq!(s["duration_s"], 1.0);
+    assert_eq!(s["profile"]["duration_s"], 1.0);
+    assert_eq!(s["profile"]["accel_time_s"], 0.1);
+    assert!(s["profile"].get("jerk").is_none());
     for f in ["actuators.csv", "actuators.svg", "serial.svg"] {
         assert!(out.join(f).exists(), "{f}");
     }

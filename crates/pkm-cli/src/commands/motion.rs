@@ -438,7 +438,16 @@ pub fn run(a: &MotionArgs) -> Result<u8> {
             .with_context(|| format!("cannot write {}", csv_path.display()))?;
     }
     let s = &outcome.summary;
-    let summary = summary_json(&machine, s, &feed);
+    let mut summary = summary_json(&machine, s, &feed);
+    // A move timed by --duration (and --accel-time) is not shaped by the path
+    // acceleration/jerk options: say what timed it instead.
+    if let Some(d) = a.duration {
+        summary["profile"] = json!({
+            "profile": summary["profile"]["profile"],
+            "duration_s": d,
+            "accel_time_s": a.accel_time,
+        });
+    }
     write_atomic(
         &a.out.join("summary.json"),
         serde_json::to_string_pretty(&summary)?.as_bytes(),
