@@ -304,6 +304,16 @@ pub fn run(a: &ErrorsArgs) -> Result<u8> {
                 out["budget_rss"].as_f64().unwrap_or(0.0),
                 tol.len()
             );
+            if let Some(items) = out["budget"].as_object() {
+                let mut v: Vec<(&String, f64)> = items
+                    .iter()
+                    .map(|(k, x)| (k, x.as_f64().unwrap_or(0.0)))
+                    .collect();
+                v.sort_by(|a, b| b.1.total_cmp(&a.1));
+                for (k, x) in v.iter().take(5) {
+                    println!("  largest        {k:<28} {:.4} mm", x);
+                }
+            }
         }
         if let Some(mc) = out.get("monte_carlo") {
             println!(
