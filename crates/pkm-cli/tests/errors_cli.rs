@@ -69,7 +69,11 @@ fn errors_json_contract_and_plots() {
         .output()
         .unwrap();
     assert_eq!(o.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("unknown deviation `delta_q(9 arm)`"));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains("unknown deviation `delta_q(9 arm)`") && e.contains("devs.toml:1:"),
+        "{e}"
+    );
     let o = pkm()
         .args([
             "errors",

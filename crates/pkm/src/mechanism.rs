@@ -250,17 +250,9 @@ pub trait Mechanism<const P: usize, const A: usize>: Send + Sync {
     /// consistent: the default divides angle columns (mm/rad) by
     /// [`Mechanism::characteristic_length`] so every column is in actuator units per mm.
     fn condition(&self, x: &SVector<f64, P>) -> Result<f64> {
-        let j = self.jacobian(x)?;
-        let d = self.driven();
-        let lc = self.characteristic_length();
-        let jd = SMatrix::<f64, A, A>::from_fn(|r, c| {
-            let k = d[c];
-            match self.coordinates()[k].quantity {
-                crate::units::Quantity::Angle => j[(r, k)] / lc,
-                crate::units::Quantity::Length => j[(r, k)],
-            }
-        });
-        Ok(crate::linalg::condition_number(&jd))
+        Ok(crate::linalg::condition_number(&scaled_driven_jacobian(
+            self, x,
+        )?))
     }
 
     /// Length (mm) that scales rotations against translations in conditioning: a
@@ -312,6 +304,28 @@ impl Default for NewtonOptions {
             min_rcond: 1e-10,
         }
     }
+}
+
+/// The driven columns of the Jacobian at `x` with angle columns divided by the
+/// characteristic length: every column in actuator units per mm (the matrix whose
+/// conditioning [`Mechanism::condition`] reports by default).
+pub fn scaled_driven_jacobian<M, const P: usize, const A: usize>(
+    m: &M,
+    x: &SVector<f64, P>,
+) -> Result<SMatrix<f64, A, A>>
+where
+    M: Mechanism<P, A> + ?Sized,
+{
+    let j = m.jacobian(x)?;
+    let d = m.driven();
+    let lc = m.characteristic_length();
+    Ok(SMatrix::<f64, A, A>::from_fn(|r, c| {
+        let k = d[c];
+        match m.coordinates()[k].quantity {
+            crate::units::Quantity::Angle => j[(r, k)] / lc,
+            crate::units::Quantity::Length => j[(r, k)],
+        }
+    }))
 }
 
 /// The columns of `J` belonging to the driven coordinates (`A x A`).

@@ -68,14 +68,8 @@ where
         let idx: Vec<usize> = (0..A).filter(|&c| is_angle(c) == angle).collect();
         DMatrix::from_fn(mat.nrows(), idx.len(), |r, k| mat[(r, idx[k])])
     };
-    let scaled = DMatrix::from_fn(A, A, |r, c| {
-        if is_angle(c) {
-            jd[(r, c)] / lc
-        } else {
-            jd[(r, c)]
-        }
-    });
-    let sv = scaled.singular_values();
+    let scaled = crate::mechanism::scaled_driven_jacobian(m, x)?;
+    let sv = DMatrix::from_fn(A, A, |r, c| scaled[(r, c)]).singular_values();
     let smin = sv.iter().copied().fold(f64::INFINITY, f64::min);
     let smax_all = sv.iter().copied().fold(0.0, f64::max);
     let inv_t = jd.clone().try_inverse().map(|i| i.transpose());

@@ -2,7 +2,7 @@
 
 use nalgebra::{Matrix3, Matrix4, Rotation3, Vector3};
 use pkm::serial::completion::complete;
-use pkm::serial::{joint_transform, Chain, Joint, JointKind, Link, LinkDeviation};
+use pkm::serial::{Chain, Joint, JointKind, Link, LinkDeviation};
 use pkm::{Error, Range};
 
 fn small_rotation(w: [f64; 3]) -> Matrix3<f64> {
@@ -212,7 +212,6 @@ fn zero_deviations_give_the_nominal_pose_and_each_kind_moves_the_tool_as_expecte
     let t4 = c.pose(&q, &[], &dev3).unwrap();
     assert!((t4 - t).fixed_view::<3, 1>(0, 3).amax() < 1e-15);
     assert!((t4 - t).fixed_view::<3, 3>(0, 0).amax() > 0.5 * e);
-    let _ = joint_transform(JointKind::Revolute, 0.0) * Matrix4::<f64>::identity();
 }
 
 fn revolute(name: &str) -> Option<Joint> {
@@ -389,12 +388,30 @@ fn monte_carlo_converges_to_the_first_order_prediction() {
         monte_carlo(&m, &qt, &qw, &tol, 5000, 7).unwrap(),
         monte_carlo(&m, &qt, &qw, &tol, 5000, 7).unwrap()
     );
-    // Budget: sorted, worst case >= RSS >= largest item; the RSS of the budget is the
-    // norm of the first-order std vector times sqrt 3 for all-uniform... here simply
-    // consistent with its items.
+    // Budget: each item is |dp/dd| times its tolerance, from the sensitivities computed
+    // above; sorted; worst case and RSS of the items.
     let b = budget(&m, &qt, &qw, &tol).unwrap();
+    assert_eq!(b.items.len(), tol.len());
+    for (t, (dp, w)) in tol.iter().zip(&s) {
+        let item = b
+            .items
+            .iter()
+            .find(|i| i.name == m.parameter_name(&t.parameter))
+            .unwrap();
+        assert!(
+            (item.position - dp.norm() * t.value).abs() < 1e-15,
+            "{}",
+            item.name
+        );
+        assert!(
+            (item.orientation - w.norm() * t.value).abs() < 1e-15,
+            "{}",
+            item.name
+        );
+    }
     assert!(b.items.windows(2).all(|w| w[0].position >= w[1].position));
-    assert!(b.worst_case >= b.rss && b.rss >= b.items[0].position);
+    let sum: f64 = b.items.iter().map(|i| i.position).sum();
+    assert!((b.worst_case - sum).abs() < 1e-15);
     let dq_x = b.items.iter().find(|i| i.name == "dq(X)").unwrap();
     assert!((dq_x.position - 5e-3).abs() < 1e-12, "{}", dq_x.position);
 }

@@ -6,7 +6,6 @@ use anyhow::{bail, Context, Result};
 use pkm::machine::Model;
 use pkm::serial::accuracy::Parameter;
 use pkm::serial::tolerance::{budget, deviations_from, monte_carlo, pose_error};
-use pkm::serial::SerialModel;
 use serde_json::json;
 
 use super::load;
@@ -14,59 +13,6 @@ use crate::io::write_atomic;
 use crate::poses::parse_list;
 use crate::report::plot::{bars_svg, histogram_svg};
 use crate::ErrorsArgs;
-
-/// Deviation values by name from a TOML file (`"delta_x(1 slide)" = 0.01`; mm, deg for
-/// angles and revolute dq), converted to internal units.
-fn read_deviations(s: &SerialModel, path: &std::path::Path) -> Result<Vec<(Parameter, f64)>> {
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
-    let table: toml::Table = text
-        .parse()
-        .map_err(|e: toml::de::Error| anyhow::anyhow!("{}: {e}", path.display()))?;
-    let m = s.mechanism.machine();
-    let params = m.all_parameters();
-    let mut out = Vec::new();
-    for (name, v) in &table {
-        let Some(p) = params.iter().find(|p| m.parameter_name(p) == *name) else {
-            bail!(
-                "{}: unknown deviation `{name}`: expected delta_x|y|z(LINK), alpha_ab(LINK) or dq(JOINT), e.g. {}",
-                path.display(),
-                params.iter().take(3).map(|p| m.parameter_name(p)).collect::<Vec<_>>().join(", ")
-            );
-        };
-        let val = v
-            .as_float()
-            .or_else(|| v.as_integer().map(|i| i as f64))
-            .with_context(|| format!("{}: `{name}`: expected a number", path.display()))?;
-        out.push((
-            *p,
-            if is_angle(s, p) {
-                val.to_radians()
-            } else {
-                val
-            },
-        ));
-    }
-    Ok(out)
-}
-
-fn is_angle(s: &SerialModel, p: &Parameter) -> bool {
-    let m = s.mechanism.machine();
-    match p {
-        Parameter::Alpha { .. } => true,
-        Parameter::Delta { .. } => false,
-        Parameter::Dq { chain, joint } => {
-            let ch = if *chain == 0 {
-                Some(&m.tool)
-            } else {
-                m.workpiece.as_ref()
-            };
-            ch.and_then(|c| c.joints().nth(*joint))
-                .map(|j| j.kind == pkm::serial::JointKind::Revolute)
-                .unwrap_or(false)
-        }
-    }
-}
 
 pub fn run(a: &ErrorsArgs) -> Result<u8> {
     let machine = load(&a.machine)?;
@@ -92,7 +38,11 @@ pub fn run(a: &ErrorsArgs) -> Result<u8> {
     let nt = m.tool.dof();
     let (qt, qw) = (&x[..nt], &x[nt..]);
     let devs = match &a.deviations {
-        Some(p) => read_deviations(s, p)?,
+        Some(p) => {
+            let text = std::fs::read_to_string(p)
+                .with_context(|| format!("cannot read {}", p.display()))?;
+            pkm::machine::read_deviations(m, &text, &p.display().to_string())?
+        }
         None => Vec::new(),
     };
     let dev = deviations_from(m, &devs);
@@ -120,8 +70,8 @@ pub fn run(a: &ErrorsArgs) -> Result<u8> {
         tol.iter().map(|t| t.parameter).collect()
     };
     let sens = m.sensitivities(qt, qw, &dev, &params)?;
-    let unit = |p: &Parameter| if is_angle(s, p) { "deg" } else { "mm" };
-    let per_user = |p: &Parameter, v: f64| if is_angle(s, p) { v.to_radians() } else { v };
+    let unit = |p: &Parameter| if m.is_angular(p) { "deg" } else { "mm" };
+    let per_user = |p: &Parameter, v: f64| if m.is_angular(p) { v.to_radians() } else { v };
     let sens_json: Vec<_> = params
         .iter()
         .zip(&sens)

@@ -213,22 +213,9 @@ impl Hexapod {
     /// Twist Jacobian with the rotation columns scaled by the characteristic length, so
     /// that its singular values are all in mm per mm: `J diag(I, I / l_c)`.
     pub fn scaled_twist_jacobian(&self, p: &Vector3<f64>, r: &Matrix3<f64>) -> SMatrix<f64, 6, 6> {
-        let mut j = self.set.twist_jacobian(p, r);
-        for row in 0..6 {
-            for c in 3..6 {
-                j[(row, c)] /= self.characteristic_length;
-            }
-        }
-        j
-    }
-
-    /// Largest actuator rate per unit tool speed (pure translation), mm/s per mm/s: the
-    /// 2-norm of the translational block of the Jacobian.
-    pub fn velocity_transmission(&self, x: &Vector6<f64>) -> f64 {
-        let (p, r) = split_pose(x);
-        let j = self.set.twist_jacobian(&p, &r);
-        let jt: SMatrix<f64, 6, 3> = j.fixed_view::<6, 3>(0, 0).into_owned();
-        crate::linalg::singular_values(&jt)[0]
+        self.soa
+            .lengths_and_jacobian(p, r, self.characteristic_length)
+            .1
     }
 }
 

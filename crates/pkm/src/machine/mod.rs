@@ -20,7 +20,7 @@ use crate::mechanism::Mechanism;
 use crate::tripod::{CentreLegTripod, TranslationalTripod};
 
 pub use reference::Reference;
-pub use serial_file::read_tolerances;
+pub use serial_file::{read_deviations, read_tolerances};
 pub use source::line_col;
 
 pub(crate) fn v3(a: [f64; 3]) -> nalgebra::Vector3<f64> {

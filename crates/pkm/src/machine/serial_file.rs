@@ -9,7 +9,7 @@ use super::source::{Seg, Source};
 use super::{v3, Model};
 use crate::error::Error;
 use crate::limits::Range;
-use crate::serial::accuracy::{Parameter, SerialMachine};
+use crate::serial::accuracy::SerialMachine;
 use crate::serial::mechanism::SerialAny;
 use crate::serial::tolerance::{Distribution, Tolerance};
 use crate::serial::{Chain, Joint, JointKind, Link};
@@ -339,49 +339,19 @@ fn tolerances(
     machine: &SerialMachine,
     entries: &[ToleranceFile],
 ) -> Result<Vec<Tolerance>, Error> {
-    let params = machine.all_parameters();
     let mut tolerances = Vec::new();
     for (i, t) in entries.iter().enumerate() {
         let at = |k: &str| vec![key("tolerance"), Seg::Index(i), key(k)];
-        let Some(p) = params
-            .iter()
-            .find(|p| machine.parameter_name(p) == t.deviation)
-        else {
-            let examples: Vec<String> = params
-                .iter()
-                .take(4)
-                .map(|p| machine.parameter_name(p))
-                .collect();
-            return Err(src.error(
-                &at("deviation"),
-                format!(
-                    "unknown deviation `{}`: expected delta_x|y|z(LINK), alpha_ab(LINK) with a, b in x, y, z, or dq(JOINT), e.g. {}",
-                    t.deviation,
-                    examples.join(", ")
-                ),
-            ));
-        };
+        let p = machine
+            .parameter_by_name(&t.deviation)
+            .map_err(|m| src.error(&at("deviation"), m))?;
         if !(t.value > 0.0) {
             return Err(src.error(
                 &at("value"),
                 format!("expected a tolerance > 0, found {}", t.value),
             ));
         }
-        let angle = match p {
-            Parameter::Alpha { .. } => true,
-            Parameter::Dq { chain, joint } => {
-                let ch = if *chain == 0 {
-                    &machine.tool
-                } else {
-                    machine.workpiece.as_ref().expect("chain")
-                };
-                ch.joints()
-                    .nth(*joint)
-                    .map(|j| j.kind == JointKind::Revolute)
-                    .unwrap_or(false)
-            }
-            Parameter::Delta { .. } => false,
-        };
+        let angle = machine.is_angular(&p);
         let distribution = match t.distribution.as_deref() {
             None | Some("uniform") => Distribution::Uniform,
             Some("normal") => Distribution::Normal,
@@ -393,7 +363,7 @@ fn tolerances(
             }
         };
         tolerances.push(Tolerance {
-            parameter: *p,
+            parameter: p,
             value: if angle { t.value.to_radians() } else { t.value },
             distribution,
         });
@@ -418,4 +388,33 @@ pub fn read_tolerances(
     src.check_finite()?;
     let f: TolerancesOnly = src.deserialize()?;
     tolerances(&src, machine, &f.tolerance)
+}
+
+/// Reads a deviations file (`"delta_x(1 slide)" = 0.01`, one value per named
+/// deviation; mm, deg for angles and revolute dq) for `machine`, in internal units;
+/// errors name the file, line and deviation.
+pub fn read_deviations(
+    machine: &SerialMachine,
+    text: &str,
+    file: &str,
+) -> Result<Vec<(crate::serial::accuracy::Parameter, f64)>, Error> {
+    let src = Source::parse(file, text)?;
+    src.check_finite()?;
+    let values: std::collections::BTreeMap<String, f64> = src.deserialize()?;
+    values
+        .iter()
+        .map(|(name, v)| {
+            let p = machine
+                .parameter_by_name(name)
+                .map_err(|m| src.error(&[key(name)], m))?;
+            Ok((
+                p,
+                if machine.is_angular(&p) {
+                    v.to_radians()
+                } else {
+                    *v
+                },
+            ))
+        })
+        .collect()
 }

@@ -24,9 +24,9 @@ use crate::units::Quantity;
 /// determines theta modulo pi (its formula (11) is lost). pkm's closed form gives both
 /// branches as exact angles and keeps the one the machine is assembled in;
 /// `docs/seed-004.md` shows that over the design workspace this is the paper's branch
-/// (theta in `[0, 1.57]` rad) and that the other branch lies at theta below `-pi/2`,
-/// where the literal "pi + theta" correction would return a pose that does not close
-/// the loop (tested).
+/// (theta in `[0, 1.57]` rad) and that the other branch lies at theta in
+/// `[-pi, -1.98]` or `[2.80, pi]` rad, where the literal "pi + theta" correction would
+/// return a pose that does not close the loop (tested).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Branch {
@@ -386,7 +386,7 @@ pub(crate) fn head_skeleton(
     actuators: &[Actuator],
     z: f64,
     theta: f64,
-) -> Result<(Skeleton, usize)> {
+) -> Result<Skeleton> {
     let [a, b, c, tool] = g.points(z, theta)?;
     let mut s = Skeleton::default();
     let lo = actuators[0].range.min.min(z);
@@ -409,7 +409,7 @@ pub(crate) fn head_skeleton(
     s.link("AB", LinkKind::Platform, ia, ib);
     s.link("rod BC", LinkKind::Passive, ib, ic);
     s.link("spindle", LinkKind::Tool, ia, it);
-    Ok((s, it))
+    Ok(s)
 }
 
 impl Mechanism<2, 2> for P3rpHead {
@@ -505,7 +505,7 @@ impl Mechanism<2, 2> for P3rpHead {
     }
 
     fn skeleton(&self, x: &Vector2<f64>) -> Result<Skeleton> {
-        Ok(head_skeleton(&self.geometry, &self.actuators, x[0], x[1])?.0)
+        head_skeleton(&self.geometry, &self.actuators, x[0], x[1])
     }
 
     /// The crank length `l1`: a deflection of 1 rad moves hinge B by `l1`.

@@ -15,7 +15,9 @@ use crate::units::Quantity;
 
 /// The hybrid machine: tool tip X, Y, Z relative to the part (table frame, origin on
 /// the table surface under the spindle at X = Y = 0) and the spindle deflection A
-/// (rotation about X, the head's theta); B and C are always 0.
+/// (rotation about X, the head's theta). B and C are held coordinates the machine keeps
+/// at 0: kinematics ignores them and [`Mechanism::check_limits`] reports any other value
+/// as a violated limit with its excess.
 ///
 /// Actuators `X`, `Y` (table axes, valued as the tool's position relative to the part,
 /// as CNC axes are) and the head's sliders `U`, `V`:
@@ -199,7 +201,7 @@ impl Mechanism<6, 4> for HybridMachine {
     fn skeleton(&self, x: &Vector6<f64>) -> Result<Skeleton> {
         let q = self.inverse(x)?;
         let h = self.head_pose(x);
-        let (mut s, _) = head_skeleton(&self.head, &self.actuators[2..], h[0], h[1])?;
+        let mut s = head_skeleton(&self.head, &self.actuators[2..], h[0], h[1])?;
         let o = s.point(
             "O (spindle axis on the table)",
             PointRole::Other,

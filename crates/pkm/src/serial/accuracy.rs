@@ -116,6 +116,38 @@ impl SerialMachine {
         }
     }
 
+    /// The deviation with this name ([`SerialMachine::parameter_name`]), or a message
+    /// saying what names look like (for file and command-line errors).
+    pub fn parameter_by_name(&self, name: &str) -> std::result::Result<Parameter, String> {
+        let all = self.all_parameters();
+        all.iter()
+            .copied()
+            .find(|p| self.parameter_name(p) == name)
+            .ok_or_else(|| {
+                let examples: Vec<String> =
+                    all.iter().take(4).map(|p| self.parameter_name(p)).collect();
+                format!(
+                    "unknown deviation `{name}`: expected delta_x|y|z(LINK), alpha_ab(LINK) \
+                     with a, b in x, y, z, or dq(JOINT), e.g. {}",
+                    examples.join(", ")
+                )
+            })
+    }
+
+    /// Whether a deviation is an angle (rad inside, deg at the boundary): the angular
+    /// deviations, and the positioning deviation of a revolute joint.
+    pub fn is_angular(&self, p: &Parameter) -> bool {
+        match *p {
+            Parameter::Alpha { .. } => true,
+            Parameter::Delta { .. } => false,
+            Parameter::Dq { chain, joint } => self
+                .chain(chain)
+                .ok()
+                .and_then(|c| c.joints().nth(joint))
+                .is_some_and(|j| j.kind == JointKind::Revolute),
+        }
+    }
+
     /// Every primary deviation of the machine: per link 3 linear and 9 angular, per
     /// joint 1 positioning.
     pub fn all_parameters(&self) -> Vec<Parameter> {
@@ -162,7 +194,7 @@ impl SerialMachine {
             Some(w) => {
                 let dw = dev.get(1).unwrap_or(&none);
                 let tw = w.pose(qw, &dw.dq, &dw.links)?;
-                Ok(inverse(&tw) * t)
+                Ok(inverse(&tw)? * t)
             }
         }
     }
@@ -180,13 +212,13 @@ impl SerialMachine {
         params: &[Parameter],
     ) -> Result<Vec<(Vector3<f64>, Vector3<f64>)>> {
         let none = ChainDeviations::default();
-        let factors_t = factors(&self.tool, qt, dev.first().unwrap_or(&none))?;
-        let tt = product(&factors_t);
-        let (factors_w, tw_inv) = match &self.workpiece {
+        let pt = Products::new(&factors(&self.tool, qt, dev.first().unwrap_or(&none))?);
+        let tt = pt.total();
+        let (pw, tw_inv) = match &self.workpiece {
             Some(w) => {
-                let f = factors(w, qw, dev.get(1).unwrap_or(&none))?;
-                let tw = product(&f);
-                (Some(f), inverse(&tw))
+                let p = Products::new(&factors(w, qw, dev.get(1).unwrap_or(&none))?);
+                let inv = inverse(&p.total())?;
+                (Some(p), inv)
             }
             None => (None, Matrix4::identity()),
         };
@@ -197,10 +229,10 @@ impl SerialMachine {
             .map(|p| {
                 let (c, k, dm) = derivative(self, p, qt, qw, dev)?;
                 let d_rel = if c == 0 {
-                    tw_inv * chain_derivative(&factors_t, k, &dm)
+                    tw_inv * pt.derivative(k, &dm)
                 } else {
-                    let fw = factors_w.as_ref().expect("chain checked");
-                    -tw_inv * chain_derivative(fw, k, &dm) * tw_inv * tt
+                    let pw = pw.as_ref().expect("chain checked");
+                    -tw_inv * pw.derivative(k, &dm) * tw_inv * tt
                 };
                 let dp = d_rel.fixed_view::<3, 1>(0, 3).into_owned();
                 let dr = d_rel.fixed_view::<3, 3>(0, 0) * rot.transpose();
@@ -218,8 +250,11 @@ impl SerialMachine {
 
 /// Inverse of a homogeneous transform whose block may be slightly non-orthonormal
 /// (deviated blocks): a general 4x4 inverse.
-fn inverse(t: &Matrix4<f64>) -> Matrix4<f64> {
-    t.try_inverse().unwrap_or_else(Matrix4::identity)
+fn inverse(t: &Matrix4<f64>) -> Result<Matrix4<f64>> {
+    t.try_inverse().ok_or_else(|| Error::Singular {
+        what: "workpiece-chain transform (deviated blocks far from a rotation)".into(),
+        rcond: 0.0,
+    })
 }
 
 /// The chain's factors in order: link 0, then per link its joint and its geometry.
@@ -245,13 +280,38 @@ fn factors(ch: &Chain, q: &[f64], d: &ChainDeviations) -> Result<Vec<Matrix4<f64
     Ok(f)
 }
 
-fn product(f: &[Matrix4<f64>]) -> Matrix4<f64> {
-    f.iter().fold(Matrix4::identity(), |a, b| a * b)
+/// Prefix and suffix products of a chain's factors, computed once for all parameters:
+/// `prefix[k] = F_0 .. F_(k-1)`, `suffix[k] = F_(k+1) .. F_(n-1)`.
+struct Products {
+    prefix: Vec<Matrix4<f64>>,
+    suffix: Vec<Matrix4<f64>>,
 }
 
-/// `prod_(i<k) F_i * dm * prod_(i>k) F_i`.
-fn chain_derivative(f: &[Matrix4<f64>], k: usize, dm: &Matrix4<f64>) -> Matrix4<f64> {
-    product(&f[..k]) * dm * product(&f[k + 1..])
+impl Products {
+    fn new(f: &[Matrix4<f64>]) -> Self {
+        let n = f.len();
+        let mut prefix = Vec::with_capacity(n + 1);
+        prefix.push(Matrix4::identity());
+        for m in f {
+            let last = *prefix.last().expect("non-empty");
+            prefix.push(last * m);
+        }
+        let mut suffix = vec![Matrix4::identity(); n];
+        for k in (0..n.saturating_sub(1)).rev() {
+            suffix[k] = f[k + 1] * suffix[k + 1];
+        }
+        Products { prefix, suffix }
+    }
+
+    /// The whole product.
+    fn total(&self) -> Matrix4<f64> {
+        *self.prefix.last().expect("non-empty")
+    }
+
+    /// `prod_(i<k) F_i * dm * prod_(i>k) F_i`.
+    fn derivative(&self, k: usize, dm: &Matrix4<f64>) -> Matrix4<f64> {
+        self.prefix[k] * dm * self.suffix[k]
+    }
 }
 
 /// The chain, the index of the factor a parameter enters, and that factor's derivative.

@@ -12,8 +12,14 @@ impl SerialMachine {
     /// velocity (mm per unit) and the angular velocity (rad per unit), workpiece frame.
     /// These are the sensitivities to the positioning deviations `dq`.
     pub fn tool_jacobian(&self, qt: &[f64], qw: &[f64]) -> Result<DMatrix<f64>> {
-        let nt = self.tool.dof();
         let nw = self.workpiece.as_ref().map(|w| w.dof()).unwrap_or(0);
+        self.dq_jacobian(qt, qw, nw)
+    }
+
+    /// The columns of [`SerialMachine::tool_jacobian`] for the tool joints and the
+    /// first `nw` workpiece joints.
+    fn dq_jacobian(&self, qt: &[f64], qw: &[f64], nw: usize) -> Result<DMatrix<f64>> {
+        let nt = self.tool.dof();
         let params: Vec<Parameter> = (0..nt)
             .map(|joint| Parameter::Dq { chain: 0, joint })
             .chain((0..nw).map(|joint| Parameter::Dq { chain: 1, joint }))
@@ -95,8 +101,8 @@ pub fn inverse(
         if ep <= o.position_tolerance && ew <= o.orientation_tolerance {
             return Ok((q, it));
         }
-        let j_full = m.tool_jacobian(&q, qw)?;
-        let mut j = j_full.columns(0, nt).into_owned();
+        // Tool joints only: the workpiece joints are fixed here.
+        let mut j = m.dq_jacobian(&q, qw, 0)?;
         for r in 3..6 {
             for c in 0..nt {
                 j[(r, c)] *= lc;

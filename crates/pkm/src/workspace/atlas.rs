@@ -5,7 +5,7 @@
 use nalgebra::SVector;
 use rayon::prelude::*;
 
-use super::{check_axes, evaluate, grid_point, GridAxis};
+use super::{check_axes, grid_point, reach, GridAxis};
 use crate::error::{Error, Result};
 use crate::mechanism::Mechanism;
 
@@ -121,20 +121,20 @@ where
         .with_min_len(chunk)
         .map_init(Vec::new, |v, k| {
             let x = grid_point(base, axes, &counts, k);
-            let r = evaluate(m, &x, v);
-            let q = m.inverse(&x).unwrap_or(nan);
-            let (velocity, acceleration) = if q[0].is_nan() {
-                (nan, nan)
-            } else {
-                worst_rates(m, &x, cap).unwrap_or((nan, nan))
+            // Limits only: the atlas needs no condition number (an eigenproblem per
+            // point for some machines).
+            let (q, binding) = reach(m, &x, v);
+            let (velocity, acceleration) = match q {
+                Some(_) => worst_rates(m, &x, cap).unwrap_or((nan, nan)),
+                None => (nan, nan),
             };
             if k % chunk == chunk - 1 {
                 progress(chunk as u64);
             }
             AtlasPoint {
-                reachable: r.reachable,
-                binding: r.binding,
-                q,
+                reachable: binding.is_none(),
+                binding,
+                q: q.unwrap_or(nan),
                 velocity,
                 acceleration,
             }

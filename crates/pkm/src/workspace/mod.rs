@@ -110,31 +110,39 @@ pub fn flat_index(axes: &[GridAxis], idx: &[usize]) -> usize {
     k
 }
 
+/// Inverse kinematics and every limit at `x`: the actuator values when the pose is
+/// within every limit, else the name of what binds (`no solution`, the first violated
+/// limit) beside the actuator values when they exist.
+pub(crate) fn reach<M: Mechanism<P, A>, const P: usize, const A: usize>(
+    m: &M,
+    x: &SVector<f64, P>,
+    v: &mut Vec<Violation>,
+) -> (Option<SVector<f64, A>>, Option<String>) {
+    let q = match m.inverse(x) {
+        Ok(q) => q,
+        Err(e) => {
+            let why = match e {
+                Error::NotAttainable { .. } => "no solution".into(),
+                other => other.to_string(),
+            };
+            return (None, Some(why));
+        }
+    };
+    v.clear();
+    m.check_limits(x, &q, v);
+    (Some(q), v.first().map(|f| f.limit.clone()))
+}
+
 pub(crate) fn evaluate<M: Mechanism<P, A>, const P: usize, const A: usize>(
     m: &M,
     x: &SVector<f64, P>,
     v: &mut Vec<Violation>,
 ) -> PointResult {
-    let q = match m.inverse(x) {
-        Ok(q) => q,
-        Err(e) => {
-            return PointResult {
-                reachable: false,
-                condition: f64::NAN,
-                binding: Some(match e {
-                    Error::NotAttainable { .. } => "no solution".into(),
-                    other => other.to_string(),
-                }),
-            }
-        }
-    };
-    v.clear();
-    m.check_limits(x, &q, v);
-    if let Some(first) = v.first() {
+    if let (_, Some(binding)) = reach(m, x, v) {
         return PointResult {
             reachable: false,
             condition: f64::NAN,
-            binding: Some(first.limit.clone()),
+            binding: Some(binding),
         };
     }
     let c = m.condition(x).unwrap_or(f64::INFINITY);
