@@ -40,6 +40,30 @@ pub fn sin_cos(x: f64) -> (f64, f64) {
     if !(x.abs() <= 1e4) {
         return x.sin_cos();
     }
+    kernel(x)
+}
+
+/// `(sin x, cos x)` of every element of `x`, in one vectorised pass when all of them
+/// are within `|x| <= 1e4` (else element by element).
+#[inline(always)]
+pub fn sin_cos_array<const N: usize>(x: &[f64; N]) -> ([f64; N], [f64; N]) {
+    let mut s = [0.0; N];
+    let mut c = [0.0; N];
+    if x.iter().all(|v| v.abs() <= 1e4) {
+        for k in 0..N {
+            (s[k], c[k]) = kernel(x[k]);
+        }
+    } else {
+        for k in 0..N {
+            (s[k], c[k]) = x[k].sin_cos();
+        }
+    }
+    (s, c)
+}
+
+/// The branch-free kernel for `|x| <= 1e4`.
+#[inline(always)]
+fn kernel(x: f64) -> (f64, f64) {
     let y = x * TWO_OVER_PI + MAGIC;
     let q = y.to_bits();
     let k = y - MAGIC;
@@ -63,6 +87,19 @@ pub fn sin_cos(x: f64) -> (f64, f64) {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn array_matches_scalar_and_falls_back_beyond_range() {
+        let x = [0.3, -2.0, 7.5, 1e3, -1e4, 0.0, 3.0, -0.7];
+        let (s, c) = super::sin_cos_array(&x);
+        for k in 0..x.len() {
+            assert_eq!((s[k], c[k]), super::sin_cos(x[k]));
+        }
+        let y = [0.3, 1e6];
+        let (s, c) = super::sin_cos_array(&y);
+        assert_eq!((s[1], c[1]), 1e6f64.sin_cos());
+        assert_eq!((s[0], c[0]), 0.3f64.sin_cos());
+    }
+
     #[test]
     fn matches_std_within_two_ulp() {
         let mut worst: f64 = 0.0;

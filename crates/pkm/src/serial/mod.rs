@@ -188,17 +188,52 @@ impl Chain {
 }
 
 /// A chain with one deviation set applied, prepared for fast repeated evaluation: the
-/// deviated link transforms are computed once, and each joint is applied as the
-/// column operation it is (a turn mixes two columns, a slide adds to the translation).
+/// deviated link transforms are computed once (consecutive fixed links multiplied
+/// together), stored as 3 x 4 affine blocks, and each joint is applied as the column
+/// operation it is (a turn mixes two columns, a slide adds to the translation).
 #[derive(Debug, Clone, PartialEq)]
 pub struct PreparedChain {
-    steps: Vec<Step>,
+    /// The fixed links before the first joint.
+    head: Affine,
+    /// Each joint with its positioning deviation and the fixed links after it.
+    steps: Vec<(JointKind, f64, Affine)>,
 }
 
-#[derive(Debug, Clone, PartialEq)]
-enum Step {
-    Joint(JointKind, f64),
-    Link(Matrix4<f64>),
+/// A 3 x 4 affine transform, row-major (the bottom row `0 0 0 1` implied).
+type Affine = [[f64; 4]; 3];
+
+const AFFINE_IDENTITY: Affine = [
+    [1.0, 0.0, 0.0, 0.0],
+    [0.0, 1.0, 0.0, 0.0],
+    [0.0, 0.0, 1.0, 0.0],
+];
+
+#[inline(always)]
+fn affine_mul(a: &Affine, b: &Affine) -> Affine {
+    // Row by row: `n_r = a_r0 b_0 + a_r1 b_1 + a_r2 b_2 + (0, 0, 0, a_r3)`, each row of
+    // `b` one 4-wide vector.
+    let mut n = [[0.0; 4]; 3];
+    for r in 0..3 {
+        for c in 0..4 {
+            n[r][c] = a[r][0] * b[0][c] + a[r][1] * b[1][c] + a[r][2] * b[2][c];
+        }
+        n[r][3] += a[r][3];
+    }
+    n
+}
+
+fn affine_of(m: &Matrix4<f64>) -> Affine {
+    std::array::from_fn(|r| std::array::from_fn(|c| m[(r, c)]))
+}
+
+fn matrix_of(a: &Affine) -> Matrix4<f64> {
+    let mut m = Matrix4::identity();
+    for r in 0..3 {
+        for c in 0..4 {
+            m[(r, c)] = a[r][c];
+        }
+    }
+    m
 }
 
 impl PreparedChain {
@@ -206,19 +241,21 @@ impl PreparedChain {
     /// (empty slices: none).
     pub fn new(chain: &Chain, dq: &[f64], dev: &[LinkDeviation]) -> Self {
         let zero = LinkDeviation::default();
-        let mut steps = Vec::with_capacity(2 * chain.links.len());
+        let mut head = AFFINE_IDENTITY;
+        let mut steps: Vec<(JointKind, f64, Affine)> = Vec::with_capacity(chain.links.len());
         let mut k = 0;
         for (i, link) in chain.links.iter().enumerate() {
             if let Some(j) = &link.joint {
-                steps.push(Step::Joint(j.kind, dq.get(k).copied().unwrap_or(0.0)));
+                steps.push((j.kind, dq.get(k).copied().unwrap_or(0.0), AFFINE_IDENTITY));
                 k += 1;
             }
-            steps.push(Step::Link(link_transform(
-                link,
-                dev.get(i).unwrap_or(&zero),
-            )));
+            let l = affine_of(&link_transform(link, dev.get(i).unwrap_or(&zero)));
+            match steps.last_mut() {
+                Some(s) => s.2 = affine_mul(&s.2, &l),
+                None => head = affine_mul(&head, &l),
+            }
         }
-        PreparedChain { steps }
+        PreparedChain { head, steps }
     }
 
     /// The pose and the geometric Jacobian (`6 x N`: tool-point velocity over angular
@@ -232,17 +269,17 @@ impl PreparedChain {
     ) -> (Matrix4<f64>, nalgebra::SMatrix<f64, 6, N>) {
         let mut axes = [(Vector3::zeros(), Vector3::zeros(), JointKind::Prismatic); N];
         let mut k = 0;
-        let t = self.walk(q, |t: &Matrix4<f64>, kind| {
+        let t = self.walk(q, |t: &Affine, kind| {
             if k < N {
                 axes[k] = (
-                    Vector3::new(t[(0, 2)], t[(1, 2)], t[(2, 2)]),
-                    Vector3::new(t[(0, 3)], t[(1, 3)], t[(2, 3)]),
+                    Vector3::new(t[0][2], t[1][2], t[2][2]),
+                    Vector3::new(t[0][3], t[1][3], t[2][3]),
                     kind,
                 );
             }
             k += 1;
         });
-        let p = Vector3::new(t[(0, 3)], t[(1, 3)], t[(2, 3)]);
+        let p = Vector3::new(t[0][3], t[1][3], t[2][3]);
         let mut j = nalgebra::SMatrix::<f64, 6, N>::zeros();
         for (c, (z, o, kind)) in axes.iter().enumerate() {
             let (v, w) = match kind {
@@ -254,76 +291,53 @@ impl PreparedChain {
                 j[(r + 3, c)] = w[r];
             }
         }
-        (t, j)
+        (matrix_of(&t), j)
     }
 
     /// The chain's pose at joint values `q` (exactly [`Chain::pose`] with the prepared
-    /// deviations). `q` must hold one value per joint.
+    /// deviations, up to rounding). `q` must hold one value per joint.
     #[inline]
     pub fn pose(&self, q: &[f64]) -> Matrix4<f64> {
-        self.walk(q, |_, _| {})
+        matrix_of(&self.walk(q, |_, _| {}))
     }
 
     /// Runs through the chain, calling `at_joint` with the frame of each joint (before
     /// its motion) and its kind.
-    #[inline]
-    fn walk<F: FnMut(&Matrix4<f64>, JointKind)>(&self, q: &[f64], mut at_joint: F) -> Matrix4<f64> {
+    #[inline(always)]
+    fn walk<F: FnMut(&Affine, JointKind)>(&self, q: &[f64], mut at_joint: F) -> Affine {
         // The joints' sines and cosines first: independent of each other and of the
         // matrix products, they overlap instead of sitting on the products' chain.
-        const TRIG: [(f64, f64); 12] = [(0.0, 1.0); 12];
-        let mut trig = TRIG;
-        let mut j = 0;
-        for s in &self.steps {
-            if let Step::Joint(kind, dq) = s {
-                if j < TRIG.len() && *kind == JointKind::Revolute {
-                    trig[j] = crate::trig::sin_cos(q[j] + dq);
-                }
-                j += 1;
-            }
+        // A fixed-length, branch-free loop so the compiler vectorises it.
+        const MAX: usize = 8;
+        let mut v = [0.0; MAX];
+        for ((vk, (_, dq, _)), qk) in v.iter_mut().zip(&self.steps).zip(q) {
+            *vk = qk + dq;
         }
-        let mut t = Matrix4::identity();
-        let mut k = 0;
-        for s in &self.steps {
-            match s {
-                Step::Joint(kind, dq) => {
-                    at_joint(&t, *kind);
-                    let v = q[k] + dq;
-                    k += 1;
-                    match kind {
-                        JointKind::Revolute => {
-                            let (sn, cs) = if k <= TRIG.len() {
-                                trig[k - 1]
-                            } else {
-                                v.sin_cos()
-                            };
-                            for r in 0..3 {
-                                let (a, b) = (t[(r, 0)], t[(r, 1)]);
-                                t[(r, 0)] = cs * a + sn * b;
-                                t[(r, 1)] = cs * b - sn * a;
-                            }
-                        }
-                        JointKind::Prismatic => {
-                            for r in 0..3 {
-                                t[(r, 3)] += v * t[(r, 2)];
-                            }
-                        }
+        let (sn, cs) = crate::trig::sin_cos_array(&v);
+        let mut t = self.head;
+        for (k, ((kind, dq, link), qk)) in self.steps.iter().zip(q).enumerate() {
+            at_joint(&t, *kind);
+            match kind {
+                JointKind::Revolute => {
+                    let (s, c) = if k < MAX {
+                        (sn[k], cs[k])
+                    } else {
+                        (qk + dq).sin_cos()
+                    };
+                    for row in &mut t {
+                        let (a, b) = (row[0], row[1]);
+                        row[0] = c * a + s * b;
+                        row[1] = c * b - s * a;
                     }
                 }
-                Step::Link(m) => {
-                    // Affine product: the bottom rows are (0, 0, 0, 1).
-                    let mut n = Matrix4::identity();
-                    for r in 0..3 {
-                        for c in 0..4 {
-                            let mut acc = if c == 3 { t[(r, 3)] } else { 0.0 };
-                            for j in 0..3 {
-                                acc += t[(r, j)] * m[(j, c)];
-                            }
-                            n[(r, c)] = acc;
-                        }
+                JointKind::Prismatic => {
+                    let v = qk + dq;
+                    for row in &mut t {
+                        row[3] += v * row[2];
                     }
-                    t = n;
                 }
             }
+            t = affine_mul(&t, link);
         }
         t
     }
