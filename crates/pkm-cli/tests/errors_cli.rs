@@ -264,3 +264,62 @@ fn tolerances_from_a_separate_file() {
         "{e}"
     );
 }
+
+#[test]
+fn six_axis_robot_takes_tool_poses_through_ik_fk_and_motion() {
+    let kr30 = path("examples/machines/kr30-dh.toml");
+    let run = |args: &[&str]| -> Value {
+        let o = pkm().args(args).output().unwrap();
+        assert_eq!(
+            o.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        serde_json::from_slice(&o.stdout).unwrap()
+    };
+    let ik = run(&["ik", &kr30, "--pose", "1200,100,1400,180,0,0", "--json"]);
+    let q: Vec<String> = ["A1", "A2", "A3", "A4", "A5", "A6"]
+        .iter()
+        .map(|n| ik["actuators"][n].as_f64().unwrap().to_string())
+        .collect();
+    // The wrist stays bent down (the branch of the home posture), A1 = A6 = atan(100/1200).
+    let a1 = ik["actuators"]["A1"].as_f64().unwrap();
+    assert!((a1 - (100f64 / 1200.0).atan().to_degrees()).abs() < 1e-9, "{a1}");
+    assert!(ik["actuators"]["A5"].as_f64().unwrap() > 0.0);
+    let fk = run(&["fk", &kr30, "--actuators", &q.join(","), "--json"]);
+    let p: Vec<f64> = fk["position"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    for (a, b) in p.iter().zip([1200.0, 100.0, 1400.0]) {
+        assert!((a - b).abs() < 1e-6, "{p:?}");
+    }
+    // A straight move: the joints follow, the summary names them.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("m");
+    let o = pkm()
+        .args([
+            "motion",
+            &kr30,
+            "--from",
+            "1200,100,1400,180,0,0",
+            "--to",
+            "1300,-100,1300,180,0,0",
+            "--duration",
+            "1",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    let s: Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    // A1 turns from atan(100/1200) to atan(-100/1300).
+    let a1 = &s["actuators"]["A1"];
+    let expect = (100f64 / 1200.0).atan().to_degrees() + (100f64 / 1300.0).atan().to_degrees();
+    assert!((a1["travel"].as_f64().unwrap() - expect).abs() < 1e-6, "{a1}");
+}

@@ -69,3 +69,4 @@ impl_dyn_mechanism!(serial::mechanism::SerialMechanism<5>, 5, 5);
 impl_dyn_mechanism!(serial::mechanism::SerialMechanism<6>, 6, 6);
 impl_dyn_mechanism!(serial::mechanism::SerialMechanism<7>, 7, 7);
 impl_dyn_mechanism!(serial::mechanism::SerialMechanism<8>, 8, 8);
+impl_dyn_mechanism!(serial::arm::SerialArm, 6, 6);

@@ -27,16 +27,16 @@ pub fn run(a: &ErrorsArgs) -> Result<u8> {
     let m = s.mechanism.machine();
     let vals = match &a.actuators {
         Some(v) => parse_list(v, "--actuators")?,
-        None => mech
-            .home()
+        None => s
+            .mechanism
+            .home_joints()
             .iter()
-            .zip(mech.coordinates())
-            .map(|(v, c)| c.quantity.to_user(*v))
+            .zip(mech.actuators())
+            .map(|(v, a)| a.quantity.to_user(*v))
             .collect(),
     };
     let x = crate::poses::actuators_from_user(mech, &vals)?;
-    let nt = m.tool.dof();
-    let (qt, qw) = (&x[..nt], &x[nt..]);
+    let (qt, qw) = s.mechanism.split_joints(&x);
     let devs = match &a.deviations {
         Some(p) => {
             let text = std::fs::read_to_string(p)
@@ -150,7 +150,8 @@ pub fn run(a: &ErrorsArgs) -> Result<u8> {
     }
     if let Some(spec) = &a.map {
         let names: Vec<&str> = spec.split(',').map(str::trim).collect();
-        let coords = mech.coordinates();
+        // The map runs over joint travel: the axes are the machine's joints.
+        let coords = mech.actuators();
         let idx: Vec<usize> = names
             .iter()
             .map(|n| {
@@ -195,7 +196,8 @@ pub fn run(a: &ErrorsArgs) -> Result<u8> {
                 let mut y = x.clone();
                 y[idx[0]] = axes[0].value(i);
                 y[idx[1]] = axes[1].value(k);
-                let b = budget(m, &y[..nt], &y[nt..], tol)?;
+                let (yt, yw) = s.mechanism.split_joints(&y);
+                let b = budget(m, yt, yw, tol)?;
                 worst_all = worst_all.max(b.rss);
                 csv.push_str(&format!(
                     "{:.6},{:.6},{:.9},{:.9}\n",

@@ -83,11 +83,21 @@ pub fn default_axes(
         _ => vec![0, 1, 2],
     };
     let q = |k: usize| m.coordinates()[k].quantity;
-    let reach = m
+    // Linear drives: their largest stroke sets the scale. A machine with revolute
+    // drives (a robot arm): the distance of the tool from the base at home.
+    let reach = if m
         .actuators()
         .iter()
-        .map(|a| a.range.max.abs())
-        .fold(0.0, f64::max);
+        .any(|a| a.quantity == pkm::Quantity::Angle)
+        && m.pose_space() != PoseSpace::Own
+    {
+        m.characteristic_length() / 0.6
+    } else {
+        m.actuators()
+            .iter()
+            .map(|a| a.range.max.abs())
+            .fold(0.0, f64::max)
+    };
     let mut ranges = Vec::new();
     match bounds {
         Some(b) => {

@@ -24,8 +24,7 @@ pub fn section(h: &mut Html, s: &SerialModel, mech: &dyn pkm::DynMechanism) -> R
         .iter()
         .map(|a| 0.5 * (a.range.min + a.range.max))
         .collect();
-    let nt = m.tool.dof();
-    let (qt, qw) = (&x[..nt], &x[nt..]);
+    let (qt, qw) = s.mechanism.split_joints(&x);
     let at: Vec<String> = mech
         .actuators()
         .iter()

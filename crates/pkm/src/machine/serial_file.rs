@@ -35,6 +35,9 @@ pub(super) struct SerialFile {
     workpiece_chain: Vec<LinkFile>,
     #[serde(default)]
     home: Option<HomeFile>,
+    /// Pose coordinates: `tool` (X..C of the tool, six-joint robots) or `joints`.
+    #[serde(default)]
+    pose: Option<String>,
     #[serde(default)]
     tolerance: Vec<ToleranceFile>,
     #[serde(default)]
@@ -315,8 +318,32 @@ pub(super) fn build(src: &Source, f: SerialFile) -> Result<super::Parts, Error> 
         ));
     }
     let tolerances = tolerances(src, &machine, &f.tolerance)?;
-    let mechanism =
-        SerialAny::new(machine, &home).map_err(|e| src.error(&[key("home")], e.to_string()))?;
+    let spatial = match f.pose.as_deref() {
+        None => SerialAny::can_be_spatial(&machine),
+        Some("tool") => {
+            if !SerialAny::can_be_spatial(&machine) {
+                return Err(src.error(
+                    &[key("pose")],
+                    "`tool` coordinates need six tool-chain joints and no workpiece joints"
+                        .to_string(),
+                ));
+            }
+            true
+        }
+        Some("joints") => false,
+        Some(other) => {
+            return Err(src.error(
+                &[key("pose")],
+                format!("expected \"tool\" or \"joints\", found \"{other}\""),
+            ))
+        }
+    };
+    let mechanism = if spatial {
+        SerialAny::spatial(machine, &home)
+    } else {
+        SerialAny::new(machine, &home)
+    }
+    .map_err(|e| src.error(&[key("home")], e.to_string()))?;
     super::check_references(src, &f.reference)?;
     let rapid = super::check_motion(src, f.motion.as_ref())?;
     let _ = Vector3::<f64>::zeros();

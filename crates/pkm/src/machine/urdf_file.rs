@@ -197,7 +197,13 @@ pub(super) fn build(text: &str, file: &str) -> Result<super::Parts, Error> {
         .joints()
         .map(|j| 0.0f64.clamp(j.range.min, j.range.max))
         .collect();
-    let mechanism = SerialAny::new(machine, &home).map_err(|e| err(file, e.to_string()))?;
+    // A six-joint robot takes tool poses; other chains their joint values.
+    let mechanism = if SerialAny::can_be_spatial(&machine) {
+        SerialAny::spatial(machine, &home)
+    } else {
+        SerialAny::new(machine, &home)
+    }
+    .map_err(|e| err(file, e.to_string()))?;
     Ok(super::Parts {
         model: Model::Serial(Box::new(SerialModel {
             mechanism,

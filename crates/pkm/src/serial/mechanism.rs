@@ -167,36 +167,7 @@ impl<const N: usize> Mechanism<N, N> for SerialMechanism<N> {
     /// Frame origins of both chains (bed frame), consecutive ones linked.
     fn skeleton(&self, x: &SVector<f64, N>) -> Result<Skeleton> {
         let (qt, qw) = self.split(x);
-        let mut s = Skeleton::default();
-        let chains = std::iter::once((&self.machine.tool, qt))
-            .chain(self.machine.workpiece.iter().map(|w| (w, qw.clone())));
-        for (ci, (ch, q)) in chains.enumerate() {
-            let mut prev = s.point(
-                &format!("{} base", ch.name),
-                PointRole::BaseJoint,
-                &Vector3::zeros(),
-            );
-            let mut t = nalgebra::Matrix4::identity();
-            let mut k = 0;
-            for link in &ch.links {
-                if let Some(j) = &link.joint {
-                    t *= super::joint_transform(j.kind, q[k]);
-                    k += 1;
-                }
-                t *= super::link_transform(link, &Default::default());
-                let p = Vector3::new(t[(0, 3)], t[(1, 3)], t[(2, 3)]);
-                let last = std::ptr::eq(link, ch.links.last().expect("links"));
-                let role = if last && ci == 0 {
-                    PointRole::Tool
-                } else {
-                    PointRole::Other
-                };
-                let i = s.point(&link.name, role, &p);
-                s.link(&link.name, LinkKind::Passive, prev, i);
-                prev = i;
-            }
-        }
-        Ok(s)
+        chain_skeleton(&self.machine, &qt, &qw)
     }
 
     fn condition(&self, _x: &SVector<f64, N>) -> Result<f64> {
@@ -229,6 +200,8 @@ pub enum SerialAny {
     J6(SerialMechanism<6>),
     J7(SerialMechanism<7>),
     J8(SerialMechanism<8>),
+    /// A six-joint robot with tool-pose coordinates X..C.
+    Arm(super::arm::SerialArm),
 }
 
 /// Applies `$body` to the `SerialMechanism<N>` inside a [`SerialAny`].
@@ -244,6 +217,7 @@ macro_rules! with_serial {
             $crate::serial::mechanism::SerialAny::J6($m) => $body,
             $crate::serial::mechanism::SerialAny::J7($m) => $body,
             $crate::serial::mechanism::SerialAny::J8($m) => $body,
+            $crate::serial::mechanism::SerialAny::Arm($m) => $body,
         }
     };
 }
@@ -277,8 +251,70 @@ impl SerialAny {
         })
     }
 
+    /// Wraps a six-joint robot with tool-pose coordinates X..C
+    /// ([`super::arm::SerialArm`]); `home` are its home joint values.
+    pub fn spatial(machine: SerialMachine, home: &[f64]) -> Result<Self> {
+        let home = crate::dynamic::fixed::<6>("home", home)?;
+        Ok(SerialAny::Arm(super::arm::SerialArm::new(machine, home)?))
+    }
+
+    /// Whether a machine can take tool-pose coordinates: six tool-chain joints and
+    /// no workpiece joints.
+    pub fn can_be_spatial(machine: &SerialMachine) -> bool {
+        machine.tool.dof() == 6 && machine.workpiece.as_ref().is_none_or(|w| w.dof() == 0)
+    }
+
     /// The machine's chains.
     pub fn machine(&self) -> &SerialMachine {
         with_serial!(self, m => &m.machine)
     }
+
+    /// The home joint values (tool chain, then workpiece chain; internal units).
+    pub fn home_joints(&self) -> Vec<f64> {
+        match self {
+            SerialAny::Arm(a) => a.home_joints.as_slice().to_vec(),
+            other => with_serial!(other, m => m.home().as_slice().to_vec()),
+        }
+    }
+
+    /// Tool-chain and workpiece-chain joint values of actuator values `q` (the
+    /// actuators of every serial mechanism are its joints, tool chain first).
+    pub fn split_joints<'a>(&self, q: &'a [f64]) -> (&'a [f64], &'a [f64]) {
+        q.split_at(self.machine().tool.dof().min(q.len()))
+    }
+}
+
+/// Frame origins of both chains of `machine` at joint values `qt`, `qw` (bed frame),
+/// consecutive ones linked; the tool chain's last point is the tool.
+pub(crate) fn chain_skeleton(machine: &SerialMachine, qt: &[f64], qw: &[f64]) -> Result<Skeleton> {
+    let mut s = Skeleton::default();
+    let chains = std::iter::once((&machine.tool, qt.to_vec()))
+        .chain(machine.workpiece.iter().map(|w| (w, qw.to_vec())));
+    for (ci, (ch, q)) in chains.enumerate() {
+        let mut prev = s.point(
+            &format!("{} base", ch.name),
+            PointRole::BaseJoint,
+            &Vector3::zeros(),
+        );
+        let mut t = nalgebra::Matrix4::identity();
+        let mut k = 0;
+        for link in &ch.links {
+            if let Some(j) = &link.joint {
+                t *= super::joint_transform(j.kind, q[k]);
+                k += 1;
+            }
+            t *= super::link_transform(link, &Default::default());
+            let p = Vector3::new(t[(0, 3)], t[(1, 3)], t[(2, 3)]);
+            let last = std::ptr::eq(link, ch.links.last().expect("links"));
+            let role = if last && ci == 0 {
+                PointRole::Tool
+            } else {
+                PointRole::Other
+            };
+            let i = s.point(&link.name, role, &p);
+            s.link(&link.name, LinkKind::Passive, prev, i);
+            prev = i;
+        }
+    }
+    Ok(s)
 }

@@ -17,6 +17,7 @@
 //! from three measured ones (eq. 3) so that it does.
 
 pub mod accuracy;
+pub mod arm;
 pub mod completion;
 pub mod ik;
 pub mod mechanism;

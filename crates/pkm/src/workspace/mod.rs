@@ -123,6 +123,11 @@ pub(crate) fn reach<M: Mechanism<P, A>, const P: usize, const A: usize>(
         Err(e) => {
             let why = match e {
                 Error::NotAttainable { .. } => "no solution".into(),
+                // Numeric inverse kinematics (serial robots): one key, not one per residual.
+                Error::NotConverged { .. } => {
+                    "no solution (inverse kinematics did not converge)".into()
+                }
+                Error::Singular { .. } => "singular".into(),
                 other => other.to_string(),
             };
             return (None, Some(why));

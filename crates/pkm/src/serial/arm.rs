@@ -1,0 +1,435 @@
+//! A six-joint serial robot as a spatial [`Mechanism`]: its pose coordinates are the
+//! tool's X, Y, Z, A, B, C (the frame of link 0 of the tool chain; a workpiece chain
+//! without joints is the fixed part the tool pose is taken relative to), its actuators
+//! the six joints. Inverse kinematics is numeric (Newton on SE(3) with the geometric
+//! Jacobian, damped near singular configurations), so any geometry works, not only
+//! robots with a spherical wrist and a closed-form solution.
+//!
+//! Which of a robot's up to 16 inverse solutions is returned: the one Newton reaches
+//! from the home joint values (or from the joint values given to
+//! [`SerialArm::inverse_from`]). Along a tool path the motion engine asks for poses close
+//! to each other, and the solution stays on the branch it started on as long as the path
+//! does not pass a singular configuration.
+
+use nalgebra::{Matrix3, Matrix4, Matrix6, SMatrix, Vector3, Vector6};
+
+use super::accuracy::SerialMachine;
+use super::mechanism::chain_skeleton;
+use super::PreparedChain;
+use crate::error::{Error, Result};
+use crate::limits::{LimitKind, Violation};
+use crate::mechanism::{
+    spatial_coordinates, Actuator, ActuatorMotion, Coordinate, Forward, Mechanism, PoseSpace,
+    Skeleton,
+};
+use crate::pose::Pose;
+use crate::rotation::{rotation_vector, rpy_angular_motion, rpy_rate_matrix, Convention};
+use crate::units::Quantity;
+use std::f64::consts::PI;
+
+/// Settings of the arm's inverse kinematics.
+const MAX_ITERATIONS: usize = 60;
+/// Converged when the position error is below this (mm) ...
+const POSITION_TOLERANCE: f64 = 1e-10;
+/// ... and the orientation error below this (rad).
+const ORIENTATION_TOLERANCE: f64 = 1e-13;
+/// Largest joint step of one Newton iteration (rad or mm): keeps the iteration on its
+/// branch far from the solution.
+const MAX_STEP: f64 = 0.3;
+/// Restarts from spread joint values when Newton stalls from the given start.
+const RESTARTS: usize = 8;
+
+/// A six-joint serial robot with tool-pose coordinates.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SerialArm {
+    /// The chains and their geometry.
+    pub machine: SerialMachine,
+    /// Home joint values (rad, mm).
+    pub home_joints: Vector6<f64>,
+    home: Vector6<f64>,
+    tool: PreparedChain,
+    /// The fixed workpiece frame's inverse (identity without a workpiece chain).
+    part_inverse: Matrix4<f64>,
+    coordinates: [Coordinate; 6],
+    actuators: [Actuator; 6],
+    characteristic_length: f64,
+}
+
+impl SerialArm {
+    /// Wraps a machine whose tool chain has six joints and whose workpiece chain (if
+    /// any) has none; `home` are the home joint values in internal units.
+    pub fn new(machine: SerialMachine, home: Vector6<f64>) -> Result<Self> {
+        let invalid = |message: String| Error::InvalidInput {
+            what: "serial robot".into(),
+            message,
+        };
+        if machine.tool.dof() != 6 {
+            return Err(invalid(format!(
+                "tool-pose coordinates need six tool-chain joints, found {}",
+                machine.tool.dof()
+            )));
+        }
+        let part = match &machine.workpiece {
+            Some(w) if w.dof() > 0 => {
+                return Err(invalid(format!(
+                    "tool-pose coordinates need a fixed workpiece; its chain has {} joints",
+                    w.dof()
+                )))
+            }
+            Some(w) => w.pose(&[], &[], &[])?,
+            None => Matrix4::identity(),
+        };
+        let part_inverse = part
+            .try_inverse()
+            .ok_or_else(|| invalid("the workpiece frame is not invertible".into()))?;
+        let joints: Vec<_> = machine.tool.joints().cloned().collect();
+        let actuators = std::array::from_fn(|i| Actuator {
+            name: joints[i].name.clone(),
+            quantity: match joints[i].kind {
+                super::JointKind::Revolute => Quantity::Angle,
+                super::JointKind::Prismatic => Quantity::Length,
+            },
+            range: joints[i].range,
+            max_velocity: None,
+            max_acceleration: None,
+        });
+        let tool = PreparedChain::new(&machine.tool, &[], &[]);
+        let mut arm = SerialArm {
+            machine,
+            home_joints: home,
+            home: Vector6::zeros(),
+            tool,
+            part_inverse,
+            coordinates: spatial_coordinates(),
+            actuators,
+            characteristic_length: 1.0,
+        };
+        arm.home = arm.coords_of_joints(&home);
+        // The reach at home (distance of the tool from the first joint's axis origin)
+        // weighs a radian against millimetres.
+        let (t, _) = arm.pose_and_jacobian(&home);
+        arm.characteristic_length = Vector3::new(t[(0, 3)], t[(1, 3)], t[(2, 3)])
+            .norm()
+            .max(1.0);
+        Ok(arm)
+    }
+
+    /// Tool pose relative to the part (homogeneous) and geometric Jacobian (tool-point
+    /// velocity over angular velocity, part frame) at joint values `q`.
+    pub fn pose_and_jacobian(&self, q: &Vector6<f64>) -> (Matrix4<f64>, Matrix6<f64>) {
+        let (t, j) = self.tool.jacobian::<6>(&(*q).into());
+        let r = self.part_inverse.fixed_view::<3, 3>(0, 0).into_owned();
+        let mut jp = Matrix6::zeros();
+        jp.fixed_view_mut::<3, 6>(0, 0)
+            .copy_from(&(r * j.fixed_view::<3, 6>(0, 0)));
+        jp.fixed_view_mut::<3, 6>(3, 0)
+            .copy_from(&(r * j.fixed_view::<3, 6>(3, 0)));
+        (self.part_inverse * t, jp)
+    }
+
+    /// Pose coordinates X..C of joint values `q` (forward kinematics, closed form).
+    pub fn coords_of_joints(&self, q: &Vector6<f64>) -> Vector6<f64> {
+        let (t, _) = self.pose_and_jacobian(q);
+        coords_of(&t)
+    }
+
+    /// Inverse kinematics from joint values `start`: Newton on the pose error
+    /// `e = [p* - p; log(R* R^T)]` with the geometric Jacobian, `J dq = e` (seed 003's
+    /// chain, differentiated), damped least squares `dq = J^T (J J^T + l^2 I)^-1 e`
+    /// (angular rows weighted by the characteristic length) when `J` is close to
+    /// singular, steps limited to 0.3 rad / mm and halved until the error decreases,
+    /// one more step after convergence so the result is exact to rounding. When Newton
+    /// stalls from `start` (a far target can trap it), it is restarted from joint values
+    /// spread over the joints' ranges (a fixed sequence: the answer is deterministic).
+    /// Revolute joints are returned within half a turn of `start`. Fails with
+    /// [`Error::NotConverged`] and the smallest residual found (mm, rad times the
+    /// characteristic length) when the pose is out of reach.
+    pub fn inverse_from(&self, x: &Vector6<f64>, start: &Vector6<f64>) -> Result<Vector6<f64>> {
+        let target_p = Vector3::new(x[0], x[1], x[2]);
+        let target_r = crate::rotation::rpy_matrix(x[3], x[4], x[5]);
+        let mut best = f64::INFINITY;
+        let mut iterations = 0;
+        for k in 0..=RESTARTS {
+            let q0 = if k == 0 { *start } else { self.spread_start(k) };
+            match self.newton(&target_p, &target_r, q0) {
+                Ok(q) => return Ok(self.wrap(q, start)),
+                Err((residual, it)) => {
+                    best = best.min(residual);
+                    iterations += it;
+                }
+            }
+        }
+        Err(Error::NotConverged {
+            solver: "serial robot inverse kinematics (Newton on SE(3))",
+            iterations,
+            residual: best,
+        })
+    }
+
+    /// The `k`-th restart: a Halton point of the joints' ranges (clipped to one turn).
+    fn spread_start(&self, k: usize) -> Vector6<f64> {
+        const PRIMES: [usize; 6] = [2, 3, 5, 7, 11, 13];
+        Vector6::from_fn(|i, _| {
+            let (mut f, mut r, mut n) = (1.0, 0.0, k);
+            while n > 0 {
+                f /= PRIMES[i] as f64;
+                r += f * (n % PRIMES[i]) as f64;
+                n /= PRIMES[i];
+            }
+            let range = self.actuators[i].range;
+            let (lo, hi) = (range.min.max(-PI), range.max.min(PI));
+            lo + r * (hi - lo)
+        })
+    }
+
+    /// Pose error `[dp; dw]` at `q` and its weighted norm.
+    fn pose_error(
+        &self,
+        p: &Vector3<f64>,
+        r: &Matrix3<f64>,
+        q: &Vector6<f64>,
+    ) -> (Vector6<f64>, Matrix6<f64>, f64) {
+        let (t, j) = self.pose_and_jacobian(q);
+        let dp = p - Vector3::new(t[(0, 3)], t[(1, 3)], t[(2, 3)]);
+        let rt: Matrix3<f64> = t.fixed_view::<3, 3>(0, 0).into_owned();
+        let dw = rotation_vector(&(r * rt.transpose()));
+        let e = Vector6::new(dp.x, dp.y, dp.z, dw.x, dw.y, dw.z);
+        (e, j, dp.norm().max(dw.norm() * self.characteristic_length))
+    }
+
+    /// Newton from `q`; on failure the residual and the iterations spent.
+    fn newton(
+        &self,
+        p: &Vector3<f64>,
+        r: &Matrix3<f64>,
+        mut q: Vector6<f64>,
+    ) -> std::result::Result<Vector6<f64>, (f64, usize)> {
+        let (mut e, mut j, mut norm) = self.pose_error(p, r, &q);
+        for it in 0..MAX_ITERATIONS {
+            let converged = e.fixed_rows::<3>(0).norm() <= POSITION_TOLERANCE
+                && e.fixed_rows::<3>(3).norm() <= ORIENTATION_TOLERANCE;
+            let mut dq = self.step(&j, &e);
+            if converged {
+                // One polishing step: quadratic convergence takes the error to rounding.
+                return Ok(q + dq);
+            }
+            let big = dq.amax();
+            if big > MAX_STEP {
+                dq *= MAX_STEP / big;
+            }
+            let mut improved = false;
+            for _ in 0..12 {
+                let qn = q + dq;
+                let (en, jn, nn) = self.pose_error(p, r, &qn);
+                if nn < norm {
+                    (q, e, j, norm) = (qn, en, jn, nn);
+                    improved = true;
+                    break;
+                }
+                dq *= 0.5;
+            }
+            if !improved {
+                return Err((norm, it + 1));
+            }
+        }
+        Err((norm, MAX_ITERATIONS))
+    }
+
+    /// The Newton step: `J^-1 e` when `J` is well conditioned, else damped least squares
+    /// in the scaled space (angular rows times the characteristic length).
+    fn step(&self, j: &Matrix6<f64>, e: &Vector6<f64>) -> Vector6<f64> {
+        let lc = self.characteristic_length;
+        let mut js = *j;
+        let mut es = *e;
+        for r in 3..6 {
+            js.row_mut(r).scale_mut(lc);
+            es[r] *= lc;
+        }
+        let lu = js.lu();
+        if let Some(inv) = lu.try_inverse() {
+            // Reciprocal condition estimate in the 1-norm.
+            let rcond = 1.0 / (crate::linalg::norm1(&js) * crate::linalg::norm1(&inv));
+            if rcond > 1e-8 {
+                return inv * es;
+            }
+        }
+        let damping = 1e-3 * lc;
+        let jjt = js * js.transpose() + Matrix6::identity() * (damping * damping);
+        match jjt.try_inverse() {
+            Some(inv) => js.transpose() * (inv * es),
+            None => Vector6::zeros(),
+        }
+    }
+
+    /// Revolute joints shifted by whole turns to lie within half a turn of `near`.
+    fn wrap(&self, mut q: Vector6<f64>, near: &Vector6<f64>) -> Vector6<f64> {
+        use std::f64::consts::TAU;
+        for (i, a) in self.actuators.iter().enumerate() {
+            if a.quantity == Quantity::Angle {
+                q[i] -= TAU * ((q[i] - near[i]) / TAU).round();
+            }
+        }
+        q
+    }
+
+    /// `dq/dx` from the geometric Jacobian `J` at joints `q` and the angles of `x`:
+    /// `q' = J^-1 [v; E(A, B, C) (A', B', C')]`.
+    fn coords_jacobian(&self, x: &Vector6<f64>, j: &Matrix6<f64>) -> Result<Matrix6<f64>> {
+        let inv = self.inverse_geometric(j)?;
+        let e = rpy_rate_matrix([x[3], x[4], x[5]]);
+        let mut m = Matrix6::identity();
+        m.fixed_view_mut::<3, 3>(3, 3).copy_from(&e);
+        Ok(inv * m)
+    }
+
+    fn inverse_geometric(&self, j: &Matrix6<f64>) -> Result<Matrix6<f64>> {
+        let lc = self.characteristic_length;
+        let mut js = *j;
+        for r in 3..6 {
+            js.row_mut(r).scale_mut(lc);
+        }
+        let singular = |rcond| Error::Singular {
+            what: "serial robot Jacobian".into(),
+            rcond,
+        };
+        let inv = js.try_inverse().ok_or_else(|| singular(0.0))?;
+        let rcond = 1.0 / (crate::linalg::norm1(&js) * crate::linalg::norm1(&inv));
+        if rcond < 1e-12 {
+            return Err(singular(rcond));
+        }
+        // Undo the row scaling: J^-1 = (S J)^-1 S.
+        let mut out = inv;
+        for c in 3..6 {
+            out.column_mut(c).scale_mut(lc);
+        }
+        Ok(out)
+    }
+}
+
+/// X..C of a homogeneous tool pose.
+fn coords_of(t: &Matrix4<f64>) -> Vector6<f64> {
+    let r: Matrix3<f64> = t.fixed_view::<3, 3>(0, 0).into_owned();
+    let a = Convention::Rpy.from_matrix(&r);
+    Vector6::new(t[(0, 3)], t[(1, 3)], t[(2, 3)], a[0], a[1], a[2])
+}
+
+impl Mechanism<6, 6> for SerialArm {
+    fn name(&self) -> &str {
+        &self.machine.name
+    }
+
+    fn kind(&self) -> &'static str {
+        "serial"
+    }
+
+    fn coordinates(&self) -> &[Coordinate; 6] {
+        &self.coordinates
+    }
+
+    fn actuators(&self) -> &[Actuator; 6] {
+        &self.actuators
+    }
+
+    fn driven(&self) -> [usize; 6] {
+        [0, 1, 2, 3, 4, 5]
+    }
+
+    fn pose_space(&self) -> PoseSpace {
+        PoseSpace::Spatial
+    }
+
+    fn home(&self) -> Vector6<f64> {
+        self.home
+    }
+
+    /// Numeric inverse kinematics from the home joint values
+    /// ([`SerialArm::inverse_from`]).
+    fn inverse(&self, x: &Vector6<f64>) -> Result<Vector6<f64>> {
+        self.inverse_from(x, &self.home_joints)
+    }
+
+    fn jacobian(&self, x: &Vector6<f64>) -> Result<SMatrix<f64, 6, 6>> {
+        let q = self.inverse(x)?;
+        let (_, j) = self.pose_and_jacobian(&q);
+        self.coords_jacobian(x, &j)
+    }
+
+    /// Closed form: the chain's pose at `q` (`start` is not needed).
+    fn forward(&self, q: &Vector6<f64>, _start: &Vector6<f64>) -> Result<Forward<6>> {
+        Ok(Forward {
+            pose: self.coords_of_joints(q),
+            iterations: 0,
+            residual: 0.0,
+        })
+    }
+
+    fn tool_pose(&self, x: &Vector6<f64>) -> Result<Pose> {
+        Ok(crate::legs::spatial_tool_pose(x))
+    }
+
+    fn coords_from_pose(&self, pose: &Pose, orientation_given: bool) -> Result<Vector6<f64>> {
+        Ok(crate::legs::spatial_coords_from_pose(
+            pose,
+            orientation_given,
+            &self.home,
+        ))
+    }
+
+    fn check_limits(&self, _x: &Vector6<f64>, q: &Vector6<f64>, out: &mut Vec<Violation>) {
+        for (a, v) in self.actuators.iter().zip(q.iter()) {
+            a.range.check(
+                || format!("joint {} position", a.name),
+                LimitKind::ActuatorPosition,
+                a.quantity,
+                *v,
+                out,
+            );
+        }
+    }
+
+    fn skeleton(&self, x: &Vector6<f64>) -> Result<Skeleton> {
+        let q = self.inverse(x)?;
+        chain_skeleton(&self.machine, q.as_slice(), &[])
+    }
+
+    fn characteristic_length(&self) -> f64 {
+        self.characteristic_length
+    }
+
+    /// `q' = J^-1 [v; w]`, `q'' = J^-1 ([a; al] - J' q')` with `J' q'` the directional
+    /// derivative of the geometric Jacobian along `q'` (central difference, step
+    /// `1e-5 / |q'|`: error of order 1e-10 relative).
+    fn actuator_motion(
+        &self,
+        x: &Vector6<f64>,
+        xd: &Vector6<f64>,
+        xdd: &Vector6<f64>,
+    ) -> Result<ActuatorMotion<6>> {
+        let q = self.inverse(x)?;
+        let (_, j) = self.pose_and_jacobian(&q);
+        let inv = self.inverse_geometric(&j)?;
+        let a = [x[3], x[4], x[5]];
+        let (w, al) = rpy_angular_motion(
+            a,
+            &Vector3::new(xd[3], xd[4], xd[5]),
+            &Vector3::new(xdd[3], xdd[4], xdd[5]),
+        );
+        let twist = Vector6::new(xd[0], xd[1], xd[2], w.x, w.y, w.z);
+        let qd = inv * twist;
+        let n = qd.norm();
+        let jd_qd = if n > 0.0 {
+            let h = 1e-5 / n;
+            let (_, jp) = self.pose_and_jacobian(&(q + qd * h));
+            let (_, jm) = self.pose_and_jacobian(&(q - qd * h));
+            (jp - jm) * qd / (2.0 * h)
+        } else {
+            Vector6::zeros()
+        };
+        let acc = Vector6::new(xdd[0], xdd[1], xdd[2], al.x, al.y, al.z);
+        Ok(ActuatorMotion {
+            q,
+            qd,
+            qdd: inv * (acc - jd_qd),
+        })
+    }
+}

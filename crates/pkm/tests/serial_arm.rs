@@ -1,0 +1,213 @@
+//! Six-joint robots as spatial mechanisms: tool-pose coordinates through numeric
+//! inverse kinematics (issue 6, item 2).
+
+use nalgebra::{Matrix6, Vector6};
+use pkm::machine::Model;
+use pkm::mechanism::{Mechanism, PoseSpace};
+use pkm::serial::arm::SerialArm;
+use pkm::serial::mechanism::SerialAny;
+use proptest::prelude::*;
+
+fn arm(file: &str) -> SerialArm {
+    let m = pkm::Machine::from_path(format!(
+        "{}/../../examples/{file}",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let Model::Serial(s) = m.model else { panic!() };
+    let SerialAny::Arm(a) = s.mechanism else {
+        panic!("{file}: expected tool-pose coordinates")
+    };
+    a
+}
+
+/// Joint values from unit-interval samples, inside a band of each joint's range that
+/// keeps the KR 30 away from its wrist singularity (q5 near 0) and on one side of its
+/// elbow singularity (arm stretched at q3 = -90 + atan(145 / 820) = -80 deg).
+fn kr30_joints(u: &[f64; 6]) -> Vector6<f64> {
+    kr30_band(u)
+}
+
+/// Whether the robot is clear of singular configurations at `q`: the smallest singular
+/// value of the geometric Jacobian (mm or rad per rad) above 0.05. Close to one, two
+/// inverse solutions are close together and Newton may return either.
+fn regular(a: &SerialArm, q: &Vector6<f64>) -> bool {
+    let (_, j) = a.pose_and_jacobian(q);
+    j.singular_values().min() > 0.05
+}
+
+fn kr30_band(u: &[f64; 6]) -> Vector6<f64> {
+    let d = std::f64::consts::PI / 180.0;
+    let band = [
+        (-150.0, 150.0),
+        (-30.0, 90.0),
+        (-65.0, 55.0),
+        (-150.0, 150.0),
+        (20.0, 110.0),
+        (-150.0, 150.0),
+    ];
+    Vector6::from_fn(|i, _| (band[i].0 + u[i] * (band[i].1 - band[i].0)) * d)
+}
+
+#[test]
+fn six_joint_files_take_tool_poses_and_five_axis_files_their_joints() {
+    let a = arm("machines/kr30-dh.toml");
+    assert_eq!(a.pose_space(), PoseSpace::Spatial);
+    assert_eq!(
+        a.coordinates()
+            .iter()
+            .map(|c| c.name.as_str())
+            .collect::<Vec<_>>(),
+        ["X", "Y", "Z", "A", "B", "C"]
+    );
+    // Home: wrist centre at X = a1 + d4 = 1170, Z = d1 + a2 + a3 = 1810; wrist bent
+    // 90 deg, so flange (170) and tool (100) hang straight down from it.
+    let h = a.home();
+    assert!((h[0] - 1170.0).abs() < 1e-9, "{h}");
+    assert!(h[1].abs() < 1e-9, "{h}");
+    assert!((h[2] - 1540.0).abs() < 1e-9, "{h}");
+    let _ = arm("robots/ur5-like.urdf");
+    let m = pkm::Machine::from_path(format!(
+        "{}/../../examples/machines/mc300.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    assert_eq!(m.mechanism().pose_space(), PoseSpace::Own);
+}
+
+#[test]
+fn pose_jacobian_and_forward_agree_with_the_chain() {
+    let a = arm("machines/kr30-dh.toml");
+    let q = kr30_joints(&[0.3, 0.6, 0.4, 0.7, 0.5, 0.2]);
+    let x = a.forward(&q, &a.home()).unwrap().pose;
+    let t = a.machine.pose(q.as_slice(), &[], &[]).unwrap();
+    for r in 0..3 {
+        assert!((x[r] - t[(r, 3)]).abs() < 1e-9);
+    }
+    let rot = pkm::rotation::rpy_matrix(x[3], x[4], x[5]);
+    assert!((rot - t.fixed_view::<3, 3>(0, 0)).amax() < 1e-12);
+}
+
+#[test]
+fn inverse_recovers_the_joints_from_a_nearby_start_and_the_pose_from_home() {
+    let a = arm("machines/kr30-dh.toml");
+    let mut worst_q: f64 = 0.0;
+    let mut worst_p: f64 = 0.0;
+    let mut rng = 12345u64;
+    let mut next = || {
+        rng = rng
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (rng >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for _ in 0..500 {
+        let u: [f64; 6] = std::array::from_fn(|_| next());
+        let q = kr30_joints(&u);
+        if !regular(&a, &q) {
+            continue;
+        }
+        let x = a.coords_of_joints(&q);
+        let start = q + Vector6::from_fn(|i, _| 0.05 * (u[(i + 1) % 6] - 0.5));
+        let back = a.inverse_from(&x, &start).unwrap();
+        worst_q = worst_q.max((back - q).amax());
+        // From home Newton may land on another branch: the pose must still match.
+        if let Ok(qh) = a.inverse(&x) {
+            worst_p = worst_p.max((a.coords_of_joints(&qh) - x).amax());
+        }
+    }
+    assert!(worst_q < 1e-9, "joints {worst_q}");
+    assert!(worst_p < 1e-9, "pose {worst_p}");
+}
+
+#[test]
+fn unreachable_pose_reports_the_residual() {
+    let a = arm("machines/kr30-dh.toml");
+    let mut x = a.home();
+    x[0] = 5000.0;
+    match a.inverse(&x) {
+        Err(pkm::Error::NotConverged { residual, .. }) => assert!(residual > 1000.0),
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn coordinate_jacobian_equals_finite_differences_of_the_inverse() {
+    let a = arm("machines/kr30-dh.toml");
+    for u in [
+        [0.3, 0.6, 0.4, 0.7, 0.5, 0.2],
+        [0.8, 0.2, 0.7, 0.1, 0.9, 0.6],
+    ] {
+        let x = a.coords_of_joints(&kr30_joints(&u));
+        // The branch the mechanism's inverse (from home) picks.
+        let q = a.inverse(&x).unwrap();
+        let j = a.jacobian(&x).unwrap();
+        let mut fd = Matrix6::zeros();
+        for c in 0..6 {
+            let h = if c < 3 { 1e-3 } else { 1e-6 };
+            let mut xp = x;
+            let mut xm = x;
+            xp[c] += h;
+            xm[c] -= h;
+            let d =
+                (a.inverse_from(&xp, &q).unwrap() - a.inverse_from(&xm, &q).unwrap()) / (2.0 * h);
+            fd.set_column(c, &d);
+        }
+        let rel = (j - fd).amax() / j.amax();
+        assert!(rel < 1e-6, "relative {rel}\n{j}\n{fd}");
+    }
+}
+
+#[test]
+fn actuator_motion_equals_differences_along_a_path() {
+    let a = arm("machines/kr30-dh.toml");
+    let x0 = a.coords_of_joints(&kr30_joints(&[0.4, 0.5, 0.5, 0.6, 0.5, 0.4]));
+    // A curved path with turning orientation: x(t) = x0 + v t + w t^2.
+    let v = Vector6::new(120.0, -80.0, 50.0, 0.2, -0.1, 0.3);
+    let w = Vector6::new(-300.0, 100.0, 200.0, 0.5, 0.4, -0.6);
+    let path = |t: f64| x0 + v * t + w * (t * t);
+    let t = 0.1;
+    let m = a
+        .actuator_motion(&path(t), &(v + w * (2.0 * t)), &(w * 2.0))
+        .unwrap();
+    let h = 1e-4;
+    let qp = a.inverse_from(&path(t + h), &m.q).unwrap();
+    let qm = a.inverse_from(&path(t - h), &m.q).unwrap();
+    let qd = (qp - qm) / (2.0 * h);
+    let qdd = (qp - m.q * 2.0 + qm) / (h * h);
+    assert!((m.qd - qd).amax() < 1e-6 * m.qd.amax(), "{}\n{}", m.qd, qd);
+    assert!(
+        (m.qdd - qdd).amax() < 1e-4 * m.qdd.amax(),
+        "{}\n{}",
+        m.qdd,
+        qdd
+    );
+}
+
+#[test]
+fn limits_name_the_joint_and_the_excess() {
+    let a = arm("machines/kr30-dh.toml");
+    // Joint A5's range is +-119 deg: drive it to 125 deg.
+    let mut q = kr30_joints(&[0.5; 6]);
+    q[4] = 125f64.to_radians();
+    let x = a.coords_of_joints(&q);
+    let mut out = Vec::new();
+    a.check_limits(&x, &q, &mut out);
+    assert_eq!(out.len(), 1, "{out:?}");
+    assert!(out[0].limit.contains("A5"), "{}", out[0].limit);
+    assert!((out[0].excess - 6.0).abs() < 1e-9, "{}", out[0].excess);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+    /// IK after FK over the band of the workspace, from a start 0.1 rad away.
+    #[test]
+    fn round_trip_over_the_workspace(u in prop::array::uniform6(0.0f64..1.0),
+                                     s in prop::array::uniform6(-0.05f64..0.05)) {
+        let a = arm("machines/kr30-dh.toml");
+        let q = kr30_joints(&u);
+        prop_assume!(regular(&a, &q));
+        let x = a.coords_of_joints(&q);
+        let back = a.inverse_from(&x, &(q + Vector6::from(s))).unwrap();
+        prop_assert!((back - q).amax() < 1e-9);
+    }
+}
