@@ -268,10 +268,12 @@ fn sensitivities_equal_central_differences() {
         ChainDeviations {
             links: vec![LinkDeviation::default(); 4],
             dq: vec![0.01, -0.02, 0.005],
+            ..Default::default()
         },
         ChainDeviations {
             links: vec![LinkDeviation::default(); 3],
             dq: vec![1e-4, -2e-4],
+            ..Default::default()
         },
     ];
     for (c, d) in dev.iter_mut().enumerate() {
@@ -281,7 +283,7 @@ fn sensitivities_equal_central_differences() {
         }
     }
     let params = m.all_parameters();
-    assert_eq!(params.len(), 4 * 12 + 3 + 3 * 12 + 2);
+    assert_eq!(params.len(), 4 * 12 + 3 + 3 * 12 + 2 + 3);
     let s = m.sensitivities(&qt, &qw, &dev, &params).unwrap();
     let perturb = |p: &Parameter, h: f64| {
         let mut d = dev.clone();
@@ -294,6 +296,7 @@ fn sensitivities_equal_central_differences() {
                 col,
             } => d[chain].links[link].alpha[(row, col)] += h,
             Parameter::Dq { chain, joint } => d[chain].dq[joint] += h,
+            Parameter::Installation { axis } => d[0].installation[axis] += h,
         }
         m.pose(&qt, &qw, &d).unwrap()
     };
@@ -653,5 +656,58 @@ fn prepared_jacobian_equals_the_tool_jacobian() {
                 );
             }
         }
+    }
+}
+
+#[test]
+fn installation_angles_cancel_relative_to_the_part_and_turn_a_robot_about_the_world() {
+    use pkm::serial::accuracy::{ChainDeviations, Parameter};
+    use pkm::serial::tolerance::{deviations_from, pose_error};
+    // Two chains: the installation turns both alike, the tool relative to the part
+    // does not move (exactly zero sensitivity, and no change of the exact pose).
+    let m = five_axis();
+    let (qt, qw) = ([35.0, -20.0, 60.0], [0.4, -1.1]);
+    let inst: Vec<Parameter> = (0..3)
+        .map(|axis| Parameter::Installation { axis })
+        .collect();
+    let names: Vec<String> = inst.iter().map(|p| m.parameter_name(p)).collect();
+    assert_eq!(names, ["theta_x0", "theta_y0", "theta_z0"]);
+    assert_eq!(m.parameter_by_name("theta_z0"), Ok(inst[2]));
+    for (dp, w) in m.sensitivities(&qt, &qw, &[], &inst).unwrap() {
+        assert_eq!((dp.norm(), w.norm()), (0.0, 0.0));
+    }
+    let d = deviations_from(&m, &[(inst[0], 0.01), (inst[2], -0.02)]);
+    let (dp, dw) = pose_error(&m, &qt, &qw, &d).unwrap();
+    assert_eq!((dp.norm(), dw.norm()), (0.0, 0.0));
+    // A robot (no workpiece chain): theta_z0 turns the tool point about the world Z:
+    // dp = e_z x p, exactly in the sensitivities, to first order in the exact pose;
+    // checked against central differences at a tilted installation.
+    let r = kr30();
+    let q = [0.3, 0.2, -0.4, 0.5, 1.0, -0.3];
+    let t = r.pose(&q, &[], &[]).unwrap();
+    let s = r.sensitivities(&q, &[], &[], &inst).unwrap();
+    let p = nalgebra::Vector3::new(t[(0, 3)], t[(1, 3)], t[(2, 3)]);
+    assert!((s[2].0 - nalgebra::Vector3::z().cross(&p)).norm() < 1e-9);
+    let base = ChainDeviations {
+        installation: nalgebra::Vector3::new(0.02, -0.01, 0.03),
+        ..Default::default()
+    };
+    let s = r
+        .sensitivities(&q, &[], std::slice::from_ref(&base), &inst)
+        .unwrap();
+    let t0 = r.pose(&q, &[], std::slice::from_ref(&base)).unwrap();
+    for (axis, (dp, w)) in s.iter().enumerate() {
+        let h = 1e-6;
+        let at = |v: f64| {
+            let mut d = base.clone();
+            d.installation[axis] += v;
+            r.pose(&q, &[], &[d]).unwrap()
+        };
+        let fd = (at(h) - at(-h)) / (2.0 * h);
+        let fdp = fd.fixed_view::<3, 1>(0, 3).into_owned();
+        let dr = fd.fixed_view::<3, 3>(0, 0) * t0.fixed_view::<3, 3>(0, 0).transpose();
+        let fdw = Vector3::new(dr[(2, 1)], dr[(0, 2)], dr[(1, 0)]);
+        assert!((dp - fdp).amax() < 1e-6 * fdp.amax(), "{axis}: {dp} {fdp}");
+        assert!((w - fdw).amax() < 1e-8, "{axis}: {w} {fdw}");
     }
 }

@@ -27,6 +27,10 @@ pub struct ChainDeviations {
     pub links: Vec<LinkDeviation>,
     /// Per joint (empty: none).
     pub dq: Vec<f64>,
+    /// Installation angles of the bed in the world (rad, about x, y, z: the world is
+    /// `R = Rz(theta_z0) Ry(theta_y0) Rx(theta_x0)` from the bed; seed 003's theta_x0,
+    /// theta_z0). Read from the tool chain's entry only.
+    pub installation: Vector3<f64>,
 }
 
 /// One primary deviation of a machine.
@@ -59,6 +63,14 @@ pub enum Parameter {
         chain: usize,
         /// Joint index in the chain.
         joint: usize,
+    },
+    /// Installation angle `theta_(axis)0` of the bed in the world (rad). It turns both
+    /// chains alike, so it moves the tool relative to a part on the workpiece chain not
+    /// at all; without a workpiece chain (a robot; the part stands in the world) it
+    /// turns the tool about the world origin.
+    Installation {
+        /// Axis 0, 1, 2 = x, y, z.
+        axis: usize,
     },
 }
 
@@ -104,6 +116,7 @@ impl SerialMachine {
                 AXES[col],
                 link_name(chain, link)
             ),
+            Parameter::Installation { axis } => format!("theta_{}0", AXES[axis.min(2)]),
             Parameter::Dq { chain, joint } => {
                 let j = self
                     .chain(chain)
@@ -128,7 +141,7 @@ impl SerialMachine {
                     all.iter().take(4).map(|p| self.parameter_name(p)).collect();
                 format!(
                     "unknown deviation `{name}`: expected delta_x|y|z(LINK), alpha_ab(LINK) \
-                     with a, b in x, y, z, or dq(JOINT), e.g. {}",
+                     with a, b in x, y, z, dq(JOINT) or theta_x0|y0|z0, e.g. {}",
                     examples.join(", ")
                 )
             })
@@ -138,7 +151,7 @@ impl SerialMachine {
     /// deviations, and the positioning deviation of a revolute joint.
     pub fn is_angular(&self, p: &Parameter) -> bool {
         match *p {
-            Parameter::Alpha { .. } => true,
+            Parameter::Alpha { .. } | Parameter::Installation { .. } => true,
             Parameter::Delta { .. } => false,
             Parameter::Dq { chain, joint } => self
                 .chain(chain)
@@ -149,7 +162,7 @@ impl SerialMachine {
     }
 
     /// Every primary deviation of the machine: per link 3 linear and 9 angular, per
-    /// joint 1 positioning.
+    /// joint 1 positioning, and the bed's three installation angles.
     pub fn all_parameters(&self) -> Vec<Parameter> {
         let mut v = Vec::new();
         let chains: Vec<&Chain> = std::iter::once(&self.tool)
@@ -179,6 +192,7 @@ impl SerialMachine {
                 v.push(Parameter::Dq { chain: c, joint });
             }
         }
+        v.extend((0..3).map(|axis| Parameter::Installation { axis }));
         v
     }
 
@@ -190,7 +204,8 @@ impl SerialMachine {
         let dt = dev.first().unwrap_or(&none);
         let t = self.tool.pose(qt, &dt.dq, &dt.links)?;
         match &self.workpiece {
-            None => Ok(t),
+            // The installation turns both chains alike: it cancels relative to the part.
+            None => Ok(installation(&dt.installation) * t),
             Some(w) => {
                 let dw = dev.get(1).unwrap_or(&none);
                 let tw = w.pose(qw, &dw.dq, &dw.links)?;
@@ -220,13 +235,30 @@ impl SerialMachine {
                 let inv = inverse(&p.total())?;
                 (Some(p), inv)
             }
-            None => (None, Matrix4::identity()),
+            // Without a workpiece chain the part stands in the world.
+            None => (
+                None,
+                installation(&dev.first().unwrap_or(&none).installation),
+            ),
         };
         let rel = tw_inv * tt;
         let rot = rel.fixed_view::<3, 3>(0, 0).into_owned();
         params
             .iter()
             .map(|p| {
+                if let Parameter::Installation { axis } = *p {
+                    return Ok(if self.workpiece.is_some() {
+                        (Vector3::zeros(), Vector3::zeros())
+                    } else {
+                        // d(R T)/d theta = (a x) R T exactly, `a` the world direction
+                        // of the axis that angle turns about.
+                        let a = installation_axis(
+                            &dev.first().unwrap_or(&none).installation,
+                            axis.min(2),
+                        );
+                        (a.cross(&rel.fixed_view::<3, 1>(0, 3).into_owned()), a)
+                    });
+                }
                 let (c, k, dm) = derivative(self, p, qt, qw, dev)?;
                 let d_rel = if c == 0 {
                     tw_inv * pt.derivative(k, &dm)
@@ -245,6 +277,28 @@ impl SerialMachine {
                 Ok((dp, w))
             })
             .collect()
+    }
+}
+
+/// The bed's installation in the world, `Rz(theta_z0) Ry(theta_y0) Rx(theta_x0)`.
+fn installation(theta: &Vector3<f64>) -> Matrix4<f64> {
+    if *theta == Vector3::zeros() {
+        return Matrix4::identity();
+    }
+    let r =
+        crate::rotation::rz(theta.z) * crate::rotation::ry(theta.y) * crate::rotation::rx(theta.x);
+    r.to_homogeneous()
+}
+
+/// World direction of installation axis `axis` at installation `theta`: turning
+/// `theta_axis` turns the bed about this axis (`Rz Ry Rx`: z about the world z, y about
+/// `Rz e_y`, x about `Rz Ry e_x`).
+fn installation_axis(theta: &Vector3<f64>, axis: usize) -> Vector3<f64> {
+    use crate::rotation::{ry, rz};
+    match axis {
+        0 => rz(theta.z) * ry(theta.y) * Vector3::x(),
+        1 => rz(theta.z) * Vector3::y(),
+        _ => Vector3::z(),
     }
 }
 
@@ -392,6 +446,10 @@ fn derivative(
             }
             Ok((chain, idx, dm))
         }
+        Parameter::Installation { .. } => Err(Error::InvalidInput {
+            what: "deviation".into(),
+            message: "an installation angle is not a factor of a chain".into(),
+        }),
     }
 }
 

@@ -123,11 +123,13 @@ pub fn zero_deviations(m: &SerialMachine) -> Vec<ChainDeviations> {
     let mut v = vec![ChainDeviations {
         links: vec![LinkDeviation::default(); m.tool.links.len()],
         dq: vec![0.0; m.tool.dof()],
+        ..Default::default()
     }];
     if let Some(w) = &m.workpiece {
         v.push(ChainDeviations {
             links: vec![LinkDeviation::default(); w.links.len()],
             dq: vec![0.0; w.dof()],
+            ..Default::default()
         });
     }
     v
@@ -173,6 +175,7 @@ fn apply(d: &mut [ChainDeviations], p: &Parameter, v: f64) {
             col,
         } => d[chain].links[link].alpha[(row, col)] += v,
         Parameter::Dq { chain, joint } => d[chain].dq[joint] += v,
+        Parameter::Installation { axis } => d[0].installation[axis.min(2)] += v,
     }
 }
 
@@ -212,6 +215,7 @@ pub fn monte_carlo(
                         .iter_mut()
                         .for_each(|l| *l = LinkDeviation::default());
                     cd.dq.iter_mut().for_each(|x| *x = 0.0);
+                    cd.installation = Vector3::zeros();
                 }
                 for t in tol {
                     let v = match t.distribution {
