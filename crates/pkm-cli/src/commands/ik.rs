@@ -117,12 +117,25 @@ pub fn run(a: &IkArgs) -> Result<u8> {
                     v.map(|v| format!("{v:.4} {unit}"))
                         .unwrap_or_else(|| "-".into())
                 };
+                // Actuator rates in mm/s (linear drives) or rad/s (revolute ones),
+                // efforts in N or N mm.
+                let angular = |a: &pkm::mechanism::Actuator| a.quantity == pkm::Quantity::Angle;
+                let (rate, effort) = if m.actuators().iter().all(angular) {
+                    ("rad/s", "N mm")
+                } else if m.actuators().iter().any(angular) {
+                    ("mm/s or rad/s", "N or N mm")
+                } else {
+                    ("mm/s", "N")
+                };
                 println!(
                     "transmit   velocity {}, angular {}, force {}, moment {}",
-                    f(t.velocity, "(mm/s)/(mm/s)"),
-                    f(t.angular_velocity.map(|v| v.to_radians()), "(mm/s)/(deg/s)"),
-                    f(t.force, "N/N"),
-                    f(t.moment, "N/(N mm)")
+                    f(t.velocity, &format!("({rate})/(mm/s)")),
+                    f(
+                        t.angular_velocity.map(|v| v.to_radians()),
+                        &format!("({rate})/(deg/s)")
+                    ),
+                    f(t.force, &format!("({effort})/N")),
+                    f(t.moment, &format!("({effort})/(N mm)"))
                 );
                 println!(
                     "singular   distance {:.4} (smallest scaled singular value; 0 = singular), condition {:.3}",
