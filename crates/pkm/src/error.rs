@@ -55,6 +55,17 @@ pub enum Error {
         /// Final residual norm in the solver's units (mm for strut lengths).
         residual: f64,
     },
+    /// An identification problem whose data cannot determine a combination of the free
+    /// parameters.
+    #[error(
+        "not identifiable: {combination} (relative singular value {relative_singular_value:.2e})"
+    )]
+    NotIdentifiable {
+        /// The combination, named, with advice.
+        combination: String,
+        /// Its singular value relative to the largest.
+        relative_singular_value: f64,
+    },
     /// The configuration is singular (or too close to it) for the requested operation.
     #[error("singular configuration: {what} (reciprocal condition number {rcond:.3e})")]
     Singular {

@@ -27,6 +27,7 @@
 pub mod dynamic;
 pub mod error;
 pub mod hexapod;
+pub mod identify;
 pub mod legs;
 pub mod limits;
 pub mod linalg;

@@ -1,0 +1,234 @@
+//! Simulated identification experiments: a "true" machine (nominal + random
+//! deviations), measured states with noise on the points and on the readings, written
+//! as a real campaign would be; and the validation of a model against the truth.
+
+use nalgebra::{SVector, Vector3};
+use rand::{Rng, SeedableRng};
+use rand_distr::{Distribution as _, Normal};
+use serde::Serialize;
+
+use super::{Identifiable, Measurements, State};
+use crate::error::{Error, Result};
+use crate::mechanism::PoseSpace;
+use crate::units::Quantity;
+
+/// How the states are chosen.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Design {
+    /// Poses drawn uniformly around home (within every limit of the true machine).
+    Random,
+    /// Seed 001's design: the zero state, then one more actuator changed per state
+    /// (cumulative), by `step`; beyond `A + 1` states the cycle repeats with the sign
+    /// flipped.
+    OneActuator,
+}
+
+/// Settings of [`simulate`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Experiment {
+    /// Size of the deviations: every geometric parameter and zero reading of the true
+    /// machine is nominal + uniform in `[-deviation, deviation]` (mm).
+    pub deviation: f64,
+    /// Standard deviation of the measured points' coordinates (mm).
+    pub point_noise: f64,
+    /// Standard deviation of the readings (mm or rad).
+    pub length_noise: f64,
+    /// Number of states.
+    pub states: usize,
+    /// State design.
+    pub design: Design,
+    /// Half-width of the random poses' translations around home (mm).
+    pub translation: f64,
+    /// Half-width of the random poses' angles around home (rad).
+    pub rotation: f64,
+    /// Actuator change per state of the one-actuator design (mm or rad).
+    pub step: f64,
+    /// Fixture points (platform frame, mm).
+    pub fixture: Vec<Vector3<f64>>,
+    /// Random seed.
+    pub seed: u64,
+}
+
+/// A simulated campaign and the truth behind it.
+#[derive(Debug, Clone)]
+pub struct Simulated<M, const P: usize, const A: usize> {
+    /// The true machine.
+    pub truth: M,
+    /// Its true zero readings.
+    pub true_zero: SVector<f64, A>,
+    /// The measurements.
+    pub measurements: Measurements,
+    /// The true poses of the states.
+    pub poses: Vec<SVector<f64, P>>,
+}
+
+/// Seed 001's fixture: an equilateral triangle of circumradius `r` in the platform's
+/// XY plane at height `z`, vertices at 90, 210 and 330 deg.
+pub fn triangle(r: f64, z: f64) -> Vec<Vector3<f64>> {
+    [90f64, 210.0, 330.0]
+        .iter()
+        .map(|a| {
+            let (s, c) = a.to_radians().sin_cos();
+            Vector3::new(r * c, r * s, z)
+        })
+        .collect()
+}
+
+/// Simulates a campaign on a true machine drawn around `nominal` (zero readings
+/// `zero`).
+pub fn simulate<M: Identifiable<P, A>, const P: usize, const A: usize>(
+    nominal: &M,
+    zero: &SVector<f64, A>,
+    e: &Experiment,
+) -> Result<Simulated<M, P, A>> {
+    let mut rng = rand::rngs::StdRng::seed_from_u64(e.seed);
+    let dev = e.deviation.abs();
+    let mut draw = |v: f64| {
+        if dev > 0.0 {
+            v + rng.random_range(-dev..=dev)
+        } else {
+            v
+        }
+    };
+    let g: Vec<f64> = nominal.geometry().iter().map(|v| draw(*v)).collect();
+    let true_zero = SVector::<f64, A>::from_fn(|j, _| draw(zero[j]));
+    let truth = nominal.with_geometry(&g)?;
+    simulate_on(truth, true_zero, e)
+}
+
+/// Simulates a campaign on a given true machine (zero readings `true_zero`).
+pub fn simulate_on<M: Identifiable<P, A>, const P: usize, const A: usize>(
+    truth: M,
+    true_zero: SVector<f64, A>,
+    e: &Experiment,
+) -> Result<Simulated<M, P, A>> {
+    let mut rng = rand::rngs::StdRng::seed_from_u64(e.seed ^ 0x5EED_0001);
+    let unit = Normal::new(0.0, 1.0).expect("unit normal");
+    let mut poses = Vec::with_capacity(e.states);
+    let mut violations = Vec::new();
+    match e.design {
+        Design::Random => {
+            let home = truth.home();
+            let mut tries = 0;
+            while poses.len() < e.states {
+                tries += 1;
+                if tries > 1000 * e.states.max(1) {
+                    return Err(Error::InvalidInput {
+                        what: "simulated experiment".into(),
+                        message: format!(
+                            "found only {} poses within the limits in {} tries: reduce the \
+                             translation/rotation spans",
+                            poses.len(),
+                            tries - 1
+                        ),
+                    });
+                }
+                let x = SVector::<f64, P>::from_fn(|k, _| {
+                    let span = match (truth.pose_space(), truth.coordinates()[k].quantity) {
+                        (_, Quantity::Length) => e.translation,
+                        (_, Quantity::Angle) => e.rotation,
+                    };
+                    home[k] + rng.random_range(-1.0..=1.0) * span
+                });
+                let Ok(q) = truth.inverse(&x) else { continue };
+                violations.clear();
+                truth.check_limits(&x, &q, &mut violations);
+                if violations.is_empty() {
+                    poses.push(x);
+                }
+            }
+        }
+        Design::OneActuator => {
+            let mut dq = SVector::<f64, A>::zeros();
+            let mut start = truth.home();
+            for i in 0..e.states {
+                if i > 0 {
+                    let j = (i - 1) % A;
+                    let sign = if ((i - 1) / A).is_multiple_of(2) {
+                        1.0
+                    } else {
+                        -1.0
+                    };
+                    dq[j] += sign * e.step;
+                }
+                let f = truth.forward(&(true_zero + dq), &start)?;
+                start = f.pose;
+                poses.push(f.pose);
+            }
+        }
+    }
+    let _ = PoseSpace::Spatial;
+    let mut states = Vec::with_capacity(poses.len());
+    for x in &poses {
+        let q = truth.inverse(x)?;
+        let readings = (0..A)
+            .map(|j| q[j] - true_zero[j] + e.length_noise * unit.sample(&mut rng))
+            .collect();
+        let points = e
+            .fixture
+            .iter()
+            .map(|s| {
+                truth.platform_point(x, s).0
+                    + Vector3::from_fn(|_, _| e.point_noise * unit.sample(&mut rng))
+            })
+            .collect();
+        states.push(State { readings, points });
+    }
+    Ok(Simulated {
+        truth,
+        true_zero,
+        measurements: Measurements {
+            fixture: e.fixture.clone(),
+            states,
+        },
+        poses,
+    })
+}
+
+/// Pose errors of a model against the truth.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct PoseErrors {
+    /// Largest tool-point position error (mm).
+    pub position_max: f64,
+    /// RMS tool-point position error (mm).
+    pub position_rms: f64,
+    /// Largest orientation error (rad).
+    pub orientation_max: f64,
+    /// RMS orientation error (rad).
+    pub orientation_rms: f64,
+}
+
+/// How far a model (`m`, zero readings `zero`) puts the tool from the true poses
+/// `poses` when given the readings `readings` the control would have: forward
+/// kinematics of the model at `zero + dL`, against the truth.
+pub fn pose_errors<M: Identifiable<P, A>, const P: usize, const A: usize>(
+    m: &M,
+    zero: &SVector<f64, A>,
+    readings: &[Vec<f64>],
+    poses: &[SVector<f64, P>],
+) -> Result<PoseErrors> {
+    let mut pm: f64 = 0.0;
+    let mut ps = 0.0;
+    let mut om: f64 = 0.0;
+    let mut os = 0.0;
+    for (r, x) in readings.iter().zip(poses) {
+        let q = SVector::<f64, A>::from_fn(|j, _| zero[j] + r[j]);
+        let f = m.forward(&q, x)?;
+        let a = m.tool_pose(x)?;
+        let b = m.tool_pose(&f.pose)?;
+        let dp = (a.translation.vector - b.translation.vector).norm();
+        let dw = a.rotation.angle_to(&b.rotation);
+        pm = pm.max(dp);
+        om = om.max(dw);
+        ps += dp * dp;
+        os += dw * dw;
+    }
+    let n = readings.len().max(1) as f64;
+    Ok(PoseErrors {
+        position_max: pm,
+        position_rms: (ps / n).sqrt(),
+        orientation_max: om,
+        orientation_rms: (os / n).sqrt(),
+    })
+}
