@@ -90,6 +90,26 @@ enum Command {
         monte_carlo), DIR/budget.svg and DIR/monte-carlo.svg. Units: mm; deg for angular\n\
         deviations and rotary axes.")]
     Errors(ErrorsArgs),
+    /// Simulate an identification campaign (seed 001): a true machine drawn around the
+    /// file's, states measured with a triangular fixture, noise on points and readings.
+    #[command(after_help = "Examples:\n  \
+        pkm simulate-measurements examples/machines/hexapod-seed001.toml --deviation 1 --point-noise 0.005 --length-noise 0.001 --states 50 --holdout 20 --seed 1 --out sim\n  \
+        pkm simulate-measurements examples/machines/hexapod-seed001.toml --design one-strut --states 7 --point-noise 0 --length-noise 0 --out seven\n\n\
+        Writes DIR/measurements.csv (the format `pkm calibrate` reads: `# fixture P1 = x, y, z`\n\
+        lines, then state,dL1..dL6,P1_x,...), DIR/validation.csv with --holdout, DIR/true.toml\n\
+        (the true machine, a machine file) and DIR/truth.json.")]
+    SimulateMeasurements(SimulateArgs),
+    /// Identify a machine's geometric parameters (hexapod: the 42 of seed 001) from
+    /// measurements, with standard errors and the identifiability analysis.
+    #[command(after_help = "Examples:\n  \
+        pkm calibrate examples/machines/hexapod-seed001.toml --measurements sim/measurements.csv --validation sim/validation.csv --out cal\n  \
+        pkm calibrate MACHINE.toml --measurements tracker.csv --model points --out cal     # laser tracker: points only\n  \
+        pkm calibrate MACHINE.toml --measurements m.csv --fix A1.z,A2.z --out cal           # hold parameters\n\n\
+        Writes DIR/identified.toml (a machine file every command accepts), DIR/report.json\n\
+        (parameters with standard errors, residual RMS before/after, singular values,\n\
+        condition number, unidentifiable combinations, validation), DIR/residuals.svg and\n\
+        DIR/singular-values.svg. A rank-deficient problem fails, naming the combination.")]
+    Calibrate(CalibrateArgs),
     /// Validate a machine file and summarise it.
     #[command(after_help = "Example:\n  pkm check examples/machines/tripod-seed000.toml --json")]
     Check(CheckArgs),
@@ -291,6 +311,80 @@ pub struct WorkspaceArgs {
 }
 
 #[derive(Args)]
+pub struct SimulateArgs {
+    /// Machine file (TOML, type = "hexapod"): the nominal machine.
+    pub machine: PathBuf,
+    /// Half-width of the uniform deviations of every joint coordinate and zero length of
+    /// the true machine (mm).
+    #[arg(long, default_value_t = 1.0)]
+    pub deviation: f64,
+    /// Standard deviation of the measured point coordinates (mm).
+    #[arg(long, default_value_t = 0.005)]
+    pub point_noise: f64,
+    /// Standard deviation of the strut length readings (mm).
+    #[arg(long, default_value_t = 0.001)]
+    pub length_noise: f64,
+    /// Number of states for identification.
+    #[arg(long, default_value_t = 50)]
+    pub states: usize,
+    /// Further states on the same true machine, written to validation.csv.
+    #[arg(long, default_value_t = 0)]
+    pub holdout: usize,
+    /// `random` (poses around home within every limit) or `one-strut` (seed 001: the
+    /// zero state, then one more strut changed per state).
+    #[arg(long, default_value = "random")]
+    pub design: String,
+    /// Half-width of the random poses' translations (mm).
+    #[arg(long, default_value_t = 100.0)]
+    pub translation: f64,
+    /// Half-width of the random poses' angles (deg).
+    #[arg(long, default_value_t = 10.0)]
+    pub rotation: f64,
+    /// Strut change per state of the one-strut design (mm).
+    #[arg(long, default_value_t = 40.0)]
+    pub step: f64,
+    /// Circumradius of the triangular fixture (mm).
+    #[arg(long, default_value_t = 200.0)]
+    pub fixture_radius: f64,
+    /// Random seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Output directory.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+#[derive(Args)]
+pub struct CalibrateArgs {
+    /// Machine file (TOML, type = "hexapod"): the nominal machine, start of the fit.
+    pub machine: PathBuf,
+    /// Measurement file (CSV, see `pkm simulate-measurements --help`).
+    #[arg(long)]
+    pub measurements: PathBuf,
+    /// `pose` (full pose per state from >= 3 fixture points) or `points` (points only,
+    /// e.g. one laser-tracker target).
+    #[arg(long, default_value = "pose")]
+    pub model: String,
+    /// Parameters held at their nominal values (names as in report.json, e.g. A1.z).
+    #[arg(long)]
+    pub fix: Option<String>,
+    /// Write the seed 001 procedure's solution (first seven states, six systems of seven
+    /// equations) to identified.toml instead of Levenberg-Marquardt's.
+    #[arg(long)]
+    pub seed_procedure: bool,
+    /// States not used for identification: point errors of the nominal and identified
+    /// models.
+    #[arg(long)]
+    pub validation: Option<PathBuf>,
+    /// Output directory.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Print report.json to stdout.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Args)]
 pub struct ErrorsArgs {
     /// Machine file (TOML, type = "serial").
     pub machine: PathBuf,
@@ -352,6 +446,8 @@ fn main() -> ExitCode {
         Command::Motion(a) => commands::motion::run(&a),
         Command::Workspace(a) => commands::workspace::run(&a),
         Command::Errors(a) => commands::errors::run(&a),
+        Command::SimulateMeasurements(a) => commands::calibrate::simulate_run(&a),
+        Command::Calibrate(a) => commands::calibrate::calibrate_run(&a),
         Command::Report(a) => report::run(&a),
     };
     match res {

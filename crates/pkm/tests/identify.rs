@@ -3,7 +3,7 @@
 use nalgebra::{Matrix3, Rotation3, Vector3, Vector6};
 use pkm::hexapod::Hexapod;
 use pkm::identify::fit::rigid_transform;
-use pkm::identify::hexapod::{home_lengths, seed_procedure};
+use pkm::identify::hexapod::{seed_procedure, zero_lengths};
 use pkm::identify::simulate::{pose_errors, simulate, simulate_on, triangle, Design, Experiment};
 use pkm::identify::{identify, parameter_names, residuals, Identifiable, Model, Options};
 use pkm::machine::Model as MachineModel;
@@ -60,7 +60,7 @@ fn best_fit_transform_is_exact_on_exact_points_and_rejects_a_line() {
 #[test]
 fn residual_jacobians_equal_finite_differences() {
     let h = hexapod();
-    let zero = home_lengths(&h).unwrap();
+    let zero = zero_lengths(&h).unwrap();
     let s = simulate(&h, &zero, &experiment(8, Design::Random, 3)).unwrap();
     let theta = true_parameters(&s);
     for model in [Model::Pose, Model::Points] {
@@ -85,7 +85,7 @@ fn residual_jacobians_equal_finite_differences() {
 #[test]
 fn noise_free_data_recover_the_true_parameters() {
     let h = hexapod();
-    let zero = home_lengths(&h).unwrap();
+    let zero = zero_lengths(&h).unwrap();
     assert_eq!(parameter_names(&h).len(), 42);
     let s = simulate(&h, &zero, &experiment(30, Design::Random, 11)).unwrap();
     let truth = true_parameters(&s);
@@ -114,7 +114,7 @@ fn noise_free_data_recover_the_true_parameters() {
 #[test]
 fn seed_procedure_recovers_the_parameters_from_seven_states() {
     let h = hexapod();
-    let zero = home_lengths(&h).unwrap();
+    let zero = zero_lengths(&h).unwrap();
     let s = simulate(&h, &zero, &experiment(7, Design::OneActuator, 5)).unwrap();
     let sp = seed_procedure(&h, &zero, &s.measurements).unwrap();
     let truth = true_parameters(&s);
@@ -141,7 +141,7 @@ fn seed_procedure_recovers_the_parameters_from_seven_states() {
 #[test]
 fn with_noise_fifty_states_bring_the_pose_error_to_the_noise_level() {
     let h = hexapod();
-    let zero = home_lengths(&h).unwrap();
+    let zero = zero_lengths(&h).unwrap();
     let mut e = experiment(50, Design::Random, 21);
     e.point_noise = 0.005;
     e.length_noise = 0.001;
@@ -188,7 +188,7 @@ fn with_noise_fifty_states_bring_the_pose_error_to_the_noise_level() {
 #[test]
 fn standard_errors_predict_the_actual_errors() {
     let h = hexapod();
-    let zero = home_lengths(&h).unwrap();
+    let zero = zero_lengths(&h).unwrap();
     let mut z2 = 0.0;
     let mut n = 0.0;
     for seed in 0..20 {
@@ -213,7 +213,7 @@ fn standard_errors_predict_the_actual_errors() {
 #[test]
 fn translations_only_cannot_separate_base_and_platform_joints() {
     let h = hexapod();
-    let zero = home_lengths(&h).unwrap();
+    let zero = zero_lengths(&h).unwrap();
     let mut e = experiment(30, Design::Random, 8);
     e.rotation = 0.0;
     let s = simulate(&h, &zero, &e).unwrap();
@@ -235,7 +235,7 @@ fn translations_only_cannot_separate_base_and_platform_joints() {
 #[ignore]
 fn print_figures_for_the_notes() {
     let h = hexapod();
-    let zero = home_lengths(&h).unwrap();
+    let zero = zero_lengths(&h).unwrap();
     let s = simulate(&h, &zero, &experiment(7, Design::OneActuator, 5)).unwrap();
     let sp = seed_procedure(&h, &zero, &s.measurements).unwrap();
     println!("seed conditions {:?}", sp.conditions);
@@ -272,4 +272,53 @@ fn print_figures_for_the_notes() {
     let s7 = simulate(&h, &zero, &experiment(7, Design::OneActuator, 5)).unwrap();
     let id7 = identify(&h, &zero, &s7.measurements, &Options::default()).unwrap();
     println!("7 one-strut states via LM: condition {}", id7.condition);
+}
+
+#[test]
+fn noisy_nearly_rank_deficient_data_are_refused_not_fitted() {
+    let h = hexapod();
+    let zero = zero_lengths(&h).unwrap();
+    let mut e = experiment(30, Design::Random, 8);
+    e.rotation = 0.0;
+    e.point_noise = 0.005;
+    e.length_noise = 0.001;
+    let s = simulate(&h, &zero, &e).unwrap();
+    // The noisy best-fit poses turn by ~1e-5 rad: the null space becomes a tiny
+    // singular value, the standard errors hundreds of mm.
+    match identify(&h, &zero, &s.measurements, &Options::default()) {
+        Err(pkm::Error::NotIdentifiable { combination, .. }) => {
+            assert!(combination.contains("standard error"), "{combination}");
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn measurement_files_round_trip_and_errors_name_line_and_column() {
+    use pkm::identify::csv::{parse, write};
+    let h = hexapod();
+    let zero = zero_lengths(&h).unwrap();
+    let mut e = experiment(4, Design::Random, 2);
+    e.point_noise = 0.005;
+    let s = simulate(&h, &zero, &e).unwrap();
+    let acts = pkm::mechanism::Mechanism::actuators(&h);
+    let text = write(&s.measurements, acts, "a comment\nfixture: a triangle");
+    let back = parse(&text, "m.csv", acts).unwrap();
+    assert_eq!(back, s.measurements);
+    // A bad number: line and column named.
+    let bad = text.replacen("\n1,", "\n1,x", 1);
+    let line = bad.lines().position(|l| l.starts_with("1,x")).unwrap() + 1;
+    let msg = parse(&bad, "m.csv", acts).unwrap_err().to_string();
+    assert!(msg.starts_with(&format!("m.csv:{line}:2")), "{msg}");
+    // A wrong header names the expected columns.
+    let bad = text.replace("dL3", "dQ3");
+    let msg = parse(&bad, "m.csv", acts).unwrap_err().to_string();
+    assert!(
+        msg.contains("state,dL1,dL2,dL3") && msg.contains("`dQ3`"),
+        "{msg}"
+    );
+    // A short row.
+    let bad = text.trim_end().rsplit_once(',').unwrap().0.to_string();
+    let msg = parse(&bad, "m.csv", acts).unwrap_err().to_string();
+    assert!(msg.contains("15 values, expected 16"), "{msg}");
 }

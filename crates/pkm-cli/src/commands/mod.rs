@@ -1,6 +1,7 @@
 //! The subcommands.
 
 pub mod atlas;
+pub mod calibrate;
 pub mod check;
 pub mod csvio;
 pub mod errors;

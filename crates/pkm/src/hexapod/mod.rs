@@ -67,6 +67,9 @@ pub struct Hexapod {
     pub strut_diameter: Option<f64>,
     /// Home pose (X, Y, Z mm; A, B, C rad).
     pub home: Vector6<f64>,
+    /// Strut lengths at the control's zero readings (`L_j^(0)` of seed 001), from a
+    /// calibration; `None`: the lengths at home.
+    pub zero_lengths: Option<Vector6<f64>>,
     /// Length that scales rotations against translations in conditioning (mm): the
     /// mean distance of the platform joints from the tool tip.
     pub characteristic_length: f64,
@@ -156,6 +159,7 @@ impl Hexapod {
             tool,
             strut_diameter,
             home,
+            zero_lengths: None,
             characteristic_length: characteristic_length.max(1e-9),
             soa: (&set).into(),
             lanes: simd::Lanes::new(&set.arms, &set.base),

@@ -63,13 +63,15 @@ impl Identifiable<6, 6> for Hexapod {
             s.base = Vector3::new(g[3 * j], g[3 * j + 1], g[3 * j + 2]);
             s.platform = Vector3::new(g[18 + 3 * j], g[19 + 3 * j], g[20 + 3 * j]);
         }
-        Ok(Hexapod::new(
+        let mut h = Hexapod::new(
             self.name.clone(),
             struts,
             self.tool,
             self.strut_diameter,
             self.home,
-        ))
+        );
+        h.zero_lengths = self.zero_lengths;
+        Ok(h)
     }
 
     /// `L_j = |p + R (B'_j - t) - A_j|` (seed 001 eq. 1 with the tool offset `t`):
@@ -247,8 +249,12 @@ pub fn seed_procedure(
     })
 }
 
-/// The nominal zero readings of a hexapod: its strut lengths at home (the zero state
-/// of the measurements pkm simulates).
-pub fn home_lengths(h: &Hexapod) -> Result<Vector6<f64>> {
-    h.inverse(&h.home())
+/// A hexapod's zero readings `L^(0)`: the calibrated ones from its file
+/// (`[calibration] zero_lengths`), else its strut lengths at home (the zero state of
+/// the measurements pkm simulates).
+pub fn zero_lengths(h: &Hexapod) -> Result<Vector6<f64>> {
+    match h.zero_lengths {
+        Some(z) => Ok(z),
+        None => h.inverse(&h.home()),
+    }
 }

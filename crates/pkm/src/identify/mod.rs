@@ -27,6 +27,7 @@
 //! condition number, the combinations of parameters in near-null directions named, and
 //! standard errors `s sqrt(diag (J^T J)^-1)` with `s` the residual RMS.
 
+pub mod csv;
 pub mod fit;
 pub mod hexapod;
 pub mod simulate;
@@ -112,6 +113,11 @@ pub struct Options {
     pub rank_tolerance: f64,
     /// Largest number of residual evaluations of Levenberg-Marquardt.
     pub max_evaluations: usize,
+    /// Largest acceptable standard error of an identified parameter (its unit, mm for
+    /// the hexapod): with noisy data a nearly undetermined combination does not show as
+    /// a zero singular value but as a huge standard error; beyond this the result is
+    /// noise and [`identify`] fails naming the weakest combination.
+    pub max_standard_error: f64,
 }
 
 impl Default for Options {
@@ -121,6 +127,7 @@ impl Default for Options {
             fixed: Vec::new(),
             rank_tolerance: 1e-9,
             max_evaluations: 400,
+            max_standard_error: 1.0,
         }
     }
 }
@@ -473,6 +480,26 @@ pub fn identify<M: Identifiable<P, A>, const P: usize, const A: usize>(
         }
     }
     let condition = sv.first().copied().unwrap_or(0.0) / sv.last().copied().unwrap_or(0.0);
+    let (worst, worst_se) =
+        se.iter()
+            .enumerate()
+            .fold((0, 0.0), |a, (i, v)| if *v > a.1 { (i, *v) } else { a });
+    if worst_se > o.max_standard_error {
+        let (what, rel) = match weak.first() {
+            Some(w) => (w.description.clone(), w.relative_singular_value),
+            None => (
+                format!("`{}` is poorly determined by these states", names[worst]),
+                sv.last().copied().unwrap_or(0.0) / sv.first().copied().unwrap_or(1.0),
+            ),
+        };
+        return Err(Error::NotIdentifiable {
+            combination: format!(
+                "{what}; with this data the standard error of `{}` is {worst_se:.3} (limit {})",
+                names[worst], o.max_standard_error
+            ),
+            relative_singular_value: rel,
+        });
+    }
     Ok(Identification {
         free: (0..n).map(|i| free.contains(&i)).collect(),
         names,
@@ -681,4 +708,51 @@ fn describe(terms: &[(String, f64)]) -> String {
         "{} ({what}; hold one of them or measure states that separate them)",
         sum.join(" ")
     )
+}
+
+/// How well a model predicts measured points.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct PointErrors {
+    /// Largest distance between a predicted and a measured point (mm).
+    pub max: f64,
+    /// RMS distance (mm).
+    pub rms: f64,
+    /// States whose readings the model cannot reach (forward kinematics failed).
+    pub failed: usize,
+}
+
+/// Validation on states not used for identification: forward kinematics of the model
+/// `m` at `zero + dL` for each state, the fixture's points predicted and compared with
+/// the measured ones (the measurement noise is part of the result).
+pub fn point_errors<M: Identifiable<P, A>, const P: usize, const A: usize>(
+    m: &M,
+    zero: &SVector<f64, A>,
+    meas: &Measurements,
+) -> PointErrors {
+    let mut max: f64 = 0.0;
+    let mut sum = 0.0;
+    let mut count = 0usize;
+    let mut failed = 0;
+    let mut start = m.home();
+    for st in &meas.states {
+        let q =
+            SVector::<f64, A>::from_fn(|j, _| zero[j] + st.readings.get(j).copied().unwrap_or(0.0));
+        match m.forward(&q, &start) {
+            Ok(f) => {
+                start = f.pose;
+                for (s, p) in meas.fixture.iter().zip(&st.points) {
+                    let d = (m.platform_point(&f.pose, s).0 - p).norm();
+                    max = max.max(d);
+                    sum += d * d;
+                    count += 1;
+                }
+            }
+            Err(_) => failed += 1,
+        }
+    }
+    PointErrors {
+        max,
+        rms: (sum / count.max(1) as f64).sqrt(),
+        failed,
+    }
 }

@@ -70,7 +70,9 @@ pub fn triangle(r: f64, z: f64) -> Vec<Vector3<f64>> {
         .iter()
         .map(|a| {
             let (s, c) = a.to_radians().sin_cos();
-            Vector3::new(r * c, r * s, z)
+            // Exact zeros where the trigonometry leaves rounding dust.
+            let snap = |v: f64| if v.abs() < 1e-9 * r.abs() { 0.0 } else { v };
+            Vector3::new(snap(r * c), snap(r * s), z)
         })
         .collect()
 }

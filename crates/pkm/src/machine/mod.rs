@@ -19,6 +19,7 @@ use crate::error::{Error, Result};
 use crate::mechanism::Mechanism;
 use crate::tripod::{CentreLegTripod, TranslationalTripod};
 
+pub use hexapod_file::with_geometry as hexapod_file_with_geometry;
 pub use reference::Reference;
 pub use serial_file::{read_deviations, read_tolerances};
 pub use source::line_col;
