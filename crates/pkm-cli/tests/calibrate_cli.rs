@@ -176,3 +176,22 @@ fn bad_measurements_and_unidentifiable_designs_are_named() {
         "{err}"
     );
 }
+
+#[test]
+fn hexapod_report_has_a_calibration_section() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("rep");
+    ok(&pkm()
+        .args([
+            "report",
+            &path("examples/machines/hexapod-seed001.toml"),
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap());
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    assert!(html.contains("id=\"calibration\""));
+    assert!(html.contains("seven-state design"));
+    assert!(html.contains("singular values of the scaled identification Jacobian"));
+}

@@ -51,13 +51,51 @@ fn tripod(c: &mut Criterion) {
     });
 }
 
+fn identification(c: &mut Criterion) {
+    use pkm::identify::hexapod::zero_lengths;
+    use pkm::identify::simulate::{simulate, triangle, Design, Experiment};
+    use pkm::identify::{identify, Model as Measured, Options};
+    let Model::Hexapod(h) = machine("hexapod-seed001.toml").model else {
+        panic!()
+    };
+    let zero = zero_lengths(&h).unwrap();
+    let e = Experiment {
+        deviation: 1.0,
+        point_noise: 0.005,
+        length_noise: 0.001,
+        states: 100,
+        design: Design::Random,
+        translation: 100.0,
+        rotation: 10f64.to_radians(),
+        step: 40.0,
+        fixture: triangle(200.0, 0.0),
+        seed: 1,
+    };
+    let s = simulate(h.as_ref(), &zero, &e).unwrap();
+    let mut g = c.benchmark_group("identification");
+    g.sample_size(20);
+    for (name, model) in [("pose", Measured::Pose), ("points", Measured::Points)] {
+        let o = Options {
+            model,
+            ..Default::default()
+        };
+        g.bench_function(
+            format!("hexapod 42 parameters from 100 states ({name} model, LM + analysis)"),
+            |b| b.iter(|| identify(h.as_ref(), &zero, black_box(&s.measurements), &o).unwrap()),
+        );
+    }
+    g.finish();
+}
+
+criterion_group!(identification_benches, identification);
 criterion_group!(benches, tripod);
 criterion_main!(
     benches,
     motion_benches,
     hexapod_benches,
     workspace_benches,
-    serial_benches
+    serial_benches,
+    identification_benches
 );
 
 fn motion(c: &mut Criterion) {

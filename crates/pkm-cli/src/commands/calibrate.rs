@@ -15,7 +15,7 @@ use serde_json::json;
 
 use super::load;
 use crate::io::write_atomic;
-use crate::report::plot::{panels_svg, Series};
+use crate::report::plot::{panels_svg_x, Series};
 use crate::{CalibrateArgs, SimulateArgs};
 
 /// The hexapod of a machine file, or a message saying what identification covers.
@@ -269,6 +269,18 @@ fn report_json(
 }
 
 fn plots(out: &Path, id: &Identification, inputs: &[&Path]) -> Result<()> {
+    let (residuals, singular) = plot_svgs(id)?;
+    write_atomic(&out.join("residuals.svg"), residuals.as_bytes(), inputs)?;
+    write_atomic(
+        &out.join("singular-values.svg"),
+        singular.as_bytes(),
+        inputs,
+    )?;
+    Ok(())
+}
+
+/// The residuals per state (nominal, identified) and the singular values, as SVG.
+pub fn plot_svgs(id: &Identification) -> Result<(String, String)> {
     let per_state = |v: &[f64]| Series {
         name: "RMS".into(),
         points: v
@@ -277,8 +289,9 @@ fn plots(out: &Path, id: &Identification, inputs: &[&Path]) -> Result<()> {
             .map(|(i, r)| ((i + 1) as f64, 1000.0 * r))
             .collect(),
     };
-    let svg = panels_svg(
+    let residuals = panels_svg_x(
         "residuals per measured state",
+        "state",
         &[
             (
                 "nominal parameters".into(),
@@ -293,7 +306,6 @@ fn plots(out: &Path, id: &Identification, inputs: &[&Path]) -> Result<()> {
         ],
         (760, 520),
     )?;
-    write_atomic(&out.join("residuals.svg"), svg.as_bytes(), inputs)?;
     let top = id
         .singular_values
         .first()
@@ -309,16 +321,16 @@ fn plots(out: &Path, id: &Identification, inputs: &[&Path]) -> Result<()> {
             .map(|(i, s)| ((i + 1) as f64, (s / top).max(1e-17).log10()))
             .collect(),
     };
-    let svg = panels_svg(
+    let singular = panels_svg_x(
         &format!(
             "singular values of the scaled identification Jacobian (condition {:.3e})",
             id.condition
         ),
+        "index (largest first)",
         &[("".into(), "log10(s / s_max)".into(), vec![sv])],
         (760, 360),
     )?;
-    write_atomic(&out.join("singular-values.svg"), svg.as_bytes(), inputs)?;
-    Ok(())
+    Ok((residuals, singular))
 }
 
 fn print_text(

@@ -1,6 +1,7 @@
 //! `pkm report`: a self-contained HTML report (inline SVG, no network needed).
 
 mod accuracy;
+mod calibration;
 mod drawing;
 pub mod heatmap;
 mod html;
@@ -71,6 +72,13 @@ pub fn build(machine: &Machine) -> Result<String> {
     };
     if serial.is_some() {
         nav.push_str(" · <a href=\"#accuracy\">Accuracy</a>");
+    }
+    let hexapod = match &machine.model {
+        pkm::machine::Model::Hexapod(x) => Some(x.as_ref()),
+        _ => None,
+    };
+    if hexapod.is_some() {
+        nav.push_str(" · <a href=\"#calibration\">Calibration</a>");
     }
     let head = p3rp::head_of(machine);
     if head.is_some() {
@@ -189,6 +197,9 @@ pub fn build(machine: &Machine) -> Result<String> {
     }
     if let Some(s) = serial {
         accuracy::section(&mut h, s, m)?;
+    }
+    if let Some(x) = hexapod {
+        calibration::section(&mut h, x)?;
     }
 
     if !references.is_empty() {

@@ -28,6 +28,16 @@ pub fn panels_svg(
     panels: &[(String, String, Vec<Series>)],
     size: (u32, u32),
 ) -> Result<String> {
+    panels_svg_x(title, "t [s]", panels, size)
+}
+
+/// [`panels_svg`] with another shared x axis.
+pub fn panels_svg_x(
+    title: &str,
+    xlabel: &str,
+    panels: &[(String, String, Vec<Series>)],
+    size: (u32, u32),
+) -> Result<String> {
     let mut out = String::new();
     {
         let root = SVGBackend::with_string(&mut out, size).into_drawing_area();
@@ -69,7 +79,7 @@ pub fn panels_svg(
                 .map_err(|e| anyhow!("{e}"))?;
             chart
                 .configure_mesh()
-                .x_desc("t [s]")
+                .x_desc(xlabel)
                 .y_desc(ylabel.as_str())
                 .light_line_style(RGBColor(235, 235, 235))
                 .draw()
