@@ -195,3 +195,72 @@ fn hexapod_report_has_a_calibration_section() {
     assert!(html.contains("seven-state design"));
     assert!(html.contains("singular values of the scaled identification Jacobian"));
 }
+
+#[test]
+fn tripod_calibrates_with_its_platform_joints_held() {
+    let dir = tempfile::tempdir().unwrap();
+    let tri = path("examples/machines/tripod-seed000.toml");
+    let sim = dir.path().join("sim");
+    ok(&pkm()
+        .args([
+            "simulate-measurements",
+            &tri,
+            "--translation",
+            "30",
+            "--fixture-radius",
+            "40",
+        ])
+        .args(["--states", "30", "--holdout", "10", "--out"])
+        .arg(&sim)
+        .output()
+        .unwrap());
+    // Without holding anything: a base joint trades against its platform joint.
+    let o = pkm()
+        .args(["calibrate", &tri, "--measurements"])
+        .arg(sim.join("measurements.csv"))
+        .arg("--out")
+        .arg(dir.path().join("c0"))
+        .output()
+        .unwrap();
+    assert_ne!(o.status.code(), Some(0));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("not identifiable"));
+    let cal = dir.path().join("cal");
+    let o = pkm()
+        .args([
+            "calibrate",
+            &tri,
+            "--fix",
+            "C.*,D.*,E.*",
+            "--json",
+            "--measurements",
+        ])
+        .arg(sim.join("measurements.csv"))
+        .arg("--validation")
+        .arg(sim.join("validation.csv"))
+        .arg("--out")
+        .arg(&cal)
+        .output()
+        .unwrap();
+    ok(&o);
+    let r: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let params = r["parameters"].as_array().unwrap();
+    assert_eq!(params.len(), 21);
+    assert_eq!(params.iter().filter(|p| p["free"] == false).count(), 9);
+    let v = &r["validation"];
+    assert!(v["nominal"]["rms"].as_f64().unwrap() > 1.0, "{v}");
+    assert!(v["identified"]["rms"].as_f64().unwrap() < 0.03, "{v}");
+    ok(&pkm()
+        .arg("check")
+        .arg(cal.join("identified.toml"))
+        .output()
+        .unwrap());
+    // An unknown --fix pattern lists the parameters.
+    let o = pkm()
+        .args(["calibrate", &tri, "--fix", "Q.*", "--measurements"])
+        .arg(sim.join("measurements.csv"))
+        .arg("--out")
+        .arg(dir.path().join("c1"))
+        .output()
+        .unwrap();
+    assert!(String::from_utf8_lossy(&o.stderr).contains("no parameter matches `Q.*`"));
+}

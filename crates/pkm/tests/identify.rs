@@ -322,3 +322,52 @@ fn measurement_files_round_trip_and_errors_name_line_and_column() {
     let msg = parse(&bad, "m.csv", acts).unwrap_err().to_string();
     assert!(msg.contains("15 values, expected 16"), "{msg}");
 }
+
+#[test]
+fn translational_tripod_identified_with_its_platform_joints_held() {
+    use pkm::identify::tripod::zero_lengths as tripod_zero;
+    use pkm::tripod::TranslationalTripod;
+    let m = pkm::Machine::from_path(format!(
+        "{}/../../examples/machines/tripod-seed000.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let MachineModel::TranslationalTripod(t) = m.model else {
+        panic!()
+    };
+    let zero = tripod_zero(&t).unwrap();
+    let mut e = experiment(20, Design::Random, 4);
+    e.translation = 30.0;
+    e.fixture = triangle(40.0, 0.0);
+    let s = simulate(&t, &zero, &e).unwrap();
+    assert_eq!(parameter_names(&t).len(), 21);
+    // The platform never turns: A_j and B'_j trade.
+    match identify(&t, &zero, &s.measurements, &Options::default()) {
+        Err(pkm::Error::NotIdentifiable { combination, .. }) => {
+            assert!(combination.contains("8 more"), "{combination}")
+        }
+        other => panic!("{other:?}"),
+    }
+    // Platform joints held: an equivalent machine, exact in every prediction.
+    let o = Options {
+        fixed: (9..18).collect(),
+        ..Default::default()
+    };
+    let id = identify(&t, &zero, &s.measurements, &o).unwrap();
+    assert!(id.rms_after < 1e-9, "{}", id.rms_after);
+    let mut held = e.clone();
+    held.seed = 77;
+    let v = simulate_on(s.truth.clone(), s.true_zero, &held).unwrap();
+    let readings: Vec<Vec<f64>> = v
+        .measurements
+        .states
+        .iter()
+        .map(|st| st.readings.clone())
+        .collect();
+    let model: TranslationalTripod = t.with_geometry(&id.values[..18]).unwrap();
+    let z = nalgebra::Vector3::from_column_slice(&id.values[18..]);
+    let before = pose_errors(&t, &zero, &readings, &v.poses).unwrap();
+    let after = pose_errors(&model, &z, &readings, &v.poses).unwrap();
+    assert!(before.position_max > 0.3, "{before:?}");
+    assert!(after.position_max < 1e-6, "{after:?}");
+}

@@ -4,13 +4,13 @@
 use std::path::Path;
 
 use anyhow::{bail, Context, Result};
-use nalgebra::{Vector3, Vector6};
+use nalgebra::SVector;
 use pkm::hexapod::Hexapod;
-use pkm::identify::hexapod::{seed_procedure, zero_lengths};
+use pkm::identify::hexapod::{seed_procedure, SeedProcedure};
 use pkm::identify::simulate::{simulate, triangle, Design, Experiment};
 use pkm::identify::{self, Identifiable, Identification, Measurements, Model};
-use pkm::machine::Model as MachineModel;
-use pkm::mechanism::Mechanism;
+use pkm::machine::{Model as MachineModel, StrutGeometry};
+use pkm::tripod::TranslationalTripod;
 use serde_json::json;
 
 use super::load;
@@ -18,22 +18,70 @@ use crate::io::write_atomic;
 use crate::report::plot::{panels_svg_x, Series};
 use crate::{CalibrateArgs, SimulateArgs};
 
-/// The hexapod of a machine file, or a message saying what identification covers.
-fn hexapod<'a>(m: &'a pkm::Machine, path: &Path) -> Result<&'a Hexapod> {
-    match &m.model {
-        MachineModel::Hexapod(h) => Ok(h),
-        _ => bail!(
-            "{}: identification is implemented for hexapods (the 42 parameters of seed 001); \
-             this is a {} machine",
-            path.display(),
-            m.kind()
-        ),
-    }
+/// The joints of a hexapod, for its machine file.
+fn hexapod_struts(h: &Hexapod) -> Vec<StrutGeometry> {
+    h.struts
+        .iter()
+        .map(|s| StrutGeometry {
+            name: s.actuator.name.clone(),
+            base_name: s.base_name.clone(),
+            platform_name: s.platform_name.clone(),
+            base: s.base,
+            platform: s.platform,
+        })
+        .collect()
+}
+
+/// The joints of a translational tripod, for its machine file.
+fn tripod_struts(t: &TranslationalTripod) -> Vec<StrutGeometry> {
+    t.geometry
+        .struts
+        .iter()
+        .map(|s| StrutGeometry {
+            name: s.actuator.name.clone(),
+            base_name: s.base_name.clone(),
+            platform_name: s.platform_name.clone(),
+            base: s.base,
+            platform: s.platform,
+        })
+        .collect()
+}
+
+/// What identification covers, with a message for the rest.
+fn unsupported(m: &pkm::Machine, path: &Path) -> anyhow::Error {
+    anyhow::anyhow!(
+        "{}: identification is implemented for hexapods (the 42 parameters of seed 001) and \
+         translational tripods; this is a {} machine",
+        path.display(),
+        m.kind()
+    )
 }
 
 pub fn simulate_run(a: &SimulateArgs) -> Result<u8> {
     let machine = load(&a.machine)?;
-    let h = hexapod(&machine, &a.machine)?;
+    match &machine.model {
+        MachineModel::Hexapod(h) => {
+            let z = pkm::identify::hexapod::zero_lengths(h)?;
+            simulate_machine(a, h.as_ref(), z, |t: &Hexapod, z| {
+                let mut t = t.clone();
+                t.zero_lengths = Some(*z);
+                hexapod_struts(&t)
+            })
+        }
+        MachineModel::TranslationalTripod(t) => {
+            let z = pkm::identify::tripod::zero_lengths(t)?;
+            simulate_machine(a, t, z, |t: &TranslationalTripod, _| tripod_struts(t))
+        }
+        _ => Err(unsupported(&machine, &a.machine)),
+    }
+}
+
+fn simulate_machine<M: Identifiable<P, A> + Clone, const P: usize, const A: usize>(
+    a: &SimulateArgs,
+    h: &M,
+    zero: SVector<f64, A>,
+    struts: impl Fn(&M, &SVector<f64, A>) -> Vec<StrutGeometry>,
+) -> Result<u8> {
     let design = match a.design.as_str() {
         "random" => Design::Random,
         "one-strut" => Design::OneActuator,
@@ -42,7 +90,6 @@ pub fn simulate_run(a: &SimulateArgs) -> Result<u8> {
     if a.states == 0 {
         bail!("--states: expected at least one state");
     }
-    let zero = zero_lengths(h)?;
     let e = Experiment {
         deviation: a.deviation,
         point_noise: a.point_noise,
@@ -90,17 +137,16 @@ pub fn simulate_run(a: &SimulateArgs) -> Result<u8> {
             &inputs,
         )?;
     }
-    let mut truth = s.truth.clone();
-    truth.zero_lengths = Some(s.true_zero);
     let text = std::fs::read_to_string(&a.machine)?;
-    let toml = pkm::machine::hexapod_file_with_geometry(
+    let toml = pkm::machine::with_strut_geometry(
         &text,
         &a.machine.display().to_string(),
-        &truth,
+        &struts(&s.truth, &s.true_zero),
+        Some(s.true_zero.as_slice()),
         &format!("The TRUE machine of a simulated experiment ({comment})"),
     )?;
     write_atomic(&a.out.join("true.toml"), toml.as_bytes(), &inputs)?;
-    let mut theta = truth.geometry();
+    let mut theta = s.truth.geometry();
     theta.extend(s.true_zero.iter());
     let names = identify::parameter_names(h);
     let summary = json!({
@@ -117,7 +163,7 @@ pub fn simulate_run(a: &SimulateArgs) -> Result<u8> {
     )?;
     println!(
         "{}: {} states (+{} held out) on a true machine {} mm off nominal; wrote {}",
-        h.name,
+        h.name(),
         a.states,
         a.holdout,
         a.deviation,
@@ -126,7 +172,10 @@ pub fn simulate_run(a: &SimulateArgs) -> Result<u8> {
     Ok(0)
 }
 
-fn read_measurements(path: &Path, h: &Hexapod) -> Result<Measurements> {
+fn read_measurements<M: Identifiable<P, A>, const P: usize, const A: usize>(
+    path: &Path,
+    h: &M,
+) -> Result<Measurements> {
     let text =
         std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
     Ok(identify::csv::parse(
@@ -138,20 +187,68 @@ fn read_measurements(path: &Path, h: &Hexapod) -> Result<Measurements> {
 
 pub fn calibrate_run(a: &CalibrateArgs) -> Result<u8> {
     let machine = load(&a.machine)?;
-    let h = hexapod(&machine, &a.machine)?;
+    match &machine.model {
+        MachineModel::Hexapod(h) => {
+            let z = pkm::identify::hexapod::zero_lengths(h)?;
+            let seed = |m: &Measurements| seed_procedure(h, &z, m);
+            calibrate_machine(a, h.as_ref(), z, hexapod_struts, Some(&seed))
+        }
+        MachineModel::TranslationalTripod(t) => {
+            if a.seed_procedure {
+                bail!("--seed-procedure: seed 001's procedure is for hexapods");
+            }
+            let z = pkm::identify::tripod::zero_lengths(t)?;
+            calibrate_machine(a, t, z, tripod_struts, None)
+        }
+        _ => Err(unsupported(&machine, &a.machine)),
+    }
+}
+
+/// Whether `name` matches `pattern` (`*` matches any run of characters).
+fn glob(pattern: &str, name: &str) -> bool {
+    let parts: Vec<&str> = pattern.split('*').collect();
+    if parts.len() == 1 {
+        return pattern == name;
+    }
+    let mut rest = name;
+    for (i, p) in parts.iter().enumerate() {
+        if i == 0 {
+            let Some(r) = rest.strip_prefix(p) else {
+                return false;
+            };
+            rest = r;
+        } else if i == parts.len() - 1 {
+            return rest.ends_with(p);
+        } else {
+            let Some(k) = rest.find(p) else { return false };
+            rest = &rest[k + p.len()..];
+        }
+    }
+    true
+}
+
+type SeedFn<'a> = &'a dyn Fn(&Measurements) -> pkm::Result<SeedProcedure>;
+
+fn calibrate_machine<M: Identifiable<P, A>, const P: usize, const A: usize>(
+    a: &CalibrateArgs,
+    h: &M,
+    zero: SVector<f64, A>,
+    struts: fn(&M) -> Vec<StrutGeometry>,
+    seed_fn: Option<SeedFn>,
+) -> Result<u8> {
     let meas = read_measurements(&a.measurements, h)?;
-    let zero = zero_lengths(h)?;
     let names = identify::parameter_names(h);
     let mut fixed = Vec::new();
     if let Some(list) = &a.fix {
         for n in list.split(',').map(str::trim).filter(|n| !n.is_empty()) {
-            let i = names.iter().position(|x| x == n).with_context(|| {
-                format!(
-                    "--fix: unknown parameter `{n}`; the parameters are {}",
+            let hits: Vec<usize> = (0..names.len()).filter(|&i| glob(n, &names[i])).collect();
+            if hits.is_empty() {
+                bail!(
+                    "--fix: no parameter matches `{n}`; the parameters are {}",
                     names.join(", ")
-                )
-            })?;
-            fixed.push(i);
+                );
+            }
+            fixed.extend(hits);
         }
     }
     let model = match a.model.as_str() {
@@ -165,18 +262,17 @@ pub fn calibrate_run(a: &CalibrateArgs) -> Result<u8> {
         ..Default::default()
     };
     let id = identify::identify(h, &zero, &meas, &o)?;
-    let seed = if a.seed_procedure {
-        Some(seed_procedure(h, &zero, &meas)?)
-    } else {
-        None
+    let seed = match (a.seed_procedure, seed_fn) {
+        (true, Some(f)) => Some(f(&meas)?),
+        _ => None,
     };
     let values = seed
         .as_ref()
         .map(|s| s.values.clone())
         .unwrap_or(id.values.clone());
-    let mut identified = h.with_geometry(&values[..36])?;
-    let z = Vector6::from_column_slice(&values[36..]);
-    identified.zero_lengths = Some(z);
+    let ng = values.len() - A;
+    let identified = h.with_geometry(&values[..ng])?;
+    let z = SVector::<f64, A>::from_column_slice(&values[ng..]);
     let validation = match &a.validation {
         Some(p) => {
             let v = read_measurements(p, h)?;
@@ -190,10 +286,11 @@ pub fn calibrate_run(a: &CalibrateArgs) -> Result<u8> {
         .with_context(|| format!("cannot create {}", a.out.display()))?;
     let inputs = [a.machine.as_path(), a.measurements.as_path()];
     let text = std::fs::read_to_string(&a.machine)?;
-    let toml = pkm::machine::hexapod_file_with_geometry(
+    let toml = pkm::machine::with_strut_geometry(
         &text,
         &a.machine.display().to_string(),
-        &identified,
+        &struts(&identified),
+        Some(z.as_slice()),
         &format!(
             "Identified by pkm calibrate from {} ({} states, {} model{}): residual RMS {:.4} -> {:.4} mm",
             a.measurements.display(),
@@ -215,7 +312,7 @@ pub fn calibrate_run(a: &CalibrateArgs) -> Result<u8> {
     if a.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
-        print_text(h, &id, seed.as_ref(), validation.as_ref(), &a.out);
+        print_text(h.name(), &id, seed.as_ref(), validation.as_ref(), &a.out);
     }
     Ok(0)
 }
@@ -225,7 +322,7 @@ type Validation = (usize, identify::PointErrors, identify::PointErrors);
 fn report_json(
     id: &Identification,
     values: &[f64],
-    seed: Option<&pkm::identify::hexapod::SeedProcedure>,
+    seed: Option<&SeedProcedure>,
     validation: Option<&Validation>,
 ) -> serde_json::Value {
     let params: Vec<_> = (0..id.names.len())
@@ -334,15 +431,14 @@ pub fn plot_svgs(id: &Identification) -> Result<(String, String)> {
 }
 
 fn print_text(
-    h: &Hexapod,
+    name: &str,
     id: &Identification,
-    seed: Option<&pkm::identify::hexapod::SeedProcedure>,
+    seed: Option<&SeedProcedure>,
     validation: Option<&Validation>,
     out: &Path,
 ) {
     println!(
-        "{}: {} parameters from {} equations",
-        h.name,
+        "{name}: {} parameters from {} equations",
         id.names.len(),
         id.equations
     );
@@ -387,6 +483,5 @@ fn print_text(
             b.max, b.rms, a.max, a.rms
         );
     }
-    let _ = Vector3::<f64>::zeros();
     println!("wrote {}", out.display());
 }

@@ -4,45 +4,28 @@
 
 use nalgebra::{DMatrix, Matrix3, SMatrix, SVector, Vector3, Vector6};
 
-use super::{measured_poses, Identifiable, Measurements};
+use super::{measured_poses, struts, Identifiable, Measurements};
 use crate::error::{Error, Result};
 use crate::hexapod::Hexapod;
 use crate::legs::split_pose;
 use crate::mechanism::Mechanism;
-use crate::rotation::{rpy_rate_matrix, Convention};
-
-/// Joint names per strut: the file's names, or `name[strut]` when struts share a joint
-/// (each strut then has its own parameters).
-fn joint_names(h: &Hexapod) -> ([String; 6], [String; 6]) {
-    fn unique(names: [&str; 6], h: &Hexapod) -> [String; 6] {
-        std::array::from_fn(|i| {
-            let shared = (0..6).any(|k| k != i && names[k] == names[i]);
-            if shared {
-                format!("{}[{}]", names[i], h.struts[i].actuator.name)
-            } else {
-                names[i].to_string()
-            }
-        })
-    }
-    (
-        unique(std::array::from_fn(|i| h.struts[i].base_name.as_str()), h),
-        unique(
-            std::array::from_fn(|i| h.struts[i].platform_name.as_str()),
-            h,
-        ),
-    )
-}
 
 impl Identifiable<6, 6> for Hexapod {
     /// `A.x, A.y, A.z` of strut 1..6's base joint, then `B.x, ...` of its platform joint
     /// (named as in the file).
     fn geometry_names(&self) -> Vec<String> {
-        let (a, b) = joint_names(self);
-        let axes = ["x", "y", "z"];
-        a.iter()
-            .chain(b.iter())
-            .flat_map(|n| axes.iter().map(move |ax| format!("{n}.{ax}")))
-            .collect()
+        let b: Vec<&str> = self.struts.iter().map(|s| s.base_name.as_str()).collect();
+        let p: Vec<&str> = self
+            .struts
+            .iter()
+            .map(|s| s.platform_name.as_str())
+            .collect();
+        let n: Vec<&str> = self
+            .struts
+            .iter()
+            .map(|s| s.actuator.name.as_str())
+            .collect();
+        struts::names(&b, &p, &n)
     }
 
     fn geometry(&self) -> Vec<f64> {
@@ -52,20 +35,15 @@ impl Identifiable<6, 6> for Hexapod {
     }
 
     fn with_geometry(&self, g: &[f64]) -> Result<Self> {
-        if g.len() != 36 {
-            return Err(Error::InvalidInput {
-                what: "hexapod geometry".into(),
-                message: format!("expected 36 joint coordinates, got {}", g.len()),
-            });
-        }
-        let mut struts = self.struts.clone();
-        for (j, s) in struts.iter_mut().enumerate() {
-            s.base = Vector3::new(g[3 * j], g[3 * j + 1], g[3 * j + 2]);
-            s.platform = Vector3::new(g[18 + 3 * j], g[19 + 3 * j], g[20 + 3 * j]);
+        let (base, platform) = struts::split::<6>(g)?;
+        let mut s = self.struts.clone();
+        for (j, st) in s.iter_mut().enumerate() {
+            st.base = base[j];
+            st.platform = platform[j];
         }
         let mut h = Hexapod::new(
             self.name.clone(),
-            struts,
+            s,
             self.tool,
             self.strut_diameter,
             self.home,
@@ -74,57 +52,31 @@ impl Identifiable<6, 6> for Hexapod {
         Ok(h)
     }
 
-    /// `L_j = |p + R (B'_j - t) - A_j|` (seed 001 eq. 1 with the tool offset `t`):
-    /// `dL_j/dA_j = -n_j^T`, `dL_j/dB'_j = n_j^T R`, `n_j` the unit strut vector.
+    /// `L_j = |p + R (B'_j - t) - A_j|` (seed 001 eq. 1 with the tool offset `t`).
     fn inverse_with_geometry_jacobian(
         &self,
         x: &Vector6<f64>,
         jac: &mut DMatrix<f64>,
     ) -> Result<Vector6<f64>> {
-        let (p, r) = split_pose(x);
-        jac.fill(0.0);
-        let mut q = Vector6::zeros();
-        for (j, s) in self.struts.iter().enumerate() {
-            let v = p + r * (s.platform - self.tool) - s.base;
-            let l = v.norm();
-            if l <= 0.0 {
-                return Err(Error::Singular {
-                    what: format!("strut {} of zero length", s.actuator.name),
-                    rcond: 0.0,
-                });
-            }
-            let n = v / l;
-            let nb = r.transpose() * n;
-            q[j] = l;
-            for k in 0..3 {
-                jac[(j, 3 * j + k)] = -n[k];
-                jac[(j, 18 + 3 * j + k)] = nb[k];
-            }
-        }
-        Ok(q)
+        struts::lengths_with_jacobian(
+            &std::array::from_fn(|j| self.struts[j].base),
+            &std::array::from_fn(|j| self.struts[j].platform),
+            &self.tool,
+            x,
+            jac,
+        )
     }
 
-    /// `P = p + R (s - t)`; `dP/dx = [I, -[R (s - t)]x E(A, B, C)]`.
     fn platform_point(
         &self,
         x: &Vector6<f64>,
         s: &Vector3<f64>,
     ) -> (Vector3<f64>, SMatrix<f64, 3, 6>) {
-        let (p, r) = split_pose(x);
-        let v = r * (s - self.tool);
-        let mut d = SMatrix::<f64, 3, 6>::zeros();
-        d.fixed_view_mut::<3, 3>(0, 0)
-            .copy_from(&Matrix3::identity());
-        let e = rpy_rate_matrix([x[3], x[4], x[5]]);
-        d.fixed_view_mut::<3, 3>(0, 3)
-            .copy_from(&(-v.cross_matrix() * e));
-        (p + v, d)
+        struts::platform_point(&self.tool, x, s)
     }
 
     fn coords_from_platform_frame(&self, c: &Vector3<f64>, r: &Matrix3<f64>) -> Vector6<f64> {
-        let p = c + r * self.tool;
-        let a = Convention::Rpy.from_matrix(r);
-        Vector6::new(p.x, p.y, p.z, a[0], a[1], a[2])
+        struts::coords_from_platform_frame(&self.tool, c, r)
     }
 }
 

@@ -31,6 +31,8 @@ pub mod csv;
 pub mod fit;
 pub mod hexapod;
 pub mod simulate;
+pub mod struts;
+pub mod tripod;
 
 use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
 use nalgebra::{DMatrix, DVector, Dyn, Matrix3, Owned, SMatrix, SVector, Vector3};

@@ -9,7 +9,6 @@ use serde::Serialize;
 
 use super::{Identifiable, Measurements, State};
 use crate::error::{Error, Result};
-use crate::mechanism::PoseSpace;
 use crate::units::Quantity;
 
 /// How the states are chosen.
@@ -112,6 +111,8 @@ pub fn simulate_on<M: Identifiable<P, A>, const P: usize, const A: usize>(
     match e.design {
         Design::Random => {
             let home = truth.home();
+            // Coordinates the mechanism holds (a translational tripod's angles) stay.
+            let driven = truth.driven();
             let mut tries = 0;
             while poses.len() < e.states {
                 tries += 1;
@@ -127,9 +128,10 @@ pub fn simulate_on<M: Identifiable<P, A>, const P: usize, const A: usize>(
                     });
                 }
                 let x = SVector::<f64, P>::from_fn(|k, _| {
-                    let span = match (truth.pose_space(), truth.coordinates()[k].quantity) {
-                        (_, Quantity::Length) => e.translation,
-                        (_, Quantity::Angle) => e.rotation,
+                    let span = match truth.coordinates()[k].quantity {
+                        _ if !driven.contains(&k) => 0.0,
+                        Quantity::Length => e.translation,
+                        Quantity::Angle => e.rotation,
                     };
                     home[k] + rng.random_range(-1.0..=1.0) * span
                 });
@@ -160,7 +162,6 @@ pub fn simulate_on<M: Identifiable<P, A>, const P: usize, const A: usize>(
             }
         }
     }
-    let _ = PoseSpace::Spatial;
     let mut states = Vec::with_capacity(poses.len());
     for x in &poses {
         let q = truth.inverse(x)?;

@@ -2,7 +2,7 @@
 
 use std::collections::BTreeMap;
 
-use nalgebra::{Vector3, Vector6};
+use nalgebra::Vector6;
 use serde::Deserialize;
 
 use super::reference::Reference;
@@ -243,86 +243,4 @@ pub(super) fn build(src: &Source, f: HexapodFile) -> Result<super::Parts, Error>
         references: f.reference,
         rapid,
     })
-}
-
-/// The hexapod machine file `text` rewritten with the joint coordinates and zero
-/// lengths (`[calibration] zero_lengths`) of `h` (an identified machine), everything
-/// else kept; `comment` lines go on top. Struts that shared a joint get a joint each
-/// (`A1_L1`, ...: identification gives each strut its own), per-joint cone axes
-/// following. The file's own comments are not kept.
-pub fn with_geometry(text: &str, file: &str, h: &Hexapod, comment: &str) -> Result<String, Error> {
-    let src = Source::parse(file, text)?;
-    let mut doc: toml::Table = toml::from_str(text).map_err(|e| src.error(&[], e.to_string()))?;
-    let field = |k: &str| src.error(&[key(k)], "expected a table");
-    let xyz =
-        |v: &Vector3<f64>| toml::Value::Array(v.iter().map(|c| toml::Value::Float(*c)).collect());
-    for (table, role, axes) in [
-        ("base_joints", "base", "base_joint_axes"),
-        ("platform_joints", "platform", "platform_joint_axes"),
-    ] {
-        let names: Vec<String> = h
-            .struts
-            .iter()
-            .map(|s| {
-                if role == "base" {
-                    s.base_name.clone()
-                } else {
-                    s.platform_name.clone()
-                }
-            })
-            .collect();
-        let mut joints = toml::Table::new();
-        let mut renamed: Vec<(String, String)> = Vec::new();
-        for (j, s) in h.struts.iter().enumerate() {
-            let shared = names.iter().filter(|n| **n == names[j]).count() > 1;
-            let name = if shared {
-                let n = format!("{}_{}", names[j], s.actuator.name);
-                renamed.push((names[j].clone(), n.clone()));
-                n
-            } else {
-                names[j].clone()
-            };
-            let v = if role == "base" { &s.base } else { &s.platform };
-            joints.insert(name.clone(), xyz(v));
-            if shared {
-                let struts = doc
-                    .get_mut("struts")
-                    .and_then(|v| v.as_array_mut())
-                    .ok_or_else(|| field("struts"))?;
-                if let Some(t) = struts.get_mut(j).and_then(|v| v.as_table_mut()) {
-                    t.insert(role.into(), toml::Value::String(name));
-                }
-            }
-        }
-        doc.insert(table.into(), toml::Value::Table(joints));
-        if let Some(lim) = doc.get_mut("limits").and_then(|v| v.as_table_mut()) {
-            if let Some(ax) = lim.get_mut(axes).and_then(|v| v.as_table_mut()) {
-                for (old, new) in &renamed {
-                    if let Some(v) = ax.get(old).cloned() {
-                        ax.insert(new.clone(), v);
-                    }
-                }
-                for (old, _) in &renamed {
-                    ax.remove(old);
-                }
-            }
-        }
-    }
-    if let Some(z) = &h.zero_lengths {
-        let mut c = toml::Table::new();
-        c.insert(
-            "zero_lengths".into(),
-            toml::Value::Array(z.iter().map(|v| toml::Value::Float(*v)).collect()),
-        );
-        doc.insert("calibration".into(), toml::Value::Table(c));
-    }
-    let body = toml::to_string(&doc).map_err(|e| src.error(&[], e.to_string()))?;
-    let mut out = String::new();
-    for l in comment.lines() {
-        out.push_str("# ");
-        out.push_str(l);
-        out.push('\n');
-    }
-    out.push_str(&body);
-    Ok(out)
 }

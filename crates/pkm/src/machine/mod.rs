@@ -9,6 +9,7 @@ mod p3rp_file;
 mod reference;
 mod serial_file;
 mod source;
+mod strut_writer;
 mod tripod_file;
 mod urdf_file;
 
@@ -19,10 +20,10 @@ use crate::error::{Error, Result};
 use crate::mechanism::Mechanism;
 use crate::tripod::{CentreLegTripod, TranslationalTripod};
 
-pub use hexapod_file::with_geometry as hexapod_file_with_geometry;
 pub use reference::Reference;
 pub use serial_file::{read_deviations, read_tolerances};
 pub use source::line_col;
+pub use strut_writer::{with_strut_geometry, StrutGeometry};
 
 pub(crate) fn v3(a: [f64; 3]) -> nalgebra::Vector3<f64> {
     nalgebra::Vector3::new(a[0], a[1], a[2])

@@ -32,9 +32,18 @@ pub(super) struct TripodFile {
     #[serde(default)]
     centre_leg: Option<CentreLegFile>,
     #[serde(default)]
+    calibration: Option<CalibrationFile>,
+    #[serde(default)]
     reference: Vec<Reference>,
     #[serde(default)]
     motion: Option<super::MotionFile>,
+}
+
+/// Result of an identification (`pkm calibrate`).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CalibrationFile {
+    zero_lengths: [f64; 3],
 }
 
 #[derive(Debug, Deserialize, Clone, Copy, PartialEq)]
@@ -165,13 +174,22 @@ pub(super) fn build(src: &Source, f: TripodFile) -> Result<super::Parts, Error> 
             ));
         }
     }
-    let geometry = TripodGeometry::new(
+    let mut geometry = TripodGeometry::new(
         f.name.clone().unwrap_or_else(|| "tripod".into()),
         struts,
         v3(f.tool.tip),
         lim.max_tilt.map(f64::to_radians),
         lim.min_strut_spindle_angle.map(f64::to_radians),
     );
+    if let Some(c) = &f.calibration {
+        if c.zero_lengths.iter().any(|l| !(l.is_finite() && *l > 0.0)) {
+            return Err(src.error(
+                &[key("calibration"), key("zero_lengths")],
+                "expected three positive strut lengths (mm)",
+            ));
+        }
+        geometry.zero_lengths = Some(nalgebra::Vector3::from(c.zero_lengths));
+    }
     let model = match f.constraint {
         Constraint::Translational => {
             if f.centre_leg.is_some() {

@@ -38,6 +38,9 @@ pub struct TripodGeometry {
     /// seed-000 collision condition `phi <= lambda` (see [`TripodGeometry::strut_spindle_angles`]);
     /// `None` disables the check.
     pub min_strut_spindle_angle: Option<f64>,
+    /// Strut lengths at the control's zero readings (from a calibration); `None`: the
+    /// lengths at home.
+    pub zero_lengths: Option<Vector3<f64>>,
     /// Cached: the actuators of the three struts.
     actuators: [Actuator; 3],
     /// Cached: base joints and arms (`c_i - t`) for the shared strut computations.
@@ -65,6 +68,7 @@ impl TripodGeometry {
             tool,
             max_tilt,
             min_strut_spindle_angle,
+            zero_lengths: None,
             actuators,
             set,
         }

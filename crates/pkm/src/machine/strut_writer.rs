@@ -1,0 +1,115 @@
+//! Rewriting a strut machine's file (hexapod, tripod: `[base_joints]`,
+//! `[platform_joints]`, `[[struts]]`) with identified joint coordinates.
+
+use nalgebra::Vector3;
+
+use super::source::{Seg, Source};
+use crate::error::Error;
+
+/// One strut's identified geometry.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StrutGeometry {
+    /// Strut (actuator) name.
+    pub name: String,
+    /// Its base joint's name in the file.
+    pub base_name: String,
+    /// Its platform joint's name in the file.
+    pub platform_name: String,
+    /// Base joint centre (mm).
+    pub base: Vector3<f64>,
+    /// Platform joint centre, platform frame (mm).
+    pub platform: Vector3<f64>,
+}
+
+/// The machine file `text` rewritten with the joints of `struts` and the zero lengths
+/// (`[calibration] zero_lengths`), everything else kept; `comment` lines go on top.
+/// Struts that shared a joint get a joint each (`A1_L1`, ...: identification gives
+/// each strut its own), per-joint cone axes following. The file's own comments are not
+/// kept.
+pub fn with_strut_geometry(
+    text: &str,
+    file: &str,
+    struts: &[StrutGeometry],
+    zero_lengths: Option<&[f64]>,
+    comment: &str,
+) -> Result<String, Error> {
+    let src = Source::parse(file, text)?;
+    let mut doc: toml::Table = toml::from_str(text).map_err(|e| src.error(&[], e.to_string()))?;
+    let xyz =
+        |v: &Vector3<f64>| toml::Value::Array(v.iter().map(|c| toml::Value::Float(*c)).collect());
+    for (table, role, axes) in [
+        ("base_joints", "base", "base_joint_axes"),
+        ("platform_joints", "platform", "platform_joint_axes"),
+    ] {
+        let names: Vec<&str> = struts
+            .iter()
+            .map(|s| {
+                if role == "base" {
+                    s.base_name.as_str()
+                } else {
+                    s.platform_name.as_str()
+                }
+            })
+            .collect();
+        let mut joints = toml::Table::new();
+        let mut renamed: Vec<(String, String)> = Vec::new();
+        for (j, s) in struts.iter().enumerate() {
+            let shared = names.iter().filter(|n| **n == names[j]).count() > 1;
+            let name = if shared {
+                let n = format!("{}_{}", names[j], s.name);
+                renamed.push((names[j].to_string(), n.clone()));
+                n
+            } else {
+                names[j].to_string()
+            };
+            joints.insert(
+                name.clone(),
+                xyz(if role == "base" { &s.base } else { &s.platform }),
+            );
+            if shared {
+                let list = doc
+                    .get_mut("struts")
+                    .and_then(|v| v.as_array_mut())
+                    .ok_or_else(|| {
+                        src.error(&[Seg::Key("struts".into())], "expected an array of tables")
+                    })?;
+                if let Some(t) = list.get_mut(j).and_then(|v| v.as_table_mut()) {
+                    t.insert(role.into(), toml::Value::String(name));
+                }
+            }
+        }
+        doc.insert(table.into(), toml::Value::Table(joints));
+        if let Some(ax) = doc
+            .get_mut("limits")
+            .and_then(|v| v.as_table_mut())
+            .and_then(|l| l.get_mut(axes))
+            .and_then(|v| v.as_table_mut())
+        {
+            for (old, new) in &renamed {
+                if let Some(v) = ax.get(old).cloned() {
+                    ax.insert(new.clone(), v);
+                }
+            }
+            for (old, _) in &renamed {
+                ax.remove(old);
+            }
+        }
+    }
+    if let Some(z) = zero_lengths {
+        let mut c = toml::Table::new();
+        c.insert(
+            "zero_lengths".into(),
+            toml::Value::Array(z.iter().map(|v| toml::Value::Float(*v)).collect()),
+        );
+        doc.insert("calibration".into(), toml::Value::Table(c));
+    }
+    let body = toml::to_string(&doc).map_err(|e| src.error(&[], e.to_string()))?;
+    let mut out = String::new();
+    for l in comment.lines() {
+        out.push_str("# ");
+        out.push_str(l);
+        out.push('\n');
+    }
+    out.push_str(&body);
+    Ok(out)
+}
