@@ -73,6 +73,19 @@ fn simulate_then_calibrate_gives_a_machine_file_and_a_report() {
     let v = &r["validation"];
     assert!(v["nominal"]["rms"].as_f64().unwrap() > 0.5, "{v}");
     assert!(v["identified"]["rms"].as_f64().unwrap() < 0.02, "{v}");
+    // The tool pose against the measured (best-fit) pose: position and orientation.
+    assert!(
+        v["nominal"]["pose"]["position_rms"].as_f64().unwrap() > 0.5,
+        "{v}"
+    );
+    assert!(
+        v["identified"]["pose"]["position_rms"].as_f64().unwrap() < 0.02,
+        "{v}"
+    );
+    assert!(
+        v["identified"]["pose"]["orientation_max"].as_f64().unwrap() < 2e-4,
+        "{v}"
+    );
     // The identified parameters are near the truth (within 4 standard errors).
     let truth: Value =
         serde_json::from_slice(&std::fs::read(sim.join("truth.json")).unwrap()).unwrap();

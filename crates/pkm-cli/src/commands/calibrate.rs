@@ -482,6 +482,12 @@ fn print_text(
             "validation       {n} states: point error max {:.4} / RMS {:.4} mm (nominal) -> max {:.4} / RMS {:.4} mm (identified)",
             b.max, b.rms, a.max, a.rms
         );
+        if let (Some(pb), Some(pa)) = (b.pose, a.pose) {
+            println!(
+                "                 tool pose: position max {:.4} / RMS {:.4} mm, orientation max {:.2e} rad (nominal) -> position max {:.4} / RMS {:.4} mm, orientation max {:.2e} rad (identified)",
+                pb.position_max, pb.position_rms, pb.orientation_max, pa.position_max, pa.position_rms, pa.orientation_max
+            );
+        }
     }
     println!("wrote {}", out.display());
 }
