@@ -331,7 +331,7 @@ fn serial(c: &mut Criterion) {
     let mut g = c.benchmark_group("serial monte carlo");
     g.sample_size(10);
     g.bench_function(
-        "MC-300 1e6 machines, 41 tolerances (rayon, all cores)",
+        "MC-300 1e6 machines, 43 tolerances (rayon, all cores)",
         |b| {
             b.iter(|| {
                 pkm::serial::tolerance::monte_carlo(&m, &qt, &qw, &s.tolerances, 1_000_000, 1)
