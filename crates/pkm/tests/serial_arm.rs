@@ -122,10 +122,19 @@ fn inverse_recovers_the_joints_from_a_nearby_start_and_the_pose_from_home() {
 #[test]
 fn unreachable_pose_reports_the_residual() {
     let a = arm("machines/kr30-dh.toml");
+    // Beyond any reach: refused at once, with the distances.
     let mut x = a.home();
     x[0] = 5000.0;
     match a.inverse(&x) {
-        Err(pkm::Error::NotConverged { residual, .. }) => assert!(residual > 1000.0),
+        Err(pkm::Error::NotAttainable { reason }) => {
+            assert!(reason.contains("beyond the 2971.975 mm"), "{reason}")
+        }
+        other => panic!("{other:?}"),
+    }
+    // Within the bound but out of the arm's reach: Newton fails, with its residual.
+    x[0] = 2500.0;
+    match a.inverse(&x) {
+        Err(pkm::Error::NotConverged { residual, .. }) => assert!(residual > 100.0, "{residual}"),
         other => panic!("{other:?}"),
     }
 }

@@ -53,6 +53,11 @@ pub struct SerialArm {
     coordinates: [Coordinate; 6],
     actuators: [Actuator; 6],
     characteristic_length: f64,
+    /// The base origin in the part frame and an upper bound of the tool's distance from
+    /// it (sum of the link translations and prismatic travels): a target beyond it is
+    /// out of reach without iterating.
+    base_origin: Vector3<f64>,
+    reach: f64,
 }
 
 impl SerialArm {
@@ -103,7 +108,29 @@ impl SerialArm {
             coordinates: spatial_coordinates(),
             actuators,
             characteristic_length: 1.0,
+            base_origin: Vector3::zeros(),
+            reach: f64::INFINITY,
         };
+        arm.base_origin = Vector3::new(
+            part_inverse[(0, 3)],
+            part_inverse[(1, 3)],
+            part_inverse[(2, 3)],
+        );
+        arm.reach = arm
+            .machine
+            .tool
+            .links
+            .iter()
+            .map(|l| {
+                let travel = match &l.joint {
+                    Some(j) if j.kind == super::JointKind::Prismatic => {
+                        j.range.min.abs().max(j.range.max.abs())
+                    }
+                    _ => 0.0,
+                };
+                l.translation.norm() + travel
+            })
+            .sum::<f64>();
         arm.home = arm.coords_of_joints(&home);
         // The reach at home (distance of the tool from the first joint's axis origin)
         // weighs a radian against millimetres.
@@ -146,6 +173,16 @@ impl SerialArm {
     /// characteristic length) when the pose is out of reach.
     pub fn inverse_from(&self, x: &Vector6<f64>, start: &Vector6<f64>) -> Result<Vector6<f64>> {
         let target_p = Vector3::new(x[0], x[1], x[2]);
+        let distance = (target_p - self.base_origin).norm();
+        if distance > self.reach * (1.0 + 1e-12) {
+            return Err(Error::NotAttainable {
+                reason: format!(
+                    "the tool point is {distance:.3} mm from the robot's base, beyond the \
+                     {:.3} mm the links can reach",
+                    self.reach
+                ),
+            });
+        }
         let target_r = crate::rotation::rpy_matrix(x[3], x[4], x[5]);
         let mut best = f64::INFINITY;
         let mut iterations = 0;
@@ -205,7 +242,17 @@ impl SerialArm {
         mut q: Vector6<f64>,
     ) -> std::result::Result<Vector6<f64>, (f64, usize)> {
         let (mut e, mut j, mut norm) = self.pose_error(p, r, &q);
+        // Progress check: an iteration that has not cut the error in ten
+        // iterations is stuck (less than 0.1 %: a local minimum of the error, typically an unreachable
+        // target); give up and let the caller restart elsewhere.
+        let mut norm_before = norm;
         for it in 0..MAX_ITERATIONS {
+            if it > 0 && it % 10 == 0 {
+                if norm > 0.999 * norm_before {
+                    return Err((norm, it));
+                }
+                norm_before = norm;
+            }
             let converged = e.fixed_rows::<3>(0).norm() <= POSITION_TOLERANCE
                 && e.fixed_rows::<3>(3).norm() <= ORIENTATION_TOLERANCE;
             let mut dq = self.step(&j, &e);
