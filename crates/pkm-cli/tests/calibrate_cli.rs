@@ -185,7 +185,8 @@ fn bad_measurements_and_unidentifiable_designs_are_named() {
     assert_ne!(o.status.code(), Some(0));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
-        err.contains("not identifiable") && err.contains("trade against each other"),
+        err.contains("not identifiable")
+            && err.contains("moved alike (a translation of the strut)"),
         "{err}"
     );
 }

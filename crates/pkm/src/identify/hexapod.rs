@@ -78,6 +78,14 @@ impl Identifiable<6, 6> for Hexapod {
     fn coords_from_platform_frame(&self, c: &Vector3<f64>, r: &Matrix3<f64>) -> Vector6<f64> {
         struts::coords_from_platform_frame(&self.tool, c, r)
     }
+
+    fn explain(&self, terms: &[(usize, f64)]) -> Option<String> {
+        let (p, r) = crate::legs::split_pose(&self.home());
+        let s = &self.struts;
+        let dirs: [Vector3<f64>; 6] =
+            std::array::from_fn(|j| (p + r * (s[j].platform - self.tool) - s[j].base).normalize());
+        struts::explain(terms, &super::parameter_names(self), &dirs, &r)
+    }
 }
 
 /// Result of seed 001's procedure.

@@ -72,6 +72,14 @@ pub trait Identifiable<const P: usize, const A: usize>: Mechanism<P, A> + Sized 
     /// Pose coordinates of a platform frame measured with origin `c` and rotation `r`
     /// (platform frame to base frame).
     fn coords_from_platform_frame(&self, c: &Vector3<f64>, r: &Matrix3<f64>) -> SVector<f64, P>;
+
+    /// The mechanism's reading of a combination the data cannot separate, given as
+    /// `(parameter index, coefficient)` (geometry first, then one zero reading per
+    /// actuator), e.g. "joint A4 moved along strut L4 trades against zero(L4)"; `None`
+    /// when it has none.
+    fn explain(&self, _terms: &[(usize, f64)]) -> Option<String> {
+        None
+    }
 }
 
 /// One measured state: the actuator readings (increments from the zero state, mm or
@@ -435,7 +443,8 @@ pub fn identify<M: Identifiable<P, A>, const P: usize, const A: usize>(
     let rms = |r: &DVector<f64>| (r.norm_squared() / r.len().max(1) as f64).sqrt();
     // Identifiability at the start: a rank-deficient problem is reported, not solved.
     let jf0 = problem.free_jacobian(&j0);
-    let (sv0, weak0) = analyse(&jf0, &free, &names);
+    let explain = |t: &[(usize, f64)]| nominal.explain(t);
+    let (sv0, weak0) = analyse(&jf0, &free, &names, &explain);
     let null: Vec<&Combination> = weak0
         .iter()
         .filter(|w| w.relative_singular_value < o.rank_tolerance)
@@ -466,7 +475,7 @@ pub fn identify<M: Identifiable<P, A>, const P: usize, const A: usize>(
         });
     };
     let jf = problem.free_jacobian(&j1);
-    let (sv, weak) = analyse(&jf, &free, &names);
+    let (sv, weak) = analyse(&jf, &free, &names, &explain);
     // Standard errors: s^2 (J^T J)^-1, s^2 = |r|^2 / (m - n).
     let dof = (r1.len() as f64 - free.len() as f64).max(1.0);
     let s2 = r1.norm_squared() / dof;
@@ -572,12 +581,20 @@ fn validate<M: Identifiable<P, A>, const P: usize, const A: usize>(
     Ok(())
 }
 
+/// A mechanism's reading of a combination ([`Identifiable::explain`]).
+type Explain<'a> = dyn Fn(&[(usize, f64)]) -> Option<String> + 'a;
+
 /// Singular values of the column-scaled Jacobian (largest first) and its weak
 /// directions (relative singular value below 1e-3), named. The directions of the
 /// numerical null space (relative singular value below 1e-9) are put in reduced row
 /// echelon form, so that each names a few parameters (e.g. a base joint coordinate and
 /// the platform joint coordinate that trades against it) instead of a mix of all.
-fn analyse(j: &DMatrix<f64>, free: &[usize], names: &[String]) -> (Vec<f64>, Vec<Combination>) {
+fn analyse(
+    j: &DMatrix<f64>,
+    free: &[usize],
+    names: &[String],
+    explain: &Explain,
+) -> (Vec<f64>, Vec<Combination>) {
     let norms: Vec<f64> = (0..j.ncols())
         .map(|c| j.column(c).norm().max(1e-300))
         .collect();
@@ -630,18 +647,22 @@ fn analyse(j: &DMatrix<f64>, free: &[usize], names: &[String]) -> (Vec<f64>, Vec
         .into_iter()
         .map(|(r, v)| {
             let big = v.amax().max(1e-300);
-            let mut terms: Vec<(String, f64)> = v
+            let mut indexed: Vec<(usize, f64)> = v
                 .iter()
                 .enumerate()
                 .filter(|(_, c)| c.abs() >= 0.05 * big)
-                .map(|(c, x)| (names[free[c]].clone(), x / big))
+                .map(|(c, x)| (free[c], x / big))
                 .collect();
-            terms.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()));
+            indexed.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()));
             // Sign convention: the largest term positive.
-            if terms.first().is_some_and(|t| t.1 < 0.0) {
-                terms.iter_mut().for_each(|t| t.1 = -t.1);
+            if indexed.first().is_some_and(|t| t.1 < 0.0) {
+                indexed.iter_mut().for_each(|t| t.1 = -t.1);
             }
-            let description = describe(&terms);
+            let terms: Vec<(String, f64)> = indexed
+                .iter()
+                .map(|(i, c)| (names[*i].clone(), *c))
+                .collect();
+            let description = describe(&terms, explain(&indexed), r);
             Combination {
                 relative_singular_value: r,
                 terms,
@@ -697,14 +718,22 @@ fn echelon(rows: Vec<DVector<f64>>) -> Vec<DVector<f64>> {
         .collect()
 }
 
-fn describe(terms: &[(String, f64)]) -> String {
+fn describe(terms: &[(String, f64)], reading: Option<String>, relative: f64) -> String {
     let sum: Vec<String> = terms.iter().map(|(n, c)| format!("{c:+.3} {n}")).collect();
-    let what = if terms.len() == 1 {
-        format!("`{}` does not change any measured quantity", terms[0].0)
+    let effect = if relative == 0.0 {
+        "does not change any measured quantity".to_string()
     } else {
-        "these parameters trade against each other: changing them together along this \
-         direction does not change any measured quantity"
-            .to_string()
+        format!("changes the measurements little (relative singular value {relative:.1e})")
+    };
+    let what = if let Some(r) = reading {
+        r
+    } else if terms.len() == 1 {
+        format!("`{}` {effect}", terms[0].0)
+    } else {
+        format!(
+            "these parameters trade against each other: changing them together along this \
+             direction {effect}"
+        )
     };
     format!(
         "{} ({what}; hold one of them or measure states that separate them)",

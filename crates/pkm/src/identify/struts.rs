@@ -112,3 +112,81 @@ pub fn split<const N: usize>(g: &[f64]) -> Result<Joints<N>> {
         }),
     ))
 }
+
+/// Reads a combination of a strut machine's parameters (indices: `A_j` coordinates
+/// `3j..3j+3`, `B'_j` coordinates `3N + 3j..`, zero readings `6N + j`), `dir_at_home[j]`
+/// the unit vector of strut `j` at home (base to platform joint) and `rot_at_home` the
+/// platform rotation there:
+/// * one strut's joint moved along the strut against its zero reading: the strut's
+///   direction hardly changes over the states;
+/// * one strut's base and platform joints moved alike: the platform hardly turns.
+pub fn explain<const N: usize>(
+    terms: &[(usize, f64)],
+    names: &[String],
+    dir_at_home: &[Vector3<f64>; N],
+    rot_at_home: &Matrix3<f64>,
+) -> Option<String> {
+    let strut_of = |i: usize| -> usize {
+        if i < 3 * N {
+            i / 3
+        } else if i < 6 * N {
+            (i - 3 * N) / 3
+        } else {
+            i - 6 * N
+        }
+    };
+    let j = strut_of(terms.first()?.0);
+    if terms.iter().any(|(i, _)| strut_of(*i) != j) {
+        return None;
+    }
+    let mut da = Vector3::zeros();
+    let mut db = Vector3::zeros();
+    let mut dz = 0.0;
+    for (i, c) in terms {
+        match *i {
+            i if i < 3 * N => da[i % 3] += c,
+            i if i < 6 * N => db[(i - 3 * N) % 3] += c,
+            _ => dz += c,
+        }
+    }
+    let n = dir_at_home[j];
+    let strut = names
+        .get(6 * N + j)
+        .map(|s| s.trim_start_matches("zero(").trim_end_matches(')'))
+        .unwrap_or("?");
+    let joint = |k: usize| {
+        names[k]
+            .rsplit_once('.')
+            .map(|x| x.0)
+            .unwrap_or(&names[k])
+            .to_string()
+    };
+    let along = |d: &Vector3<f64>| d.norm() > 0.0 && (d.normalize().dot(&n)).abs() > 0.9;
+    let dbw = rot_at_home * db;
+    if dz.abs() > 0.0 && along(&da) && db.norm() < 0.2 * da.norm() {
+        return Some(format!(
+            "base joint {} moved along strut {strut} trades against zero({strut}): the strut's \
+             direction hardly changes over the measured states",
+            joint(3 * j)
+        ));
+    }
+    if dz.abs() > 0.0 && along(&dbw) && da.norm() < 0.2 * db.norm() {
+        return Some(format!(
+            "platform joint {} moved along strut {strut} trades against zero({strut}): the \
+             strut's direction hardly changes over the measured states",
+            joint(3 * N + 3 * j)
+        ));
+    }
+    if dz.abs() < 0.05 && da.norm() > 0.0 && (da - dbw).norm() < 0.2 * da.norm() {
+        return Some(format!(
+            "base joint {} and platform joint {} of strut {strut} moved alike (a translation of \
+             the strut) change no length: the platform hardly turns over the measured states",
+            joint(3 * j),
+            joint(3 * N + 3 * j)
+        ));
+    }
+    Some(format!(
+        "the joints and zero reading of strut {strut} are poorly separated: its direction \
+         and the platform's orientation vary too little over the measured states"
+    ))
+}

@@ -72,6 +72,15 @@ impl Identifiable<6, 3> for TranslationalTripod {
     fn coords_from_platform_frame(&self, c: &Vector3<f64>, r: &Matrix3<f64>) -> Vector6<f64> {
         struts::coords_from_platform_frame(&self.geometry.tool, c, r)
     }
+
+    fn explain(&self, terms: &[(usize, f64)]) -> Option<String> {
+        let (p, r) = crate::legs::split_pose(&self.home());
+        let s = &self.geometry.struts;
+        let dirs: [Vector3<f64>; 3] = std::array::from_fn(|j| {
+            (p + r * (s[j].platform - self.geometry.tool) - s[j].base).normalize()
+        });
+        struts::explain(terms, &super::parameter_names(self), &dirs, &r)
+    }
 }
 
 /// A translational tripod's zero readings: calibrated ones from its file, else its
