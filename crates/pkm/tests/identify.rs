@@ -154,12 +154,7 @@ fn with_noise_fifty_states_bring_the_pose_error_to_the_noise_level() {
         let mut held = e.clone();
         held.seed = 999;
         let v = simulate_on(s.truth.clone(), s.true_zero, &held).unwrap();
-        let readings: Vec<Vec<f64>> = v
-            .measurements
-            .states
-            .iter()
-            .map(|st| st.readings.clone())
-            .collect();
+        let readings = v.measurements.readings();
         let before = pose_errors(&h, &zero, &readings, &v.poses).unwrap();
         assert!(before.position_rms > 0.5, "{before:?}");
         for model in [Model::Pose, Model::Points] {
@@ -358,12 +353,7 @@ fn translational_tripod_identified_with_its_platform_joints_held() {
     let mut held = e.clone();
     held.seed = 77;
     let v = simulate_on(s.truth.clone(), s.true_zero, &held).unwrap();
-    let readings: Vec<Vec<f64>> = v
-        .measurements
-        .states
-        .iter()
-        .map(|st| st.readings.clone())
-        .collect();
+    let readings = v.measurements.readings();
     let model: TranslationalTripod = t.with_geometry(&id.values[..18]).unwrap();
     let z = nalgebra::Vector3::from_column_slice(&id.values[18..]);
     let before = pose_errors(&t, &zero, &readings, &v.poses).unwrap();

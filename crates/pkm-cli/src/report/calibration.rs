@@ -41,12 +41,7 @@ pub fn section(h: &mut Html, hex: &Hexapod) -> Result<()> {
             ..e.clone()
         },
     )?;
-    let readings: Vec<Vec<f64>> = held
-        .measurements
-        .states
-        .iter()
-        .map(|st| st.readings.clone())
-        .collect();
+    let readings = held.measurements.readings();
     let before = pose_errors(hex, &zero, &readings, &held.poses)?;
     let model = hex.with_geometry(&id.values[..36])?;
     let z = Vector6::from_column_slice(&id.values[36..]);

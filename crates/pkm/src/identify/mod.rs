@@ -101,6 +101,13 @@ pub struct Measurements {
     pub states: Vec<State>,
 }
 
+impl Measurements {
+    /// The readings of every state.
+    pub fn readings(&self) -> Vec<Vec<f64>> {
+        self.states.iter().map(|s| s.readings.clone()).collect()
+    }
+}
+
 /// Which measurement equations to use.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
@@ -774,7 +781,7 @@ pub fn point_errors<M: Identifiable<P, A>, const P: usize, const A: usize>(
     } else {
         None
     };
-    let (mut pm, mut ps, mut om, mut os, mut np) = (0.0f64, 0.0, 0.0f64, 0.0, 0usize);
+    let mut stats = simulate::PoseStats::default();
     for (i, st) in meas.states.iter().enumerate() {
         let q =
             SVector::<f64, A>::from_fn(|j, _| zero[j] + st.readings.get(j).copied().unwrap_or(0.0));
@@ -783,13 +790,7 @@ pub fn point_errors<M: Identifiable<P, A>, const P: usize, const A: usize>(
                 start = f.pose;
                 if let Some(x) = measured.as_ref().map(|v| v[i]) {
                     if let (Ok(a), Ok(b)) = (m.tool_pose(&x), m.tool_pose(&f.pose)) {
-                        let dp = (a.translation.vector - b.translation.vector).norm();
-                        let dw = a.rotation.angle_to(&b.rotation);
-                        pm = pm.max(dp);
-                        om = om.max(dw);
-                        ps += dp * dp;
-                        os += dw * dw;
-                        np += 1;
+                        stats.add(&a, &b);
                     }
                 }
                 for (s, p) in meas.fixture.iter().zip(&st.points) {
@@ -802,16 +803,10 @@ pub fn point_errors<M: Identifiable<P, A>, const P: usize, const A: usize>(
             Err(_) => failed += 1,
         }
     }
-    let n = np.max(1) as f64;
     PointErrors {
         max,
         rms: (sum / count.max(1) as f64).sqrt(),
-        pose: measured.map(|_| simulate::PoseErrors {
-            position_max: pm,
-            position_rms: (ps / n).sqrt(),
-            orientation_max: om,
-            orientation_rms: (os / n).sqrt(),
-        }),
+        pose: measured.map(|_| stats.finish()),
         failed,
     }
 }

@@ -202,6 +202,40 @@ pub struct PoseErrors {
     pub orientation_rms: f64,
 }
 
+/// Running maxima and sums of squares of pose differences.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct PoseStats {
+    pm: f64,
+    ps: f64,
+    om: f64,
+    os: f64,
+    n: usize,
+}
+
+impl PoseStats {
+    /// Adds the difference between two tool poses.
+    pub(crate) fn add(&mut self, a: &crate::pose::Pose, b: &crate::pose::Pose) {
+        let dp = (a.translation.vector - b.translation.vector).norm();
+        let dw = a.rotation.angle_to(&b.rotation);
+        self.pm = self.pm.max(dp);
+        self.om = self.om.max(dw);
+        self.ps += dp * dp;
+        self.os += dw * dw;
+        self.n += 1;
+    }
+
+    /// Maxima and RMS values.
+    pub(crate) fn finish(&self) -> PoseErrors {
+        let n = self.n.max(1) as f64;
+        PoseErrors {
+            position_max: self.pm,
+            position_rms: (self.ps / n).sqrt(),
+            orientation_max: self.om,
+            orientation_rms: (self.os / n).sqrt(),
+        }
+    }
+}
+
 /// How far a model (`m`, zero readings `zero`) puts the tool from the true poses
 /// `poses` when given the readings `readings` the control would have: forward
 /// kinematics of the model at `zero + dL`, against the truth.
@@ -211,27 +245,11 @@ pub fn pose_errors<M: Identifiable<P, A>, const P: usize, const A: usize>(
     readings: &[Vec<f64>],
     poses: &[SVector<f64, P>],
 ) -> Result<PoseErrors> {
-    let mut pm: f64 = 0.0;
-    let mut ps = 0.0;
-    let mut om: f64 = 0.0;
-    let mut os = 0.0;
+    let mut stats = PoseStats::default();
     for (r, x) in readings.iter().zip(poses) {
         let q = SVector::<f64, A>::from_fn(|j, _| zero[j] + r[j]);
         let f = m.forward(&q, x)?;
-        let a = m.tool_pose(x)?;
-        let b = m.tool_pose(&f.pose)?;
-        let dp = (a.translation.vector - b.translation.vector).norm();
-        let dw = a.rotation.angle_to(&b.rotation);
-        pm = pm.max(dp);
-        om = om.max(dw);
-        ps += dp * dp;
-        os += dw * dw;
+        stats.add(&m.tool_pose(x)?, &m.tool_pose(&f.pose)?);
     }
-    let n = readings.len().max(1) as f64;
-    Ok(PoseErrors {
-        position_max: pm,
-        position_rms: (ps / n).sqrt(),
-        orientation_max: om,
-        orientation_rms: (os / n).sqrt(),
-    })
+    Ok(stats.finish())
 }
