@@ -85,7 +85,8 @@ enum Command {
         pkm errors examples/machines/mc300.toml --actuators 100,-50,-80,30,45 --out err\n  \
         pkm errors examples/machines/mc300.toml --actuators 100,-50,-80,30,45 --monte-carlo 100000 --json --out err\n  \
         pkm errors examples/machines/mc300.toml --deviations devs.toml --out err   # devs.toml: \"delta_x(1 slide)\" = 0.01\n  \
-        pkm errors examples/machines/mc300.toml --tolerances tight.toml --map X,Y --out map\n\n\
+        pkm errors examples/machines/mc300.toml --tolerances tight.toml --map X,Y --out map\n  \
+        pkm errors examples/machines/hexapod-seed001.toml --pose 0,0,550,5,0,0 --joint-tolerance 0.01 --length-tolerance 0.005 --monte-carlo 100000 --out hex\n\n\
         Writes DIR/errors.json (position_error, orientation_error, sensitivities, budget,\n\
         monte_carlo), DIR/budget.svg and DIR/monte-carlo.svg. Units: mm; deg for angular\n\
         deviations and rotary axes.")]
@@ -386,8 +387,21 @@ pub struct CalibrateArgs {
 
 #[derive(Args)]
 pub struct ErrorsArgs {
-    /// Machine file (TOML, type = "serial").
+    /// Machine file (TOML): a serial machine (seed 003's deviations) or a hexapod /
+    /// translational tripod (tolerances of its joints and zero lengths).
     pub machine: PathBuf,
+    /// Hexapod / tripod: the tool pose X,Y,Z,A,B,C (mm, deg); default: home.
+    #[arg(long, allow_hyphen_values = true)]
+    pub pose: Option<String>,
+    /// Hexapod / tripod: tolerance of every joint-centre coordinate (mm).
+    #[arg(long, default_value_t = 0.01)]
+    pub joint_tolerance: f64,
+    /// Hexapod / tripod: tolerance of every strut's zero length (mm).
+    #[arg(long, default_value_t = 0.01)]
+    pub length_tolerance: f64,
+    /// Hexapod / tripod: `uniform` (in +-tolerance) or `normal` (tolerance = 3 sigma).
+    #[arg(long, default_value = "uniform")]
+    pub distribution: String,
     /// Axis values (mm, deg), in the file's joint order; default: home.
     #[arg(long, allow_hyphen_values = true)]
     pub actuators: Option<String>,

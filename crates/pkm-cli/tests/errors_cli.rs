@@ -338,3 +338,60 @@ fn six_axis_robot_takes_tool_poses_through_ik_fk_and_motion() {
         "{a1}"
     );
 }
+
+#[test]
+fn strut_machines_get_a_budget_and_monte_carlo_of_their_geometry() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("hex");
+    let o = pkm()
+        .args([
+            "errors",
+            &path("examples/machines/hexapod-seed001.toml"),
+            "--pose",
+            "10,-20,560,5,0,0",
+            "--joint-tolerance",
+            "0.01",
+            "--length-tolerance",
+            "0.005",
+            "--monte-carlo",
+            "20000",
+            "--json",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let budget = v["budget"].as_object().unwrap();
+    assert_eq!(budget.len(), 42);
+    // A zero length at its tolerance moves the tool by about that much (struts are
+    // steep, not vertical): between 0.3x and 2x the 5 um.
+    let z1 = budget["zero(L1)"].as_f64().unwrap();
+    assert!((0.0015..0.01).contains(&z1), "{z1}");
+    let mc = &v["monte_carlo"];
+    assert!(mc["p95"].as_f64().unwrap() < v["budget_worst_case"].as_f64().unwrap());
+    assert!(mc["mean"].as_f64().unwrap() > 0.0);
+    for f in ["errors.json", "budget.svg", "monte-carlo.svg"] {
+        assert!(out.join(f).exists(), "{f}");
+    }
+    // Serial-only options are refused with the options that apply.
+    let o = pkm()
+        .args([
+            "errors",
+            &path("examples/machines/tripod-seed000.toml"),
+            "--actuators",
+            "1,2,3",
+            "--out",
+        ])
+        .arg(dir.path().join("t"))
+        .output()
+        .unwrap();
+    assert_ne!(o.status.code(), Some(0));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("takes --pose, --joint-tolerance"));
+}

@@ -24,6 +24,7 @@
 // `!(x > 0.0)` is used on purpose: it is also true for NaN, which must fail validation.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod accuracy;
 pub mod dynamic;
 pub mod error;
 pub mod hexapod;

@@ -3,8 +3,12 @@
 //! Monte Carlo distribution of the tool-point error.
 
 use anyhow::{bail, Context, Result};
+use nalgebra::SVector;
+use pkm::accuracy::GeometricTolerances;
+use pkm::identify::Identifiable;
 use pkm::machine::Model;
 use pkm::serial::accuracy::Parameter;
+use pkm::serial::tolerance::Distribution;
 use pkm::serial::tolerance::{budget, deviations_from, monte_carlo, pose_error};
 use serde_json::json;
 
@@ -16,6 +20,17 @@ use crate::ErrorsArgs;
 
 pub fn run(a: &ErrorsArgs) -> Result<u8> {
     let machine = load(&a.machine)?;
+    match &machine.model {
+        Model::Hexapod(h) => {
+            let z = pkm::identify::hexapod::zero_lengths(h)?;
+            return strut_errors(a, &machine, h.as_ref(), z);
+        }
+        Model::TranslationalTripod(t) => {
+            let z = pkm::identify::tripod::zero_lengths(t)?;
+            return strut_errors(a, &machine, t, z);
+        }
+        _ => {}
+    }
     let Model::Serial(s) = &machine.model else {
         bail!(
             "{}: `pkm errors` needs a serial machine (type = \"serial\"); this is a {} machine",
@@ -274,6 +289,141 @@ pub fn run(a: &ErrorsArgs) -> Result<u8> {
                 mc["p95"].as_f64().unwrap_or(0.0), mc["p99"].as_f64().unwrap_or(0.0), mc["max"].as_f64().unwrap_or(0.0)
             );
         }
+        println!("wrote {}", a.out.display());
+    }
+    Ok(0)
+}
+
+/// `pkm errors` for strut machines: the tool-point error budget and Monte Carlo of
+/// tolerances on the joint centres and zero lengths (`pkm::accuracy`).
+fn strut_errors<M: Identifiable<6, A>, const A: usize>(
+    a: &ErrorsArgs,
+    machine: &pkm::Machine,
+    m: &M,
+    zero: SVector<f64, A>,
+) -> Result<u8> {
+    if a.actuators.is_some() || a.deviations.is_some() || a.tolerances.is_some() || a.map.is_some()
+    {
+        bail!(
+            "{}: --actuators, --deviations, --tolerances and --map are for serial machines; \
+             a {} takes --pose, --joint-tolerance, --length-tolerance",
+            a.machine.display(),
+            machine.kind()
+        );
+    }
+    let dm = machine.mechanism();
+    let x: Vec<f64> = match &a.pose {
+        Some(p) => {
+            pkm::dynamic::pose_from_user(dm, &parse_list(p, "--pose")?, pkm::Convention::Rpy)?
+        }
+        None => dm.home(),
+    };
+    let x = SVector::<f64, 6>::from_column_slice(&x);
+    let distribution = match a.distribution.as_str() {
+        "uniform" => Distribution::Uniform,
+        "normal" => Distribution::Normal,
+        d => bail!("--distribution: expected `uniform` or `normal`, found `{d}`"),
+    };
+    if !(a.joint_tolerance >= 0.0 && a.length_tolerance >= 0.0) {
+        bail!("--joint-tolerance, --length-tolerance: expected values >= 0 (mm)");
+    }
+    let tol = GeometricTolerances {
+        joint: a.joint_tolerance,
+        zero: a.length_tolerance,
+        distribution,
+    };
+    let names = pkm::identify::parameter_names(m);
+    let sens = pkm::accuracy::sensitivities(m, &x)?;
+    let b = pkm::accuracy::budget(m, &x, &tol)?;
+    std::fs::create_dir_all(&a.out)
+        .with_context(|| format!("cannot create {}", a.out.display()))?;
+    let inputs = [a.machine.as_path()];
+    let mut map = serde_json::Map::new();
+    for i in &b.items {
+        map.insert(i.name.clone(), json!(i.position));
+    }
+    let mut out = json!({
+        "machine": m.name(),
+        "pose": crate::poses::coords_json(dm, x.as_slice()),
+        "tolerances": {"joint_mm": tol.joint, "zero_length_mm": tol.zero, "distribution": a.distribution},
+        "sensitivities": names.iter().zip(&sens).map(|(n, (d, w))| json!({
+            "parameter": n, "unit": "mm",
+            "position_mm_per_unit": [d.x, d.y, d.z],
+            "orientation_rad_per_unit": [w.x, w.y, w.z],
+        })).collect::<Vec<_>>(),
+        "budget": map,
+        "budget_worst_case": b.worst_case,
+        "budget_rss": b.rss,
+    });
+    let top: Vec<(String, f64)> = b
+        .items
+        .iter()
+        .take(25)
+        .map(|i| (i.name.clone(), 1000.0 * i.position))
+        .collect();
+    let svg = bars_svg(
+        &format!(
+            "error budget: tool-point error at each tolerance (worst case {:.2} um, RSS {:.2} um)",
+            1000.0 * b.worst_case,
+            1000.0 * b.rss
+        ),
+        "contribution [um]",
+        &top,
+        760,
+    )?;
+    write_atomic(&a.out.join("budget.svg"), svg.as_bytes(), &inputs)?;
+    let mut mc_line = String::new();
+    if let Some(n) = a.monte_carlo {
+        if n == 0 {
+            bail!("--monte-carlo: expected a number of samples > 0");
+        }
+        let mc = pkm::accuracy::monte_carlo(m, &x, &zero, &tol, n, a.seed)?;
+        out.as_object_mut().expect("object").insert(
+            "monte_carlo".into(),
+            json!({
+                "samples": mc.samples, "seed": a.seed,
+                "mean": mc.mean, "std": mc.std, "p95": mc.p95, "p99": mc.p99, "max": mc.max,
+                "mean_vector": mc.mean_vector, "std_vector": mc.std_vector,
+            }),
+        );
+        let bins: Vec<(f64, usize)> = mc.histogram.iter().map(|(x, c)| (1000.0 * x, *c)).collect();
+        let svg = histogram_svg(
+            &format!(
+                "Monte Carlo, {} machines: tool-point error (mean {:.2} um, p95 {:.2} um)",
+                mc.samples,
+                1000.0 * mc.mean,
+                1000.0 * mc.p95
+            ),
+            "|error| [um]",
+            &bins,
+            (640, 400),
+        )?;
+        write_atomic(&a.out.join("monte-carlo.svg"), svg.as_bytes(), &inputs)?;
+        mc_line = format!(
+            "monte carlo      {} samples: mean {:.4}, std {:.4}, p95 {:.4}, p99 {:.4}, max {:.4} mm\n",
+            mc.samples, mc.mean, mc.std, mc.p95, mc.p99, mc.max
+        );
+    }
+    let text = serde_json::to_string_pretty(&out)?;
+    write_atomic(&a.out.join("errors.json"), text.as_bytes(), &inputs)?;
+    if a.json {
+        println!("{text}");
+    } else {
+        println!("{} ({})", m.name(), machine.kind());
+        println!(
+            "tolerances       joints +-{} mm, zero lengths +-{} mm ({})",
+            tol.joint, tol.zero, a.distribution
+        );
+        println!(
+            "budget           worst case {:.4} mm, RSS {:.4} mm ({} parameters)",
+            b.worst_case,
+            b.rss,
+            b.items.len()
+        );
+        for i in b.items.iter().take(5) {
+            println!("  largest        {:<28} {:.4} mm", i.name, i.position);
+        }
+        print!("{mc_line}");
         println!("wrote {}", a.out.display());
     }
     Ok(0)

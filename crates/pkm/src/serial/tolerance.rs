@@ -233,6 +233,12 @@ pub fn monte_carlo(
             out
         })
         .collect();
+    Ok(statistics(&errors))
+}
+
+/// Statistics of a sample of tool-point error vectors (mm): mean, standard deviation,
+/// percentiles and histogram of their norms, mean and spread of the components.
+pub fn statistics(errors: &[Vector3<f64>]) -> MonteCarlo {
     let mut norms: Vec<f64> = errors.iter().map(|e| e.norm()).collect();
     let k = norms.len().max(1) as f64;
     let mean = norms.iter().sum::<f64>() / k;
@@ -258,7 +264,7 @@ pub fn monte_carlo(
     for x in &norms {
         hist[((x / width) as usize).min(bins - 1)] += 1;
     }
-    Ok(MonteCarlo {
+    MonteCarlo {
         samples: norms.len(),
         mean,
         std,
@@ -272,5 +278,5 @@ pub fn monte_carlo(
             .enumerate()
             .map(|(i, c)| (i as f64 * width, c))
             .collect(),
-    })
+    }
 }
