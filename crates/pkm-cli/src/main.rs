@@ -154,6 +154,10 @@ pub struct IkArgs {
     /// CSV to write the batch results to.
     #[arg(long, requires = "input")]
     pub output: Option<PathBuf>,
+    /// Six-axis robots: every inverse solution found (postures: shoulder, elbow, wrist),
+    /// nearest to home first, each with its limit status.
+    #[arg(long, conflicts_with = "input")]
+    pub all_solutions: bool,
     #[command(flatten)]
     pub opts: PoseOptions,
 }

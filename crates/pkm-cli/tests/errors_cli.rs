@@ -81,7 +81,7 @@ fn errors_json_contract_and_plots() {
     let o = pkm()
         .args([
             "errors",
-            &path("examples/machines/tripod-seed000.toml"),
+            &path("examples/machines/p3rp-seed004.toml"),
             "--out",
         ])
         .arg(dir.path().join("bad2"))
@@ -394,4 +394,45 @@ fn strut_machines_get_a_budget_and_monte_carlo_of_their_geometry() {
         .unwrap();
     assert_ne!(o.status.code(), Some(0));
     assert!(String::from_utf8_lossy(&o.stderr).contains("takes --pose, --joint-tolerance"));
+}
+
+#[test]
+fn all_inverse_solutions_of_a_robot_with_their_limits() {
+    let o = pkm()
+        .args([
+            "ik",
+            &path("examples/machines/kr30-dh.toml"),
+            "--pose",
+            "1200,100,1400,180,0,0",
+            "--all-solutions",
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let s = v["solutions"].as_array().unwrap();
+    // Elbow up/down x wrist flipped or not (reaching backwards is beyond the arm here);
+    // the elbow-down postures bend A5 beyond its +-119 deg.
+    assert_eq!(s.len(), 4, "{v}");
+    assert_eq!(s.iter().filter(|x| x["within_limits"] == true).count(), 2);
+    assert!((s[0]["actuators"]["A5"].as_f64().unwrap() - 80.3348).abs() < 1e-3);
+    // Not a robot: refused.
+    let o = pkm()
+        .args([
+            "ik",
+            &path("examples/machines/hexapod-seed001.toml"),
+            "--pose",
+            "0,0,550",
+            "--all-solutions",
+        ])
+        .output()
+        .unwrap();
+    assert_ne!(o.status.code(), Some(0));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("for six-axis robots"));
 }

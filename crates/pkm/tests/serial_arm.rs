@@ -220,3 +220,34 @@ proptest! {
         prop_assert!((back - q).amax() < 1e-9);
     }
 }
+
+#[test]
+fn all_inverse_solutions_include_the_wrist_flip_and_reach_the_pose() {
+    use std::f64::consts::PI;
+    let a = arm("machines/kr30-dh.toml");
+    let q = kr30_joints(&[0.3, 0.6, 0.4, 0.7, 0.5, 0.2]);
+    let x = a.coords_of_joints(&q);
+    let sols = a.inverse_solutions(&x, 64);
+    // A spherical wrist and the shoulder/elbow choices: 8 postures in general.
+    assert!((4..=16).contains(&sols.len()), "{}", sols.len());
+    for s in &sols {
+        assert!((a.coords_of_joints(s) - x).amax() < 1e-9);
+    }
+    let same = |p: &Vector6<f64>, r: &Vector6<f64>| {
+        (0..6).all(|i| {
+            let d = (p[i] - r[i]).rem_euclid(2.0 * PI);
+            d.min(2.0 * PI - d) < 1e-7
+        })
+    };
+    assert!(sols.iter().any(|s| same(s, &q)), "the original posture");
+    // Wrist flip of a spherical wrist: (q4 + pi, -q5, q6 + pi).
+    let mut flip = q;
+    flip[3] += PI;
+    flip[4] = -flip[4];
+    flip[5] += PI;
+    assert!(sols.iter().any(|s| same(s, &flip)), "the wrist flip");
+    // Beyond reach: none.
+    let mut far = x;
+    far[0] = 5000.0;
+    assert!(a.inverse_solutions(&far, 64).is_empty());
+}

@@ -33,7 +33,7 @@ pub fn run(a: &ErrorsArgs) -> Result<u8> {
     }
     let Model::Serial(s) = &machine.model else {
         bail!(
-            "{}: `pkm errors` needs a serial machine (type = \"serial\"); this is a {} machine",
+            "{}: `pkm errors` needs a serial machine (seed 003's deviations), a hexapod or a translational tripod (joint and zero-length tolerances); this is a {} machine",
             a.machine.display(),
             machine.kind()
         );

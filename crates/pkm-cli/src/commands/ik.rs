@@ -86,6 +86,9 @@ pub fn run(a: &IkArgs) -> Result<u8> {
     }
     let vals = parse_list(a.pose.as_deref().unwrap_or_default(), "--pose")?;
     let x = pose_from_user(m, &vals, conv)?;
+    if a.all_solutions {
+        return all_solutions(&machine, &x, a.opts.json);
+    }
     let r = solve(m, x)?;
     if a.opts.json {
         println!(
@@ -248,4 +251,77 @@ pub fn csv_text(s: &str) -> String {
     } else {
         s.to_string()
     }
+}
+
+/// `--all-solutions`: the postures of a six-axis robot reaching `x`.
+fn all_solutions(machine: &Machine, x: &[f64], json_out: bool) -> Result<u8> {
+    use pkm::machine::Model;
+    use pkm::mechanism::Mechanism;
+    use pkm::serial::mechanism::SerialAny;
+    let arm = match &machine.model {
+        Model::Serial(s) => match &s.mechanism {
+            SerialAny::Arm(a) => a,
+            _ => anyhow::bail!("--all-solutions: for six-axis robots (tool-pose coordinates); this serial machine takes its joint values"),
+        },
+        _ => anyhow::bail!(
+            "--all-solutions: for six-axis robots; a {} machine's inverse kinematics has one solution per pose here",
+            machine.kind()
+        ),
+    };
+    let m = machine.mechanism();
+    let xv = nalgebra::Vector6::from_column_slice(x);
+    let sols = arm.inverse_solutions(&xv, 256);
+    let mut list = Vec::new();
+    for q in &sols {
+        let mut v = Vec::new();
+        Mechanism::<6, 6>::check_limits(arm, &xv, q, &mut v);
+        list.push((q, v));
+    }
+    if json_out {
+        let arr: Vec<Value> = list
+            .iter()
+            .map(|(q, v)| {
+                json!({
+                    "actuators": actuators_json(m, q.as_slice()),
+                    "within_limits": v.is_empty(),
+                    "violations": v,
+                })
+            })
+            .collect();
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&json!({
+                "machine": m.name(),
+                "pose": coords_json(m, x),
+                "solutions": arr,
+            }))?
+        );
+    } else {
+        println!("{} ({})", m.name(), m.kind());
+        println!("pose       {}", coords_text(m, x));
+        if list.is_empty() {
+            println!("no inverse solution found (256 starts)");
+        }
+        for (k, (q, v)) in list.iter().enumerate() {
+            let joints: Vec<String> = m
+                .actuators()
+                .iter()
+                .zip(q.iter())
+                .map(|(a, val)| format!("{}={:.4}", a.name, a.quantity.to_user(*val)))
+                .collect();
+            let status = match v.first() {
+                None => "within limits".to_string(),
+                Some(f) => format!(
+                    "{} beyond {:.3} by {:.3} {}",
+                    f.limit, f.bound, f.excess, f.unit
+                ),
+            };
+            println!("solution {:>2} {}  ({status})", k + 1, joints.join(" "));
+        }
+    }
+    Ok(if list.iter().any(|(_, v)| v.is_empty()) {
+        0
+    } else {
+        EXIT_UNREACHABLE
+    })
 }

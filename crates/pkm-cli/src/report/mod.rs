@@ -377,6 +377,16 @@ fn motion_section(h: &mut Html, machine: &Machine) -> Result<()> {
         home[0] - 32.0,
         home[1] - 32.0
     ));
+    // Units of the actuators (a robot's joints turn: deg; ratios to a Cartesian machine
+    // then compare unlike quantities and are not given).
+    let angular = |a: &pkm::mechanism::Actuator| a.quantity == pkm::Quantity::Angle;
+    let (linear, unit) = if m.actuators().iter().all(angular) {
+        (false, "deg")
+    } else if m.actuators().iter().any(angular) {
+        (false, "mm or deg")
+    } else {
+        (true, "mm")
+    };
     let mut start = [0.0; 6];
     start[..home.len().min(6)].copy_from_slice(&home[..home.len().min(6)]);
     start[0] += 32.0;
@@ -425,10 +435,14 @@ fn motion_section(h: &mut Html, machine: &Machine) -> Result<()> {
             sig(peak(&s.serial, |x| x.peak_velocity)),
             sig(peak(&s.actuators, |x| x.peak_acceleration)),
             sig(peak(&s.serial, |x| x.peak_acceleration)),
-            format!(
-                "{:.3} / {:.3} / {:.3}",
-                s.ratios.travel, s.ratios.velocity, s.ratios.acceleration
-            ),
+            if linear {
+                format!(
+                    "{:.3} / {:.3} / {:.3}",
+                    s.ratios.travel, s.ratios.velocity, s.ratios.acceleration
+                )
+            } else {
+                "n/a (revolute drives)".into()
+            },
             if s.violations.is_empty() {
                 "<span class=\"ok\">none</span>".into()
             } else {
@@ -444,13 +458,17 @@ fn motion_section(h: &mut Html, machine: &Machine) -> Result<()> {
         ]);
         last = Some(out);
     }
+    let (hv, ha) = (
+        format!("peak actuator |v| [{unit}/s]"),
+        format!("peak actuator |a| [{unit}/s²]"),
+    );
     h.table(
         &[
             "feed [mm/min]",
             "duration [s]",
-            "peak actuator |v| [mm/s]",
+            &hv,
             "peak serial |v| [mm/s]",
-            "peak actuator |a| [mm/s²]",
+            &ha,
             "peak serial |a| [mm/s²]",
             "ratios travel / v / a",
             "limit violations",
@@ -460,10 +478,17 @@ fn motion_section(h: &mut Html, machine: &Machine) -> Result<()> {
     if let Some(out) = last {
         let s = &out.summary;
         let mut axes = Vec::new();
+        let units: Vec<&str> = m.actuators().iter().map(|a| a.quantity.unit()).collect();
         for (kind, list) in [("actuator", &s.actuators), ("serial", &s.serial)] {
-            for (n, st) in list.iter() {
+            for (k, (n, st)) in list.iter().enumerate() {
+                let u = if kind == "actuator" {
+                    units.get(k).copied().unwrap_or("mm")
+                } else {
+                    "mm"
+                };
                 axes.push(vec![
                     format!("{kind} {}", esc(n)),
+                    u.to_string(),
                     format!("{:.3}", st.travel),
                     format!("{:.3}", st.peak_velocity),
                     format!("{:.3}", st.mean_abs_velocity),
@@ -476,10 +501,11 @@ fn motion_section(h: &mut Html, machine: &Machine) -> Result<()> {
         h.table(
             &[
                 "axis",
-                "travel [mm]",
-                "peak |v| [mm/s]",
+                "unit",
+                "travel",
+                "peak |v| [/s]",
                 "mean |v|",
-                "peak |a| [mm/s²]",
+                "peak |a| [/s²]",
                 "mean |a|",
             ],
             &axes,
@@ -492,7 +518,9 @@ fn motion_section(h: &mut Html, machine: &Machine) -> Result<()> {
         }
         let (a, b) = plots(m, &out, "10 000 mm/min")?;
         h.raw(&format!("<div class=\"views\">{a}{b}</div>"));
-        h.p("Seed 000 reports, for its larger tripod (whose dimensions it does not print): struts travel 3.6x, move 3.4x slower and accelerate 3.3x less than the serial axes; strut velocities 0-49 mm/s and accelerations within ±131 mm/s² at 10 000 mm/min, serial velocities 0-167 mm/s.");
+        if linear {
+            h.p("Seed 000 reports, for its larger tripod (whose dimensions it does not print): struts travel 3.6x, move 3.4x slower and accelerate 3.3x less than the serial axes; strut velocities 0-49 mm/s and accelerations within ±131 mm/s² at 10 000 mm/min, serial velocities 0-167 mm/s.");
+        }
     }
     Ok(())
 }

@@ -203,6 +203,63 @@ impl SerialArm {
         })
     }
 
+    /// Every inverse solution Newton finds from the home joints and `starts - 1` joint
+    /// values spread over the ranges (a 6R robot has up to 16: shoulder left/right,
+    /// elbow up/down, wrist flipped or not, and more for general geometry), distinct to
+    /// 1e-6 modulo whole turns, revolute joints shifted by whole turns into their ranges
+    /// where they fit, nearest to home first. Joint limits are not checked here.
+    pub fn inverse_solutions(&self, x: &Vector6<f64>, starts: usize) -> Vec<Vector6<f64>> {
+        use std::f64::consts::TAU;
+        let target_p = Vector3::new(x[0], x[1], x[2]);
+        if (target_p - self.base_origin).norm() > self.reach * (1.0 + 1e-12) {
+            return Vec::new();
+        }
+        let target_r = crate::rotation::rpy_matrix(x[3], x[4], x[5]);
+        let mut out: Vec<Vector6<f64>> = Vec::new();
+        for k in 0..starts.max(1) {
+            let q0 = if k == 0 {
+                self.home_joints
+            } else {
+                self.spread_start(k)
+            };
+            let Ok(q) = self.newton(&target_p, &target_r, q0) else {
+                continue;
+            };
+            let mut q = self.wrap(q, &self.home_joints);
+            for (i, a) in self.actuators.iter().enumerate() {
+                if a.quantity == Quantity::Angle {
+                    while q[i] < a.range.min && q[i] + TAU <= a.range.max {
+                        q[i] += TAU;
+                    }
+                    while q[i] > a.range.max && q[i] - TAU >= a.range.min {
+                        q[i] -= TAU;
+                    }
+                }
+            }
+            // The same posture modulo whole turns of revolute joints counts once.
+            let same = |o: &Vector6<f64>| {
+                (0..6).all(|i| {
+                    let d = (o[i] - q[i]).abs();
+                    if self.actuators[i].quantity == Quantity::Angle {
+                        let d = d.rem_euclid(TAU);
+                        d.min(TAU - d) < 1e-6
+                    } else {
+                        d < 1e-6
+                    }
+                })
+            };
+            if !out.iter().any(same) {
+                out.push(q);
+            }
+        }
+        out.sort_by(|a, b| {
+            (a - self.home_joints)
+                .amax()
+                .total_cmp(&(b - self.home_joints).amax())
+        });
+        out
+    }
+
     /// The `k`-th restart: a Halton point of the joints' ranges (clipped to one turn).
     fn spread_start(&self, k: usize) -> Vector6<f64> {
         const PRIMES: [usize; 6] = [2, 3, 5, 7, 11, 13];
