@@ -345,9 +345,11 @@ fn report_writes_a_self_contained_page() {
     assert!(html.contains("Seed 000 tripod"));
     assert_eq!(
         html.matches("<svg").count(),
-        10,
-        "three views at home, two workspace slices, two motion plots, three at Table 1"
+        12,
+        "three views at home, two workspace slices, two motion plots, three at Table 1, \
+         budget and Monte Carlo of the geometric tolerances"
     );
+    assert!(html.contains("Accuracy from geometric tolerances"));
     assert!(html.contains("seed 000's arc study"));
     assert!(html.contains("Kinematic checks"));
     assert!(html.contains("Top view") && html.contains("Front view") && html.contains("Side view"));

@@ -3,6 +3,7 @@
 mod accuracy;
 mod calibration;
 mod drawing;
+mod geometric;
 pub mod heatmap;
 mod html;
 mod p3rp;
@@ -77,6 +78,13 @@ pub fn build(machine: &Machine) -> Result<String> {
         pkm::machine::Model::Hexapod(x) => Some(x.as_ref()),
         _ => None,
     };
+    let tripod = match &machine.model {
+        pkm::machine::Model::TranslationalTripod(t) => Some(t),
+        _ => None,
+    };
+    if hexapod.is_some() || tripod.is_some() {
+        nav.push_str(" · <a href=\"#geometric\">Geometric accuracy</a>");
+    }
     if hexapod.is_some() {
         nav.push_str(" · <a href=\"#calibration\">Calibration</a>");
     }
@@ -199,7 +207,11 @@ pub fn build(machine: &Machine) -> Result<String> {
         accuracy::section(&mut h, s, m)?;
     }
     if let Some(x) = hexapod {
+        geometric::section(&mut h, x, &pkm::identify::hexapod::zero_lengths(x)?)?;
         calibration::section(&mut h, x)?;
+    }
+    if let Some(t) = tripod {
+        geometric::section(&mut h, t, &pkm::identify::tripod::zero_lengths(t)?)?;
     }
 
     if !references.is_empty() {
