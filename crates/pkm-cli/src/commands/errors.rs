@@ -119,19 +119,7 @@ pub fn run(a: &ErrorsArgs) -> Result<u8> {
         o.insert("budget".into(), serde_json::Value::Object(map));
         o.insert("budget_worst_case".into(), json!(b.worst_case));
         o.insert("budget_rss".into(), json!(b.rss));
-        let top: Vec<(String, f64)> = b
-            .items
-            .iter()
-            .take(25)
-            .map(|i| (i.name.clone(), 1000.0 * i.position))
-            .collect();
-        let svg = bars_svg(
-            &format!("error budget: tool-point error at each tolerance (worst case {:.2} um, RSS {:.2} um)", 1000.0 * b.worst_case, 1000.0 * b.rss),
-            "contribution [um]",
-            &top,
-            760,
-        )?;
-        write_atomic(&a.out.join("budget.svg"), svg.as_bytes(), &inputs)?;
+        write_budget(&a.out, &b, &inputs)?;
         if let Some(n) = a.monte_carlo {
             if n == 0 {
                 bail!("--monte-carlo: expected a number of samples > 0");
@@ -139,26 +127,8 @@ pub fn run(a: &ErrorsArgs) -> Result<u8> {
             let mc = monte_carlo(m, qt, qw, tol, n, a.seed)?;
             o.insert(
                 "monte_carlo".into(),
-                json!({
-                    "samples": mc.samples, "seed": a.seed,
-                    "mean": mc.mean, "std": mc.std, "p95": mc.p95, "p99": mc.p99, "max": mc.max,
-                    "mean_vector": mc.mean_vector, "std_vector": mc.std_vector,
-                }),
+                write_monte_carlo(&a.out, &mc, a.seed, &inputs)?,
             );
-            let bins: Vec<(f64, usize)> =
-                mc.histogram.iter().map(|(x, c)| (1000.0 * x, *c)).collect();
-            let svg = histogram_svg(
-                &format!(
-                    "Monte Carlo, {} machines: tool-point error (mean {:.2} um, p95 {:.2} um)",
-                    mc.samples,
-                    1000.0 * mc.mean,
-                    1000.0 * mc.p95
-                ),
-                "|error| [um]",
-                &bins,
-                (640, 400),
-            )?;
-            write_atomic(&a.out.join("monte-carlo.svg"), svg.as_bytes(), &inputs)?;
         }
     } else if a.monte_carlo.is_some() || a.map.is_some() {
         bail!("--monte-carlo and --map need tolerances: add [[tolerance]] entries to the machine file");
@@ -355,23 +325,7 @@ fn strut_errors<M: Identifiable<6, A>, const A: usize>(
         "budget_worst_case": b.worst_case,
         "budget_rss": b.rss,
     });
-    let top: Vec<(String, f64)> = b
-        .items
-        .iter()
-        .take(25)
-        .map(|i| (i.name.clone(), 1000.0 * i.position))
-        .collect();
-    let svg = bars_svg(
-        &format!(
-            "error budget: tool-point error at each tolerance (worst case {:.2} um, RSS {:.2} um)",
-            1000.0 * b.worst_case,
-            1000.0 * b.rss
-        ),
-        "contribution [um]",
-        &top,
-        760,
-    )?;
-    write_atomic(&a.out.join("budget.svg"), svg.as_bytes(), &inputs)?;
+    write_budget(&a.out, &b, &inputs)?;
     let mut mc_line = String::new();
     if let Some(n) = a.monte_carlo {
         if n == 0 {
@@ -380,25 +334,8 @@ fn strut_errors<M: Identifiable<6, A>, const A: usize>(
         let mc = pkm::accuracy::monte_carlo(m, &x, &zero, &tol, n, a.seed)?;
         out.as_object_mut().expect("object").insert(
             "monte_carlo".into(),
-            json!({
-                "samples": mc.samples, "seed": a.seed,
-                "mean": mc.mean, "std": mc.std, "p95": mc.p95, "p99": mc.p99, "max": mc.max,
-                "mean_vector": mc.mean_vector, "std_vector": mc.std_vector,
-            }),
+            write_monte_carlo(&a.out, &mc, a.seed, &inputs)?,
         );
-        let bins: Vec<(f64, usize)> = mc.histogram.iter().map(|(x, c)| (1000.0 * x, *c)).collect();
-        let svg = histogram_svg(
-            &format!(
-                "Monte Carlo, {} machines: tool-point error (mean {:.2} um, p95 {:.2} um)",
-                mc.samples,
-                1000.0 * mc.mean,
-                1000.0 * mc.p95
-            ),
-            "|error| [um]",
-            &bins,
-            (640, 400),
-        )?;
-        write_atomic(&a.out.join("monte-carlo.svg"), svg.as_bytes(), &inputs)?;
         mc_line = format!(
             "monte carlo      {} samples: mean {:.4}, std {:.4}, p95 {:.4}, p99 {:.4}, max {:.4} mm\n",
             mc.samples, mc.mean, mc.std, mc.p95, mc.p99, mc.max
@@ -427,4 +364,56 @@ fn strut_errors<M: Identifiable<6, A>, const A: usize>(
         println!("wrote {}", a.out.display());
     }
     Ok(0)
+}
+
+/// The budget's largest 25 lines as a bar chart, DIR/budget.svg.
+fn write_budget(
+    out: &std::path::Path,
+    b: &pkm::serial::tolerance::Budget,
+    inputs: &[&std::path::Path],
+) -> Result<()> {
+    let top: Vec<(String, f64)> = b
+        .items
+        .iter()
+        .take(25)
+        .map(|i| (i.name.clone(), 1000.0 * i.position))
+        .collect();
+    let svg = bars_svg(
+        &format!(
+            "error budget: tool-point error at each tolerance (worst case {:.2} um, RSS {:.2} um)",
+            1000.0 * b.worst_case,
+            1000.0 * b.rss
+        ),
+        "contribution [um]",
+        &top,
+        760,
+    )?;
+    write_atomic(&out.join("budget.svg"), svg.as_bytes(), inputs)
+}
+
+/// The Monte Carlo histogram, DIR/monte-carlo.svg, and the JSON of its statistics.
+fn write_monte_carlo(
+    out: &std::path::Path,
+    mc: &pkm::serial::tolerance::MonteCarlo,
+    seed: u64,
+    inputs: &[&std::path::Path],
+) -> Result<serde_json::Value> {
+    let bins: Vec<(f64, usize)> = mc.histogram.iter().map(|(x, c)| (1000.0 * x, *c)).collect();
+    let svg = histogram_svg(
+        &format!(
+            "Monte Carlo, {} machines: tool-point error (mean {:.2} um, p95 {:.2} um)",
+            mc.samples,
+            1000.0 * mc.mean,
+            1000.0 * mc.p95
+        ),
+        "|error| [um]",
+        &bins,
+        (640, 400),
+    )?;
+    write_atomic(&out.join("monte-carlo.svg"), svg.as_bytes(), inputs)?;
+    Ok(json!({
+        "samples": mc.samples, "seed": seed,
+        "mean": mc.mean, "std": mc.std, "p95": mc.p95, "p99": mc.p99, "max": mc.max,
+        "mean_vector": mc.mean_vector, "std_vector": mc.std_vector,
+    }))
 }

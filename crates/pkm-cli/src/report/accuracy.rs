@@ -51,6 +51,41 @@ pub fn section(h: &mut Html, s: &SerialModel, mech: &dyn pkm::DynMechanism) -> R
         s.tolerances.len(),
         SAMPLES
     ));
+    budget_and_monte_carlo(h, &b, &mc)?;
+    let rows: Vec<Vec<String>> = b
+        .items
+        .iter()
+        .map(|i| {
+            vec![
+                esc(&i.name),
+                format!("{:.4}", i.tolerance),
+                format!("{:.3}", 1e3 * i.position),
+                format!("{:.2e}", i.orientation),
+            ]
+        })
+        .collect();
+    h.details(
+        "Every toleranced deviation (tolerance in mm or rad)",
+        &Html::table_string(
+            &[
+                "deviation",
+                "tolerance",
+                "tool-point error [µm]",
+                "tool rotation [rad]",
+            ],
+            &rows,
+        ),
+    );
+    Ok(())
+}
+
+/// The budget and Monte Carlo figures of a tolerance study: the summary table, the
+/// largest 20 budget lines as bars and the histogram of the tool-point error.
+pub fn budget_and_monte_carlo(
+    h: &mut Html,
+    b: &pkm::serial::tolerance::Budget,
+    mc: &pkm::serial::tolerance::MonteCarlo,
+) -> Result<()> {
     h.table(
         &[
             "worst case [µm]",
@@ -86,29 +121,5 @@ pub fn section(h: &mut Html, s: &SerialModel, mech: &dyn pkm::DynMechanism) -> R
         (560, 400),
     )?;
     h.raw(&format!("<div class=\"views\">{bars}{hist}</div>"));
-    let rows: Vec<Vec<String>> = b
-        .items
-        .iter()
-        .map(|i| {
-            vec![
-                esc(&i.name),
-                format!("{:.4}", i.tolerance),
-                format!("{:.3}", 1e3 * i.position),
-                format!("{:.2e}", i.orientation),
-            ]
-        })
-        .collect();
-    h.details(
-        "Every toleranced deviation (tolerance in mm or rad)",
-        &Html::table_string(
-            &[
-                "deviation",
-                "tolerance",
-                "tool-point error [µm]",
-                "tool rotation [rad]",
-            ],
-            &rows,
-        ),
-    );
     Ok(())
 }

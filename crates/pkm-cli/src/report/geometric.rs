@@ -8,7 +8,6 @@ use pkm::identify::Identifiable;
 use pkm::serial::tolerance::Distribution;
 
 use super::html::Html;
-use crate::report::plot::{bars_svg, histogram_svg};
 
 /// Tolerance of every joint coordinate and zero length in the report (mm).
 const TOLERANCE: f64 = 0.01;
@@ -40,38 +39,6 @@ pub fn section<M: Identifiable<6, A>, const A: usize>(
          the model; the same parameters are what calibration identifies.",
         1000.0 * TOLERANCE
     ));
-    h.table(
-        &[
-            "worst case [µm]",
-            "RSS [µm]",
-            "MC mean [µm]",
-            "MC p95 [µm]",
-            "MC p99 [µm]",
-            "MC max [µm]",
-        ],
-        &[vec![
-            format!("{:.2}", 1e3 * b.worst_case),
-            format!("{:.2}", 1e3 * b.rss),
-            format!("{:.2}", 1e3 * mc.mean),
-            format!("{:.2}", 1e3 * mc.p95),
-            format!("{:.2}", 1e3 * mc.p99),
-            format!("{:.2}", 1e3 * mc.max),
-        ]],
-    );
-    let top: Vec<(String, f64)> = b
-        .items
-        .iter()
-        .take(20)
-        .map(|i| (i.name.clone(), 1e3 * i.position))
-        .collect();
-    let bars = bars_svg("error budget (largest 20)", "contribution [µm]", &top, 640)?;
-    let bins: Vec<(f64, usize)> = mc.histogram.iter().map(|(x, c)| (1e3 * x, *c)).collect();
-    let hist = histogram_svg(
-        "Monte Carlo: tool-point error",
-        "|error| [µm]",
-        &bins,
-        (560, 400),
-    )?;
-    h.raw(&format!("<div class=\"views\">{bars}{hist}</div>"));
+    super::accuracy::budget_and_monte_carlo(h, &b, &mc)?;
     Ok(())
 }
