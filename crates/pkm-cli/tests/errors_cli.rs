@@ -436,3 +436,41 @@ fn all_inverse_solutions_of_a_robot_with_their_limits() {
     assert_ne!(o.status.code(), Some(0));
     assert!(String::from_utf8_lossy(&o.stderr).contains("for six-axis robots"));
 }
+
+#[test]
+fn strut_machine_error_map_over_two_pose_coordinates() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("map");
+    let o = pkm()
+        .args([
+            "errors",
+            &path("examples/machines/hexapod-seed001.toml"),
+            "--map",
+            "X,Y",
+            "--map-points",
+            "21",
+            "--json",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let map = &v["error_map"];
+    assert_eq!(map["points"], 21 * 21);
+    // The default span reaches beyond the workspace: those cells are blank.
+    let blank = map["unreachable"].as_u64().unwrap();
+    assert!(blank > 0 && blank < 21 * 21, "{map}");
+    // Home (the centre of the map) is where the tolerances matter least here.
+    assert!(map["max_rss"].as_f64().unwrap() > v["budget_rss"].as_f64().unwrap());
+    let csv = std::fs::read_to_string(out.join("error-map.csv")).unwrap();
+    assert!(csv.starts_with("X_mm,Y_mm,rss_mm,worst_case_mm\n"));
+    assert_eq!(csv.lines().count(), 1 + 21 * 21);
+    assert!(out.join("error-map.svg").exists());
+}

@@ -134,88 +134,21 @@ pub fn run(a: &ErrorsArgs) -> Result<u8> {
         bail!("--monte-carlo and --map need tolerances: add [[tolerance]] entries to the machine file");
     }
     if let Some(spec) = &a.map {
-        let names: Vec<&str> = spec.split(',').map(str::trim).collect();
         // The map runs over joint travel: the axes are the machine's joints.
-        let coords = mech.actuators();
-        let idx: Vec<usize> = names
+        let axes: Vec<MapAxis> = mech
+            .actuators()
             .iter()
-            .map(|n| {
-                coords.iter().position(|c| c.name == *n).with_context(|| {
-                    format!(
-                        "--map: unknown axis `{n}`, expected two of {}",
-                        coords
-                            .iter()
-                            .map(|c| c.name.as_str())
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    )
-                })
+            .map(|c| MapAxis {
+                name: c.name.clone(),
+                quantity: c.quantity,
+                range: (c.range.min, c.range.max),
             })
-            .collect::<Result<_>>()?;
-        if idx.len() != 2 || idx[0] == idx[1] {
-            bail!("--map: expected two different axes, e.g. X,Y");
-        }
-        if a.map_points < 2 || a.map_points > 401 {
-            bail!("--map-points: expected 2 to 401");
-        }
-        let n = a.map_points;
-        let acts = mech.actuators();
-        let axis = |k: usize| pkm::workspace::GridAxis {
-            coordinate: idx[k],
-            min: acts[idx[k]].range.min,
-            max: acts[idx[k]].range.max,
-            step: (acts[idx[k]].range.max - acts[idx[k]].range.min) / (n - 1) as f64,
-        };
-        let axes = [axis(0), axis(1)];
-        let mut csv = format!(
-            "{}_{},{}_{},rss_mm,worst_case_mm\n",
-            coords[idx[0]].name,
-            coords[idx[0]].quantity.unit(),
-            coords[idx[1]].name,
-            coords[idx[1]].quantity.unit()
-        );
-        let mut rss = Vec::with_capacity(n * n);
-        let mut worst_all: f64 = 0.0;
-        for i in 0..axes[0].count() {
-            for k in 0..axes[1].count() {
-                let mut y = x.clone();
-                y[idx[0]] = axes[0].value(i);
-                y[idx[1]] = axes[1].value(k);
-                let (yt, yw) = s.mechanism.split_joints(&y);
-                let b = budget(m, yt, yw, tol)?;
-                worst_all = worst_all.max(b.rss);
-                csv.push_str(&format!(
-                    "{:.6},{:.6},{:.9},{:.9}\n",
-                    coords[idx[0]].quantity.to_user(y[idx[0]]),
-                    coords[idx[1]].quantity.to_user(y[idx[1]]),
-                    b.rss,
-                    b.worst_case
-                ));
-                rss.push(b.rss);
-            }
-        }
-        write_atomic(&a.out.join("error-map.csv"), csv.as_bytes(), &inputs)?;
-        let coord = |k: usize| {
-            (
-                coords[axes[k].coordinate].name.clone(),
-                coords[axes[k].coordinate].quantity,
-            )
-        };
-        let value = |flat: usize| Some(1e3 * rss[flat]);
-        let svg = super::workspace::slice_plot(
-            &axes,
-            &x,
-            &coord,
-            (0, 1),
-            "first-order RSS of the tolerances over the travel",
-            crate::report::heatmap::Scale::Linear("RSS [µm]"),
-            &value,
-        )?;
-        write_atomic(&a.out.join("error-map.svg"), svg.as_bytes(), &inputs)?;
-        o.insert(
-            "error_map".into(),
-            json!({"axes": names, "points": n * n, "max_rss": worst_all, "file": "error-map.csv"}),
-        );
+            .collect();
+        let map = error_map(a, spec, &axes, &x, &inputs, |y| {
+            let (yt, yw) = s.mechanism.split_joints(y);
+            Ok(Some(budget(m, yt, yw, tol)?))
+        })?;
+        o.insert("error_map".into(), map);
     }
     let text = serde_json::to_string_pretty(&out)?;
     write_atomic(&a.out.join("errors.json"), text.as_bytes(), &inputs)?;
@@ -272,11 +205,10 @@ fn strut_errors<M: Identifiable<6, A>, const A: usize>(
     m: &M,
     zero: SVector<f64, A>,
 ) -> Result<u8> {
-    if a.actuators.is_some() || a.deviations.is_some() || a.tolerances.is_some() || a.map.is_some()
-    {
+    if a.actuators.is_some() || a.deviations.is_some() || a.tolerances.is_some() {
         bail!(
-            "{}: --actuators, --deviations, --tolerances and --map are for serial machines; \
-             a {} takes --pose, --joint-tolerance, --length-tolerance",
+            "{}: --actuators, --deviations and --tolerances are for serial machines; \
+             a {} takes --pose, --joint-tolerance, --length-tolerance (and --map, --monte-carlo)",
             a.machine.display(),
             machine.kind()
         );
@@ -340,6 +272,40 @@ fn strut_errors<M: Identifiable<6, A>, const A: usize>(
             "monte carlo      {} samples: mean {:.4}, std {:.4}, p95 {:.4}, p99 {:.4}, max {:.4} mm\n",
             mc.samples, mc.mean, mc.std, mc.p95, mc.p99, mc.max
         );
+    }
+    if let Some(spec) = &a.map {
+        // Over two pose coordinates: the workspace command's default span around the
+        // pose; unreachable poses are left blank.
+        let grid = super::workspace::default_axes(dm, x.as_slice(), None, None)?;
+        let axes: Vec<MapAxis> = dm
+            .coordinates()
+            .iter()
+            .enumerate()
+            .map(|(k, c)| MapAxis {
+                name: c.name.clone(),
+                quantity: c.quantity,
+                range: grid
+                    .iter()
+                    .find(|g| g.coordinate == k)
+                    .map(|g| (g.min, g.max))
+                    .unwrap_or((x[k], x[k])),
+            })
+            .collect();
+        let map = error_map(a, spec, &axes, x.as_slice(), &inputs, |y| {
+            let y = SVector::<f64, 6>::from_column_slice(y);
+            let Ok(q) = m.inverse(&y) else {
+                return Ok(None);
+            };
+            let mut v = Vec::new();
+            m.check_limits(&y, &q, &mut v);
+            if !v.is_empty() {
+                return Ok(None);
+            }
+            Ok(pkm::accuracy::budget(m, &y, &tol).ok())
+        })?;
+        out.as_object_mut()
+            .expect("object")
+            .insert("error_map".into(), map);
     }
     let text = serde_json::to_string_pretty(&out)?;
     write_atomic(&a.out.join("errors.json"), text.as_bytes(), &inputs)?;
@@ -416,4 +382,116 @@ fn write_monte_carlo(
         "mean": mc.mean, "std": mc.std, "p95": mc.p95, "p99": mc.p99, "max": mc.max,
         "mean_vector": mc.mean_vector, "std_vector": mc.std_vector,
     }))
+}
+
+/// One axis an error map can run over.
+struct MapAxis {
+    name: String,
+    quantity: pkm::Quantity,
+    /// Travel (internal units).
+    range: (f64, f64),
+}
+
+/// `--map A,B`: the first-order RSS and worst case of the tolerances over a grid of two
+/// axes (the others at `base`), DIR/error-map.csv and DIR/error-map.svg; `budget_at`
+/// gives `None` where the machine cannot be (left blank).
+fn error_map(
+    a: &ErrorsArgs,
+    spec: &str,
+    axes_all: &[MapAxis],
+    base: &[f64],
+    inputs: &[&std::path::Path],
+    budget_at: impl Fn(&[f64]) -> Result<Option<pkm::serial::tolerance::Budget>>,
+) -> Result<serde_json::Value> {
+    let names: Vec<&str> = spec.split(',').map(str::trim).collect();
+    let idx: Vec<usize> = names
+        .iter()
+        .map(|n| {
+            axes_all.iter().position(|c| c.name == *n).with_context(|| {
+                format!(
+                    "--map: unknown axis `{n}`, expected two of {}",
+                    axes_all
+                        .iter()
+                        .map(|c| c.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )
+            })
+        })
+        .collect::<Result<_>>()?;
+    if idx.len() != 2 || idx[0] == idx[1] {
+        bail!("--map: expected two different axes, e.g. X,Y");
+    }
+    if a.map_points < 2 || a.map_points > 401 {
+        bail!("--map-points: expected 2 to 401");
+    }
+    let n = a.map_points;
+    let axis = |k: usize| {
+        let (lo, hi) = axes_all[idx[k]].range;
+        pkm::workspace::GridAxis {
+            coordinate: idx[k],
+            min: lo,
+            max: hi,
+            step: (hi - lo) / (n - 1) as f64,
+        }
+    };
+    let axes = [axis(0), axis(1)];
+    let (c0, c1) = (&axes_all[idx[0]], &axes_all[idx[1]]);
+    let mut csv = format!(
+        "{}_{},{}_{},rss_mm,worst_case_mm\n",
+        c0.name,
+        c0.quantity.unit(),
+        c1.name,
+        c1.quantity.unit()
+    );
+    let mut rss = Vec::with_capacity(n * n);
+    let mut worst_all: f64 = 0.0;
+    let mut blank = 0;
+    for i in 0..axes[0].count() {
+        for k in 0..axes[1].count() {
+            let mut y = base.to_vec();
+            y[idx[0]] = axes[0].value(i);
+            y[idx[1]] = axes[1].value(k);
+            let (u0, u1) = (
+                c0.quantity.to_user(y[idx[0]]),
+                c1.quantity.to_user(y[idx[1]]),
+            );
+            match budget_at(&y)? {
+                Some(b) => {
+                    worst_all = worst_all.max(b.rss);
+                    csv.push_str(&format!(
+                        "{u0:.6},{u1:.6},{:.9},{:.9}\n",
+                        b.rss, b.worst_case
+                    ));
+                    rss.push(Some(b.rss));
+                }
+                None => {
+                    blank += 1;
+                    csv.push_str(&format!("{u0:.6},{u1:.6},,\n"));
+                    rss.push(None);
+                }
+            }
+        }
+    }
+    write_atomic(&a.out.join("error-map.csv"), csv.as_bytes(), inputs)?;
+    let coord = |k: usize| {
+        (
+            axes_all[axes[k].coordinate].name.clone(),
+            axes_all[axes[k].coordinate].quantity,
+        )
+    };
+    let value = |flat: usize| rss[flat].map(|v| 1e3 * v);
+    let svg = super::workspace::slice_plot(
+        &axes,
+        base,
+        &coord,
+        (0, 1),
+        "first-order RSS of the tolerances over the travel",
+        crate::report::heatmap::Scale::Linear("RSS [µm]"),
+        &value,
+    )?;
+    write_atomic(&a.out.join("error-map.svg"), svg.as_bytes(), inputs)?;
+    Ok(
+        json!({"axes": names, "points": n * n, "unreachable": blank, "max_rss": worst_all, "file": "error-map.csv"}),
+    )
 }
