@@ -255,6 +255,13 @@ pub trait Mechanism<const P: usize, const A: usize>: Send + Sync {
         )?))
     }
 
+    /// [`Mechanism::condition`] when the actuator positions `q = inverse(x)` are already
+    /// known (a workspace sweep has just solved them): mechanisms whose inverse is
+    /// iterative (a serial robot's) override it so the sweep does not solve twice.
+    fn condition_at(&self, x: &SVector<f64, P>, _q: &SVector<f64, A>) -> Result<f64> {
+        self.condition(x)
+    }
+
     /// Length (mm) that scales rotations against translations in conditioning: a
     /// rotation of 1 rad counts as a displacement of this many mm. Default 1 mm.
     fn characteristic_length(&self) -> f64 {
@@ -316,16 +323,27 @@ pub fn scaled_driven_jacobian<M, const P: usize, const A: usize>(
 where
     M: Mechanism<P, A> + ?Sized,
 {
-    let j = m.jacobian(x)?;
+    Ok(scale_driven_columns(m, &m.jacobian(x)?))
+}
+
+/// The driven columns of a Jacobian `j` of `m`, angle columns divided by the
+/// characteristic length (see [`scaled_driven_jacobian`]).
+pub fn scale_driven_columns<M, const P: usize, const A: usize>(
+    m: &M,
+    j: &SMatrix<f64, A, P>,
+) -> SMatrix<f64, A, A>
+where
+    M: Mechanism<P, A> + ?Sized,
+{
     let d = m.driven();
     let lc = m.characteristic_length();
-    Ok(SMatrix::<f64, A, A>::from_fn(|r, c| {
+    SMatrix::<f64, A, A>::from_fn(|r, c| {
         let k = d[c];
         match m.coordinates()[k].quantity {
             crate::units::Quantity::Angle => j[(r, k)] / lc,
             crate::units::Quantity::Length => j[(r, k)],
         }
-    }))
+    })
 }
 
 /// The columns of `J` belonging to the driven coordinates (`A x A`).
@@ -437,7 +455,7 @@ where
 }
 
 /// The `i`-th point of the Halton sequence in base `b` (in `[0, 1)`).
-fn halton(mut i: usize, b: usize) -> f64 {
+pub(crate) fn halton(mut i: usize, b: usize) -> f64 {
     let (mut f, mut r) = (1.0, 0.0);
     while i > 0 {
         f /= b as f64;

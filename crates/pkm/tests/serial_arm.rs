@@ -167,6 +167,20 @@ fn coordinate_jacobian_equals_finite_differences_of_the_inverse() {
 }
 
 #[test]
+fn condition_from_known_joints_equals_the_condition_of_the_pose() {
+    let a = arm("machines/kr30-dh.toml");
+    for u in [
+        [0.3, 0.6, 0.4, 0.7, 0.5, 0.2],
+        [0.8, 0.2, 0.7, 0.1, 0.9, 0.6],
+    ] {
+        let x = a.coords_of_joints(&kr30_joints(&u));
+        let q = a.inverse(&x).unwrap();
+        let (c1, c2) = (a.condition(&x).unwrap(), a.condition_at(&x, &q).unwrap());
+        assert!((c1 - c2).abs() < 1e-9 * c1, "{c1} {c2}");
+    }
+}
+
+#[test]
 fn actuator_motion_equals_differences_along_a_path() {
     let a = arm("machines/kr30-dh.toml");
     let x0 = a.coords_of_joints(&kr30_joints(&[0.4, 0.5, 0.5, 0.6, 0.5, 0.4]));

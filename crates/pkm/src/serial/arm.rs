@@ -264,15 +264,9 @@ impl SerialArm {
     fn spread_start(&self, k: usize) -> Vector6<f64> {
         const PRIMES: [usize; 6] = [2, 3, 5, 7, 11, 13];
         Vector6::from_fn(|i, _| {
-            let (mut f, mut r, mut n) = (1.0, 0.0, k);
-            while n > 0 {
-                f /= PRIMES[i] as f64;
-                r += f * (n % PRIMES[i]) as f64;
-                n /= PRIMES[i];
-            }
             let range = self.actuators[i].range;
             let (lo, hi) = (range.min.max(-PI), range.max.min(PI));
-            lo + r * (hi - lo)
+            lo + crate::mechanism::halton(k, PRIMES[i]) * (hi - lo)
         })
     }
 
@@ -456,6 +450,15 @@ impl Mechanism<6, 6> for SerialArm {
         let q = self.inverse(x)?;
         let (_, j) = self.pose_and_jacobian(&q);
         self.coords_jacobian(x, &j)
+    }
+
+    /// The scaled condition number from the joints already solved (no second inverse).
+    fn condition_at(&self, x: &Vector6<f64>, q: &Vector6<f64>) -> Result<f64> {
+        let (_, j) = self.pose_and_jacobian(q);
+        let jx = self.coords_jacobian(x, &j)?;
+        Ok(crate::linalg::condition_number(
+            &crate::mechanism::scale_driven_columns(self, &jx),
+        ))
     }
 
     /// Closed form: the chain's pose at `q` (`start` is not needed).

@@ -143,14 +143,17 @@ pub(crate) fn evaluate<M: Mechanism<P, A>, const P: usize, const A: usize>(
     x: &SVector<f64, P>,
     v: &mut Vec<Violation>,
 ) -> PointResult {
-    if let (_, Some(binding)) = reach(m, x, v) {
-        return PointResult {
-            reachable: false,
-            condition: f64::NAN,
-            binding: Some(binding),
-        };
-    }
-    let c = m.condition(x).unwrap_or(f64::INFINITY);
+    let q = match reach(m, x, v) {
+        (Some(q), None) => q,
+        (_, binding) => {
+            return PointResult {
+                reachable: false,
+                condition: f64::NAN,
+                binding,
+            }
+        }
+    };
+    let c = m.condition_at(x, &q).unwrap_or(f64::INFINITY);
     PointResult {
         reachable: c.is_finite(),
         condition: c,
