@@ -52,13 +52,12 @@ fn tripod(c: &mut Criterion) {
 }
 
 fn identification(c: &mut Criterion) {
-    use pkm::identify::hexapod::zero_lengths;
     use pkm::identify::simulate::{simulate, triangle, Design, Experiment};
     use pkm::identify::{identify, Model as Measured, Options};
     let Model::Hexapod(h) = machine("hexapod-seed001.toml").model else {
         panic!()
     };
-    let zero = zero_lengths(&h).unwrap();
+    let zero = pkm::identify::Identifiable::zero_readings(h.as_ref()).unwrap();
     let e = Experiment {
         deviation: 1.0,
         point_noise: 0.005,

@@ -3,7 +3,6 @@
 
 use nalgebra::{Vector3, Vector6};
 use pkm::accuracy::{budget, monte_carlo, sensitivities, GeometricTolerances};
-use pkm::identify::hexapod::zero_lengths;
 use pkm::identify::Identifiable;
 use pkm::machine::Model;
 use pkm::mechanism::Mechanism;
@@ -67,13 +66,13 @@ fn sensitivities_equal_exact_differences_on_hexapod_and_tripod() {
     let Model::Hexapod(h) = machine("hexapod-seed001.toml") else {
         panic!()
     };
-    let z = zero_lengths(&h).unwrap();
+    let z = h.zero_readings().unwrap();
     let x = Vector6::new(30.0, -20.0, h.home[2] + 40.0, 0.1, -0.05, 0.2);
     check_against_differences(h.as_ref(), &z, &x);
     let Model::TranslationalTripod(t) = machine("tripod-seed000.toml") else {
         panic!()
     };
-    let z = pkm::identify::tripod::zero_lengths(&t).unwrap();
+    let z = t.zero_readings().unwrap();
     let mut x = t.home;
     x[0] += 20.0;
     x[1] -= 10.0;
@@ -99,7 +98,7 @@ fn monte_carlo_converges_to_the_first_order_prediction() {
     let Model::Hexapod(h) = machine("hexapod-seed001.toml") else {
         panic!()
     };
-    let z = zero_lengths(&h).unwrap();
+    let z = h.zero_readings().unwrap();
     let x = Vector6::new(30.0, -20.0, h.home[2] + 40.0, 0.1, -0.05, 0.2);
     let tol = GeometricTolerances {
         joint: 0.01,

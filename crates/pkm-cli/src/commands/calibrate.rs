@@ -5,47 +5,17 @@ use std::path::Path;
 
 use anyhow::{bail, Context, Result};
 use nalgebra::SVector;
-use pkm::hexapod::Hexapod;
 use pkm::identify::hexapod::{seed_procedure, SeedProcedure};
 use pkm::identify::simulate::{simulate, triangle, Design, Experiment};
+use pkm::identify::struts::StrutMachine;
 use pkm::identify::{self, Identifiable, Identification, Measurements, Model};
-use pkm::machine::{Model as MachineModel, StrutGeometry};
-use pkm::tripod::TranslationalTripod;
+use pkm::machine::Model as MachineModel;
 use serde_json::json;
 
 use super::load;
 use crate::io::write_atomic;
 use crate::report::plot::{panels_svg_x, Series};
 use crate::{CalibrateArgs, SimulateArgs};
-
-/// The joints of a hexapod, for its machine file.
-fn hexapod_struts(h: &Hexapod) -> Vec<StrutGeometry> {
-    h.struts
-        .iter()
-        .map(|s| StrutGeometry {
-            name: s.actuator.name.clone(),
-            base_name: s.base_name.clone(),
-            platform_name: s.platform_name.clone(),
-            base: s.base,
-            platform: s.platform,
-        })
-        .collect()
-}
-
-/// The joints of a translational tripod, for its machine file.
-fn tripod_struts(t: &TranslationalTripod) -> Vec<StrutGeometry> {
-    t.geometry
-        .struts
-        .iter()
-        .map(|s| StrutGeometry {
-            name: s.actuator.name.clone(),
-            base_name: s.base_name.clone(),
-            platform_name: s.platform_name.clone(),
-            base: s.base,
-            platform: s.platform,
-        })
-        .collect()
-}
 
 /// What identification covers, with a message for the rest.
 fn unsupported(m: &pkm::Machine, path: &Path) -> anyhow::Error {
@@ -60,28 +30,14 @@ fn unsupported(m: &pkm::Machine, path: &Path) -> anyhow::Error {
 pub fn simulate_run(a: &SimulateArgs) -> Result<u8> {
     let machine = load(&a.machine)?;
     match &machine.model {
-        MachineModel::Hexapod(h) => {
-            let z = pkm::identify::hexapod::zero_lengths(h)?;
-            simulate_machine(a, h.as_ref(), z, |t: &Hexapod, z| {
-                let mut t = t.clone();
-                t.zero_lengths = Some(*z);
-                hexapod_struts(&t)
-            })
-        }
-        MachineModel::TranslationalTripod(t) => {
-            let z = pkm::identify::tripod::zero_lengths(t)?;
-            simulate_machine(a, t, z, |t: &TranslationalTripod, _| tripod_struts(t))
-        }
+        MachineModel::Hexapod(h) => simulate_machine(a, h.as_ref()),
+        MachineModel::TranslationalTripod(t) => simulate_machine(a, t),
         _ => Err(unsupported(&machine, &a.machine)),
     }
 }
 
-fn simulate_machine<M: Identifiable<P, A> + Clone, const P: usize, const A: usize>(
-    a: &SimulateArgs,
-    h: &M,
-    zero: SVector<f64, A>,
-    struts: impl Fn(&M, &SVector<f64, A>) -> Vec<StrutGeometry>,
-) -> Result<u8> {
+fn simulate_machine<M: StrutMachine<A>, const A: usize>(a: &SimulateArgs, h: &M) -> Result<u8> {
+    let zero = h.zero_readings()?;
     let design = match a.design.as_str() {
         "random" => Design::Random,
         "one-strut" => Design::OneActuator,
@@ -141,7 +97,7 @@ fn simulate_machine<M: Identifiable<P, A> + Clone, const P: usize, const A: usiz
     let toml = pkm::machine::with_strut_geometry(
         &text,
         &a.machine.display().to_string(),
-        &struts(&s.truth, &s.true_zero),
+        &s.truth.struts(),
         Some(s.true_zero.as_slice()),
         &format!("The TRUE machine of a simulated experiment ({comment})"),
     )?;
@@ -188,18 +144,8 @@ fn read_measurements<M: Identifiable<P, A>, const P: usize, const A: usize>(
 pub fn calibrate_run(a: &CalibrateArgs) -> Result<u8> {
     let machine = load(&a.machine)?;
     match &machine.model {
-        MachineModel::Hexapod(h) => {
-            let z = pkm::identify::hexapod::zero_lengths(h)?;
-            let seed = |m: &Measurements| seed_procedure(h, &z, m);
-            calibrate_machine(a, h.as_ref(), z, hexapod_struts, Some(&seed))
-        }
-        MachineModel::TranslationalTripod(t) => {
-            if a.seed_procedure {
-                bail!("--seed-procedure: seed 001's procedure is for hexapods");
-            }
-            let z = pkm::identify::tripod::zero_lengths(t)?;
-            calibrate_machine(a, t, z, tripod_struts, None)
-        }
+        MachineModel::Hexapod(h) => calibrate_machine(a, h.as_ref()),
+        MachineModel::TranslationalTripod(t) => calibrate_machine(a, t),
         _ => Err(unsupported(&machine, &a.machine)),
     }
 }
@@ -227,15 +173,8 @@ fn glob(pattern: &str, name: &str) -> bool {
     true
 }
 
-type SeedFn<'a> = &'a dyn Fn(&Measurements) -> pkm::Result<SeedProcedure>;
-
-fn calibrate_machine<M: Identifiable<P, A>, const P: usize, const A: usize>(
-    a: &CalibrateArgs,
-    h: &M,
-    zero: SVector<f64, A>,
-    struts: fn(&M) -> Vec<StrutGeometry>,
-    seed_fn: Option<SeedFn>,
-) -> Result<u8> {
+fn calibrate_machine<M: StrutMachine<A>, const A: usize>(a: &CalibrateArgs, h: &M) -> Result<u8> {
+    let zero = h.zero_readings()?;
     let meas = read_measurements(&a.measurements, h)?;
     let names = identify::parameter_names(h);
     let mut fixed = Vec::new();
@@ -262,9 +201,10 @@ fn calibrate_machine<M: Identifiable<P, A>, const P: usize, const A: usize>(
         ..Default::default()
     };
     let id = identify::identify(h, &zero, &meas, &o)?;
-    let seed = match (a.seed_procedure, seed_fn) {
-        (true, Some(f)) => Some(f(&meas)?),
-        _ => None,
+    let seed = if a.seed_procedure {
+        Some(seed_procedure(h, &zero, &meas)?)
+    } else {
+        None
     };
     let values = seed
         .as_ref()
@@ -289,7 +229,7 @@ fn calibrate_machine<M: Identifiable<P, A>, const P: usize, const A: usize>(
     let toml = pkm::machine::with_strut_geometry(
         &text,
         &a.machine.display().to_string(),
-        &struts(&identified),
+        &identified.struts(),
         Some(z.as_slice()),
         &format!(
             "Identified by pkm calibrate from {} ({} states, {} model{}): residual RMS {:.4} -> {:.4} mm",

@@ -22,11 +22,11 @@ pub fn run(a: &ErrorsArgs) -> Result<u8> {
     let machine = load(&a.machine)?;
     match &machine.model {
         Model::Hexapod(h) => {
-            let z = pkm::identify::hexapod::zero_lengths(h)?;
+            let z = h.zero_readings()?;
             return strut_errors(a, &machine, h.as_ref(), z);
         }
         Model::TranslationalTripod(t) => {
-            let z = pkm::identify::tripod::zero_lengths(t)?;
+            let z = t.zero_readings()?;
             return strut_errors(a, &machine, t, z);
         }
         _ => {}

@@ -5,7 +5,7 @@
 use anyhow::Result;
 use nalgebra::Vector6;
 use pkm::hexapod::Hexapod;
-use pkm::identify::hexapod::{seed_procedure, zero_lengths};
+use pkm::identify::hexapod::seed_procedure;
 use pkm::identify::simulate::{pose_errors, simulate, simulate_on, triangle, Design, Experiment};
 use pkm::identify::{identify, Identifiable, Options};
 
@@ -17,7 +17,7 @@ pub fn section(h: &mut Html, hex: &Hexapod) -> Result<()> {
         "calibration",
         "Calibration: identification of the 42 parameters (seed 001)",
     );
-    let zero = zero_lengths(hex)?;
+    let zero = hex.zero_readings()?;
     let e = Experiment {
         deviation: 1.0,
         point_noise: 0.005,

@@ -207,11 +207,11 @@ pub fn build(machine: &Machine) -> Result<String> {
         accuracy::section(&mut h, s, m)?;
     }
     if let Some(x) = hexapod {
-        geometric::section(&mut h, x, &pkm::identify::hexapod::zero_lengths(x)?)?;
+        geometric::section(&mut h, x, &pkm::identify::Identifiable::zero_readings(x)?)?;
         calibration::section(&mut h, x)?;
     }
     if let Some(t) = tripod {
-        geometric::section(&mut h, t, &pkm::identify::tripod::zero_lengths(t)?)?;
+        geometric::section(&mut h, t, &pkm::identify::Identifiable::zero_readings(t)?)?;
     }
 
     if !references.is_empty() {

@@ -2,44 +2,38 @@
 //! centres `B'_j` in the platform frame (18), and the strut lengths of the zero state
 //! `L_j^(0)` (6, the actuators' zero readings), with seed 001's procedure.
 
-use nalgebra::{DMatrix, Matrix3, SMatrix, SVector, Vector3, Vector6};
+use nalgebra::{SMatrix, SVector, Vector3, Vector6};
 
-use super::{measured_poses, struts, Identifiable, Measurements};
+use super::struts::{self, StrutMachine};
+use super::{measured_poses, Identifiable, Measurements};
 use crate::error::{Error, Result};
 use crate::hexapod::Hexapod;
 use crate::legs::split_pose;
-use crate::mechanism::Mechanism;
+use crate::machine::StrutGeometry;
 
-impl Identifiable<6, 6> for Hexapod {
-    /// `A.x, A.y, A.z` of strut 1..6's base joint, then `B.x, ...` of its platform joint
-    /// (named as in the file).
-    fn geometry_names(&self) -> Vec<String> {
-        let b: Vec<&str> = self.struts.iter().map(|s| s.base_name.as_str()).collect();
-        let p: Vec<&str> = self
-            .struts
-            .iter()
-            .map(|s| s.platform_name.as_str())
-            .collect();
-        let n: Vec<&str> = self
-            .struts
-            .iter()
-            .map(|s| s.actuator.name.as_str())
-            .collect();
-        struts::names(&b, &p, &n)
+impl StrutMachine<6> for Hexapod {
+    fn struts(&self) -> [StrutGeometry; 6] {
+        std::array::from_fn(|j| {
+            let s = &self.struts[j];
+            StrutGeometry {
+                name: s.actuator.name.clone(),
+                base_name: s.base_name.clone(),
+                platform_name: s.platform_name.clone(),
+                base: s.base,
+                platform: s.platform,
+            }
+        })
     }
 
-    fn geometry(&self) -> Vec<f64> {
-        let a = self.struts.iter().flat_map(|s| s.base.iter().copied());
-        let b = self.struts.iter().flat_map(|s| s.platform.iter().copied());
-        a.chain(b).collect()
+    fn tool(&self) -> Vector3<f64> {
+        self.tool
     }
 
-    fn with_geometry(&self, g: &[f64]) -> Result<Self> {
-        let (base, platform) = struts::split::<6>(g)?;
+    fn with_struts(&self, struts: &[StrutGeometry; 6]) -> Self {
         let mut s = self.struts.clone();
-        for (j, st) in s.iter_mut().enumerate() {
-            st.base = base[j];
-            st.platform = platform[j];
+        for (st, g) in s.iter_mut().zip(struts) {
+            st.base = g.base;
+            st.platform = g.platform;
         }
         let mut h = Hexapod::new(
             self.name.clone(),
@@ -49,55 +43,24 @@ impl Identifiable<6, 6> for Hexapod {
             self.home,
         );
         h.zero_lengths = self.zero_lengths;
-        Ok(h)
+        h
     }
 
-    /// `L_j = |p + R (B'_j - t) - A_j|` (seed 001 eq. 1 with the tool offset `t`).
-    fn inverse_with_geometry_jacobian(
-        &self,
-        x: &Vector6<f64>,
-        jac: &mut DMatrix<f64>,
-    ) -> Result<Vector6<f64>> {
-        struts::lengths_with_jacobian(
-            &std::array::from_fn(|j| self.struts[j].base),
-            &std::array::from_fn(|j| self.struts[j].platform),
-            &self.tool,
-            x,
-            jac,
-        )
-    }
-
-    fn platform_point(
-        &self,
-        x: &Vector6<f64>,
-        s: &Vector3<f64>,
-    ) -> (Vector3<f64>, SMatrix<f64, 3, 6>) {
-        struts::platform_point(&self.tool, x, s)
-    }
-
-    fn coords_from_platform_frame(&self, c: &Vector3<f64>, r: &Matrix3<f64>) -> Vector6<f64> {
-        struts::coords_from_platform_frame(&self.tool, c, r)
-    }
-
-    fn explain(&self, terms: &[(usize, f64)]) -> Option<String> {
-        let (p, r) = crate::legs::split_pose(&self.home());
-        let s = &self.struts;
-        let dirs: [Vector3<f64>; 6] =
-            std::array::from_fn(|j| (p + r * (s[j].platform - self.tool) - s[j].base).normalize());
-        struts::explain(terms, &super::parameter_names(self), &dirs, &r)
+    fn calibrated_zero(&self) -> Option<Vector6<f64>> {
+        self.zero_lengths
     }
 }
 
 /// Result of seed 001's procedure.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SeedProcedure {
-    /// The 42 parameters in [`super::parameter_names`] order.
+    /// The parameters in [`super::parameter_names`] order (42 for a hexapod).
     pub values: Vec<f64>,
     /// Condition number of each strut's 7 x 7 system at its solution (columns scaled
     /// to unit norm).
-    pub conditions: [f64; 6],
+    pub conditions: Vec<f64>,
     /// Newton iterations per strut.
-    pub iterations: [usize; 6],
+    pub iterations: Vec<usize>,
 }
 
 /// Seed 001's procedure: seven measured states (full poses from the fixture) give
@@ -107,9 +70,10 @@ pub struct SeedProcedure {
 /// nominal values. Uses the first seven states; fails with [`Error::NotConverged`]
 /// when a system does not converge and [`Error::Singular`] when one is singular (the
 /// states do not separate that strut's parameters).
-pub fn seed_procedure(
-    nominal: &Hexapod,
-    zero: &Vector6<f64>,
+/// Written for any strut machine (the systems decouple for every one).
+pub fn seed_procedure<M: StrutMachine<A>, const A: usize>(
+    nominal: &M,
+    zero: &SVector<f64, A>,
     meas: &Measurements,
 ) -> Result<SeedProcedure> {
     if meas.states.len() < 7 {
@@ -129,15 +93,16 @@ pub fn seed_procedure(
     let g = nominal.geometry();
     let mut values = g.clone();
     values.extend(zero.iter());
-    let mut conditions = [0.0; 6];
-    let mut iterations = [0; 6];
-    for j in 0..6 {
+    let mut conditions = vec![0.0; A];
+    let mut iterations = vec![0; A];
+    let names = nominal.struts();
+    let t = nominal.tool();
+    for j in 0..A {
         let mut u = SVector::<f64, 7>::from_fn(|k, _| match k {
             0..=2 => g[3 * j + k],
-            3..=5 => g[18 + 3 * j + k - 3],
+            3..=5 => g[3 * A + 3 * j + k - 3],
             _ => zero[j],
         });
-        let t = nominal.tool;
         let eval = |u: &SVector<f64, 7>| {
             let a = Vector3::new(u[0], u[1], u[2]);
             let b = Vector3::new(u[3], u[4], u[5]);
@@ -145,14 +110,11 @@ pub fn seed_procedure(
             let mut jac = SMatrix::<f64, 7, 7>::zeros();
             for (i, x) in poses.iter().enumerate() {
                 let (p, r) = split_pose(x);
-                let v = p + r * (b - t) - a;
-                let l = v.norm();
-                let n = v / l;
-                let nb = r.transpose() * n;
+                let (l, da, db) = struts::strut_length(&p, &r, &a, &b, &t);
                 f[i] = l - u[6] - seven.states[i].readings[j];
                 for k in 0..3 {
-                    jac[(i, k)] = -n[k];
-                    jac[(i, 3 + k)] = nb[k];
+                    jac[(i, k)] = da[k];
+                    jac[(i, 3 + k)] = db[k];
                 }
                 jac[(i, 6)] = -1.0;
             }
@@ -168,7 +130,7 @@ pub fn seed_procedure(
                 return Err(Error::Singular {
                     what: format!(
                         "seed 001 system of strut {} (the states do not separate its parameters)",
-                        nominal.struts[j].actuator.name
+                        names[j].name
                     ),
                     rcond: 0.0,
                 });
@@ -198,23 +160,13 @@ pub fn seed_procedure(
         iterations[j] = it;
         for k in 0..3 {
             values[3 * j + k] = u[k];
-            values[18 + 3 * j + k] = u[3 + k];
+            values[3 * A + 3 * j + k] = u[3 + k];
         }
-        values[36 + j] = u[6];
+        values[6 * A + j] = u[6];
     }
     Ok(SeedProcedure {
         values,
         conditions,
         iterations,
     })
-}
-
-/// A hexapod's zero readings `L^(0)`: the calibrated ones from its file
-/// (`[calibration] zero_lengths`), else its strut lengths at home (the zero state of
-/// the measurements pkm simulates).
-pub fn zero_lengths(h: &Hexapod) -> Result<Vector6<f64>> {
-    match h.zero_lengths {
-        Some(z) => Ok(z),
-        None => h.inverse(&h.home()),
-    }
 }

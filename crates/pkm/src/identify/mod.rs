@@ -80,6 +80,13 @@ pub trait Identifiable<const P: usize, const A: usize>: Mechanism<P, A> + Sized 
     fn explain(&self, _terms: &[(usize, f64)]) -> Option<String> {
         None
     }
+
+    /// The actuators' zero readings of the machine as described (a calibrated value
+    /// from its file where it has one); default: the actuator positions at home, the
+    /// zero state of the campaigns pkm simulates.
+    fn zero_readings(&self) -> Result<SVector<f64, A>> {
+        self.inverse(&self.home())
+    }
 }
 
 /// One measured state: the actuator readings (increments from the zero state, mm or

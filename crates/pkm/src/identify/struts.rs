@@ -1,12 +1,124 @@
-//! The strut equations shared by every strut machine (hexapod, translational tripod):
-//! `L_j = |p + R (B'_j - t) - A_j|` (seed 001 eq. 1 with the tool offset `t`), their
-//! derivatives with respect to the joint centres, and the platform's points.
+//! Strut machines (hexapod, translational tripod): their identifiable parameters and
+//! the strut equations `L_j = |p + R (B'_j - t) - A_j|` (seed 001 eq. 1 with the tool
+//! offset `t`), written once. A machine implements [`StrutMachine`] (its joints, tool
+//! offset, calibrated zero lengths, and how to rebuild itself with other joints) and
+//! gets [`Identifiable`] from it.
 
 use nalgebra::{DMatrix, Matrix3, SMatrix, SVector, Vector3, Vector6};
 
+use super::Identifiable;
 use crate::error::{Error, Result};
 use crate::legs::split_pose;
+use crate::machine::StrutGeometry;
+use crate::mechanism::Mechanism;
 use crate::rotation::{rpy_rate_matrix, Convention};
+
+/// A machine of `A` struts between base joints and platform joints, pose X..C.
+pub trait StrutMachine<const A: usize>: Mechanism<6, A> + Sized + Sync {
+    /// Each strut's name, joint names and joint centres (base frame, platform frame).
+    fn struts(&self) -> [StrutGeometry; A];
+
+    /// The tool tip in the platform frame (mm).
+    fn tool(&self) -> Vector3<f64>;
+
+    /// The same machine with other joint centres (names, limits and home kept).
+    fn with_struts(&self, struts: &[StrutGeometry; A]) -> Self;
+
+    /// Strut lengths at the control's zero readings from the file's `[calibration]`.
+    fn calibrated_zero(&self) -> Option<SVector<f64, A>>;
+
+    /// The joint centres as arrays.
+    fn joints(&self) -> Joints<A> {
+        let s = self.struts();
+        (
+            std::array::from_fn(|j| s[j].base),
+            std::array::from_fn(|j| s[j].platform),
+        )
+    }
+}
+
+impl<M: StrutMachine<A>, const A: usize> Identifiable<6, A> for M {
+    /// `A.x, A.y, A.z` of every strut's base joint, then `B.x, ...` of its platform joint
+    /// (named as in the file).
+    fn geometry_names(&self) -> Vec<String> {
+        let s = self.struts();
+        let b: Vec<&str> = s.iter().map(|s| s.base_name.as_str()).collect();
+        let p: Vec<&str> = s.iter().map(|s| s.platform_name.as_str()).collect();
+        let n: Vec<&str> = s.iter().map(|s| s.name.as_str()).collect();
+        names(&b, &p, &n)
+    }
+
+    fn geometry(&self) -> Vec<f64> {
+        let s = self.struts();
+        let a = s.iter().flat_map(|s| s.base.iter().copied());
+        let b = s.iter().flat_map(|s| s.platform.iter().copied());
+        a.chain(b).collect()
+    }
+
+    fn with_geometry(&self, g: &[f64]) -> Result<Self> {
+        let (base, platform) = split::<A>(g)?;
+        let mut s = self.struts();
+        for (j, st) in s.iter_mut().enumerate() {
+            st.base = base[j];
+            st.platform = platform[j];
+        }
+        Ok(self.with_struts(&s))
+    }
+
+    fn inverse_with_geometry_jacobian(
+        &self,
+        x: &Vector6<f64>,
+        jac: &mut DMatrix<f64>,
+    ) -> Result<SVector<f64, A>> {
+        let (base, platform) = self.joints();
+        lengths_with_jacobian(&base, &platform, &self.tool(), x, jac)
+    }
+
+    fn platform_point(
+        &self,
+        x: &Vector6<f64>,
+        s: &Vector3<f64>,
+    ) -> (Vector3<f64>, SMatrix<f64, 3, 6>) {
+        platform_point(&self.tool(), x, s)
+    }
+
+    fn coords_from_platform_frame(&self, c: &Vector3<f64>, r: &Matrix3<f64>) -> Vector6<f64> {
+        coords_from_platform_frame(&self.tool(), c, r)
+    }
+
+    fn explain(&self, terms: &[(usize, f64)]) -> Option<String> {
+        let (p, r) = split_pose(&self.home());
+        let (base, platform) = self.joints();
+        let t = self.tool();
+        let dirs: [Vector3<f64>; A] =
+            std::array::from_fn(|j| (p + r * (platform[j] - t) - base[j]).normalize());
+        explain(terms, &super::parameter_names(self), &dirs, &r)
+    }
+
+    /// The file's `[calibration] zero_lengths`, else the strut lengths at home.
+    fn zero_readings(&self) -> Result<SVector<f64, A>> {
+        match self.calibrated_zero() {
+            Some(z) => Ok(z),
+            None => self.inverse(&self.home()),
+        }
+    }
+}
+
+/// Length of one strut at tool pose `(p, r)` and its gradients with respect to the base
+/// joint `a` and the platform joint `b`: `-n` and `R^T n`, `n` the unit strut vector.
+#[inline]
+pub fn strut_length(
+    p: &Vector3<f64>,
+    r: &Matrix3<f64>,
+    a: &Vector3<f64>,
+    b: &Vector3<f64>,
+    tool: &Vector3<f64>,
+) -> (f64, Vector3<f64>, Vector3<f64>) {
+    let v = p + r * (b - tool) - a;
+    let l = v.norm();
+    let n = v / l;
+    (l, -n, r.transpose() * n)
+}
 
 /// Parameter names: `A.x, A.y, A.z` of every strut's base joint, then `B.x, ...` of
 /// its platform joint, named as in the file (`name[strut]` for a joint two struts
@@ -46,20 +158,17 @@ pub fn lengths_with_jacobian<const N: usize>(
     jac.fill(0.0);
     let mut q = SVector::<f64, N>::zeros();
     for j in 0..N {
-        let v = p + r * (platform[j] - tool) - base[j];
-        let l = v.norm();
-        if l <= 0.0 {
+        let (l, da, db) = strut_length(&p, &r, &base[j], &platform[j], tool);
+        if !(l > 0.0) {
             return Err(Error::Singular {
                 what: format!("strut {} of zero length", j + 1),
                 rcond: 0.0,
             });
         }
-        let n = v / l;
-        let nb = r.transpose() * n;
         q[j] = l;
         for k in 0..3 {
-            jac[(j, 3 * j + k)] = -n[k];
-            jac[(j, 3 * N + 3 * j + k)] = nb[k];
+            jac[(j, 3 * j + k)] = da[k];
+            jac[(j, 3 * N + 3 * j + k)] = db[k];
         }
     }
     Ok(q)
