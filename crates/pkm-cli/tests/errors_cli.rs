@@ -421,7 +421,18 @@ fn all_inverse_solutions_of_a_robot_with_their_limits() {
     // the elbow-down postures bend A5 beyond its +-119 deg.
     assert_eq!(s.len(), 4, "{v}");
     assert_eq!(s.iter().filter(|x| x["within_limits"] == true).count(), 2);
-    assert!((s[0]["actuators"]["A5"].as_f64().unwrap() - 80.3348).abs() < 1e-3);
+    // Hand values: A1 points at the target, atan(100 / 1200); the two postures within
+    // limits are each other's wrist flip (A4 + 180, -A5, A6 + 180).
+    let q = |k: usize, n: &str| s[k]["actuators"][n].as_f64().unwrap();
+    let a1 = (100f64 / 1200.0).atan().to_degrees();
+    assert!(s
+        .iter()
+        .all(|x| (x["actuators"]["A1"].as_f64().unwrap() - a1).abs() < 1e-9));
+    let ok: Vec<usize> = (0..4).filter(|&k| s[k]["within_limits"] == true).collect();
+    let (i, j) = (ok[0], ok[1]);
+    assert!((q(i, "A5") + q(j, "A5")).abs() < 1e-9);
+    assert!(((q(i, "A4") - q(j, "A4")).abs() - 180.0).abs() < 1e-9);
+    assert!(((q(i, "A6") - q(j, "A6")).abs() - 180.0).abs() < 1e-9);
     // Not a robot: refused.
     let o = pkm()
         .args([

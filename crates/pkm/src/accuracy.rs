@@ -95,7 +95,7 @@ pub fn budget<M: Identifiable<P, A>, const P: usize, const A: usize>(
     let s = sensitivities(m, x)?;
     let names = parameter_names(m);
     let ng = names.len() - A;
-    let mut items: Vec<BudgetItem> = s
+    let items: Vec<BudgetItem> = s
         .iter()
         .enumerate()
         .map(|(k, (dp, w))| {
@@ -108,18 +108,7 @@ pub fn budget<M: Identifiable<P, A>, const P: usize, const A: usize>(
             }
         })
         .collect();
-    items.sort_by(|a, b| b.position.total_cmp(&a.position));
-    let worst_case = items.iter().map(|i| i.position).sum();
-    let rss = items
-        .iter()
-        .map(|i| i.position * i.position)
-        .sum::<f64>()
-        .sqrt();
-    Ok(Budget {
-        items,
-        worst_case,
-        rss,
-    })
+    Ok(Budget::from_items(items))
 }
 
 /// Monte Carlo of `n` machines with every parameter drawn within its tolerance (seeded

@@ -99,7 +99,10 @@ pub fn section(h: &mut Html, hex: &Hexapod) -> Result<()> {
             vec![
                 "condition number (scaled Jacobian)".into(),
                 "".into(),
-                format!("{:.0} (50 states, 300 equations)", id.condition),
+                format!(
+                    "{:.0} ({} states, {} equations)",
+                    id.condition, e.states, id.equations
+                ),
             ],
             vec![
                 "seed 001's seven-state design: worst per-strut condition".into(),

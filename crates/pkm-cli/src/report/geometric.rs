@@ -13,8 +13,6 @@ use super::html::Html;
 const TOLERANCE: f64 = 0.01;
 /// Monte Carlo size.
 const SAMPLES: usize = 20_000;
-/// Its size as printed.
-const SAMPLES_TEXT: &str = "20 000";
 
 pub fn section<M: Identifiable<6, A>, const A: usize>(
     h: &mut Html,
@@ -35,7 +33,7 @@ pub fn section<M: Identifiable<6, A>, const A: usize>(
          ±{} µm (uniform, illustrative: <code>pkm errors MACHINE --joint-tolerance MM \
          --length-tolerance MM</code> takes yours): the tool-point error each causes with the \
          control's nominal readings (first order), their worst-case sum and RSS, and a \
-         Monte Carlo of {SAMPLES_TEXT} machines solved exactly. docs/identification.md explains \
+         Monte Carlo of {SAMPLES} machines solved exactly. docs/identification.md explains \
          the model; the same parameters are what calibration identifies.",
         1000.0 * TOLERANCE
     ));

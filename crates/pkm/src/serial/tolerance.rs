@@ -71,7 +71,7 @@ pub struct Budget {
 pub fn budget(m: &SerialMachine, qt: &[f64], qw: &[f64], tol: &[Tolerance]) -> Result<Budget> {
     let params: Vec<Parameter> = tol.iter().map(|t| t.parameter).collect();
     let s = m.sensitivities(qt, qw, &[], &params)?;
-    let mut items: Vec<BudgetItem> = tol
+    let items: Vec<BudgetItem> = tol
         .iter()
         .zip(&s)
         .map(|(t, (dp, w))| BudgetItem {
@@ -81,18 +81,26 @@ pub fn budget(m: &SerialMachine, qt: &[f64], qw: &[f64], tol: &[Tolerance]) -> R
             orientation: w.norm() * t.value,
         })
         .collect();
-    items.sort_by(|a, b| b.position.total_cmp(&a.position));
-    let worst_case = items.iter().map(|i| i.position).sum();
-    let rss = items
-        .iter()
-        .map(|i| i.position * i.position)
-        .sum::<f64>()
-        .sqrt();
-    Ok(Budget {
-        items,
-        worst_case,
-        rss,
-    })
+    Ok(Budget::from_items(items))
+}
+
+impl Budget {
+    /// A budget of these items: sorted, largest position contribution first, with their
+    /// worst-case sum and root sum of squares.
+    pub fn from_items(mut items: Vec<BudgetItem>) -> Self {
+        items.sort_by(|a, b| b.position.total_cmp(&a.position));
+        let worst_case = items.iter().map(|i| i.position).sum();
+        let rss = items
+            .iter()
+            .map(|i| i.position * i.position)
+            .sum::<f64>()
+            .sqrt();
+        Budget {
+            items,
+            worst_case,
+            rss,
+        }
+    }
 }
 
 /// Monte Carlo results: statistics of the tool-point error norm (mm).
