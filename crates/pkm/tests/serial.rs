@@ -544,48 +544,6 @@ fn tool_jacobian_equals_finite_differences() {
 }
 
 #[test]
-fn numeric_inverse_kinematics_round_trip() {
-    use pkm::serial::ik::{inverse, IkOptions};
-    let m = kr30();
-    let mut iters = Vec::new();
-    for k in 0..200 {
-        // Joint sets inside the ranges, wrist away from its singularity (A5 = 0).
-        let q: Vec<f64> = (0..6)
-            .map(|j| {
-                let v = ((k * 37 + j * 11) % 17) as f64 / 17.0 - 0.5;
-                match j {
-                    1 => 0.2 + 0.8 * v,
-                    2 => -0.6 + 0.8 * v,
-                    4 => 0.5 + 0.6 * v.abs(),
-                    _ => 1.5 * v,
-                }
-            })
-            .collect();
-        let target = m.pose(&q, &[], &[]).unwrap();
-        let start: Vec<f64> = q
-            .iter()
-            .enumerate()
-            .map(|(j, v)| v + 0.1 * if j % 2 == 0 { 1.0 } else { -1.0 })
-            .collect();
-        let (sol, it) = inverse(&m, &target, &start, &[], &IkOptions::default()).unwrap();
-        let t = m.pose(&sol, &[], &[]).unwrap();
-        assert!((t - target).fixed_view::<3, 1>(0, 3).amax() < 1e-8, "{k}");
-        assert!((t - target).fixed_view::<3, 3>(0, 0).amax() < 1e-10, "{k}");
-        iters.push(it);
-    }
-    iters.sort();
-    eprintln!(
-        "serial DLS IK: median {} iterations, max {}",
-        iters[100], iters[199]
-    );
-    // Out of reach: reported with its residual, not returned.
-    let mut far = m.pose(&[0.0; 6], &[], &[]).unwrap();
-    far[(0, 3)] = 5000.0;
-    let e = inverse(&m, &far, &[0.0; 6], &[], &IkOptions::default()).unwrap_err();
-    assert!(matches!(e, pkm::Error::NotConverged { .. }), "{e}");
-}
-
-#[test]
 fn urdf_import_equals_the_hand_built_chain() {
     let m = pkm::Machine::from_path(format!(
         "{}/../../examples/robots/ur5-like.urdf",

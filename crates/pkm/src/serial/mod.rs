@@ -19,7 +19,7 @@
 pub mod accuracy;
 pub mod arm;
 pub mod completion;
-pub mod ik;
+pub mod jacobian;
 pub mod mechanism;
 pub mod tolerance;
 
