@@ -3,16 +3,7 @@
 use serde_json::Value;
 
 mod common;
-use common::{path, pkm};
-
-fn ok(o: &std::process::Output) {
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-}
+use common::{ok, path, pkm};
 
 #[test]
 fn simulate_then_calibrate_gives_a_machine_file_and_a_report() {

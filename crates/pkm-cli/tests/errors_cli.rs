@@ -3,7 +3,7 @@
 use serde_json::Value;
 
 mod common;
-use common::{path, pkm};
+use common::{ok, path, pkm};
 
 #[test]
 fn errors_json_contract_and_plots() {
@@ -26,12 +26,7 @@ fn errors_json_contract_and_plots() {
         .arg(&out)
         .output()
         .unwrap();
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    ok(&o);
     let v: Value = serde_json::from_slice(&o.stdout).unwrap();
     let e: Vec<f64> = v["position_error"]
         .as_array()
@@ -99,12 +94,7 @@ fn report_has_an_accuracy_section_for_serial_machines() {
         .arg(dir.path())
         .output()
         .unwrap();
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    ok(&o);
     let html = std::fs::read_to_string(dir.path().join("index.html")).unwrap();
     assert!(html.contains("Accuracy: primary deviations (seed 003)"));
     assert!(html.contains("delta_z(1 slide)"));
@@ -122,12 +112,7 @@ fn fk_works_directly_on_a_urdf_file() {
         ])
         .output()
         .unwrap();
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    ok(&o);
     let v: Value = serde_json::from_slice(&o.stdout).unwrap();
     // The UR5's zero pose: x = a2 + a3, y = -(d4 + d6), z = d1 - d5 (mm).
     let p: Vec<f64> = v["position"]
@@ -174,12 +159,7 @@ fn error_map_over_two_axes() {
         .arg(&out)
         .output()
         .unwrap();
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    ok(&o);
     let v: Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v["error_map"]["points"], 121);
     let csv = std::fs::read_to_string(out.join("error-map.csv")).unwrap();
@@ -239,12 +219,7 @@ fn tolerances_from_a_separate_file() {
         .arg(dir.path().join("t"))
         .output()
         .unwrap();
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    ok(&o);
     let v: Value = serde_json::from_slice(&o.stdout).unwrap();
     let b = v["budget"].as_object().unwrap();
     assert_eq!(b.len(), 2);
@@ -274,12 +249,7 @@ fn six_axis_robot_takes_tool_poses_through_ik_fk_and_motion() {
     let kr30 = path("examples/machines/kr30-dh.toml");
     let run = |args: &[&str]| -> Value {
         let o = pkm().args(args).output().unwrap();
-        assert_eq!(
-            o.status.code(),
-            Some(0),
-            "{}",
-            String::from_utf8_lossy(&o.stderr)
-        );
+        ok(&o);
         serde_json::from_slice(&o.stdout).unwrap()
     };
     let ik = run(&["ik", &kr30, "--pose", "1200,100,1400,180,0,0", "--json"]);
@@ -322,12 +292,7 @@ fn six_axis_robot_takes_tool_poses_through_ik_fk_and_motion() {
         .arg(&out)
         .output()
         .unwrap();
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    ok(&o);
     let s: Value =
         serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
     // A1 turns from atan(100/1200) to atan(-100/1300).
@@ -361,12 +326,7 @@ fn strut_machines_get_a_budget_and_monte_carlo_of_their_geometry() {
         .arg(&out)
         .output()
         .unwrap();
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    ok(&o);
     let v: Value = serde_json::from_slice(&o.stdout).unwrap();
     let budget = v["budget"].as_object().unwrap();
     assert_eq!(budget.len(), 42);
@@ -409,12 +369,7 @@ fn all_inverse_solutions_of_a_robot_with_their_limits() {
         ])
         .output()
         .unwrap();
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    ok(&o);
     let v: Value = serde_json::from_slice(&o.stdout).unwrap();
     let s = v["solutions"].as_array().unwrap();
     // Elbow up/down x wrist flipped or not (reaching backwards is beyond the arm here);
@@ -466,12 +421,7 @@ fn strut_machine_error_map_over_two_pose_coordinates() {
         .arg(&out)
         .output()
         .unwrap();
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    ok(&o);
     let v: Value = serde_json::from_slice(&o.stdout).unwrap();
     let map = &v["error_map"];
     assert_eq!(map["points"], 21 * 21);

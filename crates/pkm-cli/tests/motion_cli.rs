@@ -3,7 +3,7 @@
 use serde_json::Value;
 
 mod common;
-use common::{path, pkm};
+use common::{ok, path, pkm};
 
 #[test]
 fn seed000_arc_through_the_cli() {
@@ -25,12 +25,7 @@ fn seed000_arc_through_the_cli() {
         .arg(&out)
         .output()
         .unwrap();
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    ok(&o);
     let v: Value = serde_json::from_slice(&o.stdout).unwrap();
     let file: Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
@@ -240,12 +235,7 @@ fn seed004_move_and_report() {
         .arg(&out)
         .output()
         .unwrap();
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    ok(&o);
     let s: Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     let v = &s["actuators"]["V"];
@@ -275,12 +265,7 @@ fn seed004_move_and_report() {
         .arg("--json")
         .output()
         .unwrap();
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    ok(&o);
     let s: Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(s["type"], "p3rp/hybrid");
     assert!(
@@ -306,12 +291,7 @@ fn seed004_move_and_report() {
             .arg(&rep)
             .output()
             .unwrap();
-        assert_eq!(
-            o.status.code(),
-            Some(0),
-            "{}",
-            String::from_utf8_lossy(&o.stderr)
-        );
+        ok(&o);
         let html = std::fs::read_to_string(rep.join("index.html")).unwrap();
         assert!(html.contains("seed 004 reproduced"));
         assert!(html.contains("slider V peak velocity in the fig. 7 move"));

@@ -3,7 +3,7 @@
 use serde_json::Value;
 
 mod common;
-use common::{path, pkm};
+use common::{ok, path, pkm};
 
 #[test]
 fn workspace_outputs() {
@@ -21,12 +21,7 @@ fn workspace_outputs() {
         .arg(&out)
         .output()
         .unwrap();
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    ok(&o);
     let v: Value = serde_json::from_slice(&o.stdout).unwrap();
     for k in ["volume_mm3", "reachable_fraction"] {
         assert!(v[k].as_f64().unwrap() > 0.0, "{k}");
@@ -108,12 +103,7 @@ fn hexapod_ik_fk_round_trip_through_the_cli() {
         .args(["fk", &m, "--actuators", &q.join(","), "--json"])
         .output()
         .unwrap();
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    ok(&o);
     let fk: Value = serde_json::from_slice(&o.stdout).unwrap();
     let p = fk["position"].as_array().unwrap();
     for (k, e) in [10.0, -20.0, 560.0].iter().enumerate() {
@@ -166,12 +156,7 @@ fn atlas_and_forward_maps_of_the_p3rp_head() {
         .arg(&out)
         .output()
         .unwrap();
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    ok(&o);
     let s: Value = serde_json::from_slice(&o.stdout).unwrap();
     let v = &s["atlas"]["actuators"]["V"];
     // V' = z' + g'(theta) theta': 150 mm/s plus the largest g' (about 110 mm/rad at
@@ -244,12 +229,7 @@ fn hexapod_assembly_modes_and_transmission() {
         ])
         .output()
         .unwrap();
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    ok(&o);
     let v: Value = serde_json::from_slice(&o.stdout).unwrap();
     let modes = v["assembly_modes"].as_array().unwrap();
     assert!(modes.len() >= 2, "{}", modes.len());
@@ -325,12 +305,7 @@ fn hexapod_csv_round_trip_through_the_tracking_fk() {
         .arg(&fout)
         .output()
         .unwrap();
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    ok(&o);
     let back = std::fs::read_to_string(&fout).unwrap();
     for (a, b) in poses.lines().skip(1).zip(back.lines().skip(1)) {
         let x: Vec<f64> = a.split(',').map(|v| v.parse().unwrap()).collect();

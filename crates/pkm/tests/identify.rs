@@ -8,13 +8,17 @@ use pkm::identify::simulate::{pose_errors, simulate, simulate_on, triangle, Desi
 use pkm::identify::{identify, parameter_names, residuals, Identifiable, Model, Options};
 use pkm::machine::Model as MachineModel;
 
-fn hexapod() -> Hexapod {
-    let m = pkm::Machine::from_path(format!(
-        "{}/../../examples/machines/hexapod-seed001.toml",
+fn model(name: &str) -> MachineModel {
+    pkm::Machine::from_path(format!(
+        "{}/../../examples/machines/{name}",
         env!("CARGO_MANIFEST_DIR")
     ))
-    .unwrap();
-    let MachineModel::Hexapod(h) = m.model else {
+    .unwrap()
+    .model
+}
+
+fn hexapod() -> Hexapod {
+    let MachineModel::Hexapod(h) = model("hexapod-seed001.toml") else {
         panic!()
     };
     *h
@@ -321,12 +325,7 @@ fn measurement_files_round_trip_and_errors_name_line_and_column() {
 #[test]
 fn translational_tripod_identified_with_its_platform_joints_held() {
     use pkm::tripod::TranslationalTripod;
-    let m = pkm::Machine::from_path(format!(
-        "{}/../../examples/machines/tripod-seed000.toml",
-        env!("CARGO_MANIFEST_DIR")
-    ))
-    .unwrap();
-    let MachineModel::TranslationalTripod(t) = m.model else {
+    let MachineModel::TranslationalTripod(t) = model("tripod-seed000.toml") else {
         panic!()
     };
     let zero = t.zero_readings().unwrap();

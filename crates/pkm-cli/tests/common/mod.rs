@@ -19,3 +19,13 @@ pub fn path(rel: &str) -> String {
 pub fn pkm() -> Command {
     Command::cargo_bin("pkm").unwrap()
 }
+
+/// Asserts that a run succeeded, showing its stderr otherwise.
+pub fn ok(o: &std::process::Output) {
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
