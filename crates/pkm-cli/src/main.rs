@@ -78,18 +78,21 @@ enum Command {
         Writes DIR/summary.json (volume_mm3, bounding_box, reachable_fraction, condition\n\
         statistics, points per binding limit), DIR/points.csv, DIR/points.ply and slice heat maps.")]
     Workspace(WorkspaceArgs),
-    /// Accuracy of a serial machine (seed 003): the tool-point error with given primary
-    /// deviations, the sensitivity to every deviation, the error budget of the file's
-    /// tolerances and a Monte Carlo of them.
+    /// Accuracy of any machine (seed 003's model): the tool-pose error of given
+    /// deviations, the sensitivity to every geometric parameter, the error budget of
+    /// the tolerances, a Monte Carlo of them and an error map.
     #[command(after_help = "Examples:\n  \
         pkm errors examples/machines/mc300.toml --actuators 100,-50,-80,30,45 --out err\n  \
         pkm errors examples/machines/mc300.toml --actuators 100,-50,-80,30,45 --monte-carlo 100000 --json --out err\n  \
         pkm errors examples/machines/mc300.toml --deviations devs.toml --out err   # devs.toml: \"delta_x(1 slide)\" = 0.01\n  \
         pkm errors examples/machines/mc300.toml --tolerances tight.toml --map X,Y --out map\n  \
-        pkm errors examples/machines/hexapod-seed001.toml --pose 0,0,550,5,0,0 --joint-tolerance 0.01 --length-tolerance 0.005 --monte-carlo 100000 --out hex\n\n\
-        Writes DIR/errors.json (position_error, orientation_error, sensitivities, budget,\n\
-        monte_carlo), DIR/budget.svg and DIR/monte-carlo.svg. Units: mm; deg for angular\n\
-        deviations and rotary axes.")]
+        pkm errors examples/machines/hexapod-seed001.toml --pose 0,0,550,5,0,0 --joint-tolerance 0.01 --length-tolerance 0.005 --monte-carlo 100000 --out hex\n  \
+        pkm errors examples/machines/p3rp-seed004.toml --link-tolerance 0.02 --angle-tolerance 0.01 --map z,theta --out head\n\n\
+        Tolerances: --tolerances FILE, else the per-kind flags when any is given, else the\n\
+        machine file's [[tolerance]] entries, else +-0.01 mm on lengths and +-0.01 mrad on angles.\n\
+        Writes DIR/errors.json (pose, parameters' sensitivities, tolerances, budget,\n\
+        monte_carlo, error_map), DIR/budget.svg, DIR/monte-carlo.svg, DIR/error-map.csv/svg.\n\
+        Units: mm; deg for angular parameters and rotary axes.")]
     Errors(ErrorsArgs),
     /// Simulate an identification campaign (seed 001): a true machine drawn around the
     /// file's, states measured with a triangular fixture, noise on points and readings.
@@ -391,29 +394,39 @@ pub struct CalibrateArgs {
 
 #[derive(Args)]
 pub struct ErrorsArgs {
-    /// Machine file (TOML): a serial machine (seed 003's deviations) or a hexapod /
-    /// translational tripod (tolerances of its joints and zero lengths).
+    /// Machine file (TOML or URDF): any machine type.
     pub machine: PathBuf,
-    /// Hexapod / tripod: the tool pose X,Y,Z,A,B,C (mm, deg); default: home.
+    /// Pose (as `pkm ik --pose`); default: home.
     #[arg(long, allow_hyphen_values = true)]
     pub pose: Option<String>,
-    /// Hexapod / tripod: tolerance of every joint-centre coordinate (mm).
-    #[arg(long, default_value_t = 0.01)]
-    pub joint_tolerance: f64,
-    /// Hexapod / tripod: tolerance of every strut's zero length (mm).
-    #[arg(long, default_value_t = 0.01)]
-    pub length_tolerance: f64,
-    /// Hexapod / tripod: `uniform` (in +-tolerance) or `normal` (tolerance = 3 sigma).
-    #[arg(long, default_value = "uniform")]
-    pub distribution: String,
-    /// Axis values (mm, deg), in the file's joint order; default: home.
+    /// Actuator values instead of a pose (mm, deg; forward kinematics from home).
     #[arg(long, allow_hyphen_values = true)]
     pub actuators: Option<String>,
-    /// TOML file of deviation values by name (mm; deg for angles).
+    /// Convention of the angles in --pose.
+    #[arg(long, default_value = "rpy", value_parser = parse_convention)]
+    pub rotation: Convention,
+    /// Tolerance of every joint-centre coordinate (mm).
+    #[arg(long)]
+    pub joint_tolerance: Option<f64>,
+    /// Tolerance of every zero length and linear drive positioning (mm).
+    #[arg(long)]
+    pub length_tolerance: Option<f64>,
+    /// Tolerance of every link dimension and linear link deviation (mm).
+    #[arg(long)]
+    pub link_tolerance: Option<f64>,
+    /// Tolerance of every angular parameter, revolute drives included (deg).
+    #[arg(long)]
+    pub angle_tolerance: Option<f64>,
+    /// With the per-kind tolerances: `uniform` (in +-tolerance) or `normal`
+    /// (tolerance = 3 sigma).
+    #[arg(long, default_value = "uniform")]
+    pub distribution: String,
+    /// TOML file of deviation values by parameter name (mm; deg for angles): their
+    /// exact tool-pose error.
     #[arg(long)]
     pub deviations: Option<PathBuf>,
-    /// Tolerances file (`[[tolerance]]` entries, as in a serial machine file) instead of
-    /// the machine file's.
+    /// Tolerances file (`[[tolerance]]` entries with `deviation`, `value`, optional
+    /// `distribution`) instead of the machine file's or the per-kind ones.
     #[arg(long)]
     pub tolerances: Option<PathBuf>,
     /// Monte Carlo of the tolerances with this many machines.
@@ -422,8 +435,8 @@ pub struct ErrorsArgs {
     /// Seed of the Monte Carlo.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Error map over two axes (names, e.g. X,Y) across their travel, the other axes
-    /// at --actuators: the first-order RSS and worst case of the tolerances per point.
+    /// Error map over two pose coordinates (names, e.g. X,Y; a joint-space machine's
+    /// joints over their travel), the others at the pose: RSS and worst case per point.
     #[arg(long)]
     pub map: Option<String>,
     /// Points per axis of the error map.

@@ -197,7 +197,7 @@ fn hexapod_report_has_a_calibration_section() {
         .unwrap());
     let html = std::fs::read_to_string(out.join("index.html")).unwrap();
     assert!(html.contains("id=\"calibration\""));
-    assert!(html.contains("id=\"geometric\""));
+    assert!(html.contains("id=\"accuracy\""));
     assert!(html.contains("Accuracy from geometric tolerances"));
     assert!(html.contains("seven-state design"));
     assert!(html.contains("singular values of the scaled identification Jacobian"));

@@ -82,8 +82,61 @@ fn errors_json_contract_and_plots() {
         .arg(dir.path().join("bad2"))
         .output()
         .unwrap();
-    assert_eq!(o.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("needs a serial machine"));
+    // Every machine type has an accuracy model now (the P3RP head's link dimensions and
+    // drives, central-difference sensitivities).
+    ok(&o);
+}
+
+#[test]
+fn every_example_machine_gets_a_budget() {
+    let dir = tempfile::tempdir().unwrap();
+    for f in [
+        "examples/machines/tripod-seed000.toml",
+        "examples/machines/tripod-centre-leg.toml",
+        "examples/machines/hexapod-seed001.toml",
+        "examples/machines/hexapod-linuxcnc.toml",
+        "examples/machines/p3rp-seed004.toml",
+        "examples/machines/p3rp-hybrid-seed004.toml",
+        "examples/machines/mc300.toml",
+        "examples/machines/kr30-dh.toml",
+        "examples/robots/ur5-like.urdf",
+    ] {
+        let out = dir.path().join(f.replace('/', "_"));
+        let o = pkm()
+            .args([
+                "errors",
+                &path(f),
+                "--json",
+                "--monte-carlo",
+                "500",
+                "--out",
+            ])
+            .arg(&out)
+            .output()
+            .unwrap();
+        ok(&o);
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        let b = v["budget"].as_object().unwrap();
+        assert!(!b.is_empty(), "{f}");
+        assert!(v["budget_rss"].as_f64().unwrap() > 0.0, "{f}");
+        let mc = &v["monte_carlo"];
+        assert_eq!(
+            mc["samples"].as_u64().unwrap() + mc["failed"].as_u64().unwrap(),
+            500
+        );
+        assert!(
+            mc["max"].as_f64().unwrap() <= v["budget_worst_case"].as_f64().unwrap() * 1.01,
+            "{f}"
+        );
+        assert_eq!(
+            v["sensitivities"].as_array().unwrap().len(),
+            v["budget_items"]
+                .as_array()
+                .unwrap()
+                .len()
+                .max(v["sensitivities"].as_array().unwrap().len())
+        );
+    }
 }
 
 #[test]
@@ -96,7 +149,8 @@ fn report_has_an_accuracy_section_for_serial_machines() {
         .unwrap();
     ok(&o);
     let html = std::fs::read_to_string(dir.path().join("index.html")).unwrap();
-    assert!(html.contains("Accuracy: primary deviations (seed 003)"));
+    assert!(html.contains("Accuracy from geometric tolerances"));
+    assert!(html.contains("machine file's <code>[[tolerance]]</code> entries"));
     assert!(html.contains("delta_z(1 slide)"));
 }
 
@@ -340,7 +394,8 @@ fn strut_machines_get_a_budget_and_monte_carlo_of_their_geometry() {
     for f in ["errors.json", "budget.svg", "monte-carlo.svg"] {
         assert!(out.join(f).exists(), "{f}");
     }
-    // Serial-only options are refused with the options that apply.
+    // --actuators: the pose by forward kinematics; lengths no pose has fail with
+    // exit code 3; --pose and --actuators together are refused.
     let o = pkm()
         .args([
             "errors",
@@ -352,8 +407,21 @@ fn strut_machines_get_a_budget_and_monte_carlo_of_their_geometry() {
         .arg(dir.path().join("t"))
         .output()
         .unwrap();
-    assert_ne!(o.status.code(), Some(0));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("takes --pose, --joint-tolerance"));
+    assert_eq!(o.status.code(), Some(3));
+    let o = pkm()
+        .args([
+            "errors",
+            &path("examples/machines/tripod-seed000.toml"),
+            "--actuators",
+            "208.1673,208.1673,208.1673",
+            "--pose",
+            "0,0,-290",
+            "--out",
+        ])
+        .arg(dir.path().join("t"))
+        .output()
+        .unwrap();
+    assert!(String::from_utf8_lossy(&o.stderr).contains("give one of them"));
 }
 
 #[test]

@@ -74,6 +74,18 @@ pub enum Error {
         /// Reciprocal condition number found (0 = exactly singular).
         rcond: f64,
     },
+    /// The machine cannot run this analysis; `reason` says why (what it lacks).
+    #[error("{machine}: {analysis} is not available for a {kind} machine: {reason}")]
+    Unsupported {
+        /// Machine name.
+        machine: String,
+        /// Machine type (`p3rp/head`, ...).
+        kind: String,
+        /// The analysis asked for (`identification`, `--all-solutions`, ...).
+        analysis: &'static str,
+        /// Why the machine cannot do it.
+        reason: String,
+    },
 }
 
 fn format_file_error(

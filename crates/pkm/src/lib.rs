@@ -25,6 +25,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod accuracy;
+pub mod analysis;
 pub mod dynamic;
 pub mod error;
 pub mod hexapod;

@@ -344,16 +344,24 @@ fn sensitivities_equal_central_differences() {
 
 #[test]
 fn monte_carlo_converges_to_the_first_order_prediction() {
+    use pkm::accuracy::{budget, monte_carlo, Distribution, Tolerance};
     use pkm::serial::accuracy::Parameter;
-    use pkm::serial::tolerance::{budget, monte_carlo, Distribution, Tolerance};
     let m = five_axis();
     let (qt, qw) = ([35.0, -20.0, 60.0], [0.4, -1.1]);
-    let tol: Vec<Tolerance> = m
-        .all_parameters()
-        .into_iter()
+    // The generic engine runs on the machine as a joint-space mechanism; its
+    // parameters are `all_parameters()` in order.
+    let mech = pkm::serial::mechanism::SerialMechanism::<5>::new(
+        m.clone(),
+        nalgebra::SVector::<f64, 5>::from_column_slice(&[qt[0], qt[1], qt[2], qw[0], qw[1]]),
+    )
+    .unwrap();
+    let x = mech.home;
+    let all = m.all_parameters();
+    let tol: Vec<Tolerance> = all
+        .iter()
         .enumerate()
         .map(|(i, p)| Tolerance {
-            parameter: p,
+            parameter: i,
             value: match p {
                 Parameter::Alpha { .. } => 2e-5,
                 _ => 5e-3,
@@ -365,15 +373,14 @@ fn monte_carlo_converges_to_the_first_order_prediction() {
             },
         })
         .collect();
-    let params: Vec<Parameter> = tol.iter().map(|t| t.parameter).collect();
-    let s = m.sensitivities(&qt, &qw, &[], &params).unwrap();
+    let s = m.sensitivities(&qt, &qw, &[], &all).unwrap();
     let mut var = Vector3::zeros();
     for (t, (dp, _)) in tol.iter().zip(&s) {
         var += dp.component_mul(dp) * t.std().powi(2);
     }
     let predicted = var.map(f64::sqrt);
     let n = 40_000;
-    let mc = monte_carlo(&m, &qt, &qw, &tol, n, 7).unwrap();
+    let mc = monte_carlo(&mech, &x, &tol, n, 7).unwrap();
     for k in 0..3 {
         let rel = mc.std_vector[k] / predicted[k] - 1.0;
         assert!(
@@ -388,18 +395,18 @@ fn monte_carlo_converges_to_the_first_order_prediction() {
     assert_eq!(mc.histogram.iter().map(|h| h.1).sum::<usize>(), n);
     // Seeded: the same result again.
     assert_eq!(
-        monte_carlo(&m, &qt, &qw, &tol, 5000, 7).unwrap(),
-        monte_carlo(&m, &qt, &qw, &tol, 5000, 7).unwrap()
+        monte_carlo(&mech, &x, &tol, 5000, 7).unwrap(),
+        monte_carlo(&mech, &x, &tol, 5000, 7).unwrap()
     );
-    // Budget: each item is |dp/dd| times its tolerance, from the sensitivities computed
-    // above; sorted; worst case and RSS of the items.
-    let b = budget(&m, &qt, &qw, &tol).unwrap();
+    // Budget: each item is |dp/dd| times its tolerance, from the chain's own
+    // sensitivities computed above; sorted; worst case and RSS of the items.
+    let b = budget(&mech, &x, &tol).unwrap();
     assert_eq!(b.items.len(), tol.len());
     for (t, (dp, w)) in tol.iter().zip(&s) {
         let item = b
             .items
             .iter()
-            .find(|i| i.name == m.parameter_name(&t.parameter))
+            .find(|i| i.name == m.parameter_name(&all[t.parameter]))
             .unwrap();
         assert!(
             (item.position - dp.norm() * t.value).abs() < 1e-15,
@@ -620,7 +627,7 @@ fn prepared_jacobian_equals_the_tool_jacobian() {
 #[test]
 fn installation_angles_cancel_relative_to_the_part_and_turn_a_robot_about_the_world() {
     use pkm::serial::accuracy::{ChainDeviations, Parameter};
-    use pkm::serial::tolerance::{deviations_from, pose_error};
+    use pkm::serial::deviations::{deviations_from, pose_error};
     // Two chains: the installation turns both alike, the tool relative to the part
     // does not move (exactly zero sensitivity, and no change of the exact pose).
     let m = five_axis();

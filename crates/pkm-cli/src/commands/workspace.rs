@@ -70,77 +70,14 @@ impl Visitor for TiltJob {
     }
 }
 
-/// Axes, base pose and labels for a machine: X, Y, Z for spatial machines (the other
-/// coordinates from `base`), else up to three of its own coordinates.
+/// Default grid of the machine (see [`pkm::workspace::default_grid`]).
 pub fn default_axes(
     m: &dyn DynMechanism,
     base: &[f64],
     bounds: Option<&[f64]>,
     step: Option<f64>,
 ) -> Result<Vec<GridAxis>> {
-    let idx: Vec<usize> = match m.pose_space() {
-        PoseSpace::Own => (0..m.coordinates().len().min(3)).collect(),
-        _ => vec![0, 1, 2],
-    };
-    let q = |k: usize| m.coordinates()[k].quantity;
-    // Linear drives: their largest stroke sets the scale. A machine with revolute
-    // drives (a robot arm): the distance of the tool from the base at home.
-    let reach = if m
-        .actuators()
-        .iter()
-        .any(|a| a.quantity == pkm::Quantity::Angle)
-        && m.pose_space() != PoseSpace::Own
-    {
-        m.characteristic_length() / 0.6
-    } else {
-        m.actuators()
-            .iter()
-            .map(|a| a.range.max.abs())
-            .fold(0.0, f64::max)
-    };
-    let mut ranges = Vec::new();
-    match bounds {
-        Some(b) => {
-            if b.len() != 2 * idx.len() {
-                bail!(
-                    "--bounds: expected {} values (min,max per axis), got {}",
-                    2 * idx.len(),
-                    b.len()
-                );
-            }
-            for (i, &k) in idx.iter().enumerate() {
-                let (lo, hi) = (q(k).from_user(b[2 * i]), q(k).from_user(b[2 * i + 1]));
-                if hi <= lo {
-                    bail!("--bounds: axis {} has max <= min", m.coordinates()[k].name);
-                }
-                ranges.push((lo, hi));
-            }
-        }
-        None => {
-            for &k in &idx {
-                let half = match q(k) {
-                    pkm::Quantity::Length => 0.6 * reach,
-                    pkm::Quantity::Angle => std::f64::consts::PI,
-                };
-                ranges.push((base[k] - half, base[k] + half));
-            }
-        }
-    }
-    let axes = idx
-        .iter()
-        .zip(&ranges)
-        .map(|(&k, &(lo, hi))| GridAxis {
-            coordinate: k,
-            min: lo,
-            max: hi,
-            step: step.map(|s| q(k).from_user(s)).unwrap_or((hi - lo) / 40.0),
-        })
-        .collect::<Vec<_>>();
-    let total: f64 = axes.iter().map(|a| a.count() as f64).product();
-    if total > 5e7 {
-        bail!("the grid has {total:.0} points; give a larger --step or smaller --bounds (at most 5e7)");
-    }
-    Ok(axes)
+    Ok(pkm::workspace::default_grid(m, base, bounds, step)?)
 }
 
 /// Summary with user units.

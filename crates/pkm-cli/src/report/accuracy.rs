@@ -1,74 +1,78 @@
-//! Report section for serial machines with tolerances (seed 003): the error budget at
-//! mid travel, a Monte Carlo of the tolerances, and the largest sensitivities.
+//! Report section for every machine: the error budget of its tolerances at home (the
+//! machine file's, else +-10 um on lengths and +-10 urad on angles), a Monte Carlo of
+//! them, and every toleranced parameter (`pkm::analysis::accuracy`).
 
 use anyhow::Result;
-use pkm::serial::tolerance::{budget, monte_carlo};
-use pkm::serial::SerialModel;
+use pkm::analysis::{accuracy, AccuracyOptions, ToleranceSource};
+use pkm::Machine;
 
 use super::html::{esc, Html};
 use crate::report::plot::{bars_svg, histogram_svg};
 
 /// Monte Carlo size in the report (a fraction of a second on two cores).
-const SAMPLES: usize = 200_000;
+const SAMPLES: usize = 20_000;
 
-pub fn section(h: &mut Html, s: &SerialModel, mech: &dyn pkm::DynMechanism) -> Result<()> {
-    let m = s.mechanism.machine();
-    h.h2_id("accuracy", "Accuracy: primary deviations (seed 003)");
-    if s.tolerances.is_empty() {
-        h.p("The machine file gives no <code>[[tolerance]]</code> entries: no budget.");
-        return Ok(());
-    }
-    // Mid travel of every axis.
-    let x: Vec<f64> = mech
-        .actuators()
-        .iter()
-        .map(|a| 0.5 * (a.range.min + a.range.max))
-        .collect();
-    let (qt, qw) = s.mechanism.split_joints(&x);
-    let at: Vec<String> = mech
-        .actuators()
-        .iter()
-        .zip(&x)
-        .map(|(a, v)| {
-            format!(
-                "{} = {:.3} {}",
-                esc(&a.name),
-                a.quantity.to_user(*v),
-                a.quantity.unit()
-            )
-        })
-        .collect();
-    let b = budget(m, qt, qw, &s.tolerances)?;
-    let mc = monte_carlo(m, qt, qw, &s.tolerances, SAMPLES, 1)?;
+pub fn section(h: &mut Html, machine: &Machine) -> Result<()> {
+    h.h2_id("accuracy", "Accuracy from geometric tolerances");
+    let r = accuracy(
+        machine,
+        &AccuracyOptions {
+            monte_carlo: Some(SAMPLES),
+            ..Default::default()
+        },
+    )?;
+    let source = match r.tolerance_source {
+        ToleranceSource::MachineFile => {
+            "the machine file's <code>[[tolerance]]</code> entries".to_string()
+        }
+        _ => "±10 µm on every length and ±10 µrad on every angle (uniform, illustrative: \
+              <code>pkm errors MACHINE --joint-tolerance MM --length-tolerance MM \
+              --link-tolerance MM --angle-tolerance DEG</code> or <code>--tolerances FILE</code> \
+              takes yours)"
+            .to_string(),
+    };
     h.p(&format!(
-        "At mid travel ({}): the tool-point error each of the {} toleranced deviations causes at \
-         its tolerance (first order, in the workpiece frame), their worst-case sum and root sum \
-         of squares, and a Monte Carlo of {} machines with every deviation drawn from its \
-         distribution (uniform in ±t, or normal with t = 3σ; exact poses). docs/serial.md \
-         explains the model and its limits (an angle between aligned axes has no first-order \
-         effect when perturbed alone).",
-        at.join(", "),
-        s.tolerances.len(),
-        SAMPLES
+        "At home, the {} toleranced parameters of the machine's {} ({source}): the tool-point \
+         error each causes with the control's nominal readings (first order, {} sensitivities), \
+         their worst-case sum and root sum of squares, and a Monte Carlo of {SAMPLES} machines \
+         with every parameter drawn from its distribution and the tool pose solved exactly. \
+         docs/serial.md and docs/identification.md explain the model.",
+        r.tolerances.len(),
+        r.parameters.len(),
+        if r.analytic {
+            "analytic"
+        } else {
+            "central-difference"
+        },
     ));
-    budget_and_monte_carlo(h, &b, &mc)?;
-    let rows: Vec<Vec<String>> = b
+    if let Some(mc) = &r.monte_carlo {
+        budget_and_monte_carlo(h, &r.budget, mc)?;
+    }
+    let rows: Vec<Vec<String>> = r
+        .budget
         .items
         .iter()
         .map(|i| {
+            let p = r.parameters.iter().find(|p| p.name == i.name);
+            let unit = p.map(|p| p.quantity.unit()).unwrap_or("");
+            let t = p
+                .map(|p| p.quantity.to_user(i.tolerance))
+                .unwrap_or(i.tolerance);
             vec![
                 esc(&i.name),
-                format!("{:.4}", i.tolerance),
+                i.kind.as_str().into(),
+                format!("{t:.4} {unit}"),
                 format!("{:.3}", 1e3 * i.position),
                 format!("{:.2e}", i.orientation),
             ]
         })
         .collect();
     h.details(
-        "Every toleranced deviation (tolerance in mm or rad)",
+        "Every toleranced parameter",
         &Html::table_string(
             &[
-                "deviation",
+                "parameter",
+                "kind",
                 "tolerance",
                 "tool-point error [µm]",
                 "tool rotation [rad]",
@@ -83,8 +87,8 @@ pub fn section(h: &mut Html, s: &SerialModel, mech: &dyn pkm::DynMechanism) -> R
 /// largest 20 budget lines as bars and the histogram of the tool-point error.
 pub fn budget_and_monte_carlo(
     h: &mut Html,
-    b: &pkm::serial::tolerance::Budget,
-    mc: &pkm::serial::tolerance::MonteCarlo,
+    b: &pkm::accuracy::Budget,
+    mc: &pkm::accuracy::MonteCarlo,
 ) -> Result<()> {
     h.table(
         &[

@@ -3,7 +3,6 @@
 mod accuracy;
 mod calibration;
 mod drawing;
-mod geometric;
 pub mod heatmap;
 mod html;
 mod p3rp;
@@ -67,24 +66,11 @@ pub fn build(machine: &Machine) -> Result<String> {
     if spatial {
         nav.push_str(" · <a href=\"#motion\">Motion</a>");
     }
-    let serial = match &machine.model {
-        pkm::machine::Model::Serial(s) => Some(s.as_ref()),
-        _ => None,
-    };
-    if serial.is_some() {
-        nav.push_str(" · <a href=\"#accuracy\">Accuracy</a>");
-    }
+    nav.push_str(" · <a href=\"#accuracy\">Accuracy</a>");
     let hexapod = match &machine.model {
         pkm::machine::Model::Hexapod(x) => Some(x.as_ref()),
         _ => None,
     };
-    let tripod = match &machine.model {
-        pkm::machine::Model::TranslationalTripod(t) => Some(t),
-        _ => None,
-    };
-    if hexapod.is_some() || tripod.is_some() {
-        nav.push_str(" · <a href=\"#geometric\">Geometric accuracy</a>");
-    }
     if hexapod.is_some() {
         nav.push_str(" · <a href=\"#calibration\">Calibration</a>");
     }
@@ -203,15 +189,9 @@ pub fn build(machine: &Machine) -> Result<String> {
     if let Some(head) = &head {
         p3rp::section(&mut h, head)?;
     }
-    if let Some(s) = serial {
-        accuracy::section(&mut h, s, m)?;
-    }
+    accuracy::section(&mut h, machine)?;
     if let Some(x) = hexapod {
-        geometric::section(&mut h, x, &pkm::identify::Identifiable::zero_readings(x)?)?;
         calibration::section(&mut h, x)?;
-    }
-    if let Some(t) = tripod {
-        geometric::section(&mut h, t, &pkm::identify::Identifiable::zero_readings(t)?)?;
     }
 
     if !references.is_empty() {

@@ -10,6 +10,7 @@ mod reference;
 mod serial_file;
 mod source;
 mod strut_writer;
+mod tolerance_file;
 mod tripod_file;
 mod urdf_file;
 
@@ -21,9 +22,9 @@ use crate::mechanism::Mechanism;
 use crate::tripod::{CentreLegTripod, TranslationalTripod};
 
 pub use reference::Reference;
-pub use serial_file::{read_deviations, read_tolerances};
 pub use source::line_col;
 pub use strut_writer::{with_strut_geometry, StrutGeometry};
+pub use tolerance_file::{read_deviations, read_tolerances};
 
 pub(crate) fn v3(a: [f64; 3]) -> nalgebra::Vector3<f64> {
     nalgebra::Vector3::new(a[0], a[1], a[2])
@@ -215,13 +216,26 @@ pub enum Model {
     Serial(Box<crate::serial::SerialModel>),
 }
 
+/// What every machine type implements: the kinematics ([`Mechanism`]) and the
+/// accuracy engine's parameters ([`crate::accuracy::Parametric`]). Generic analyses
+/// take `M: Analysable<P, A>`.
+pub trait Analysable<const P: usize, const A: usize>:
+    Mechanism<P, A> + crate::accuracy::Parametric<P, A>
+{
+}
+
+impl<M, const P: usize, const A: usize> Analysable<P, A> for M where
+    M: Mechanism<P, A> + crate::accuracy::Parametric<P, A>
+{
+}
+
 /// Code generic over any mechanism, run on a machine whose type is known at run time
 /// by [`Machine::visit`].
 pub trait Visitor {
     /// What the visit returns.
     type Output;
     /// Called with the concrete mechanism.
-    fn visit<M: Mechanism<P, A>, const P: usize, const A: usize>(self, m: &M) -> Self::Output;
+    fn visit<M: Analysable<P, A>, const P: usize, const A: usize>(self, m: &M) -> Self::Output;
 }
 
 /// A machine loaded from a file.
@@ -356,6 +370,30 @@ impl Machine {
             Model::P3rpHybrid(m) => v.visit(m.as_ref()),
             Model::Serial(s) => crate::with_serial!(&s.mechanism, m => v.visit(m)),
         }
+    }
+
+    /// Tolerances of the machine's parameters given in its file (`[[tolerance]]`),
+    /// indices into its [`crate::accuracy::Parametric::parameters`]; empty when none.
+    pub fn tolerances(&self) -> &[crate::accuracy::Tolerance] {
+        match &self.model {
+            Model::Serial(s) => &s.tolerances,
+            _ => &[],
+        }
+    }
+
+    /// The machine's geometric parameters (the accuracy engine's list).
+    pub fn parameters(&self) -> Vec<crate::accuracy::Parameter> {
+        struct Params;
+        impl Visitor for Params {
+            type Output = Vec<crate::accuracy::Parameter>;
+            fn visit<M: Analysable<P, A>, const P: usize, const A: usize>(
+                self,
+                m: &M,
+            ) -> Self::Output {
+                m.parameters()
+            }
+        }
+        self.visit(Params)
     }
 
     /// The machine type as written in the `type` field plus its variant.

@@ -11,7 +11,6 @@ use crate::error::Error;
 use crate::limits::Range;
 use crate::serial::accuracy::SerialMachine;
 use crate::serial::mechanism::SerialAny;
-use crate::serial::tolerance::{Distribution, Tolerance};
 use crate::serial::{Chain, Joint, JointKind, Link};
 
 #[derive(Debug, Deserialize)]
@@ -39,7 +38,7 @@ pub(super) struct SerialFile {
     #[serde(default)]
     pose: Option<String>,
     #[serde(default)]
-    tolerance: Vec<ToleranceFile>,
+    tolerance: Vec<super::tolerance_file::ToleranceFile>,
     #[serde(default)]
     reference: Vec<Reference>,
     #[serde(default)]
@@ -132,15 +131,6 @@ struct JointFile {
 #[serde(deny_unknown_fields)]
 struct HomeFile {
     joints: Vec<f64>,
-}
-
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct ToleranceFile {
-    deviation: String,
-    value: f64,
-    #[serde(default)]
-    distribution: Option<String>,
 }
 
 fn key(k: &str) -> Seg {
@@ -317,7 +307,11 @@ pub(super) fn build(src: &Source, f: SerialFile) -> Result<super::Parts, Error> 
             ),
         ));
     }
-    let tolerances = tolerances(src, &machine, &f.tolerance)?;
+    let tolerances = super::tolerance_file::tolerances(
+        src,
+        &crate::accuracy::serial_parameters(&machine),
+        &f.tolerance,
+    )?;
     let spatial = match f.pose.as_deref() {
         None => SerialAny::can_be_spatial(&machine),
         Some("tool") => {
@@ -357,91 +351,4 @@ pub(super) fn build(src: &Source, f: SerialFile) -> Result<super::Parts, Error> 
         references: f.reference,
         rapid,
     })
-}
-
-/// `[[tolerance]]` entries by name, in the units of the deviation (mm; deg for angles
-/// and revolute dq).
-fn tolerances(
-    src: &Source,
-    machine: &SerialMachine,
-    entries: &[ToleranceFile],
-) -> Result<Vec<Tolerance>, Error> {
-    let mut tolerances = Vec::new();
-    for (i, t) in entries.iter().enumerate() {
-        let at = |k: &str| vec![key("tolerance"), Seg::Index(i), key(k)];
-        let p = machine
-            .parameter_by_name(&t.deviation)
-            .map_err(|m| src.error(&at("deviation"), m))?;
-        if !(t.value > 0.0) {
-            return Err(src.error(
-                &at("value"),
-                format!("expected a tolerance > 0, found {}", t.value),
-            ));
-        }
-        let angle = machine.is_angular(&p);
-        let distribution = match t.distribution.as_deref() {
-            None | Some("uniform") => Distribution::Uniform,
-            Some("normal") => Distribution::Normal,
-            Some(other) => {
-                return Err(src.error(
-                    &at("distribution"),
-                    format!("unknown distribution `{other}`, expected `uniform` or `normal`"),
-                ))
-            }
-        };
-        tolerances.push(Tolerance {
-            parameter: p,
-            value: if angle { t.value.to_radians() } else { t.value },
-            distribution,
-        });
-    }
-    Ok(tolerances)
-}
-
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct TolerancesOnly {
-    tolerance: Vec<ToleranceFile>,
-}
-
-/// Reads a tolerances file (`[[tolerance]]` entries as in a serial machine file) for
-/// `machine`; errors name the file, line and field.
-pub fn read_tolerances(
-    machine: &SerialMachine,
-    text: &str,
-    file: &str,
-) -> Result<Vec<Tolerance>, Error> {
-    let src = Source::parse(file, text)?;
-    src.check_finite()?;
-    let f: TolerancesOnly = src.deserialize()?;
-    tolerances(&src, machine, &f.tolerance)
-}
-
-/// Reads a deviations file (`"delta_x(1 slide)" = 0.01`, one value per named
-/// deviation; mm, deg for angles and revolute dq) for `machine`, in internal units;
-/// errors name the file, line and deviation.
-pub fn read_deviations(
-    machine: &SerialMachine,
-    text: &str,
-    file: &str,
-) -> Result<Vec<(crate::serial::accuracy::Parameter, f64)>, Error> {
-    let src = Source::parse(file, text)?;
-    src.check_finite()?;
-    let values: std::collections::BTreeMap<String, f64> = src.deserialize()?;
-    values
-        .iter()
-        .map(|(name, v)| {
-            let p = machine
-                .parameter_by_name(name)
-                .map_err(|m| src.error(&[key(name)], m))?;
-            Ok((
-                p,
-                if machine.is_angular(&p) {
-                    v.to_radians()
-                } else {
-                    *v
-                },
-            ))
-        })
-        .collect()
 }

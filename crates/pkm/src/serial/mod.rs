@@ -19,9 +19,9 @@
 pub mod accuracy;
 pub mod arm;
 pub mod completion;
+pub mod deviations;
 pub mod jacobian;
 pub mod mechanism;
-pub mod tolerance;
 
 use nalgebra::{Matrix3, Matrix4, Vector3};
 
@@ -31,7 +31,7 @@ pub struct SerialModel {
     /// The machine as a mechanism (joint count fixed at load time).
     pub mechanism: mechanism::SerialAny,
     /// Tolerances of primary deviations from the file (`[[tolerance]]`).
-    pub tolerances: Vec<tolerance::Tolerance>,
+    pub tolerances: Vec<crate::accuracy::Tolerance>,
 }
 use serde::Serialize;
 

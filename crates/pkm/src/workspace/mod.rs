@@ -11,9 +11,10 @@ use nalgebra::SVector;
 use rayon::prelude::*;
 use serde::Serialize;
 
+use crate::dynamic::DynMechanism;
 use crate::error::{Error, Result};
 use crate::limits::Violation;
-use crate::mechanism::Mechanism;
+use crate::mechanism::{Mechanism, PoseSpace};
 use crate::rotation::Convention;
 
 /// One axis of a grid: a pose coordinate swept from `min` to `max` by `step`
@@ -379,4 +380,106 @@ pub fn reachable_tilt<M: Mechanism<P, A>, const P: usize, const A: usize>(
             lo
         })
         .collect())
+}
+
+/// The default grid of a machine around pose `base`: X, Y, Z for spatial machines
+/// (the other coordinates from `base`), else up to three of its own coordinates, over
+/// `bounds` (user units, min,max per axis) or [`default_span`], with `step` (user
+/// units) or 1/40 of each range. Grids beyond 5e7 points are refused.
+pub fn default_grid(
+    m: &dyn DynMechanism,
+    base: &[f64],
+    bounds: Option<&[f64]>,
+    step: Option<f64>,
+) -> crate::Result<Vec<GridAxis>> {
+    let idx: Vec<usize> = match m.pose_space() {
+        PoseSpace::Own => (0..m.coordinates().len().min(3)).collect(),
+        _ => vec![0, 1, 2],
+    };
+    let q = |k: usize| m.coordinates()[k].quantity;
+    let mut ranges = Vec::new();
+    match bounds {
+        Some(b) => {
+            if b.len() != 2 * idx.len() {
+                return Err(crate::Error::InvalidInput {
+                    what: "grid".into(),
+                    message: format!(
+                        "--bounds: expected {} values (min,max per axis), got {}",
+                        2 * idx.len(),
+                        b.len()
+                    ),
+                });
+            }
+            for (i, &k) in idx.iter().enumerate() {
+                let (lo, hi) = (q(k).from_user(b[2 * i]), q(k).from_user(b[2 * i + 1]));
+                if hi <= lo {
+                    return Err(crate::Error::InvalidInput {
+                        what: "grid".into(),
+                        message: format!(
+                            "--bounds: axis {} has max <= min",
+                            m.coordinates()[k].name
+                        ),
+                    });
+                }
+                ranges.push((lo, hi));
+            }
+        }
+        None => {
+            for &k in &idx {
+                ranges.push(default_span(m, base, k));
+            }
+        }
+    }
+    let axes = idx
+        .iter()
+        .zip(&ranges)
+        .map(|(&k, &(lo, hi))| GridAxis {
+            coordinate: k,
+            min: lo,
+            max: hi,
+            step: step.map(|s| q(k).from_user(s)).unwrap_or((hi - lo) / 40.0),
+        })
+        .collect::<Vec<_>>();
+    let total: f64 = axes.iter().map(|a| a.count() as f64).product();
+    if total > 5e7 {
+        return Err(crate::Error::InvalidInput { what: "grid".into(), message: format!("the grid has {total:.0} points; give a larger --step or smaller --bounds (at most 5e7)") });
+    }
+    Ok(axes)
+}
+
+/// The default span of pose coordinate `k` around `base`: a joint of a machine in
+/// joint space, its travel; otherwise `base +- 0.6` reach for lengths (the largest
+/// stroke of linear drives; for revolute drives the tool's distance from the base at
+/// home / 0.6) and `+-pi` for angles.
+pub fn default_span(m: &dyn DynMechanism, base: &[f64], k: usize) -> (f64, f64) {
+    let c = &m.coordinates()[k];
+    if m.pose_space() == PoseSpace::Own {
+        if let Some(a) = m
+            .actuators()
+            .iter()
+            .find(|a| a.name == c.name && a.quantity == c.quantity)
+        {
+            return (a.range.min, a.range.max);
+        }
+    }
+    // Linear drives: their largest stroke sets the scale. A machine with revolute
+    // drives (a robot arm): the distance of the tool from the base at home.
+    let reach = if m
+        .actuators()
+        .iter()
+        .any(|a| a.quantity == crate::units::Quantity::Angle)
+        && m.pose_space() != PoseSpace::Own
+    {
+        m.characteristic_length() / 0.6
+    } else {
+        m.actuators()
+            .iter()
+            .map(|a| a.range.max.abs())
+            .fold(0.0, f64::max)
+    };
+    let half = match c.quantity {
+        crate::units::Quantity::Length => 0.6 * reach,
+        crate::units::Quantity::Angle => std::f64::consts::PI,
+    };
+    (base[k] - half, base[k] + half)
 }

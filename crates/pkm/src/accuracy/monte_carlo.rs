@@ -1,0 +1,148 @@
+//! Monte Carlo of tolerances: whole machines drawn with every toleranced parameter
+//! from its distribution, the exact tool-point error of each (seeded per chunk, so the
+//! same seed gives the same result on any number of threads; rayon).
+
+use nalgebra::{SVector, Vector3};
+use rand::{Rng, SeedableRng};
+use rand_distr::{Distribution as _, Normal};
+use rayon::prelude::*;
+use serde::Serialize;
+
+use super::{Distribution, Evaluate, Parametric, Tolerance};
+use crate::error::{Error, Result};
+
+/// Monte Carlo results: statistics of the tool-point error norm (mm).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MonteCarlo {
+    /// Machines evaluated (drawn minus failed).
+    pub samples: usize,
+    /// Machines whose pose could not be evaluated (forward kinematics failed: the drawn
+    /// machine cannot reach the commanded readings); not in the statistics.
+    pub failed: usize,
+    /// Mean of `|e|`.
+    pub mean: f64,
+    /// Standard deviation of `|e|`.
+    pub std: f64,
+    /// 95th percentile.
+    pub p95: f64,
+    /// 99th percentile.
+    pub p99: f64,
+    /// Largest.
+    pub max: f64,
+    /// Mean error vector (mm), base or workpiece frame.
+    pub mean_vector: [f64; 3],
+    /// Standard deviation of each error component (mm).
+    pub std_vector: [f64; 3],
+    /// Histogram of `|e|`: `(lower edge, count)` over 40 equal bins up to `max`.
+    pub histogram: Vec<(f64, usize)>,
+}
+
+/// Machines per seeded chunk.
+const CHUNK: usize = 4096;
+
+/// Monte Carlo of `n` machines at pose `x` with the parameters of `tol` drawn from
+/// their distributions, the others nominal: the statistics of the exact tool-point
+/// error against the nominal tool point.
+pub fn monte_carlo<M, const P: usize, const A: usize>(
+    m: &M,
+    x: &SVector<f64, P>,
+    tol: &[Tolerance],
+    n: usize,
+    seed: u64,
+) -> Result<MonteCarlo>
+where
+    M: Parametric<P, A>,
+{
+    let np = m.parameters().len();
+    if let Some(t) = tol.iter().find(|t| t.parameter >= np) {
+        return Err(Error::InvalidInput {
+            what: "tolerance".into(),
+            message: format!(
+                "parameter index {} beyond the machine's {np} parameters",
+                t.parameter
+            ),
+        });
+    }
+    if n == 0 {
+        return Err(Error::InvalidInput {
+            what: "Monte Carlo".into(),
+            message: "expected a number of samples > 0".into(),
+        });
+    }
+    // Prepared once (a failure here is the nominal machine's, reported as such).
+    let mut base = m.evaluator(x)?;
+    base.pose_error(&[])?;
+    let results: Vec<Option<Vector3<f64>>> = (0..n.div_ceil(CHUNK))
+        .into_par_iter()
+        .flat_map_iter(|c| {
+            let mut rng = rand::rngs::StdRng::seed_from_u64(
+                seed ^ (c as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15),
+            );
+            let normal = Normal::new(0.0, 1.0).expect("unit normal");
+            let count = CHUNK.min(n - c * CHUNK);
+            let mut ev = base.clone();
+            let mut d: Vec<(usize, f64)> = tol.iter().map(|t| (t.parameter, 0.0)).collect();
+            let mut out = Vec::with_capacity(count);
+            for _ in 0..count {
+                for (slot, t) in d.iter_mut().zip(tol) {
+                    slot.1 = match t.distribution {
+                        Distribution::Uniform => rng.random_range(-1.0..=1.0) * t.value,
+                        Distribution::Normal => normal.sample(&mut rng) * t.value / 3.0,
+                    };
+                }
+                out.push(ev.pose_error(&d).ok().map(|e| e.position));
+            }
+            out
+        })
+        .collect();
+    let ok: Vec<Vector3<f64>> = results.iter().flatten().copied().collect();
+    let mut s = statistics(&ok);
+    s.failed = n - ok.len();
+    Ok(s)
+}
+
+/// Statistics of a sample of tool-point error vectors (mm): mean, standard deviation,
+/// percentiles and histogram of their norms, mean and spread of the components.
+pub fn statistics(errors: &[Vector3<f64>]) -> MonteCarlo {
+    let mut norms: Vec<f64> = errors.iter().map(|e| e.norm()).collect();
+    let k = norms.len().max(1) as f64;
+    let mean = norms.iter().sum::<f64>() / k;
+    let std = (norms.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (k - 1.0).max(1.0)).sqrt();
+    let mv = errors.iter().fold(Vector3::zeros(), |a, e| a + e) / k;
+    let sv = errors
+        .iter()
+        .fold(Vector3::zeros(), |a, e| {
+            a + (e - mv).component_mul(&(e - mv))
+        })
+        .map(|x| (x / (k - 1.0).max(1.0)).sqrt());
+    norms.sort_by(|a, b| a.total_cmp(b));
+    let pick = |f: f64| {
+        norms
+            .get(((norms.len() as f64 - 1.0) * f).round() as usize)
+            .copied()
+            .unwrap_or(0.0)
+    };
+    let max = norms.last().copied().unwrap_or(0.0);
+    let bins = 40;
+    let width = if max > 0.0 { max / bins as f64 } else { 1.0 };
+    let mut hist = vec![0usize; bins];
+    for x in &norms {
+        hist[((x / width) as usize).min(bins - 1)] += 1;
+    }
+    MonteCarlo {
+        samples: norms.len(),
+        failed: 0,
+        mean,
+        std,
+        p95: pick(0.95),
+        p99: pick(0.99),
+        max,
+        mean_vector: [mv.x, mv.y, mv.z],
+        std_vector: [sv.x, sv.y, sv.z],
+        histogram: hist
+            .into_iter()
+            .enumerate()
+            .map(|(i, c)| (i as f64 * width, c))
+            .collect(),
+    }
+}

@@ -1,0 +1,330 @@
+//! Parallel and hybrid machines in the accuracy engine: the machine rebuilt with its
+//! deviated geometry, its forward kinematics solved from the nominal pose at the
+//! nominal readings plus the drives' offsets. Written once for every such machine
+//! through [`Rebuild`]; strut machines add analytic sensitivities.
+
+use nalgebra::{DMatrix, SVector, Vector3};
+
+use super::{Evaluate, Parameter, ParameterKind, Parametric, PoseError};
+use crate::error::{Error, Result};
+use crate::identify::Identifiable;
+use crate::mechanism::{Mechanism, PoseSpace};
+use crate::pose::Pose;
+use crate::units::Quantity;
+
+/// A machine that can be rebuilt with other values of its geometric parameters.
+/// Its [`Parametric::parameters`] are these, then one drive offset per actuator.
+pub trait Rebuild<const P: usize, const A: usize>: Mechanism<P, A> + Sized + Sync {
+    /// The geometric parameters (without the drives), in the order of
+    /// [`Rebuild::geometry_values`].
+    fn geometry_parameters(&self) -> Vec<Parameter>;
+    /// Their values (mm, rad).
+    fn geometry_values(&self) -> Vec<f64>;
+    /// The same machine with other values (names, limits and home kept).
+    fn with_geometry_values(&self, v: &[f64]) -> Result<Self>;
+    /// Kind and name of the drive offsets: strut machines' zero lengths
+    /// (`zero(L1)`), otherwise drive positioning deviations (`dq(U)`).
+    fn drive_parameter(&self, actuator: usize) -> Parameter {
+        let a = &self.actuators()[actuator];
+        Parameter::new(
+            format!("dq({})", a.name),
+            a.quantity,
+            ParameterKind::DrivePositioning,
+        )
+    }
+}
+
+/// The exact error of a rebuilt machine (see the module documentation).
+#[derive(Clone)]
+pub struct RebuildEvaluator<'a, M, const P: usize, const A: usize> {
+    m: &'a M,
+    x: SVector<f64, P>,
+    q: SVector<f64, A>,
+    nominal: Pose,
+    g0: Vec<f64>,
+    g: Vec<f64>,
+}
+
+impl<M: Rebuild<P, A>, const P: usize, const A: usize> Evaluate for RebuildEvaluator<'_, M, P, A> {
+    fn pose_error(&mut self, deviations: &[(usize, f64)]) -> Result<PoseError> {
+        let ng = self.g0.len();
+        self.g.copy_from_slice(&self.g0);
+        let mut dq = SVector::<f64, A>::zeros();
+        let mut geometry = false;
+        for &(k, v) in deviations {
+            if k < ng {
+                self.g[k] += v;
+                geometry = true;
+            } else if k < ng + A {
+                dq[k - ng] += v;
+            } else {
+                return Err(Error::InvalidInput {
+                    what: "deviation".into(),
+                    message: format!("parameter index {k} beyond the machine's {}", ng + A),
+                });
+            }
+        }
+        let actual = if geometry {
+            let mm = self.m.with_geometry_values(&self.g)?;
+            let f = mm.forward(&(self.q + dq), &self.x)?;
+            mm.tool_pose(&f.pose)?
+        } else {
+            let f = self.m.forward(&(self.q + dq), &self.x)?;
+            self.m.tool_pose(&f.pose)?
+        };
+        Ok(PoseError::between(&self.nominal, &actual))
+    }
+}
+
+/// The parameters of a rebuildable machine: geometry, then the drives.
+pub(crate) fn rebuild_parameters<M: Rebuild<P, A>, const P: usize, const A: usize>(
+    m: &M,
+) -> Vec<Parameter> {
+    let mut v = m.geometry_parameters();
+    v.extend((0..A).map(|k| m.drive_parameter(k)));
+    v
+}
+
+/// Prepares the rebuild evaluator at `x`.
+pub(crate) fn rebuild_evaluator<'a, M: Rebuild<P, A>, const P: usize, const A: usize>(
+    m: &'a M,
+    x: &SVector<f64, P>,
+) -> Result<RebuildEvaluator<'a, M, P, A>> {
+    let g0 = m.geometry_values();
+    Ok(RebuildEvaluator {
+        m,
+        x: *x,
+        q: m.inverse(x)?,
+        nominal: m.tool_pose(x)?,
+        g: g0.clone(),
+        g0,
+    })
+}
+
+/// Implements [`Parametric`] for a [`Rebuild`] machine; `analytic` names a function
+/// `fn(&M, &SVector<f64, P>) -> Result<Vec<PoseError>>` giving its sensitivities.
+macro_rules! parametric_by_rebuild {
+    ($t:ty, $p:literal, $a:literal) => {
+        parametric_by_rebuild!($t, $p, $a, |_m, _x| None);
+    };
+    ($t:ty, $p:literal, $a:literal, $analytic:expr) => {
+        impl Parametric<$p, $a> for $t {
+            type Evaluator<'a> = RebuildEvaluator<'a, $t, $p, $a>;
+            fn parameters(&self) -> Vec<Parameter> {
+                rebuild_parameters(self)
+            }
+            fn evaluator(&self, x: &SVector<f64, $p>) -> Result<Self::Evaluator<'_>> {
+                rebuild_evaluator(self, x)
+            }
+            fn analytic_sensitivities(
+                &self,
+                x: &SVector<f64, $p>,
+            ) -> Option<Result<Vec<PoseError>>> {
+                let f: fn(&$t, &SVector<f64, $p>) -> Option<Result<Vec<PoseError>>> = $analytic;
+                f(self, x)
+            }
+        }
+    };
+}
+
+// ---- strut machines (hexapod, translational tripod): their identifiable geometry ----
+
+/// Geometry of a strut machine as [`Rebuild`] parameters: every joint-centre
+/// coordinate (the parameters identification estimates); the drives are the struts'
+/// zero lengths.
+macro_rules! strut_rebuild {
+    ($t:ty, $a:literal) => {
+        impl Rebuild<6, $a> for $t {
+            fn geometry_parameters(&self) -> Vec<Parameter> {
+                self.geometry_names()
+                    .into_iter()
+                    .map(|n| Parameter::new(n, Quantity::Length, ParameterKind::JointCentre))
+                    .collect()
+            }
+            fn geometry_values(&self) -> Vec<f64> {
+                self.geometry()
+            }
+            fn with_geometry_values(&self, v: &[f64]) -> Result<Self> {
+                self.with_geometry(v)
+            }
+            fn drive_parameter(&self, k: usize) -> Parameter {
+                Parameter::new(
+                    format!("zero({})", self.actuators()[k].name),
+                    Quantity::Length,
+                    ParameterKind::ZeroLength,
+                )
+            }
+        }
+        parametric_by_rebuild!($t, 6, $a, |m, x| Some(strut_sensitivities(m, x)));
+    };
+}
+
+/// Analytic sensitivities of a strut machine (implicit function theorem): the readings
+/// held, `q(x'; g) = q + dz`, so `dx/d(g, z) = -J_d^-1 [dq/dg, -I]`; the tool point
+/// moves by `dx[X, Y, Z]` and turns by `E(A, B, C) dx[A, B, C]`.
+fn strut_sensitivities<M: Identifiable<6, A>, const A: usize>(
+    m: &M,
+    x: &SVector<f64, 6>,
+) -> Result<Vec<PoseError>> {
+    if m.pose_space() != PoseSpace::Spatial {
+        return Err(Error::InvalidInput {
+            what: "geometric accuracy".into(),
+            message: "needs a spatial machine (pose X, Y, Z, A, B, C)".into(),
+        });
+    }
+    let ng = m.geometry().len();
+    let n = ng + A;
+    let mut jg = DMatrix::zeros(A, ng);
+    m.inverse_with_geometry_jacobian(x, &mut jg)?;
+    let j = m.jacobian(x)?;
+    let driven = m.driven();
+    let jd = DMatrix::from_fn(A, A, |r, c| j[(r, driven[c])]);
+    let mut rhs = DMatrix::zeros(A, n);
+    rhs.view_mut((0, 0), (A, ng)).copy_from(&jg);
+    for k in 0..A {
+        rhs[(k, ng + k)] = -1.0;
+    }
+    let dxd = -jd.lu().solve(&rhs).ok_or_else(|| Error::Singular {
+        what: "driven Jacobian (geometric accuracy)".into(),
+        rcond: 0.0,
+    })?;
+    let e = crate::rotation::rpy_rate_matrix([x[3], x[4], x[5]]);
+    Ok((0..n)
+        .map(|c| {
+            let mut dx = SVector::<f64, 6>::zeros();
+            for (k, &d) in driven.iter().enumerate() {
+                dx[d] = dxd[(k, c)];
+            }
+            PoseError {
+                position: Vector3::new(dx[0], dx[1], dx[2]),
+                orientation: e * Vector3::new(dx[3], dx[4], dx[5]),
+            }
+        })
+        .collect())
+}
+
+strut_rebuild!(crate::hexapod::Hexapod, 6);
+strut_rebuild!(crate::tripod::TranslationalTripod, 3);
+
+// ---- centre-leg tripod: strut joints, the leg's base joint ----
+
+impl Rebuild<3, 3> for crate::tripod::CentreLegTripod {
+    fn geometry_parameters(&self) -> Vec<Parameter> {
+        let s = &self.geometry.struts;
+        let b: Vec<&str> = s.iter().map(|s| s.base_name.as_str()).collect();
+        let p: Vec<&str> = s.iter().map(|s| s.platform_name.as_str()).collect();
+        let n: Vec<&str> = s.iter().map(|s| s.actuator.name.as_str()).collect();
+        let mut v: Vec<Parameter> = crate::identify::struts::names(&b, &p, &n)
+            .into_iter()
+            .chain(["x", "y", "z"].map(|a| format!("leg.{a}")))
+            .map(|n| Parameter::new(n, Quantity::Length, ParameterKind::JointCentre))
+            .collect();
+        v.shrink_to_fit();
+        v
+    }
+    fn geometry_values(&self) -> Vec<f64> {
+        let s = &self.geometry.struts;
+        s.iter()
+            .flat_map(|s| s.base.iter().copied())
+            .chain(s.iter().flat_map(|s| s.platform.iter().copied()))
+            .chain(self.leg.base.iter().copied())
+            .collect()
+    }
+    fn with_geometry_values(&self, v: &[f64]) -> Result<Self> {
+        if v.len() != 21 {
+            return Err(Error::InvalidInput {
+                what: "centre-leg tripod geometry".into(),
+                message: format!("expected 21 values, got {}", v.len()),
+            });
+        }
+        let old = &self.geometry;
+        let mut s = old.struts.clone();
+        for (j, st) in s.iter_mut().enumerate() {
+            st.base = Vector3::from_column_slice(&v[3 * j..3 * j + 3]);
+            st.platform = Vector3::from_column_slice(&v[9 + 3 * j..9 + 3 * j + 3]);
+        }
+        let mut geometry = crate::tripod::TripodGeometry::new(
+            old.name.clone(),
+            s,
+            old.tool,
+            old.max_tilt,
+            old.min_strut_spindle_angle,
+        );
+        geometry.zero_lengths = old.zero_lengths;
+        let mut leg = self.leg.clone();
+        leg.base = Vector3::from_column_slice(&v[18..21]);
+        Ok(crate::tripod::CentreLegTripod::new(
+            geometry, leg, self.home,
+        ))
+    }
+    fn drive_parameter(&self, k: usize) -> Parameter {
+        Parameter::new(
+            format!("zero({})", self.actuators()[k].name),
+            Quantity::Length,
+            ParameterKind::ZeroLength,
+        )
+    }
+}
+parametric_by_rebuild!(crate::tripod::CentreLegTripod, 3, 3);
+
+// ---- P3RP head and the hybrid machine on it: the head's link dimensions ----
+
+fn head_parameters() -> Vec<Parameter> {
+    let l = |n: &str| Parameter::new(n, Quantity::Length, ParameterKind::LinkDimension);
+    vec![
+        l("l1"),
+        l("l2"),
+        l("e"),
+        Parameter::new("delta", Quantity::Angle, ParameterKind::LinkDimension),
+        l("tool_length"),
+    ]
+}
+
+fn head_values(g: &crate::p3rp::HeadGeometry) -> Vec<f64> {
+    vec![g.l1, g.l2, g.e, g.delta, g.tool_length]
+}
+
+fn head_with(g: &crate::p3rp::HeadGeometry, v: &[f64]) -> Result<crate::p3rp::HeadGeometry> {
+    if v.len() != 5 {
+        return Err(Error::InvalidInput {
+            what: "P3RP head geometry".into(),
+            message: format!(
+                "expected 5 values (l1, l2, e, delta, tool_length), got {}",
+                v.len()
+            ),
+        });
+    }
+    let mut g = g.clone();
+    (g.l1, g.l2, g.e, g.delta, g.tool_length) = (v[0], v[1], v[2], v[3], v[4]);
+    Ok(g)
+}
+
+impl Rebuild<2, 2> for crate::p3rp::P3rpHead {
+    fn geometry_parameters(&self) -> Vec<Parameter> {
+        head_parameters()
+    }
+    fn geometry_values(&self) -> Vec<f64> {
+        head_values(&self.geometry)
+    }
+    fn with_geometry_values(&self, v: &[f64]) -> Result<Self> {
+        let mut h = self.clone();
+        h.geometry = head_with(&self.geometry, v)?;
+        Ok(h)
+    }
+}
+parametric_by_rebuild!(crate::p3rp::P3rpHead, 2, 2);
+
+impl Rebuild<6, 4> for crate::p3rp::HybridMachine {
+    fn geometry_parameters(&self) -> Vec<Parameter> {
+        head_parameters()
+    }
+    fn geometry_values(&self) -> Vec<f64> {
+        head_values(&self.head)
+    }
+    fn with_geometry_values(&self, v: &[f64]) -> Result<Self> {
+        let mut h = self.clone();
+        h.head = head_with(&self.head, v)?;
+        Ok(h)
+    }
+}
+parametric_by_rebuild!(crate::p3rp::HybridMachine, 6, 4);

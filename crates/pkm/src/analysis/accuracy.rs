@@ -1,0 +1,288 @@
+//! Accuracy of any loaded machine: the exact error of given deviations, the
+//! sensitivities to every parameter, the budget and Monte Carlo of tolerances and an
+//! error map, in one call ([`accuracy()`]) on the generic engine of [`crate::accuracy`].
+
+use nalgebra::SVector;
+use serde::Serialize;
+
+use crate::accuracy::{
+    self, Budget, Distribution, ErrorMap, MonteCarlo, Parameter, ParameterKind, PoseError,
+    Tolerance,
+};
+use crate::error::{Error, Result};
+use crate::limits::Violation;
+use crate::machine::{Analysable, Machine, Visitor};
+use crate::units::Quantity;
+use crate::workspace::GridAxis;
+
+/// One tolerance per kind of parameter, for machines whose file gives none (internal
+/// units; a value of 0 leaves that kind out).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct KindTolerances {
+    /// Joint-centre coordinates (mm).
+    pub joint: f64,
+    /// Link dimensions and linear link deviations (mm).
+    pub length: f64,
+    /// Zero lengths and positioning of linear drives (mm).
+    pub zero: f64,
+    /// Every angular parameter, revolute drives' positioning included (rad).
+    pub angle: f64,
+    /// Distribution in Monte Carlo.
+    pub distribution: Distribution,
+}
+
+impl Default for KindTolerances {
+    /// +-10 um on lengths, +-10 urad (2 arc seconds) on angles, uniform.
+    fn default() -> Self {
+        KindTolerances {
+            joint: 0.01,
+            length: 0.01,
+            zero: 0.01,
+            angle: 1e-5,
+            distribution: Distribution::Uniform,
+        }
+    }
+}
+
+impl KindTolerances {
+    /// The tolerance of parameter `p`, `None` when its kind is left out.
+    pub fn of(&self, p: &Parameter) -> Option<f64> {
+        let t = match (p.kind, p.quantity) {
+            (ParameterKind::Clearance, _) => return None,
+            (_, Quantity::Angle) => self.angle,
+            (ParameterKind::ZeroLength | ParameterKind::DrivePositioning, _) => self.zero,
+            (ParameterKind::JointCentre, _) => self.joint,
+            _ => self.length,
+        };
+        (t > 0.0).then_some(t)
+    }
+
+    /// The tolerances of every parameter of `params` whose kind has one.
+    pub fn tolerances(&self, params: &[Parameter]) -> Vec<Tolerance> {
+        params
+            .iter()
+            .enumerate()
+            .filter_map(|(k, p)| {
+                self.of(p).map(|value| Tolerance {
+                    parameter: k,
+                    value,
+                    distribution: self.distribution,
+                })
+            })
+            .collect()
+    }
+}
+
+/// Where the tolerances of an accuracy analysis came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ToleranceSource {
+    /// Given with the options (a tolerances file).
+    Given,
+    /// The machine file's `[[tolerance]]` entries.
+    MachineFile,
+    /// One per kind of parameter ([`KindTolerances`]).
+    ByKind,
+}
+
+/// The tolerances an accuracy analysis uses.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Tolerances {
+    /// These (from a tolerances file).
+    Given(Vec<Tolerance>),
+    /// One per kind of parameter.
+    ByKind(KindTolerances),
+    /// The machine file's `[[tolerance]]` entries, else [`KindTolerances::default`].
+    Default,
+}
+
+/// An error map request: two pose coordinates over their default span
+/// ([`crate::workspace::default_span`]), `points` per axis.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MapRequest {
+    /// Indices of the two pose coordinates.
+    pub coordinates: [usize; 2],
+    /// Grid points per axis (2 to 401).
+    pub points: usize,
+}
+
+/// What [`accuracy()`] computes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AccuracyOptions {
+    /// Pose coordinates (internal units); `None`: the home pose.
+    pub pose: Option<Vec<f64>>,
+    /// Deviations whose exact pose error is wanted (`(parameter index, value)`,
+    /// internal units).
+    pub deviations: Vec<(usize, f64)>,
+    /// Which tolerances.
+    pub tolerances: Tolerances,
+    /// Monte Carlo with this many machines.
+    pub monte_carlo: Option<usize>,
+    /// Seed of the Monte Carlo.
+    pub seed: u64,
+    /// Error map.
+    pub map: Option<MapRequest>,
+}
+
+impl Default for AccuracyOptions {
+    fn default() -> Self {
+        AccuracyOptions {
+            pose: None,
+            deviations: Vec::new(),
+            tolerances: Tolerances::Default,
+            monte_carlo: None,
+            seed: 1,
+            map: None,
+        }
+    }
+}
+
+/// Everything [`accuracy()`] found (internal units: mm, rad).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct AccuracyReport {
+    /// Machine name.
+    pub machine: String,
+    /// Machine type.
+    pub kind: String,
+    /// The pose analysed.
+    pub pose: Vec<f64>,
+    /// Limits the pose violates (the analysis still runs: it is the nominal machine's
+    /// error model, but such a pose is not one the machine goes to).
+    pub violations: Vec<Violation>,
+    /// Every parameter of the machine.
+    pub parameters: Vec<Parameter>,
+    /// The deviations given.
+    pub deviations: Vec<(usize, f64)>,
+    /// Their exact tool-pose error (zero without deviations).
+    pub pose_error: PoseError,
+    /// First-order sensitivity of the tool pose to each parameter (per unit).
+    pub sensitivities: Vec<PoseError>,
+    /// Whether the sensitivities are analytic or central differences.
+    pub analytic: bool,
+    /// Where the tolerances came from.
+    pub tolerance_source: ToleranceSource,
+    /// The tolerances.
+    pub tolerances: Vec<Tolerance>,
+    /// The error budget of the tolerances.
+    pub budget: Budget,
+    /// The Monte Carlo, when asked for.
+    pub monte_carlo: Option<MonteCarlo>,
+    /// The error map, when asked for.
+    pub map: Option<ErrorMap>,
+}
+
+/// The accuracy of `machine` at one pose: exact error of the given deviations,
+/// sensitivities, budget, and optionally Monte Carlo and an error map. Every machine
+/// type supports it.
+pub fn accuracy(machine: &Machine, opt: &AccuracyOptions) -> Result<AccuracyReport> {
+    let dm = machine.mechanism();
+    let pose = match &opt.pose {
+        Some(p) => p.clone(),
+        None => dm.home(),
+    };
+    let map_axes = match opt.map {
+        None => None,
+        Some(r) => {
+            let n = dm.coordinates().len();
+            if r.coordinates.iter().any(|&c| c >= n) || r.coordinates[0] == r.coordinates[1] {
+                return Err(Error::InvalidInput {
+                    what: "error map".into(),
+                    message: format!("expected two different coordinates of the machine's {n}"),
+                });
+            }
+            if !(2..=401).contains(&r.points) {
+                return Err(Error::InvalidInput {
+                    what: "error map".into(),
+                    message: format!("expected 2 to 401 points per axis, got {}", r.points),
+                });
+            }
+            if pose.len() != n {
+                return Err(Error::InvalidInput {
+                    what: "pose".into(),
+                    message: format!("expected {n} values, got {}", pose.len()),
+                });
+            }
+            Some(r.coordinates.map(|c| {
+                let (lo, hi) = crate::workspace::default_span(dm, &pose, c);
+                GridAxis {
+                    coordinate: c,
+                    min: lo,
+                    max: hi,
+                    step: (hi - lo) / (r.points - 1) as f64,
+                }
+            }))
+        }
+    };
+    machine.visit(AccuracyJob {
+        pose: &pose,
+        opt,
+        file: machine.tolerances(),
+        map_axes,
+    })
+}
+
+struct AccuracyJob<'a> {
+    pose: &'a [f64],
+    opt: &'a AccuracyOptions,
+    file: &'a [Tolerance],
+    map_axes: Option<[GridAxis; 2]>,
+}
+
+impl Visitor for AccuracyJob<'_> {
+    type Output = Result<AccuracyReport>;
+    fn visit<M: Analysable<P, A>, const P: usize, const A: usize>(self, m: &M) -> Self::Output {
+        let x = crate::dynamic::fixed::<P>("pose", self.pose)?;
+        let params = m.parameters();
+        let q = m.inverse(&x)?;
+        let mut violations = Vec::new();
+        m.check_limits(&x, &q, &mut violations);
+        let pose_error = accuracy::pose_error(m, &x, &self.opt.deviations)?;
+        let analytic = m.analytic_sensitivities(&x);
+        let is_analytic = analytic.is_some();
+        let sensitivities = match analytic {
+            Some(s) => s?,
+            None => accuracy::finite_difference_sensitivities(m, &x)?,
+        };
+        let (tolerance_source, tolerances) = match &self.opt.tolerances {
+            Tolerances::Given(t) => (ToleranceSource::Given, t.clone()),
+            Tolerances::ByKind(k) => (ToleranceSource::ByKind, k.tolerances(&params)),
+            Tolerances::Default if !self.file.is_empty() => {
+                (ToleranceSource::MachineFile, self.file.to_vec())
+            }
+            Tolerances::Default => (
+                ToleranceSource::ByKind,
+                KindTolerances::default().tolerances(&params),
+            ),
+        };
+        let budget = Budget::from_sensitivities(&params, &sensitivities, &tolerances)?;
+        let monte_carlo = match self.opt.monte_carlo {
+            Some(n) => Some(accuracy::monte_carlo(m, &x, &tolerances, n, self.opt.seed)?),
+            None => None,
+        };
+        let map = match self.map_axes {
+            Some(axes) => Some(accuracy::error_map(
+                m,
+                &SVector::<f64, P>::from_column_slice(self.pose),
+                axes,
+                &tolerances,
+            )?),
+            None => None,
+        };
+        Ok(AccuracyReport {
+            machine: m.name().to_string(),
+            kind: m.kind().to_string(),
+            pose: self.pose.to_vec(),
+            violations,
+            parameters: params,
+            deviations: self.opt.deviations.clone(),
+            pose_error,
+            sensitivities,
+            analytic: is_analytic,
+            tolerance_source,
+            tolerances,
+            budget,
+            monte_carlo,
+            map,
+        })
+    }
+}

@@ -1,0 +1,13 @@
+//! The analysis layer: every analysis callable on a loaded machine ([`Machine`]) with a
+//! plain options struct, returning a plain result struct (`serde::Serialize`) that a
+//! front end prints, writes or converts. Front ends (the `pkm` command, the report,
+//! bindings) call these and never dispatch on the machine type themselves.
+//!
+//! [`Machine`]: crate::Machine
+
+pub mod accuracy;
+
+pub use accuracy::{
+    accuracy, AccuracyOptions, AccuracyReport, KindTolerances, MapRequest, ToleranceSource,
+    Tolerances,
+};

@@ -1,0 +1,70 @@
+//! Sets of primary deviations of a serial machine (seed 003): zero, from named values,
+//! and the exact tool-pose error they cause. Budgets and Monte Carlo are the generic
+//! accuracy engine's ([`crate::accuracy`]).
+
+use nalgebra::Vector3;
+
+use super::accuracy::{ChainDeviations, Parameter, SerialMachine};
+use super::LinkDeviation;
+use crate::error::Result;
+
+/// Zero deviations for every link and joint of a machine's chains.
+pub fn zero_deviations(m: &SerialMachine) -> Vec<ChainDeviations> {
+    let mut v = vec![ChainDeviations {
+        links: vec![LinkDeviation::default(); m.tool.links.len()],
+        dq: vec![0.0; m.tool.dof()],
+        ..Default::default()
+    }];
+    if let Some(w) = &m.workpiece {
+        v.push(ChainDeviations {
+            links: vec![LinkDeviation::default(); w.links.len()],
+            dq: vec![0.0; w.dof()],
+            ..Default::default()
+        });
+    }
+    v
+}
+
+/// Deviations with the given values (internal units) and every other deviation zero.
+pub fn deviations_from(m: &SerialMachine, values: &[(Parameter, f64)]) -> Vec<ChainDeviations> {
+    let mut d = zero_deviations(m);
+    for (p, v) in values {
+        apply(&mut d, p, *v);
+    }
+    d
+}
+
+/// Tool-point displacement (mm) and tool-frame rotation (small rotation vector, rad)
+/// of the deviated machine against the nominal one, in the workpiece frame, at joints
+/// `qt`, `qw`: exact poses, the rotation from the skew part of `R_dev R_nom^T`.
+pub fn pose_error(
+    m: &SerialMachine,
+    qt: &[f64],
+    qw: &[f64],
+    dev: &[ChainDeviations],
+) -> Result<(Vector3<f64>, Vector3<f64>)> {
+    let a = m.pose(qt, qw, &[])?;
+    let b = m.pose(qt, qw, dev)?;
+    let dp = b.fixed_view::<3, 1>(0, 3) - a.fixed_view::<3, 1>(0, 3);
+    let dr = b.fixed_view::<3, 3>(0, 0) * a.fixed_view::<3, 3>(0, 0).transpose();
+    let w = Vector3::new(
+        0.5 * (dr[(2, 1)] - dr[(1, 2)]),
+        0.5 * (dr[(0, 2)] - dr[(2, 0)]),
+        0.5 * (dr[(1, 0)] - dr[(0, 1)]),
+    );
+    Ok((dp.into_owned(), w))
+}
+
+pub(crate) fn apply(d: &mut [ChainDeviations], p: &Parameter, v: f64) {
+    match *p {
+        Parameter::Delta { chain, link, axis } => d[chain].links[link].delta[axis] += v,
+        Parameter::Alpha {
+            chain,
+            link,
+            row,
+            col,
+        } => d[chain].links[link].alpha[(row, col)] += v,
+        Parameter::Dq { chain, joint } => d[chain].dq[joint] += v,
+        Parameter::Installation { axis } => d[0].installation[axis.min(2)] += v,
+    }
+}

@@ -1,0 +1,314 @@
+#![allow(clippy::needless_range_loop)]
+//! The generic accuracy engine on every machine type: analytic sensitivities against an
+//! independent exact evaluation, central differences against analytic ones, drive
+//! offsets against the inverse Jacobian, Monte Carlo spread against first order.
+
+use nalgebra::{SVector, Vector3, Vector6};
+use pkm::accuracy::{
+    budget, finite_difference_sensitivities, monte_carlo, sensitivities, Distribution,
+    ParameterKind, Parametric, Tolerance,
+};
+use pkm::identify::Identifiable;
+use pkm::machine::{Analysable, Model, Visitor};
+use pkm::mechanism::Mechanism;
+
+fn load(name: &str) -> pkm::Machine {
+    let dir = if name.ends_with(".urdf") {
+        "robots"
+    } else {
+        "machines"
+    };
+    pkm::Machine::from_path(format!(
+        "{}/../../examples/{dir}/{name}",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap()
+}
+
+fn machine(name: &str) -> Model {
+    load(name).model
+}
+
+/// Tool-point position and rotation of a strut machine with parameters `theta` at the
+/// readings the nominal machine needs for `x`, written from `Identifiable` alone.
+fn exact<M: Identifiable<6, A>, const A: usize>(
+    m: &M,
+    zero: &SVector<f64, A>,
+    x: &Vector6<f64>,
+    theta: &[f64],
+) -> (Vector3<f64>, nalgebra::UnitQuaternion<f64>) {
+    let readings = m.inverse(x).unwrap() - zero;
+    let ng = theta.len() - A;
+    let mm = m.with_geometry(&theta[..ng]).unwrap();
+    let z = SVector::<f64, A>::from_column_slice(&theta[ng..]);
+    let f = mm.forward(&(z + readings), x).unwrap();
+    let p = mm.tool_pose(&f.pose).unwrap();
+    (p.translation.vector, p.rotation)
+}
+
+fn strut_analytic_vs_exact<M: Identifiable<6, A> + Parametric<6, A>, const A: usize>(
+    m: &M,
+    x: &Vector6<f64>,
+) {
+    let zero = m.zero_readings().unwrap();
+    let s = sensitivities(m, x).unwrap();
+    let mut theta = m.geometry();
+    theta.extend(zero.iter());
+    assert_eq!(s.len(), theta.len());
+    assert_eq!(m.parameters().len(), theta.len());
+    for (k, e) in s.iter().enumerate() {
+        let h = 1e-5;
+        let mut tp = theta.clone();
+        let mut tm = theta.clone();
+        tp[k] += h;
+        tm[k] -= h;
+        let (pp, rp) = exact(m, &zero, x, &tp);
+        let (pm, rm) = exact(m, &zero, x, &tm);
+        let fdp = (pp - pm) / (2.0 * h);
+        let fdw = (rp * rm.inverse()).scaled_axis() / (2.0 * h);
+        assert!(
+            (e.position - fdp).amax() < 1e-6 * fdp.amax().max(1.0),
+            "{k}: {} vs {fdp}",
+            e.position
+        );
+        assert!(
+            (e.orientation - fdw).amax() < 1e-7,
+            "{k}: {} vs {fdw}",
+            e.orientation
+        );
+    }
+}
+
+#[test]
+fn strut_sensitivities_equal_exact_differences_on_hexapod_and_tripod() {
+    let Model::Hexapod(h) = machine("hexapod-seed001.toml") else {
+        panic!()
+    };
+    let x = Vector6::new(30.0, -20.0, h.home[2] + 40.0, 0.1, -0.05, 0.2);
+    strut_analytic_vs_exact(h.as_ref(), &x);
+    let Model::TranslationalTripod(t) = machine("tripod-seed000.toml") else {
+        panic!()
+    };
+    let mut x = t.home;
+    x[0] += 20.0;
+    x[1] -= 10.0;
+    strut_analytic_vs_exact(&t, &x);
+}
+
+/// Checks run on every example machine through the visitor.
+struct Invariants(&'static str);
+
+impl Visitor for Invariants {
+    type Output = ();
+    fn visit<M: Analysable<P, A>, const P: usize, const A: usize>(self, m: &M) {
+        let x = m.home();
+        let params = m.parameters();
+        assert!(!params.is_empty(), "{}", self.0);
+        // Central differences of the exact error against the analytic sensitivities.
+        let fd = finite_difference_sensitivities(m, &x).unwrap();
+        assert_eq!(fd.len(), params.len());
+        if let Some(an) = m.analytic_sensitivities(&x) {
+            let an = an.unwrap();
+            for (k, (a, f)) in an.iter().zip(&fd).enumerate() {
+                assert!(
+                    (a.position - f.position).amax() < 1e-5 * a.position.amax().max(1.0),
+                    "{} {}: {} vs {}",
+                    self.0,
+                    params[k].name,
+                    a.position,
+                    f.position
+                );
+                assert!(
+                    (a.orientation - f.orientation).amax() < 1e-6,
+                    "{} {}",
+                    self.0,
+                    params[k].name
+                );
+            }
+        }
+        // The drive offsets (zero lengths, drive positioning: one per actuator, in
+        // actuator order) move the tool as the inverse Jacobian says: dx = Jd^-1 e_k,
+        // through the tool pose's own derivative.
+        let drives: Vec<usize> = (0..params.len())
+            .filter(|&k| {
+                matches!(
+                    params[k].kind,
+                    ParameterKind::ZeroLength | ParameterKind::DrivePositioning
+                )
+            })
+            .collect();
+        assert_eq!(drives.len(), A, "{}", self.0);
+        // (A robot's home may be a singular configuration: no inverse Jacobian there.)
+        let d = m.driven();
+        let jinv = m
+            .jacobian(&x)
+            .ok()
+            .and_then(|j| nalgebra::DMatrix::from_fn(A, A, |r, c| j[(r, d[c])]).try_inverse());
+        for k in 0..A {
+            let Some(jinv) = &jinv else { break };
+            let param = &params[drives[k]];
+            let h = 1e-6;
+            let mut xp = x;
+            let mut xm = x;
+            for (c, &dc) in d.iter().enumerate() {
+                xp[dc] += h * jinv[(c, k)];
+                xm[dc] -= h * jinv[(c, k)];
+            }
+            let pp = m.tool_pose(&xp).unwrap().translation.vector;
+            let pm = m.tool_pose(&xm).unwrap().translation.vector;
+            let expect = (pp - pm) / (2.0 * h);
+            let got = fd[drives[k]].position;
+            assert!(
+                (got - expect).amax() < 1e-5 * expect.amax().max(1.0),
+                "{} {}: {got} vs {expect}",
+                self.0,
+                param.name
+            );
+        }
+        // The budget's RSS is the root sum of squares of |sensitivity| x tolerance.
+        let tol: Vec<Tolerance> = (0..params.len())
+            .map(|k| Tolerance {
+                parameter: k,
+                value: 0.01,
+                distribution: Distribution::Uniform,
+            })
+            .collect();
+        let b = budget(m, &x, &tol).unwrap();
+        let s = sensitivities(m, &x).unwrap();
+        let rss = s
+            .iter()
+            .map(|e| (e.position.norm() * 0.01).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        assert!((b.rss - rss).abs() < 1e-12, "{}", self.0);
+        assert!(b.worst_case >= b.rss);
+    }
+}
+
+#[test]
+fn every_machine_type_passes_the_engine_invariants() {
+    for name in [
+        "tripod-seed000.toml",
+        "tripod-centre-leg.toml",
+        "hexapod-seed001.toml",
+        "hexapod-linuxcnc.toml",
+        "p3rp-seed004.toml",
+        "p3rp-hybrid-seed004.toml",
+        "mc300.toml",
+        "kr30-dh.toml",
+        "ur5-like.urdf",
+    ] {
+        load(name).visit(Invariants(name));
+    }
+}
+
+#[test]
+fn a_zero_length_error_moves_the_tool_by_the_inverse_jacobian_column() {
+    let Model::Hexapod(h) = machine("hexapod-seed001.toml") else {
+        panic!()
+    };
+    let x = h.home;
+    let s = sensitivities(h.as_ref(), &x).unwrap();
+    let jinv = h.jacobian(&x).unwrap().try_inverse().unwrap();
+    // zero(L1) longer by 1 mm: the strut is 1 mm longer at the same reading.
+    let col = jinv.column(0);
+    assert!((s[36].position - Vector3::new(col[0], col[1], col[2])).amax() < 1e-12);
+}
+
+/// Per-component Monte Carlo spread against the first-order prediction.
+fn monte_carlo_matches_first_order<M: Parametric<P, A>, const P: usize, const A: usize>(
+    m: &M,
+    x: &SVector<f64, P>,
+    tol: &[Tolerance],
+    n: usize,
+    rel: f64,
+) {
+    let s = sensitivities(m, x).unwrap();
+    let predicted: Vec<f64> = (0..3)
+        .map(|c| {
+            tol.iter()
+                .map(|t| (s[t.parameter].position[c] * t.std()).powi(2))
+                .sum::<f64>()
+                .sqrt()
+        })
+        .collect();
+    let mc = monte_carlo(m, x, tol, n, 3).unwrap();
+    assert_eq!(mc.failed, 0);
+    assert_eq!(mc.samples, n);
+    for c in 0..3 {
+        if predicted[c] < 1e-9 {
+            assert!(mc.std_vector[c] < 1e-6, "{c}: {}", mc.std_vector[c]);
+            continue;
+        }
+        let r = mc.std_vector[c] / predicted[c];
+        assert!(
+            (r - 1.0).abs() < rel,
+            "component {c}: {} vs {}",
+            mc.std_vector[c],
+            predicted[c]
+        );
+        assert!(
+            mc.mean_vector[c].abs() < 0.05 * predicted[c] + 1e-6,
+            "{:?}",
+            mc.mean_vector
+        );
+    }
+    let b = budget(m, x, tol).unwrap();
+    assert!(mc.p99 <= b.worst_case, "{} {}", mc.p99, b.worst_case);
+    // Same seed, same result (chunks are seeded, whatever the thread count).
+    assert_eq!(mc, monte_carlo(m, x, tol, n, 3).unwrap());
+}
+
+#[test]
+fn monte_carlo_converges_to_the_first_order_prediction_on_parallel_machines() {
+    let Model::Hexapod(h) = machine("hexapod-seed001.toml") else {
+        panic!()
+    };
+    let x = Vector6::new(30.0, -20.0, h.home[2] + 40.0, 0.1, -0.05, 0.2);
+    let tol: Vec<Tolerance> = (0..42)
+        .map(|k| Tolerance {
+            parameter: k,
+            value: if k < 36 { 0.01 } else { 0.02 },
+            distribution: Distribution::Normal,
+        })
+        .collect();
+    monte_carlo_matches_first_order(h.as_ref(), &x, &tol, 40_000, 0.03);
+    let Model::P3rpHead(p) = machine("p3rp-seed004.toml") else {
+        panic!()
+    };
+    let x = nalgebra::Vector2::new(p.home[0] + 30.0, 0.5);
+    let tol: Vec<Tolerance> = (0..p.parameters().len())
+        .map(|k| Tolerance {
+            parameter: k,
+            value: if k == 3 { 1e-4 } else { 0.02 },
+            distribution: Distribution::Uniform,
+        })
+        .collect();
+    monte_carlo_matches_first_order(p.as_ref(), &x, &tol, 40_000, 0.03);
+}
+
+#[test]
+fn tolerances_from_a_file_by_name() {
+    let m = load("p3rp-seed004.toml");
+    let params = m.parameters();
+    let t = pkm::machine::read_tolerances(
+        &params,
+        "[[tolerance]]\ndeviation = \"l2\"\nvalue = 0.02\n[[tolerance]]\ndeviation = \"delta\"\nvalue = 0.01\ndistribution = \"normal\"\n",
+        "t.toml",
+    )
+    .unwrap();
+    assert_eq!(params[t[0].parameter].name, "l2");
+    assert!((t[1].value - 0.01f64.to_radians()).abs() < 1e-15);
+    assert_eq!(t[1].distribution, Distribution::Normal);
+    let e = pkm::machine::read_tolerances(
+        &params,
+        "[[tolerance]]\ndeviation = \"l9\"\nvalue = 1\n",
+        "t.toml",
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("t.toml:2") && e.contains("unknown deviation `l9`"),
+        "{e}"
+    );
+}
