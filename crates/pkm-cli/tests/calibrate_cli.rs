@@ -199,7 +199,7 @@ fn hexapod_report_has_a_calibration_section() {
     assert!(html.contains("id=\"calibration\""));
     assert!(html.contains("id=\"accuracy\""));
     assert!(html.contains("Accuracy from geometric tolerances"));
-    assert!(html.contains("seven-state design"));
+    assert!(html.contains("one-strut design"));
     assert!(html.contains("singular values of the scaled identification Jacobian"));
 }
 

@@ -343,11 +343,16 @@ fn report_writes_a_self_contained_page() {
     let html = std::fs::read_to_string(out.join("index.html")).unwrap();
     assert!(html.starts_with("<!DOCTYPE html>"));
     assert!(html.contains("Seed 000 tripod"));
+    // The translational tripod is identified with its platform joints held (they trade
+    // against the base joints: the platform never turns), and no section failed.
+    assert!(html.contains("Held at nominal"));
+    assert!(!html.contains("could not be computed"));
     assert_eq!(
         html.matches("<svg").count(),
-        12,
+        14,
         "three views at home, two workspace slices, two motion plots, three at Table 1, \
-         budget and Monte Carlo of the geometric tolerances"
+         budget and Monte Carlo of the geometric tolerances, residuals and singular values \
+         of the calibration study"
     );
     assert!(html.contains("Accuracy from geometric tolerances"));
     assert!(html.contains("seed 000's arc study"));

@@ -58,18 +58,3 @@ pub use mechanism::{
 pub use pose::{Pose, SmallDisplacement};
 pub use rotation::Convention;
 pub use units::Quantity;
-
-impl_dyn_mechanism!(tripod::TranslationalTripod, 6, 3);
-impl_dyn_mechanism!(tripod::CentreLegTripod, 3, 3);
-impl_dyn_mechanism!(hexapod::Hexapod, 6, 6);
-impl_dyn_mechanism!(p3rp::P3rpHead, 2, 2);
-impl_dyn_mechanism!(p3rp::HybridMachine, 6, 4);
-impl_dyn_mechanism!(serial::mechanism::SerialMechanism<1>, 1, 1);
-impl_dyn_mechanism!(serial::mechanism::SerialMechanism<2>, 2, 2);
-impl_dyn_mechanism!(serial::mechanism::SerialMechanism<3>, 3, 3);
-impl_dyn_mechanism!(serial::mechanism::SerialMechanism<4>, 4, 4);
-impl_dyn_mechanism!(serial::mechanism::SerialMechanism<5>, 5, 5);
-impl_dyn_mechanism!(serial::mechanism::SerialMechanism<6>, 6, 6);
-impl_dyn_mechanism!(serial::mechanism::SerialMechanism<7>, 7, 7);
-impl_dyn_mechanism!(serial::mechanism::SerialMechanism<8>, 8, 8);
-impl_dyn_mechanism!(serial::arm::SerialArm, 6, 6);

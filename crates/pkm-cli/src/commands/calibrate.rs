@@ -1,15 +1,17 @@
 //! `pkm simulate-measurements` and `pkm calibrate`: identification of a machine's
-//! geometric parameters (seed 001) from a measurement campaign, real or simulated.
+//! geometric parameters (seed 001) from a measurement campaign, real or simulated
+//! (`pkm::analysis::identification`).
 
 use std::path::Path;
 
 use anyhow::{bail, Context, Result};
-use nalgebra::SVector;
-use pkm::identify::hexapod::{seed_procedure, SeedProcedure};
-use pkm::identify::simulate::{simulate, triangle, Design, Experiment};
-use pkm::identify::struts::StrutMachine;
-use pkm::identify::{self, Identifiable, Identification, Measurements, Model};
-use pkm::machine::Model as MachineModel;
+use pkm::analysis::identification::{
+    calibrate, identified_machine_file, parse_design, parse_measurements, simulate_measurements,
+    write_measurements, CalibrateOptions, Calibration, SimulateOptions, Validation,
+};
+use pkm::identify::hexapod::SeedProcedure;
+use pkm::identify::simulate::{triangle, Experiment};
+use pkm::identify::{self, Identification, Measurements};
 use serde_json::json;
 
 use super::load;
@@ -17,54 +19,12 @@ use crate::io::write_atomic;
 use crate::report::plot::{panels_svg_x, Series};
 use crate::{CalibrateArgs, SimulateArgs};
 
-/// What identification covers, with a message for the rest.
-fn unsupported(m: &pkm::Machine, path: &Path) -> anyhow::Error {
-    anyhow::anyhow!(
-        "{}: identification is implemented for hexapods (the 42 parameters of seed 001) and \
-         translational tripods; this is a {} machine",
-        path.display(),
-        m.kind()
-    )
+fn read(path: &Path) -> Result<String> {
+    std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))
 }
 
 pub fn simulate_run(a: &SimulateArgs) -> Result<u8> {
     let machine = load(&a.machine)?;
-    match &machine.model {
-        MachineModel::Hexapod(h) => simulate_machine(a, h.as_ref()),
-        MachineModel::TranslationalTripod(t) => simulate_machine(a, t),
-        _ => Err(unsupported(&machine, &a.machine)),
-    }
-}
-
-fn simulate_machine<M: StrutMachine<A>, const A: usize>(a: &SimulateArgs, h: &M) -> Result<u8> {
-    let zero = h.zero_readings()?;
-    let design = match a.design.as_str() {
-        "random" => Design::Random,
-        "one-strut" => Design::OneActuator,
-        d => bail!("--design: expected `random` or `one-strut`, found `{d}`"),
-    };
-    if a.states == 0 {
-        bail!("--states: expected at least one state");
-    }
-    let e = Experiment {
-        deviation: a.deviation,
-        point_noise: a.point_noise,
-        length_noise: a.length_noise,
-        states: a.states + a.holdout,
-        design,
-        translation: a.translation,
-        rotation: a.rotation.to_radians(),
-        step: a.step,
-        fixture: triangle(a.fixture_radius, 0.0),
-        seed: a.seed,
-    };
-    let s = simulate(h, &zero, &e)?;
-    let acts = h.actuators();
-    let (used, held) = s.measurements.states.split_at(a.states);
-    let part = |states: &[pkm::identify::State]| Measurements {
-        fixture: s.measurements.fixture.clone(),
-        states: states.to_vec(),
-    };
     let comment = format!(
         "simulated by pkm simulate-measurements on {} (seed {}): deviations +-{} mm, point \
          noise {} mm, reading noise {} mm, {} design\nthe fixture is an equilateral triangle of \
@@ -77,40 +37,53 @@ fn simulate_machine<M: StrutMachine<A>, const A: usize>(a: &SimulateArgs, h: &M)
         a.design,
         a.fixture_radius
     );
+    let opt = SimulateOptions {
+        experiment: Experiment {
+            deviation: a.deviation,
+            point_noise: a.point_noise,
+            length_noise: a.length_noise,
+            states: a.states,
+            design: parse_design(&a.design)?,
+            translation: a.translation,
+            rotation: a.rotation.to_radians(),
+            step: a.step,
+            fixture: triangle(a.fixture_radius, 0.0),
+            seed: a.seed,
+        },
+        holdout: a.holdout,
+        comment: comment.clone(),
+    };
+    let text = read(&a.machine)?;
+    let s = simulate_measurements(&machine, Some(&text), &opt)?;
     std::fs::create_dir_all(&a.out)
         .with_context(|| format!("cannot create {}", a.out.display()))?;
     let inputs = [a.machine.as_path()];
     write_atomic(
         &a.out.join("measurements.csv"),
-        identify::csv::write(&part(used), acts, &comment).as_bytes(),
+        write_measurements(&machine, &s.measurements, &comment).as_bytes(),
         &inputs,
     )?;
     if a.holdout > 0 {
         write_atomic(
             &a.out.join("validation.csv"),
-            identify::csv::write(&part(held), acts, &format!("{comment}\nheld-out states"))
-                .as_bytes(),
+            write_measurements(
+                &machine,
+                &s.validation,
+                &format!("{comment}\nheld-out states"),
+            )
+            .as_bytes(),
             &inputs,
         )?;
     }
-    let text = std::fs::read_to_string(&a.machine)?;
-    let toml = pkm::machine::with_strut_geometry(
-        &text,
-        &a.machine.display().to_string(),
-        &s.truth.struts(),
-        Some(s.true_zero.as_slice()),
-        &format!("The TRUE machine of a simulated experiment ({comment})"),
-    )?;
-    write_atomic(&a.out.join("true.toml"), toml.as_bytes(), &inputs)?;
-    let mut theta = s.truth.geometry();
-    theta.extend(s.true_zero.iter());
-    let names = identify::parameter_names(h);
+    if let Some(toml) = &s.true_machine_file {
+        write_atomic(&a.out.join("true.toml"), toml.as_bytes(), &inputs)?;
+    }
     let summary = json!({
         "machine": a.machine.display().to_string(),
         "states": a.states,
         "holdout": a.holdout,
-        "true_parameters": names.iter().zip(&theta).map(|(n, v)| (n.clone(), json!(v))).collect::<serde_json::Map<_, _>>(),
-        "true_poses": s.poses.iter().map(|x| x.iter().copied().collect::<Vec<f64>>()).collect::<Vec<_>>(),
+        "true_parameters": s.names.iter().zip(&s.true_parameters).map(|(n, v)| (n.clone(), json!(v))).collect::<serde_json::Map<_, _>>(),
+        "true_poses": s.true_poses,
     });
     write_atomic(
         &a.out.join("truth.json"),
@@ -119,7 +92,7 @@ fn simulate_machine<M: StrutMachine<A>, const A: usize>(a: &SimulateArgs, h: &M)
     )?;
     println!(
         "{}: {} states (+{} held out) on a true machine {} mm off nominal; wrote {}",
-        h.name(),
+        machine.mechanism().name(),
         a.states,
         a.holdout,
         a.deviation,
@@ -128,136 +101,81 @@ fn simulate_machine<M: StrutMachine<A>, const A: usize>(a: &SimulateArgs, h: &M)
     Ok(0)
 }
 
-fn read_measurements<M: Identifiable<P, A>, const P: usize, const A: usize>(
-    path: &Path,
-    h: &M,
-) -> Result<Measurements> {
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
-    Ok(identify::csv::parse(
-        &text,
+fn read_measurements(path: &Path, machine: &pkm::Machine) -> Result<Measurements> {
+    Ok(parse_measurements(
+        machine,
+        &read(path)?,
         &path.display().to_string(),
-        h.actuators(),
     )?)
 }
 
 pub fn calibrate_run(a: &CalibrateArgs) -> Result<u8> {
     let machine = load(&a.machine)?;
-    match &machine.model {
-        MachineModel::Hexapod(h) => calibrate_machine(a, h.as_ref()),
-        MachineModel::TranslationalTripod(t) => calibrate_machine(a, t),
-        _ => Err(unsupported(&machine, &a.machine)),
-    }
-}
-
-/// Whether `name` matches `pattern` (`*` matches any run of characters).
-fn glob(pattern: &str, name: &str) -> bool {
-    let parts: Vec<&str> = pattern.split('*').collect();
-    if parts.len() == 1 {
-        return pattern == name;
-    }
-    let mut rest = name;
-    for (i, p) in parts.iter().enumerate() {
-        if i == 0 {
-            let Some(r) = rest.strip_prefix(p) else {
-                return false;
-            };
-            rest = r;
-        } else if i == parts.len() - 1 {
-            return rest.ends_with(p);
-        } else {
-            let Some(k) = rest.find(p) else { return false };
-            rest = &rest[k + p.len()..];
-        }
-    }
-    true
-}
-
-fn calibrate_machine<M: StrutMachine<A>, const A: usize>(a: &CalibrateArgs, h: &M) -> Result<u8> {
-    let zero = h.zero_readings()?;
-    let meas = read_measurements(&a.measurements, h)?;
-    let names = identify::parameter_names(h);
-    let mut fixed = Vec::new();
-    if let Some(list) = &a.fix {
-        for n in list.split(',').map(str::trim).filter(|n| !n.is_empty()) {
-            let hits: Vec<usize> = (0..names.len()).filter(|&i| glob(n, &names[i])).collect();
-            if hits.is_empty() {
-                bail!(
-                    "--fix: no parameter matches `{n}`; the parameters are {}",
-                    names.join(", ")
-                );
-            }
-            fixed.extend(hits);
-        }
-    }
-    let model = match a.model.as_str() {
-        "pose" => Model::Pose,
-        "points" => Model::Points,
-        m => bail!("--model: expected `pose` or `points`, found `{m}`"),
-    };
-    let o = identify::Options {
-        model,
-        fixed,
-        ..Default::default()
-    };
-    let id = identify::identify(h, &zero, &meas, &o)?;
-    let seed = if a.seed_procedure {
-        Some(seed_procedure(h, &zero, &meas)?)
-    } else {
-        None
-    };
-    let values = seed
-        .as_ref()
-        .map(|s| s.values.clone())
-        .unwrap_or(id.values.clone());
-    let ng = values.len() - A;
-    let identified = h.with_geometry(&values[..ng])?;
-    let z = SVector::<f64, A>::from_column_slice(&values[ng..]);
+    // Refuse a machine that cannot be identified before reading the campaign.
+    machine.supports(pkm::machine::Analysis::Identification)?;
+    let meas = read_measurements(&a.measurements, &machine)?;
     let validation = match &a.validation {
-        Some(p) => {
-            let v = read_measurements(p, h)?;
-            let before = identify::point_errors(h, &zero, &v);
-            let after = identify::point_errors(&identified, &z, &v);
-            Some((v.states.len(), before, after))
-        }
+        Some(p) => Some(read_measurements(p, &machine)?),
         None => None,
     };
-    std::fs::create_dir_all(&a.out)
-        .with_context(|| format!("cannot create {}", a.out.display()))?;
-    let inputs = [a.machine.as_path(), a.measurements.as_path()];
-    let text = std::fs::read_to_string(&a.machine)?;
-    let toml = pkm::machine::with_strut_geometry(
-        &text,
-        &a.machine.display().to_string(),
-        &identified.struts(),
-        Some(z.as_slice()),
-        &format!(
+    let model = match a.model.as_str() {
+        "pose" => identify::Model::Pose,
+        "points" => identify::Model::Points,
+        m => bail!("--model: expected `pose` or `points`, found `{m}`"),
+    };
+    let opt = CalibrateOptions {
+        model,
+        fix: a
+            .fix
+            .as_deref()
+            .map(|l| l.split(',').map(String::from).collect())
+            .unwrap_or_default(),
+        seed_procedure: a.seed_procedure,
+    };
+    let text = read(&a.machine)?;
+    // The comment's residuals are known after the fit: identify, then head the file.
+    let head = |c: &Calibration| {
+        format!(
             "Identified by pkm calibrate from {} ({} states, {} model{}): residual RMS {:.4} -> {:.4} mm",
             a.measurements.display(),
             meas.states.len(),
             a.model,
             if a.seed_procedure { ", seed 001 procedure" } else { "" },
-            id.rms_before,
-            id.rms_after
-        ),
-    )?;
+            c.identification.rms_before,
+            c.identification.rms_after
+        )
+    };
+    let c = calibrate(&machine, &meas, validation.as_ref(), &opt)?;
+    let toml = identified_machine_file(&machine, &text, &c, &head(&c))?;
+    std::fs::create_dir_all(&a.out)
+        .with_context(|| format!("cannot create {}", a.out.display()))?;
+    let inputs = [a.machine.as_path(), a.measurements.as_path()];
     write_atomic(&a.out.join("identified.toml"), toml.as_bytes(), &inputs)?;
-    let report = report_json(&id, &values, seed.as_ref(), validation.as_ref());
+    let report = report_json(
+        &c.identification,
+        &c.values,
+        c.seed_procedure.as_ref(),
+        c.validation.as_ref(),
+    );
     write_atomic(
         &a.out.join("report.json"),
         serde_json::to_string_pretty(&report)?.as_bytes(),
         &inputs,
     )?;
-    plots(&a.out, &id, &inputs)?;
+    plots(&a.out, &c.identification, &inputs)?;
     if a.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
-        print_text(h.name(), &id, seed.as_ref(), validation.as_ref(), &a.out);
+        print_text(
+            machine.mechanism().name(),
+            &c.identification,
+            c.seed_procedure.as_ref(),
+            c.validation.as_ref(),
+            &a.out,
+        );
     }
     Ok(0)
 }
-
-type Validation = (usize, identify::PointErrors, identify::PointErrors);
 
 fn report_json(
     id: &Identification,
@@ -297,10 +215,10 @@ fn report_json(
             "conditions": s.conditions,
             "iterations": s.iterations,
         })),
-        "validation": validation.map(|(n, b, a)| json!({
-            "states": n,
-            "nominal": b,
-            "identified": a,
+        "validation": validation.map(|v| json!({
+            "states": v.states,
+            "nominal": v.nominal,
+            "identified": v.identified,
         })),
     })
 }
@@ -417,7 +335,12 @@ fn print_text(
                 .join(", ")
         );
     }
-    if let Some((n, b, a)) = validation {
+    if let Some(Validation {
+        states: n,
+        nominal: b,
+        identified: a,
+    }) = validation
+    {
         println!(
             "validation       {n} states: point error max {:.4} / RMS {:.4} mm (nominal) -> max {:.4} / RMS {:.4} mm (identified)",
             b.max, b.rms, a.max, a.rms

@@ -168,40 +168,12 @@ fn batch(
     }
     header.extend(["iterations", "residual", "reachable", "status"].map(String::from));
     let mut out = header.join(",") + "\n";
-    let mut tracker = match &machine.model {
-        pkm::machine::Model::Hexapod(h) => Some((
-            h.as_ref(),
-            pkm::hexapod::FkTracker::new(
-                &pkm::dynamic::fixed::<6>("start pose", &start)?,
-                Default::default(),
-            ),
-        )),
-        _ => None,
-    };
-    let mut last = start;
+    // Rows are a stream: each solved from the last (hexapods keep a tracking solver).
+    let mut stream = pkm::analysis::kinematics::ForwardStream::new(machine, &start)?;
     let mut failed = 0usize;
     for (line, vals) in &table.rows {
         let mut cells: Vec<String> = vals.iter().map(|v| num(*v)).collect();
-        let res = actuators_from_user(m, vals).and_then(|q| {
-            let f = match tracker.as_mut() {
-                // A hexapod's rows are a stream: the tracking solver predicts the next
-                // pose and keeps its factorised Jacobian (same poses, less work).
-                Some((h, tr)) => {
-                    let qv = pkm::dynamic::fixed::<6>("actuators", &q)?;
-                    let rep = tr.track(h, &qv)?;
-                    let a = pkm::Convention::Rpy.from_matrix(&rep.rotation);
-                    let p = rep.position;
-                    pkm::dynamic::DynForward {
-                        pose: vec![p.x, p.y, p.z, a[0], a[1], a[2]],
-                        iterations: rep.iterations,
-                        residual: rep.residual,
-                    }
-                }
-                None => m.forward(&q, &last)?,
-            };
-            let v = m.check_limits(&f.pose, &q)?;
-            Ok((f, v))
-        });
+        let res = actuators_from_user(m, vals).and_then(|q| Ok(stream.next(&q)?));
         match res {
             Ok((f, v)) => {
                 if spatial {
@@ -230,7 +202,6 @@ fn batch(
                         .collect::<Vec<_>>()
                         .join("; "),
                 ));
-                last = f.pose;
             }
             Err(e) => {
                 failed += 1;

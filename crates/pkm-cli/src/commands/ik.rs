@@ -3,7 +3,8 @@
 use std::collections::BTreeMap;
 
 use anyhow::Result;
-use pkm::{DynMechanism, Machine, PoseSpace, Violation};
+use pkm::analysis::kinematics::{inverse, inverse_solutions, transmission, InverseSolution};
+use pkm::{Machine, PoseSpace};
 use serde_json::{json, Map, Value};
 
 use super::csvio::{finish_batch, num, read_table};
@@ -13,36 +14,13 @@ use crate::poses::{
 };
 use crate::{IkArgs, EXIT_UNREACHABLE};
 
-/// The result of one inverse solution.
-pub struct IkResult {
-    /// Pose coordinates (internal units).
-    pub x: Vec<f64>,
-    /// Actuator values (internal units).
-    pub q: Vec<f64>,
-    /// Violated limits.
-    pub violations: Vec<Violation>,
-}
-
-/// Inverse kinematics with the limit check.
-pub fn solve(m: &dyn DynMechanism, x: Vec<f64>) -> Result<IkResult> {
-    let q = m.inverse(&x)?;
-    let violations = m.check_limits(&x, &q)?;
-    Ok(IkResult { x, q, violations })
-}
-
-/// Transmission figures at a pose, as a [`pkm::Visitor`].
-struct TransmissionJob<'a>(&'a [f64]);
-
-impl pkm::Visitor for TransmissionJob<'_> {
-    type Output = pkm::Result<pkm::transmission::Transmission>;
-    fn visit<M: pkm::Mechanism<P, A>, const P: usize, const A: usize>(self, m: &M) -> Self::Output {
-        let x = pkm::dynamic::fixed::<P>("pose", self.0)?;
-        pkm::transmission::transmission(m, &x)
-    }
+/// Inverse kinematics with the limit check (`pkm::analysis::kinematics::inverse`).
+pub fn solve(machine: &Machine, x: Vec<f64>) -> Result<InverseSolution> {
+    Ok(inverse(machine, &x)?)
 }
 
 fn transmission_json(machine: &Machine, x: &[f64]) -> Value {
-    match machine.visit(TransmissionJob(x)) {
+    match transmission(machine, x) {
         Ok(t) => json!({
             "velocity": t.velocity,
             "angular_velocity": t.angular_velocity,
@@ -58,22 +36,22 @@ fn transmission_json(machine: &Machine, x: &[f64]) -> Value {
 }
 
 /// JSON of a solution (the `pkm ik --json` contract).
-pub fn to_json(machine: &Machine, r: &IkResult, conv: pkm::Convention) -> Result<Value> {
+pub fn to_json(machine: &Machine, r: &InverseSolution, conv: pkm::Convention) -> Result<Value> {
     let m = machine.mechanism();
     let mut joints = Map::new();
-    for p in m.skeleton(&r.x)?.points {
+    for p in m.skeleton(&r.pose)?.points {
         joints.insert(p.name.clone(), json!(p.position));
     }
     Ok(json!({
         "machine": m.name(),
         "type": m.kind(),
-        "pose": coords_json(m, &r.x),
-        "tool": tool_json(m, &r.x, conv)?,
-        "actuators": actuators_json(m, &r.q),
+        "pose": coords_json(m, &r.pose),
+        "tool": tool_json(m, &r.pose, conv)?,
+        "actuators": actuators_json(m, &r.actuators),
         "joints": joints,
         "violations": r.violations,
         "reachable": r.violations.is_empty(),
-        "transmission": transmission_json(machine, &r.x),
+        "transmission": transmission_json(machine, &r.pose),
     }))
 }
 
@@ -89,7 +67,7 @@ pub fn run(a: &IkArgs) -> Result<u8> {
     if a.all_solutions {
         return all_solutions(&machine, &x, a.opts.json);
     }
-    let r = solve(m, x)?;
+    let r = solve(&machine, x)?;
     if a.opts.json {
         println!(
             "{}",
@@ -97,8 +75,8 @@ pub fn run(a: &IkArgs) -> Result<u8> {
         );
     } else {
         println!("{} ({})", m.name(), m.kind());
-        println!("pose       {}", coords_text(m, &r.x));
-        for (act, v) in m.actuators().iter().zip(&r.q) {
+        println!("pose       {}", coords_text(m, &r.pose));
+        for (act, v) in m.actuators().iter().zip(&r.actuators) {
             println!(
                 "actuator   {:<8} {:>12.4} {}   range [{:.3}, {:.3}]",
                 act.name,
@@ -108,13 +86,13 @@ pub fn run(a: &IkArgs) -> Result<u8> {
                 act.quantity.to_user(act.range.max)
             );
         }
-        for p in m.skeleton(&r.x)?.points {
+        for p in m.skeleton(&r.pose)?.points {
             println!(
                 "joint      {:<8} {:>10.4} {:>10.4} {:>10.4} mm",
                 p.name, p.position[0], p.position[1], p.position[2]
             );
         }
-        match machine.visit(TransmissionJob(&r.x)) {
+        match transmission(&machine, &r.pose) {
             Ok(t) => {
                 let f = |v: Option<f64>, unit: &str| {
                     v.map(|v| format!("{v:.4} {unit}"))
@@ -198,10 +176,10 @@ fn batch(
         let mut cells: Vec<String> = vals.iter().map(|v| num(*v)).collect();
         let res = pose_from_user(m, vals, conv)
             .map_err(anyhow::Error::from)
-            .and_then(|x| solve(m, x));
+            .and_then(|x| solve(machine, x));
         match res {
             Ok(r) => {
-                for (act, q) in m.actuators().iter().zip(&r.q) {
+                for (act, q) in m.actuators().iter().zip(&r.actuators) {
                     cells.push(num(act.quantity.to_user(*q)));
                 }
                 cells.push(r.violations.is_empty().to_string());
@@ -255,34 +233,17 @@ pub fn csv_text(s: &str) -> String {
 
 /// `--all-solutions`: the postures of a six-axis robot reaching `x`.
 fn all_solutions(machine: &Machine, x: &[f64], json_out: bool) -> Result<u8> {
-    use pkm::machine::Model;
-    use pkm::mechanism::Mechanism;
-    use pkm::serial::mechanism::SerialAny;
-    let arm = match &machine.model {
-        Model::Serial(s) => match &s.mechanism {
-            SerialAny::Arm(a) => a,
-            _ => anyhow::bail!("--all-solutions: for six-axis robots (tool-pose coordinates); this serial machine takes its joint values"),
-        },
-        _ => anyhow::bail!(
-            "--all-solutions: for six-axis robots; a {} machine's inverse kinematics has one solution per pose here",
-            machine.kind()
-        ),
-    };
     let m = machine.mechanism();
-    let xv = nalgebra::Vector6::from_column_slice(x);
-    let sols = arm.inverse_solutions(&xv, 256);
-    let mut list = Vec::new();
-    for q in &sols {
-        let mut v = Vec::new();
-        Mechanism::<6, 6>::check_limits(arm, &xv, q, &mut v);
-        list.push((q, v));
-    }
+    let list: Vec<(Vec<f64>, Vec<pkm::Violation>)> = inverse_solutions(machine, x, 256)?
+        .into_iter()
+        .map(|s| (s.actuators, s.violations))
+        .collect();
     if json_out {
         let arr: Vec<Value> = list
             .iter()
             .map(|(q, v)| {
                 json!({
-                    "actuators": actuators_json(m, q.as_slice()),
+                    "actuators": actuators_json(m, q),
                     "within_limits": v.is_empty(),
                     "violations": v,
                 })

@@ -80,6 +80,11 @@ impl Html {
         s
     }
 
+    /// The body written so far (a section rendered on its own).
+    pub fn body(self) -> String {
+        self.body
+    }
+
     pub fn finish(self) -> String {
         format!(
             "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\

@@ -41,6 +41,52 @@ pub fn run(a: &ReportArgs) -> Result<u8> {
     Ok(0)
 }
 
+/// One analysis section of the report.
+struct Section {
+    /// Anchor.
+    id: &'static str,
+    /// Title in the navigation.
+    title: &'static str,
+    /// Whether the machine has it.
+    shown: fn(&Machine) -> bool,
+    /// Writes it.
+    render: fn(&mut Html, &Machine) -> Result<()>,
+}
+
+/// The report's analysis sections, in order.
+const SECTIONS: &[Section] = &[
+    Section {
+        id: "workspace",
+        title: "Workspace",
+        shown: |_| true,
+        render: workspace_section,
+    },
+    Section {
+        id: "motion",
+        title: "Motion",
+        shown: |m| m.mechanism().pose_space() != pkm::PoseSpace::Own,
+        render: motion_section,
+    },
+    Section {
+        id: "seed004",
+        title: "Seed 004",
+        shown: |m| m.supports(pkm::machine::Analysis::Seed004).is_ok(),
+        render: p3rp::section,
+    },
+    Section {
+        id: "accuracy",
+        title: "Accuracy",
+        shown: |_| true,
+        render: accuracy::section,
+    },
+    Section {
+        id: "calibration",
+        title: "Calibration",
+        shown: |m| m.supports(pkm::machine::Analysis::Identification).is_ok(),
+        render: calibration::section,
+    },
+];
+
 /// The whole report as one HTML document.
 pub fn build(machine: &Machine) -> Result<String> {
     let m = machine.mechanism();
@@ -61,22 +107,9 @@ pub fn build(machine: &Machine) -> Result<String> {
         "<nav><a href=\"#machine\">Machine</a> · <a href=\"#drawing\">Drawing</a> · \
          <a href=\"#checks\">Kinematic checks</a>",
     );
-    let spatial = m.pose_space() != pkm::PoseSpace::Own;
-    nav.push_str(" · <a href=\"#workspace\">Workspace</a>");
-    if spatial {
-        nav.push_str(" · <a href=\"#motion\">Motion</a>");
-    }
-    nav.push_str(" · <a href=\"#accuracy\">Accuracy</a>");
-    let hexapod = match &machine.model {
-        pkm::machine::Model::Hexapod(x) => Some(x.as_ref()),
-        _ => None,
-    };
-    if hexapod.is_some() {
-        nav.push_str(" · <a href=\"#calibration\">Calibration</a>");
-    }
-    let head = p3rp::head_of(machine);
-    if head.is_some() {
-        nav.push_str(" · <a href=\"#seed004\">Seed 004</a>");
+    let shown: Vec<&Section> = SECTIONS.iter().filter(|s| (s.shown)(machine)).collect();
+    for s in &shown {
+        nav.push_str(&format!(" · <a href=\"#{}\">{}</a>", s.id, s.title));
     }
     if !references.is_empty() {
         nav.push_str(" · <a href=\"#references\">Reproduced references</a>");
@@ -182,16 +215,20 @@ pub fn build(machine: &Machine) -> Result<String> {
     });
     h.raw(&check_table_html(machine, &table));
 
-    workspace_section(&mut h, machine)?;
-    if spatial {
-        motion_section(&mut h, machine)?;
-    }
-    if let Some(head) = &head {
-        p3rp::section(&mut h, head)?;
-    }
-    accuracy::section(&mut h, machine)?;
-    if let Some(x) = hexapod {
-        calibration::section(&mut h, x)?;
+    // The analyses' sections: each asked whether the machine has it; one that fails
+    // says why in its place instead of taking the report down.
+    for s in shown {
+        let mut part = Html::new("");
+        match (s.render)(&mut part, machine) {
+            Ok(()) => h.raw(&part.body()),
+            Err(e) => {
+                h.h2_id(s.id, s.title);
+                h.p(&format!(
+                    "<span class=\"bad\">This section could not be computed for this machine: {}</span>",
+                    esc(&format!("{e:#}"))
+                ));
+            }
+        }
     }
 
     if !references.is_empty() {

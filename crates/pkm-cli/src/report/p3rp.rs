@@ -2,23 +2,12 @@
 //! numbers reproduced, its figs. 4-7 redrawn from the model.
 
 use anyhow::Result;
-use pkm::machine::Model;
 use pkm::p3rp::seed004::reproduction;
-use pkm::p3rp::P3rpHead;
 use pkm::workspace::GridAxis;
 use pkm::{Machine, Mechanism, Visitor};
 
 use super::html::{esc, Html};
 use crate::commands::atlas::{atlas_outputs, forward_axes, forward_outputs, AtlasJob, ForwardJob};
-
-/// The head of a P3RP machine, if it is one.
-pub fn head_of(machine: &Machine) -> Option<P3rpHead> {
-    match &machine.model {
-        Model::P3rpHead(h) => Some(h.as_ref().clone()),
-        Model::P3rpHybrid(m) => Some(m.head_mechanism()),
-        _ => None,
-    }
-}
 
 fn num(v: &[f64]) -> String {
     match v {
@@ -34,7 +23,8 @@ fn num(v: &[f64]) -> String {
 const FIG6_VELOCITY: [f64; 2] = [150.0, 1.0];
 const FIG6_ACCELERATION: [f64; 2] = [9806.65, 30.0];
 
-pub fn section(h: &mut Html, head: &P3rpHead) -> Result<()> {
+pub fn section(h: &mut Html, machine: &Machine) -> Result<()> {
+    let head = &machine.p3rp_head()?;
     let g = &head.geometry;
     h.h2_id("seed004", "P3RP head: seed 004 reproduced");
     h.p(&format!(

@@ -6,6 +6,8 @@
 //! [`Machine`]: crate::Machine
 
 pub mod accuracy;
+pub mod identification;
+pub mod kinematics;
 
 pub use accuracy::{
     accuracy, AccuracyOptions, AccuracyReport, KindTolerances, MapRequest, ToleranceSource,

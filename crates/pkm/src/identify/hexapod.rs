@@ -52,7 +52,7 @@ impl StrutMachine<6> for Hexapod {
 }
 
 /// Result of seed 001's procedure.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct SeedProcedure {
     /// The parameters in [`super::parameter_names`] order (42 for a hexapod).
     pub values: Vec<f64>,

@@ -27,6 +27,13 @@ pub trait StrutMachine<const A: usize>: Mechanism<6, A> + Sized + Sync {
     /// Strut lengths at the control's zero readings from the file's `[calibration]`.
     fn calibrated_zero(&self) -> Option<SVector<f64, A>>;
 
+    /// Parameters that trade exactly against others for every measurement this
+    /// machine can give and must be held for an identification to be determined
+    /// (indices of [`super::parameter_names`]); none by default.
+    fn must_hold(&self) -> Vec<usize> {
+        Vec::new()
+    }
+
     /// The joint centres as arrays.
     fn joints(&self) -> Joints<A> {
         let s = self.struts();

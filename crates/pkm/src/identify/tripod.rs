@@ -49,4 +49,10 @@ impl StrutMachine<3> for TranslationalTripod {
     fn calibrated_zero(&self) -> Option<Vector3<f64>> {
         self.geometry.zero_lengths
     }
+
+    /// The platform never turns, so each platform joint trades against its strut's
+    /// base joint: the platform joints (9..18) are held.
+    fn must_hold(&self) -> Vec<usize> {
+        (9..18).collect()
+    }
 }

@@ -7,6 +7,7 @@
 mod hexapod_file;
 mod p3rp_file;
 mod reference;
+mod registry;
 mod serial_file;
 mod source;
 mod strut_writer;
@@ -16,12 +17,11 @@ mod urdf_file;
 
 use std::path::Path;
 
-use crate::dynamic::DynMechanism;
 use crate::error::{Error, Result};
 use crate::mechanism::Mechanism;
-use crate::tripod::{CentreLegTripod, TranslationalTripod};
 
 pub use reference::Reference;
+pub use registry::{Analysis, FileType, Model, StrutVisitor, FILE_TYPES};
 pub use source::line_col;
 pub use strut_writer::{with_strut_geometry, StrutGeometry};
 pub use tolerance_file::{read_deviations, read_tolerances};
@@ -198,24 +198,6 @@ pub(crate) fn check_references(src: &source::Source, refs: &[Reference]) -> Resu
     Ok(())
 }
 
-/// The machine types pkm knows, each a [`Mechanism`].
-#[derive(Debug, Clone, PartialEq)]
-#[non_exhaustive]
-pub enum Model {
-    /// `type = "tripod"`, `constraint = "translational"`.
-    TranslationalTripod(TranslationalTripod),
-    /// `type = "tripod"`, `constraint = "centre-leg"`.
-    CentreLegTripod(CentreLegTripod),
-    /// `type = "hexapod"`.
-    Hexapod(Box<crate::hexapod::Hexapod>),
-    /// `type = "p3rp"` without `[table]`: the P3RP spindle head of seed 004.
-    P3rpHead(Box<crate::p3rp::P3rpHead>),
-    /// `type = "p3rp"` with `[table]`: the 4-axis hybrid machine of seed 004.
-    P3rpHybrid(Box<crate::p3rp::HybridMachine>),
-    /// `type = "serial"`: tool and workpiece chains with primary deviations (seed 003).
-    Serial(Box<crate::serial::SerialModel>),
-}
-
 /// What every machine type implements: the kinematics ([`Mechanism`]) and the
 /// accuracy engine's parameters ([`crate::accuracy::Parametric`]). Generic analyses
 /// take `M: Analysable<P, A>`.
@@ -254,9 +236,6 @@ pub struct Machine {
     /// Rapid (G0) rate from the file's `[motion]` table (mm/s).
     pub rapid: Option<f64>,
 }
-
-/// Machine types accepted in the `type` field.
-pub const MACHINE_TYPES: &[&str] = &["tripod", "hexapod", "p3rp", "serial"];
 
 impl Machine {
     /// Reads and validates a machine file.
@@ -311,7 +290,7 @@ impl Machine {
                     field: "type".into(),
                     message: format!(
                         "missing field `type`, expected one of: {}",
-                        MACHINE_TYPES.join(", ")
+                        registry::type_names()
                     ),
                 })
             }
@@ -323,17 +302,14 @@ impl Machine {
             }
             Some(Some(k)) => k,
         };
-        let parts = match kind.as_str() {
-            "tripod" => tripod_file::build(&src, src.deserialize()?)?,
-            "hexapod" => hexapod_file::build(&src, src.deserialize()?)?,
-            "p3rp" => p3rp_file::build(&src, src.deserialize()?)?,
-            "serial" => serial_file::build(&src, src.deserialize()?)?,
-            other => {
+        let parts = match registry::file_type(&kind) {
+            Some(t) => (t.load)(&src)?,
+            None => {
                 return Err(src.error(
                     &[source::Seg::Key("type".into())],
                     format!(
-                        "unknown machine type `{other}`, expected one of: {}",
-                        MACHINE_TYPES.join(", ")
+                        "unknown machine type `{kind}`, expected one of: {}",
+                        registry::type_names()
                     ),
                 ))
             }
@@ -346,30 +322,6 @@ impl Machine {
             references: parts.references,
             rapid: parts.rapid,
         })
-    }
-
-    /// The mechanism behind a dynamic (run-time sized) interface.
-    pub fn mechanism(&self) -> &dyn DynMechanism {
-        match &self.model {
-            Model::TranslationalTripod(m) => m,
-            Model::CentreLegTripod(m) => m,
-            Model::Hexapod(m) => m.as_ref(),
-            Model::P3rpHead(m) => m.as_ref(),
-            Model::P3rpHybrid(m) => m.as_ref(),
-            Model::Serial(s) => crate::with_serial!(&s.mechanism, m => m),
-        }
-    }
-
-    /// Runs generic code on the concrete mechanism.
-    pub fn visit<V: Visitor>(&self, v: V) -> V::Output {
-        match &self.model {
-            Model::TranslationalTripod(m) => v.visit(m),
-            Model::CentreLegTripod(m) => v.visit(m),
-            Model::Hexapod(m) => v.visit(m.as_ref()),
-            Model::P3rpHead(m) => v.visit(m.as_ref()),
-            Model::P3rpHybrid(m) => v.visit(m.as_ref()),
-            Model::Serial(s) => crate::with_serial!(&s.mechanism, m => v.visit(m)),
-        }
     }
 
     /// Tolerances of the machine's parameters given in its file (`[[tolerance]]`),

@@ -1,0 +1,417 @@
+//! Identification on a loaded machine (seed 001): simulate a measurement campaign,
+//! identify the geometric parameters from measurements, validate on held-out states,
+//! and the identified machine as a machine file. Machines that cannot be identified
+//! answer [`crate::Error::Unsupported`] (see [`crate::machine::Analysis`]).
+
+use nalgebra::SVector;
+use serde::Serialize;
+
+use crate::error::{Error, Result};
+use crate::identify::hexapod::{seed_procedure, SeedProcedure};
+use crate::identify::simulate::{simulate, Design, Experiment};
+use crate::identify::struts::StrutMachine;
+use crate::identify::{self, Identifiable, Identification, Measurements, PointErrors};
+use crate::machine::{Analysable, Machine, StrutVisitor};
+
+/// Settings of [`simulate_measurements`]: the experiment and how many of its states
+/// are held out for validation.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SimulateOptions {
+    /// The experiment (its `states` are the identification states).
+    pub experiment: Experiment,
+    /// Further states on the same true machine, for validation.
+    pub holdout: usize,
+    /// What the campaign was (heads the true machine file).
+    pub comment: String,
+}
+
+/// A simulated campaign on a true machine drawn around the nominal one.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SimulatedCampaign {
+    /// The identification states.
+    pub measurements: Measurements,
+    /// The held-out states (empty without holdout).
+    pub validation: Measurements,
+    /// Parameter names (geometry, then zero readings).
+    pub names: Vec<String>,
+    /// The true parameters.
+    pub true_parameters: Vec<f64>,
+    /// The true pose of every state (identification states first).
+    pub true_poses: Vec<Vec<f64>>,
+    /// The true machine as a machine file: the nominal file's text with the true
+    /// joints and zero lengths (when the nominal file's text was given).
+    pub true_machine_file: Option<String>,
+}
+
+/// Simulates a campaign on `machine` (`source`: the text of its machine file, to write
+/// the true machine; `None` to skip that).
+pub fn simulate_measurements(
+    machine: &Machine,
+    source: Option<&str>,
+    opt: &SimulateOptions,
+) -> Result<SimulatedCampaign> {
+    if opt.experiment.states == 0 {
+        return Err(Error::InvalidInput {
+            what: "states".into(),
+            message: "expected at least one state".into(),
+        });
+    }
+    machine.visit_struts(SimulateJob {
+        machine,
+        source,
+        opt,
+    })?
+}
+
+struct SimulateJob<'a> {
+    machine: &'a Machine,
+    source: Option<&'a str>,
+    opt: &'a SimulateOptions,
+}
+
+impl StrutVisitor for SimulateJob<'_> {
+    type Output = Result<SimulatedCampaign>;
+    fn visit<M: StrutMachine<A> + Analysable<6, A>, const A: usize>(self, h: &M) -> Self::Output {
+        let zero = h.zero_readings()?;
+        let mut e = self.opt.experiment.clone();
+        e.states += self.opt.holdout;
+        let s = simulate(h, &zero, &e)?;
+        let (used, held) = s.measurements.states.split_at(self.opt.experiment.states);
+        let part = |states: &[identify::State]| Measurements {
+            fixture: s.measurements.fixture.clone(),
+            states: states.to_vec(),
+        };
+        let mut theta = s.truth.geometry();
+        theta.extend(s.true_zero.iter());
+        let true_machine_file = match self.source {
+            Some(text) => Some(crate::machine::with_strut_geometry(
+                text,
+                &self.machine.source,
+                &s.truth.struts(),
+                Some(s.true_zero.as_slice()),
+                &format!(
+                    "The TRUE machine of a simulated experiment ({})",
+                    self.opt.comment
+                ),
+            )?),
+            None => None,
+        };
+        Ok(SimulatedCampaign {
+            measurements: part(used),
+            validation: part(held),
+            names: identify::parameter_names(h),
+            true_parameters: theta,
+            true_poses: s.poses.iter().map(|x| x.as_slice().to_vec()).collect(),
+            true_machine_file,
+        })
+    }
+}
+
+/// Reads a measurement CSV for `machine` (its actuators name the reading columns).
+pub fn parse_measurements(machine: &Machine, text: &str, file: &str) -> Result<Measurements> {
+    identify::csv::parse(text, file, machine.mechanism().actuators())
+}
+
+/// Writes measurements as the CSV [`parse_measurements`] reads.
+pub fn write_measurements(machine: &Machine, m: &Measurements, comment: &str) -> String {
+    identify::csv::write(m, machine.mechanism().actuators(), comment)
+}
+
+/// Settings of [`calibrate`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct CalibrateOptions {
+    /// Measurement equations.
+    pub model: identify::Model,
+    /// Parameters held at their nominal values: names, `*` matching any run of
+    /// characters (`A1.z`, `C.*`).
+    pub fix: Vec<String>,
+    /// Take seed 001's procedure's solution (first seven states) for the identified
+    /// machine instead of Levenberg-Marquardt's.
+    pub seed_procedure: bool,
+}
+
+impl Default for CalibrateOptions {
+    fn default() -> Self {
+        CalibrateOptions {
+            model: identify::Model::Pose,
+            fix: Vec::new(),
+            seed_procedure: false,
+        }
+    }
+}
+
+/// Point errors of the nominal and the identified machine on held-out states.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Validation {
+    /// Held-out states.
+    pub states: usize,
+    /// The nominal machine's errors.
+    pub nominal: PointErrors,
+    /// The identified machine's errors.
+    pub identified: PointErrors,
+}
+
+/// What [`calibrate`] found.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Calibration {
+    /// Levenberg-Marquardt's identification (residuals, standard errors,
+    /// identifiability).
+    pub identification: Identification,
+    /// The parameter values of the identified machine (LM's, or the seed procedure's).
+    pub values: Vec<f64>,
+    /// Seed 001's procedure, when asked for.
+    pub seed_procedure: Option<SeedProcedure>,
+    /// Validation on held-out states, when given.
+    pub validation: Option<Validation>,
+}
+
+/// Whether `name` matches `pattern` (`*` matches any run of characters).
+fn glob(pattern: &str, name: &str) -> bool {
+    let parts: Vec<&str> = pattern.split('*').collect();
+    if parts.len() == 1 {
+        return pattern == name;
+    }
+    let mut rest = name;
+    for (i, p) in parts.iter().enumerate() {
+        if i == 0 {
+            let Some(r) = rest.strip_prefix(p) else {
+                return false;
+            };
+            rest = r;
+        } else if i == parts.len() - 1 {
+            return rest.ends_with(p);
+        } else {
+            let Some(k) = rest.find(p) else { return false };
+            rest = &rest[k + p.len()..];
+        }
+    }
+    true
+}
+
+/// Identifies `machine`'s parameters from `measurements`, validates on `validation`
+/// when given.
+pub fn calibrate(
+    machine: &Machine,
+    measurements: &Measurements,
+    validation: Option<&Measurements>,
+    opt: &CalibrateOptions,
+) -> Result<Calibration> {
+    machine.visit_struts(CalibrateJob {
+        meas: measurements,
+        validation,
+        opt,
+    })?
+}
+
+/// The identified machine of `c` as a machine file: `source` (the nominal machine's
+/// file text) with the identified joints and zero lengths, headed by `comment`.
+pub fn identified_machine_file(
+    machine: &Machine,
+    source: &str,
+    c: &Calibration,
+    comment: &str,
+) -> Result<String> {
+    struct Write<'a> {
+        file: &'a str,
+        source: &'a str,
+        values: &'a [f64],
+        comment: &'a str,
+    }
+    impl StrutVisitor for Write<'_> {
+        type Output = Result<String>;
+        fn visit<M: StrutMachine<A> + Analysable<6, A>, const A: usize>(
+            self,
+            h: &M,
+        ) -> Self::Output {
+            let ng = h.geometry().len();
+            if self.values.len() != ng + A {
+                return Err(Error::InvalidInput {
+                    what: "identified parameters".into(),
+                    message: format!("expected {} values, got {}", ng + A, self.values.len()),
+                });
+            }
+            let identified = h.with_geometry(&self.values[..ng])?;
+            crate::machine::with_strut_geometry(
+                self.source,
+                self.file,
+                &identified.struts(),
+                Some(&self.values[ng..]),
+                self.comment,
+            )
+        }
+    }
+    machine.visit_struts(Write {
+        file: &machine.source,
+        source,
+        values: &c.values,
+        comment,
+    })?
+}
+
+struct CalibrateJob<'a> {
+    meas: &'a Measurements,
+    validation: Option<&'a Measurements>,
+    opt: &'a CalibrateOptions,
+}
+
+impl StrutVisitor for CalibrateJob<'_> {
+    type Output = Result<Calibration>;
+    fn visit<M: StrutMachine<A> + Analysable<6, A>, const A: usize>(self, h: &M) -> Self::Output {
+        let zero = h.zero_readings()?;
+        let names = identify::parameter_names(h);
+        let mut fixed = Vec::new();
+        for n in self
+            .opt
+            .fix
+            .iter()
+            .map(|n| n.trim())
+            .filter(|n| !n.is_empty())
+        {
+            let hits: Vec<usize> = (0..names.len()).filter(|&i| glob(n, &names[i])).collect();
+            if hits.is_empty() {
+                return Err(Error::InvalidInput {
+                    what: "fixed parameters".into(),
+                    message: format!(
+                        "no parameter matches `{n}`; the parameters are {}",
+                        names.join(", ")
+                    ),
+                });
+            }
+            fixed.extend(hits);
+        }
+        let o = identify::Options {
+            model: self.opt.model,
+            fixed,
+            ..Default::default()
+        };
+        let id = identify::identify(h, &zero, self.meas, &o)?;
+        let seed = if self.opt.seed_procedure {
+            Some(seed_procedure(h, &zero, self.meas)?)
+        } else {
+            None
+        };
+        let values = seed
+            .as_ref()
+            .map(|s| s.values.clone())
+            .unwrap_or(id.values.clone());
+        let ng = values.len() - A;
+        let identified = h.with_geometry(&values[..ng])?;
+        let z = SVector::<f64, A>::from_column_slice(&values[ng..]);
+        let validation = self.validation.map(|v| Validation {
+            states: v.states.len(),
+            nominal: identify::point_errors(h, &zero, v),
+            identified: identify::point_errors(&identified, &z, v),
+        });
+        Ok(Calibration {
+            identification: id,
+            values,
+            seed_procedure: seed,
+            validation,
+        })
+    }
+}
+
+/// Parses the design names of [`Design`] (`random`, `one-strut`).
+pub fn parse_design(s: &str) -> Result<Design> {
+    match s {
+        "random" => Ok(Design::Random),
+        "one-strut" => Ok(Design::OneActuator),
+        d => Err(Error::InvalidInput {
+            what: "design".into(),
+            message: format!("expected `random` or `one-strut`, found `{d}`"),
+        }),
+    }
+}
+
+/// A simulated calibration study (the report's): identification on a simulated
+/// campaign, validated on held-out states of the same true machine, beside the
+/// conditioning of seed 001's one-strut design.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CalibrationStudy {
+    /// The campaign.
+    pub experiment_states: usize,
+    /// Held-out states.
+    pub holdout: usize,
+    /// Parameters held (the machine's trading pairs, [`StrutMachine::must_hold`]).
+    pub held: Vec<String>,
+    /// The identification.
+    pub identification: Identification,
+    /// Tool-pose errors of the nominal model at the held-out states.
+    pub nominal: identify::simulate::PoseErrors,
+    /// Tool-pose errors of the identified model at the held-out states.
+    pub identified: identify::simulate::PoseErrors,
+    /// Worst per-actuator condition number of seed 001's one-strut design with
+    /// `A + 1` noise-free states (`None` when it does not solve).
+    pub one_strut_condition: Option<f64>,
+}
+
+/// Runs [`CalibrationStudy`] with experiment `e` and `holdout` held-out states (seed
+/// `e.seed + 1`).
+pub fn calibration_study(
+    machine: &Machine,
+    e: &Experiment,
+    holdout: usize,
+) -> Result<CalibrationStudy> {
+    struct Job<'a>(&'a Experiment, usize);
+    impl StrutVisitor for Job<'_> {
+        type Output = Result<CalibrationStudy>;
+        fn visit<M: StrutMachine<A> + Analysable<6, A>, const A: usize>(
+            self,
+            h: &M,
+        ) -> Self::Output {
+            let (e, holdout) = (self.0, self.1);
+            let zero = h.zero_readings()?;
+            let s = simulate(h, &zero, e)?;
+            let names = identify::parameter_names(h);
+            let held = h.must_hold();
+            let id = identify::identify(
+                h,
+                &zero,
+                &s.measurements,
+                &identify::Options {
+                    fixed: held.clone(),
+                    ..Default::default()
+                },
+            )?;
+            let test = identify::simulate::simulate_on(
+                s.truth,
+                s.true_zero,
+                &Experiment {
+                    states: holdout,
+                    seed: e.seed + 1,
+                    ..e.clone()
+                },
+            )?;
+            let readings = test.measurements.readings();
+            let nominal = identify::simulate::pose_errors(h, &zero, &readings, &test.poses)?;
+            let ng = id.values.len() - A;
+            let model = h.with_geometry(&id.values[..ng])?;
+            let z = SVector::<f64, A>::from_column_slice(&id.values[ng..]);
+            let identified = identify::simulate::pose_errors(&model, &z, &readings, &test.poses)?;
+            let seven = simulate(
+                h,
+                &zero,
+                &Experiment {
+                    states: A + 1,
+                    design: Design::OneActuator,
+                    point_noise: 0.0,
+                    length_noise: 0.0,
+                    ..e.clone()
+                },
+            )?;
+            let one_strut_condition = seed_procedure(h, &zero, &seven.measurements)
+                .ok()
+                .map(|sp| sp.conditions.iter().copied().fold(0.0, f64::max));
+            Ok(CalibrationStudy {
+                experiment_states: e.states,
+                holdout,
+                held: held.iter().map(|&k| names[k].clone()).collect(),
+                identification: id,
+                nominal,
+                identified,
+                one_strut_condition,
+            })
+        }
+    }
+    machine.visit_struts(Job(e, holdout))?
+}

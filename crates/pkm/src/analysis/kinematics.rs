@@ -1,0 +1,133 @@
+//! Kinematics on a loaded machine beyond one pose: inverse kinematics with the limit
+//! check, every inverse solution of a pose (robots), and forward kinematics along a
+//! stream of actuator sets (each solved from the last; hexapods keep a tracking solver).
+
+use serde::Serialize;
+
+use crate::dynamic::DynForward;
+use crate::error::Result;
+use crate::limits::Violation;
+use crate::machine::{Analysis, Machine, Model};
+
+/// An inverse solution with its limit check.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct InverseSolution {
+    /// Pose coordinates (internal units).
+    pub pose: Vec<f64>,
+    /// Actuator values (internal units).
+    pub actuators: Vec<f64>,
+    /// Violated limits (empty: reachable).
+    pub violations: Vec<Violation>,
+}
+
+/// Inverse kinematics of pose `x` (internal units) with every limit checked.
+pub fn inverse(machine: &Machine, x: &[f64]) -> Result<InverseSolution> {
+    let m = machine.mechanism();
+    let q = m.inverse(x)?;
+    let violations = m.check_limits(x, &q)?;
+    Ok(InverseSolution {
+        pose: x.to_vec(),
+        actuators: q,
+        violations,
+    })
+}
+
+/// Every inverse solution found for pose `x` ([`Analysis::InverseSolutions`]: six-axis
+/// robots, Newton from home and `starts - 1` spread starts, deduplicated, nearest home
+/// first), each with its limit status.
+pub fn inverse_solutions(
+    machine: &Machine,
+    x: &[f64],
+    starts: usize,
+) -> Result<Vec<InverseSolution>> {
+    machine.supports(Analysis::InverseSolutions)?;
+    let Model::Serial(s) = &machine.model else {
+        unreachable!("supports() checked the machine type")
+    };
+    let crate::serial::mechanism::SerialAny::Arm(arm) = &s.mechanism else {
+        unreachable!("supports() checked the machine type")
+    };
+    let xv = crate::dynamic::fixed::<6>("pose", x)?;
+    let m = machine.mechanism();
+    arm.inverse_solutions(&xv, starts)
+        .into_iter()
+        .map(|q| {
+            let violations = m.check_limits(x, q.as_slice())?;
+            Ok(InverseSolution {
+                pose: x.to_vec(),
+                actuators: q.as_slice().to_vec(),
+                violations,
+            })
+        })
+        .collect()
+}
+
+/// Forward kinematics along a stream of actuator sets, each solved from the previous
+/// solution (a machine moving through its states). Hexapods use the tracking solver
+/// ([`crate::hexapod::FkTracker`]: predicted start, kept factorisation).
+pub struct ForwardStream<'a> {
+    machine: &'a Machine,
+    last: Vec<f64>,
+    tracker: Option<(&'a crate::hexapod::Hexapod, crate::hexapod::FkTracker)>,
+}
+
+impl<'a> ForwardStream<'a> {
+    /// A stream starting at pose `start` (internal units).
+    pub fn new(machine: &'a Machine, start: &[f64]) -> Result<Self> {
+        let tracker = match &machine.model {
+            Model::Hexapod(h) => Some((
+                h.as_ref(),
+                crate::hexapod::FkTracker::new(
+                    &crate::dynamic::fixed::<6>("start pose", start)?,
+                    Default::default(),
+                ),
+            )),
+            _ => None,
+        };
+        Ok(ForwardStream {
+            machine,
+            last: start.to_vec(),
+            tracker,
+        })
+    }
+
+    /// The pose of actuator set `q` (internal units) and the limits it violates; the
+    /// next set starts from it. A failed solve leaves the stream where it was.
+    pub fn next(&mut self, q: &[f64]) -> Result<(DynForward, Vec<Violation>)> {
+        let m = self.machine.mechanism();
+        let f = match self.tracker.as_mut() {
+            Some((h, tr)) => {
+                let qv = crate::dynamic::fixed::<6>("actuators", q)?;
+                let rep = tr.track(h, &qv)?;
+                let a = crate::Convention::Rpy.from_matrix(&rep.rotation);
+                let p = rep.position;
+                DynForward {
+                    pose: vec![p.x, p.y, p.z, a[0], a[1], a[2]],
+                    iterations: rep.iterations,
+                    residual: rep.residual,
+                }
+            }
+            None => m.forward(q, &self.last)?,
+        };
+        let v = m.check_limits(&f.pose, q)?;
+        self.last.clone_from(&f.pose);
+        Ok((f, v))
+    }
+}
+
+/// Velocity and force transmission and the distance to singularity at pose `x`
+/// ([`crate::transmission::transmission`]).
+pub fn transmission(machine: &Machine, x: &[f64]) -> Result<crate::transmission::Transmission> {
+    struct Job<'a>(&'a [f64]);
+    impl crate::machine::Visitor for Job<'_> {
+        type Output = Result<crate::transmission::Transmission>;
+        fn visit<M: crate::machine::Analysable<P, A>, const P: usize, const A: usize>(
+            self,
+            m: &M,
+        ) -> Self::Output {
+            let x = crate::dynamic::fixed::<P>("pose", self.0)?;
+            crate::transmission::transmission(m, &x)
+        }
+    }
+    machine.visit(Job(x))
+}

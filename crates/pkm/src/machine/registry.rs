@@ -1,0 +1,254 @@
+//! The registry: the one place that lists pkm's machine types (their name in files,
+//! loader and one-line description), holds the loaded model of each, dispatches from a
+//! loaded [`Machine`] to code generic over its concrete type, and answers what each
+//! type can do ([`Analysis`], [`Machine::supports`]).
+//!
+//! A new machine type is added here (a [`FILE_TYPES`] row, a [`Model`] variant, its
+//! arms in `dispatch!` and `impl_dyn_mechanism!`, and its capabilities), beside its
+//! module and its file loader.
+
+use serde::Serialize;
+
+use super::source::Source;
+use super::{Analysable, Machine, Parts, Visitor};
+use crate::error::{Error, Result};
+use crate::identify::struts::StrutMachine;
+use crate::tripod::{CentreLegTripod, TranslationalTripod};
+
+/// One machine type as written in a file's `type` field.
+pub struct FileType {
+    /// The `type` value.
+    pub name: &'static str,
+    /// What it describes (docs, `pkm check`).
+    pub summary: &'static str,
+    /// The loader.
+    pub(crate) load: fn(&Source) -> Result<Parts>,
+}
+
+/// Every machine type pkm reads from TOML files (URDF robots load as `serial`).
+pub const FILE_TYPES: &[FileType] = &[
+    FileType {
+        name: "tripod",
+        summary: "three struts between base and platform (seed 000): translational, or with a passive centre leg (Tricept-like)",
+        load: |s| super::tripod_file::build(s, s.deserialize()?),
+    },
+    FileType {
+        name: "hexapod",
+        summary: "six struts (Gough-Stewart platform, LinuxCNC genhexkins, seed 001)",
+        load: |s| super::hexapod_file::build(s, s.deserialize()?),
+    },
+    FileType {
+        name: "p3rp",
+        summary: "the 2-DOF P3RP spindle head of seed 004, alone or on an XY table (4-axis hybrid machine)",
+        load: |s| super::p3rp_file::build(s, s.deserialize()?),
+    },
+    FileType {
+        name: "serial",
+        summary: "serial chains with seed 003's primary deviations: machine tools (tool and workpiece chains), robots from DH tables",
+        load: |s| super::serial_file::build(s, s.deserialize()?),
+    },
+];
+
+/// The file type named `name`.
+pub(crate) fn file_type(name: &str) -> Option<&'static FileType> {
+    FILE_TYPES.iter().find(|t| t.name == name)
+}
+
+/// The file types' names, comma separated (for messages).
+pub(crate) fn type_names() -> String {
+    FILE_TYPES
+        .iter()
+        .map(|t| t.name)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The loaded machine of each type, each a [`crate::Mechanism`] (and [`Analysable`]).
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum Model {
+    /// `type = "tripod"`, `constraint = "translational"`.
+    TranslationalTripod(TranslationalTripod),
+    /// `type = "tripod"`, `constraint = "centre-leg"`.
+    CentreLegTripod(CentreLegTripod),
+    /// `type = "hexapod"`.
+    Hexapod(Box<crate::hexapod::Hexapod>),
+    /// `type = "p3rp"` without `[table]`: the P3RP spindle head of seed 004.
+    P3rpHead(Box<crate::p3rp::P3rpHead>),
+    /// `type = "p3rp"` with `[table]`: the 4-axis hybrid machine of seed 004.
+    P3rpHybrid(Box<crate::p3rp::HybridMachine>),
+    /// `type = "serial"`: tool and workpiece chains with primary deviations (seed 003).
+    Serial(Box<crate::serial::SerialModel>),
+}
+
+/// Runs `$body` with `$m` bound to the concrete mechanism of a [`Model`].
+macro_rules! dispatch {
+    ($model:expr, $m:ident => $body:expr) => {
+        match $model {
+            Model::TranslationalTripod($m) => $body,
+            Model::CentreLegTripod($m) => $body,
+            Model::Hexapod(b) => {
+                let $m = b.as_ref();
+                $body
+            }
+            Model::P3rpHead(b) => {
+                let $m = b.as_ref();
+                $body
+            }
+            Model::P3rpHybrid(b) => {
+                let $m = b.as_ref();
+                $body
+            }
+            Model::Serial(s) => crate::with_serial!(&s.mechanism, $m => $body),
+        }
+    };
+}
+
+crate::impl_dyn_mechanism!(TranslationalTripod, 6, 3);
+crate::impl_dyn_mechanism!(CentreLegTripod, 3, 3);
+crate::impl_dyn_mechanism!(crate::hexapod::Hexapod, 6, 6);
+crate::impl_dyn_mechanism!(crate::p3rp::P3rpHead, 2, 2);
+crate::impl_dyn_mechanism!(crate::p3rp::HybridMachine, 6, 4);
+crate::impl_dyn_mechanism!(crate::serial::mechanism::SerialMechanism<1>, 1, 1);
+crate::impl_dyn_mechanism!(crate::serial::mechanism::SerialMechanism<2>, 2, 2);
+crate::impl_dyn_mechanism!(crate::serial::mechanism::SerialMechanism<3>, 3, 3);
+crate::impl_dyn_mechanism!(crate::serial::mechanism::SerialMechanism<4>, 4, 4);
+crate::impl_dyn_mechanism!(crate::serial::mechanism::SerialMechanism<5>, 5, 5);
+crate::impl_dyn_mechanism!(crate::serial::mechanism::SerialMechanism<6>, 6, 6);
+crate::impl_dyn_mechanism!(crate::serial::mechanism::SerialMechanism<7>, 7, 7);
+crate::impl_dyn_mechanism!(crate::serial::mechanism::SerialMechanism<8>, 8, 8);
+crate::impl_dyn_mechanism!(crate::serial::arm::SerialArm, 6, 6);
+
+/// Code generic over strut machines (hexapods, translational tripods: the machines
+/// [`crate::identify`] identifies), run by [`Machine::visit_struts`].
+pub trait StrutVisitor {
+    /// What the visit returns.
+    type Output;
+    /// Called with the concrete strut machine.
+    fn visit<M: StrutMachine<A> + Analysable<6, A>, const A: usize>(self, m: &M) -> Self::Output;
+}
+
+/// The analyses that only some machine types can run (every machine runs the
+/// kinematics, motion, workspace and accuracy analyses).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+#[non_exhaustive]
+pub enum Analysis {
+    /// Identification of geometric parameters from measurements (seed 001).
+    Identification,
+    /// Every inverse solution (postures) of a pose.
+    InverseSolutions,
+    /// Forward workspace over a grid of the actuator strokes (at most 3 actuators).
+    ForwardWorkspace,
+    /// Seed 004's reproduction (the P3RP head's published numbers and figures).
+    Seed004,
+}
+
+impl Analysis {
+    /// Every analysis of this list.
+    pub const ALL: [Analysis; 4] = [
+        Analysis::Identification,
+        Analysis::InverseSolutions,
+        Analysis::ForwardWorkspace,
+        Analysis::Seed004,
+    ];
+
+    /// Its name in messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            Analysis::Identification => "identification",
+            Analysis::InverseSolutions => "all inverse solutions",
+            Analysis::ForwardWorkspace => "the forward workspace",
+            Analysis::Seed004 => "seed 004's reproduction",
+        }
+    }
+}
+
+impl Machine {
+    /// The mechanism behind a dynamic (run-time sized) interface.
+    pub fn mechanism(&self) -> &dyn crate::dynamic::DynMechanism {
+        dispatch!(&self.model, m => m)
+    }
+
+    /// Runs generic code on the concrete mechanism.
+    pub fn visit<V: Visitor>(&self, v: V) -> V::Output {
+        dispatch!(&self.model, m => v.visit(m))
+    }
+
+    /// Runs code generic over strut machines, or says why this machine is not one.
+    pub fn visit_struts<V: StrutVisitor>(&self, v: V) -> Result<V::Output> {
+        match &self.model {
+            Model::Hexapod(h) => Ok(v.visit(h.as_ref())),
+            Model::TranslationalTripod(t) => Ok(v.visit(t)),
+            _ => Err(self.unsupported(Analysis::Identification)),
+        }
+    }
+
+    /// Whether the machine can run `analysis`: `Ok`, or [`Error::Unsupported`] saying
+    /// why not.
+    pub fn supports(&self, analysis: Analysis) -> Result<()> {
+        let ok = match analysis {
+            Analysis::Identification => matches!(
+                self.model,
+                Model::Hexapod(_) | Model::TranslationalTripod(_)
+            ),
+            Analysis::InverseSolutions => matches!(
+                &self.model,
+                Model::Serial(s) if matches!(s.mechanism, crate::serial::mechanism::SerialAny::Arm(_))
+            ),
+            Analysis::ForwardWorkspace => self.mechanism().actuators().len() <= 3,
+            Analysis::Seed004 => matches!(self.model, Model::P3rpHead(_) | Model::P3rpHybrid(_)),
+        };
+        if ok {
+            Ok(())
+        } else {
+            Err(self.unsupported(analysis))
+        }
+    }
+
+    /// The analyses of [`Analysis::ALL`] this machine runs.
+    pub fn capabilities(&self) -> Vec<Analysis> {
+        Analysis::ALL
+            .into_iter()
+            .filter(|a| self.supports(*a).is_ok())
+            .collect()
+    }
+
+    fn unsupported(&self, analysis: Analysis) -> Error {
+        let reason = match analysis {
+            Analysis::Identification => {
+                "identification is implemented for strut machines (hexapods: the 42 parameters \
+                 of seed 001; translational tripods)"
+                    .to_string()
+            }
+            Analysis::InverseSolutions => {
+                "every inverse solution is searched for six-axis robots (tool-pose coordinates); \
+                 this machine's inverse kinematics has one solution per pose here"
+                    .to_string()
+            }
+            Analysis::ForwardWorkspace => format!(
+                "the forward workspace grids the actuator strokes of machines with at most 3 \
+                 actuators; this one has {}",
+                self.mechanism().actuators().len()
+            ),
+            Analysis::Seed004 => "seed 004's reproduction is for P3RP heads".to_string(),
+        };
+        let m = self.mechanism();
+        Error::Unsupported {
+            machine: m.name().to_string(),
+            kind: m.kind().to_string(),
+            analysis: analysis.name(),
+            reason,
+        }
+    }
+
+    /// The P3RP head of a P3RP machine (the head alone, or the hybrid machine's head at
+    /// its home configuration), for seed 004's analyses.
+    pub fn p3rp_head(&self) -> Result<crate::p3rp::P3rpHead> {
+        match &self.model {
+            Model::P3rpHead(h) => Ok(h.as_ref().clone()),
+            Model::P3rpHybrid(m) => Ok(m.head_mechanism()),
+            _ => Err(self.unsupported(Analysis::Seed004)),
+        }
+    }
+}
