@@ -53,7 +53,7 @@ fn tripod(c: &mut Criterion) {
 
 fn identification(c: &mut Criterion) {
     use pkm::identify::simulate::{simulate, triangle, Design, Experiment};
-    use pkm::identify::{identify, Model as Measured, Options};
+    use pkm::identify::{identify, MeasurementModel as Measured, Options};
     let Model::Hexapod(h) = machine("hexapod-seed001.toml").model else {
         panic!()
     };

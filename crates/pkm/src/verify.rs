@@ -218,19 +218,20 @@ where
         .collect()
 }
 
-/// [`check_table`] as a [`Visitor`], for machines whose type is known at run time.
-pub struct CheckTable {
-    /// Step for length coordinates (mm).
-    pub step_len: f64,
-    /// Step for angle coordinates (rad).
-    pub step_ang: f64,
-}
-
-impl Visitor for CheckTable {
-    type Output = Vec<CheckRow>;
-    fn visit<M: Mechanism<P, A>, const P: usize, const A: usize>(self, m: &M) -> Vec<CheckRow> {
-        check_table(m, self.step_len, self.step_ang)
+/// [`check_table`] on a loaded machine.
+pub fn machine_check_table(
+    machine: &crate::Machine,
+    step_len: f64,
+    step_ang: f64,
+) -> Vec<CheckRow> {
+    struct Job(f64, f64);
+    impl Visitor for Job {
+        type Output = Vec<CheckRow>;
+        fn visit<M: Mechanism<P, A>, const P: usize, const A: usize>(self, m: &M) -> Vec<CheckRow> {
+            check_table(m, self.0, self.1)
+        }
     }
+    machine.visit(Job(step_len, step_ang))
 }
 
 /// One expected value of a reference and what pkm computes for it.

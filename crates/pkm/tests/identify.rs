@@ -5,7 +5,9 @@ use pkm::hexapod::Hexapod;
 use pkm::identify::fit::rigid_transform;
 use pkm::identify::hexapod::seed_procedure;
 use pkm::identify::simulate::{pose_errors, simulate, simulate_on, triangle, Design, Experiment};
-use pkm::identify::{identify, parameter_names, residuals, Identifiable, Model, Options};
+use pkm::identify::{
+    identify, parameter_names, residuals, Identifiable, MeasurementModel, Options,
+};
 use pkm::machine::Model as MachineModel;
 
 fn model(name: &str) -> MachineModel {
@@ -67,7 +69,7 @@ fn residual_jacobians_equal_finite_differences() {
     let zero = h.zero_readings().unwrap();
     let s = simulate(&h, &zero, &experiment(8, Design::Random, 3)).unwrap();
     let theta = true_parameters(&s);
-    for model in [Model::Pose, Model::Points] {
+    for model in [MeasurementModel::Pose, MeasurementModel::Points] {
         let (_, j) = residuals(&h, &s.measurements, model, &theta).unwrap();
         assert_eq!(j.ncols(), 42);
         let mut worst: f64 = 0.0;
@@ -93,7 +95,7 @@ fn noise_free_data_recover_the_true_parameters() {
     assert_eq!(parameter_names(&h).len(), 42);
     let s = simulate(&h, &zero, &experiment(30, Design::Random, 11)).unwrap();
     let truth = true_parameters(&s);
-    for model in [Model::Pose, Model::Points] {
+    for model in [MeasurementModel::Pose, MeasurementModel::Points] {
         let o = Options {
             model,
             ..Default::default()
@@ -161,7 +163,7 @@ fn with_noise_fifty_states_bring_the_pose_error_to_the_noise_level() {
         let readings = v.measurements.readings();
         let before = pose_errors(&h, &zero, &readings, &v.poses).unwrap();
         assert!(before.position_rms > 0.5, "{before:?}");
-        for model in [Model::Pose, Model::Points] {
+        for model in [MeasurementModel::Pose, MeasurementModel::Points] {
             let o = Options {
                 model,
                 ..Default::default()

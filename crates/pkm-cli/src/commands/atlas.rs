@@ -2,10 +2,8 @@
 //! `pkm workspace --forward` (forward workspace over the actuator strokes).
 
 use anyhow::{bail, Result};
-use pkm::workspace::atlas::{atlas, Capacity};
-use pkm::workspace::forward::forward_map;
 use pkm::workspace::GridAxis;
-use pkm::{DynMechanism, Mechanism, Visitor};
+use pkm::{DynMechanism, Machine};
 use serde_json::json;
 
 use super::workspace::{slice_pairs, slice_plot};
@@ -50,44 +48,33 @@ pub struct Outputs {
     pub summary: serde_json::Value,
 }
 
-/// The atlas of a grid as a [`Visitor`].
-pub struct AtlasJob {
-    /// Base pose (internal units).
-    pub base: Vec<f64>,
-    /// Grid axes over pose coordinates.
-    pub axes: Vec<GridAxis>,
-    /// Largest pose rates (internal units).
-    pub velocity: Vec<f64>,
-    /// Largest pose accelerations (internal units).
-    pub acceleration: Vec<f64>,
-}
-
-impl Visitor for AtlasJob {
-    type Output = Result<DynAtlas>;
-    fn visit<M: Mechanism<P, A>, const P: usize, const A: usize>(self, m: &M) -> Result<DynAtlas> {
-        let base = pkm::dynamic::fixed::<P>("base pose", &self.base)?;
-        let cap = Capacity {
-            velocity: pkm::dynamic::fixed::<P>("--atlas-velocity", &self.velocity)?,
-            acceleration: pkm::dynamic::fixed::<P>("--atlas-acceleration", &self.acceleration)?,
-        };
-        let a = atlas(m, &base, &self.axes, &cap, &|_| {})?;
-        let acts = m.actuators();
-        let user = |v: &nalgebra::SVector<f64, A>| -> Vec<f64> {
-            (0..A).map(|i| acts[i].quantity.to_user(v[i])).collect()
-        };
-        Ok(DynAtlas {
-            points: a
-                .points
-                .into_iter()
-                .map(|p| AtlasRow {
-                    reachable: p.reachable,
-                    q: user(&p.q),
-                    velocity: user(&p.velocity),
-                    acceleration: user(&p.acceleration),
-                })
-                .collect(),
-        })
-    }
+/// The atlas of a grid (`pkm::analysis::workspace::atlas`), in user units.
+pub fn run_atlas(
+    machine: &Machine,
+    base: &[f64],
+    axes: &[GridAxis],
+    velocity: &[f64],
+    acceleration: &[f64],
+) -> Result<DynAtlas> {
+    let rows = pkm::analysis::workspace::atlas(machine, base, axes, velocity, acceleration)?;
+    let acts = machine.mechanism().actuators();
+    let user = |v: &[f64]| -> Vec<f64> {
+        v.iter()
+            .zip(acts)
+            .map(|(x, a)| a.quantity.to_user(*x))
+            .collect()
+    };
+    Ok(DynAtlas {
+        points: rows
+            .into_iter()
+            .map(|p| AtlasRow {
+                reachable: p.reachable,
+                q: user(&p.q),
+                velocity: user(&p.velocity),
+                acceleration: user(&p.acceleration),
+            })
+            .collect(),
+    })
 }
 
 /// Forward-map results with run-time sizes: per point reachable, binding, pose (user
@@ -97,37 +84,22 @@ pub struct DynForwardMap {
     pub points: Vec<(bool, Option<String>, Option<Vec<f64>>)>,
 }
 
-/// The forward map as a [`Visitor`].
-pub struct ForwardJob {
-    /// Grid axes over actuators.
-    pub axes: Vec<GridAxis>,
-    /// Start pose of every forward solution (internal units).
-    pub start: Vec<f64>,
-}
-
-impl Visitor for ForwardJob {
-    type Output = Result<DynForwardMap>;
-    fn visit<M: Mechanism<P, A>, const P: usize, const A: usize>(
-        self,
-        m: &M,
-    ) -> Result<DynForwardMap> {
-        let start = pkm::dynamic::fixed::<P>("start pose", &self.start)?;
-        let base = m.inverse(&start)?;
-        let f = forward_map(m, &base, &self.axes, &start, &|_| {})?;
-        let c = m.coordinates();
-        Ok(DynForwardMap {
-            points: f
-                .points
-                .into_iter()
-                .map(|p| {
-                    let pose = p
-                        .pose
-                        .map(|x| (0..P).map(|k| c[k].quantity.to_user(x[k])).collect());
-                    (p.reachable, p.binding, pose)
-                })
-                .collect(),
+/// The forward map (`pkm::analysis::workspace::forward_map`), poses in user units.
+pub fn run_forward(machine: &Machine, axes: &[GridAxis], start: &[f64]) -> Result<DynForwardMap> {
+    let c = machine.mechanism().coordinates();
+    let points = pkm::analysis::workspace::forward_map(machine, axes, start)?
+        .into_iter()
+        .map(|p| {
+            let pose = p.pose.map(|x| {
+                x.iter()
+                    .zip(c)
+                    .map(|(v, c)| c.quantity.to_user(*v))
+                    .collect()
+            });
+            (p.reachable, p.binding, pose)
         })
-    }
+        .collect();
+    Ok(DynForwardMap { points })
 }
 
 /// Converts a list of per-coordinate capacities from user units.

@@ -119,8 +119,8 @@ pub fn calibrate_run(a: &CalibrateArgs) -> Result<u8> {
         None => None,
     };
     let model = match a.model.as_str() {
-        "pose" => identify::Model::Pose,
-        "points" => identify::Model::Points,
+        "pose" => identify::MeasurementModel::Pose,
+        "points" => identify::MeasurementModel::Points,
         m => bail!("--model: expected `pose` or `points`, found `{m}`"),
     };
     let opt = CalibrateOptions {

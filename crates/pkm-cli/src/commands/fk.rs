@@ -27,28 +27,6 @@ fn start_pose(m: &dyn DynMechanism, a: &FkArgs) -> Result<Vec<f64>> {
     }
 }
 
-/// Every assembly mode found from `n` spread starts, as a [`pkm::Visitor`].
-struct ModesJob {
-    q: Vec<f64>,
-    n: usize,
-}
-
-impl pkm::Visitor for ModesJob {
-    type Output = Result<Vec<pkm::dynamic::DynForward>>;
-    fn visit<M: pkm::Mechanism<P, A>, const P: usize, const A: usize>(self, m: &M) -> Self::Output {
-        let q = pkm::dynamic::fixed::<A>("actuators", &self.q)?;
-        let starts = pkm::mechanism::spread_starts(m, self.n.max(1));
-        Ok(pkm::mechanism::assembly_modes(m, &q, &starts, 1e-6)
-            .into_iter()
-            .map(|f| pkm::dynamic::DynForward {
-                pose: f.pose.as_slice().to_vec(),
-                iterations: f.iterations,
-                residual: f.residual,
-            })
-            .collect())
-    }
-}
-
 pub fn run(a: &FkArgs) -> Result<u8> {
     let machine = load(&a.machine)?;
     let m = machine.mechanism();
@@ -62,7 +40,7 @@ pub fn run(a: &FkArgs) -> Result<u8> {
     let f = m.forward(&q, &start)?;
     let violations = m.check_limits(&f.pose, &q)?;
     let modes = match a.assembly_modes {
-        Some(n) => Some(machine.visit(ModesJob { q: q.clone(), n })?),
+        Some(n) => Some(pkm::analysis::workspace::assembly_modes(&machine, &q, n)?),
         None => None,
     };
     if a.opts.json {

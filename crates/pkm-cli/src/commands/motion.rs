@@ -5,15 +5,17 @@
 #![allow(clippy::needless_range_loop)]
 
 use std::fs::File;
-use std::io::{BufRead, BufReader, BufWriter, Write};
+use std::io::{BufReader, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
-use pkm::motion::gcode::Interpreter;
-use pkm::motion::program::{profile, to_move, FeedOptions, ProfileKind};
-use pkm::motion::{MotionSummary, Move, Profile, Runner, Sample, Sampling, Segment};
-use pkm::{DynMechanism, Machine, Mechanism, PoseSpace, Visitor};
+use pkm::analysis::motion::{
+    run_motion, sample_columns, MotionRun, MotionSource, SampleRow, SampleSink,
+};
+use pkm::motion::program::FeedOptions;
+use pkm::motion::{MotionSummary, Sampling};
+use pkm::{DynMechanism, Machine};
 use serde_json::json;
 
 use super::load;
@@ -22,252 +24,96 @@ use crate::poses::{parse_list, pose_from_user};
 use crate::report::plot::{panels_svg, Series};
 use crate::{MotionArgs, EXIT_UNREACHABLE};
 
-/// Where the moves come from.
-pub enum Source {
-    /// A G-code program (streamed line by line) starting at `start` (mm, rad).
-    Gcode {
-        /// Reader of the program text.
-        reader: Box<dyn BufRead>,
-        /// Total bytes, for the progress bar.
+/// Writes samples as CSV rows (user units) and drives the progress bar.
+pub struct CsvSink<'a> {
+    /// Where the rows go, if anywhere.
+    pub out: Option<&'a mut dyn Write>,
+    /// Actuator and coordinate quantities, for the units.
+    machine: &'a Machine,
+    line: String,
+    bar: Option<ProgressBar>,
+}
+
+impl<'a> CsvSink<'a> {
+    /// A sink writing the header row now; a progress bar over `bytes` of program when
+    /// that is large.
+    pub fn new(
+        machine: &'a Machine,
+        mut out: Option<&'a mut dyn Write>,
         bytes: u64,
-        /// Start `[X, Y, Z, A, B, C]`.
-        start: [f64; 6],
-    },
-    /// One straight move in the machine's own coordinates (internal units).
-    PointToPoint {
-        /// Start pose coordinates.
-        from: Vec<f64>,
-        /// End pose coordinates.
-        to: Vec<f64>,
-        /// Duration (s), instead of a feed.
-        duration: Option<f64>,
-        /// Acceleration time of a timed trapezoid (s).
-        accel_time: Option<f64>,
-    },
-}
-
-/// Decimated time series kept for plots (at most `CAP` rows, flat memory).
-#[derive(Default)]
-pub struct Traces {
-    /// Rows: t, then per actuator q, qd, qdd, then per serial axis x, xd, xdd (user units).
-    pub rows: Vec<Vec<f64>>,
-    stride: u64,
-    seen: u64,
-}
-
-const CAP: usize = 4000;
-
-impl Traces {
-    fn push(&mut self, row: impl FnOnce() -> Vec<f64>) {
-        if self.stride == 0 {
-            self.stride = 1;
+    ) -> Result<Self> {
+        if let Some(w) = out.as_deref_mut() {
+            writeln!(w, "{}", sample_columns(machine).join(","))?;
         }
-        if self.seen.is_multiple_of(self.stride) {
-            if self.rows.len() >= CAP {
-                let kept: Vec<Vec<f64>> = self.rows.drain(..).step_by(2).collect();
-                self.rows = kept;
-                self.stride *= 2;
-            }
-            if self.seen.is_multiple_of(self.stride) {
-                self.rows.push(row());
-            }
-        }
-        self.seen += 1;
-    }
-}
-
-/// Everything a run produces besides the CSV.
-pub struct Outcome {
-    /// The summary.
-    pub summary: MotionSummary,
-    /// Decimated series for plots.
-    pub traces: Traces,
-}
-
-/// Generic simulation, run through [`Machine::visit`].
-pub struct Simulate<'a> {
-    /// Moves.
-    pub source: Source,
-    /// Timing.
-    pub feed: FeedOptions,
-    /// Sampling.
-    pub sampling: Sampling,
-    /// CSV sink (header and rows), if any.
-    pub csv: Option<&'a mut dyn Write>,
-    /// Show a progress bar.
-    pub progress: bool,
-}
-
-fn csv_header<M: Mechanism<P, A>, const P: usize, const A: usize>(m: &M) -> String {
-    let mut h = vec!["t_s".to_string(), "line".to_string()];
-    for c in m.coordinates() {
-        h.push(format!("{}_{}", c.name, c.quantity.unit()));
-    }
-    for a in m.actuators() {
-        let u = a.quantity.unit();
-        h.push(format!("{}_{u}", a.name));
-        h.push(format!("{}_{u}_per_s", a.name));
-        h.push(format!("{}_{u}_per_s2", a.name));
-    }
-    h.join(",")
-}
-
-impl Visitor for Simulate<'_> {
-    type Output = Result<Outcome>;
-
-    fn visit<M: Mechanism<P, A>, const P: usize, const A: usize>(
-        mut self,
-        m: &M,
-    ) -> Result<Outcome> {
-        let mut runner = Runner::new(m, self.sampling)?;
-        let serial_idx: Vec<usize> = match m.pose_space() {
-            PoseSpace::Own => (0..P).collect(),
-            _ => (0..3).collect(),
-        };
-        let mut traces = Traces::default();
-        if let Some(w) = self.csv.as_deref_mut() {
-            writeln!(w, "{}", csv_header(m))?;
-        }
-        let mut csv = self.csv;
-        let mut line_buf = String::with_capacity(256);
-        let mut sink = |s: &Sample<P, A>| -> pkm::Result<()> {
-            let act = m.actuators();
-            let coords = m.coordinates();
-            traces.push(|| {
-                let mut r = Vec::with_capacity(1 + 3 * A + 3 * serial_idx.len());
-                r.push(s.t);
-                for i in 0..A {
-                    let qn = act[i].quantity;
-                    r.extend([
-                        qn.to_user(s.act.q[i]),
-                        qn.to_user(s.act.qd[i]),
-                        qn.to_user(s.act.qdd[i]),
-                    ]);
-                }
-                for &k in &serial_idx {
-                    let qn = coords[k].quantity;
-                    r.extend([
-                        qn.to_user(s.x[k]),
-                        qn.to_user(s.xd[k]),
-                        qn.to_user(s.xdd[k]),
-                    ]);
-                }
-                r
-            });
-            if let Some(w) = csv.as_deref_mut() {
-                use std::fmt::Write as _;
-                line_buf.clear();
-                let _ = write!(line_buf, "{:.6}", s.t);
-                match s.line {
-                    Some(l) => {
-                        let _ = write!(line_buf, ",{l}");
-                    }
-                    None => line_buf.push(','),
-                }
-                for k in 0..P {
-                    let _ = write!(line_buf, ",{:.6}", coords[k].quantity.to_user(s.x[k]));
-                }
-                for i in 0..A {
-                    let qn = act[i].quantity;
-                    let _ = write!(
-                        line_buf,
-                        ",{:.6},{:.6},{:.6}",
-                        qn.to_user(s.act.q[i]),
-                        qn.to_user(s.act.qd[i]),
-                        qn.to_user(s.act.qdd[i])
-                    );
-                }
-                line_buf.push('\n');
-                w.write_all(line_buf.as_bytes())
-                    .map_err(|e| pkm::Error::InvalidInput {
-                        what: "actuators.csv".into(),
-                        message: e.to_string(),
-                    })?;
-            }
-            Ok(())
-        };
-        match self.source {
-            Source::PointToPoint {
-                from,
-                to,
-                duration,
-                accel_time,
-            } => {
-                let from = pkm::dynamic::fixed::<P>("--from", &from)?;
-                let to = pkm::dynamic::fixed::<P>("--to", &to)?;
-                let q = pkm::motion::run::quantities(m);
-                let spatial = m.pose_space() != PoseSpace::Own;
-                let segment = Segment::line(from, to, &q, spatial);
-                let prof = match (duration, accel_time, self.feed.profile) {
-                    (Some(d), Some(ta), ProfileKind::Trapezoid) => Profile::trapezoid_timed(segment.length, d, ta)?,
-                    (Some(_), Some(_), _) => bail!("--accel-time needs --profile trapezoid"),
-                    (Some(d), None, ProfileKind::Constant) => Profile::constant(segment.length, segment.length / d)?,
-                    (Some(_), None, _) => bail!("--duration with --profile trapezoid needs --accel-time; with scurve give --feed instead"),
-                    (None, _, kind) => {
-                        let v = self.feed.feed.context("give --feed or --duration")?;
-                        profile(kind, segment.length, v, &self.feed)?
-                    }
-                };
-                runner.run_move(
-                    &Move {
-                        segment,
-                        profile: prof,
-                        line: None,
-                    },
-                    true,
-                    &mut sink,
-                )?;
-            }
-            Source::Gcode {
-                reader,
-                bytes,
-                start,
-            } => {
-                let bar = if self.progress && bytes > 1_000_000 {
-                    let b = ProgressBar::new(bytes);
-                    b.set_style(
-                        ProgressStyle::with_template("{bar:40} {bytes}/{total_bytes} {eta}")
-                            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-                    );
-                    Some(b)
-                } else {
-                    None
-                };
-                let mut interp = Interpreter::new(start);
-                let mut pending: Option<Move<P>> = None;
-                for (i, line) in reader.lines().enumerate() {
-                    let text = line.with_context(|| format!("reading G-code line {}", i + 1))?;
-                    if let Some(b) = &bar {
-                        b.inc(text.len() as u64 + 1);
-                    }
-                    if interp.ended {
-                        break;
-                    }
-                    if let Some(g) = interp.line(&text, i as u64 + 1)? {
-                        let mv = to_move(m, &g, &self.feed)?;
-                        if let Some(p) = pending.take() {
-                            runner.run_move(&p, false, &mut sink)?;
-                        }
-                        pending = Some(mv);
-                    }
-                }
-                if let Some(p) = pending.take() {
-                    runner.run_move(&p, true, &mut sink)?;
-                }
-                if let Some(b) = bar {
-                    b.finish_and_clear();
-                }
-            }
-        }
-        Ok(Outcome {
-            summary: runner.finish(),
-            traces,
+        let bar = (bytes > 1_000_000).then(|| {
+            let b = ProgressBar::new(bytes);
+            b.set_style(
+                ProgressStyle::with_template("{bar:40} {bytes}/{total_bytes} {eta}")
+                    .unwrap_or_else(|_| ProgressStyle::default_bar()),
+            );
+            b
+        });
+        Ok(CsvSink {
+            out,
+            machine,
+            line: String::with_capacity(256),
+            bar,
         })
+    }
+
+    fn finish(&self) {
+        if let Some(b) = &self.bar {
+            b.finish_and_clear();
+        }
+    }
+}
+
+impl SampleSink for CsvSink<'_> {
+    fn sample(&mut self, s: &SampleRow) -> pkm::Result<()> {
+        use std::fmt::Write as _;
+        let Some(w) = self.out.as_deref_mut() else {
+            return Ok(());
+        };
+        let m = self.machine.mechanism();
+        let b = &mut self.line;
+        b.clear();
+        let _ = write!(b, "{:.6}", s.t);
+        match s.line {
+            Some(l) => {
+                let _ = write!(b, ",{l}");
+            }
+            None => b.push(','),
+        }
+        for (c, x) in m.coordinates().iter().zip(s.x) {
+            let _ = write!(b, ",{:.6}", c.quantity.to_user(*x));
+        }
+        for (i, a) in m.actuators().iter().enumerate() {
+            let qn = a.quantity;
+            let _ = write!(
+                b,
+                ",{:.6},{:.6},{:.6}",
+                qn.to_user(s.q[i]),
+                qn.to_user(s.qd[i]),
+                qn.to_user(s.qdd[i])
+            );
+        }
+        b.push('\n');
+        w.write_all(b.as_bytes())
+            .map_err(|e| pkm::Error::InvalidInput {
+                what: "actuators.csv".into(),
+                message: e.to_string(),
+            })
+    }
+
+    fn progress(&mut self, bytes: u64) {
+        if let Some(b) = &self.bar {
+            b.inc(bytes);
+        }
     }
 }
 
 /// The plots of a run: actuators (position, velocity, acceleration) and serial axes.
-pub fn plots(m: &dyn DynMechanism, o: &Outcome, title: &str) -> Result<(String, String)> {
+pub fn plots(m: &dyn DynMechanism, o: &MotionRun, title: &str) -> Result<(String, String)> {
     let a = m.actuators();
     let serial: Vec<(String, &'static str)> = o
         .summary
@@ -370,28 +216,19 @@ pub fn run(a: &MotionArgs) -> Result<u8> {
         Some(s) => Some(pose_from_user(m, &parse_list(s, "--from")?, conv)?),
         None => None,
     };
+    let mut bytes = 0;
     let source = if let Some(g) = &a.gcode {
-        let start = match m.pose_space() {
-            PoseSpace::Own => bail!("G-code needs a machine whose pose is X, Y, Z[, A, B, C]"),
-            _ => {
-                let x = from.clone().unwrap_or_else(|| m.home());
-                let mut s = [0.0; 6];
-                s[..x.len()].copy_from_slice(&x);
-                s
-            }
-        };
         let f = File::open(g).with_context(|| format!("cannot read {}", g.display()))?;
-        let bytes = f.metadata().map(|x| x.len()).unwrap_or(0);
-        Source::Gcode {
+        bytes = f.metadata().map(|x| x.len()).unwrap_or(0);
+        MotionSource::Gcode {
             reader: Box::new(BufReader::new(f)),
-            bytes,
-            start,
+            from: from.clone(),
         }
     } else {
         let to =
             a.to.as_ref()
                 .context("give --gcode FILE, or --from POSE --to POSE")?;
-        Source::PointToPoint {
+        MotionSource::PointToPoint {
             from: from.unwrap_or_else(|| m.home()),
             to: pose_from_user(m, &parse_list(to, "--to")?, conv)?,
             duration: a.duration,
@@ -417,12 +254,15 @@ pub fn run(a: &MotionArgs) -> Result<u8> {
             File::create(&tmp).with_context(|| format!("cannot create {}", tmp.display()))?,
         ))
     };
-    let outcome = machine.visit(Simulate {
-        source,
-        feed,
-        sampling,
-        csv: writer.as_mut().map(|w| w as &mut dyn Write),
-        progress: true,
+    let outcome = CsvSink::new(
+        &machine,
+        writer.as_mut().map(|w| w as &mut dyn Write),
+        bytes,
+    )
+    .and_then(|mut sink| {
+        let r = run_motion(&machine, source, &feed, sampling, &mut sink);
+        sink.finish();
+        Ok(r?)
     });
     let outcome = match outcome {
         Ok(o) => o,

@@ -2,8 +2,8 @@
 
 use anyhow::{bail, Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
-use pkm::workspace::{flat_index, map, reachable_tilt, GridAxis, WorkspaceMap, WorkspaceSummary};
-use pkm::{DynMechanism, Machine, Mechanism, PoseSpace, Visitor};
+use pkm::workspace::{flat_index, GridAxis, WorkspaceMap, WorkspaceSummary};
+use pkm::{DynMechanism, Machine, PoseSpace};
 use serde_json::json;
 
 use super::load;
@@ -12,62 +12,33 @@ use crate::poses::{parse_list, pose_from_user};
 use crate::report::heatmap::{slice_svg, Cell, Scale};
 use crate::WorkspaceArgs;
 
-/// A grid map as a [`Visitor`].
-pub struct MapJob {
-    /// Base pose (internal units).
-    pub base: Vec<f64>,
-    /// Axes.
-    pub axes: Vec<GridAxis>,
-    /// Orientation set (A, B, C rad) for the total orientation workspace.
-    pub orientations: Vec<[f64; 3]>,
-    /// Show a progress bar.
-    pub progress: bool,
-}
-
-impl Visitor for MapJob {
-    type Output = Result<WorkspaceMap>;
-    fn visit<M: Mechanism<P, A>, const P: usize, const A: usize>(
-        self,
-        m: &M,
-    ) -> Result<WorkspaceMap> {
-        let base = pkm::dynamic::fixed::<P>("base pose", &self.base)?;
-        let total: usize = self.axes.iter().map(|a| a.count()).product();
-        let bar = if self.progress && total > 200_000 {
-            let b = ProgressBar::new(total as u64);
-            b.set_style(
-                ProgressStyle::with_template("{bar:40} {pos}/{len} points {eta}")
-                    .unwrap_or_else(|_| ProgressStyle::default_bar()),
-            );
-            Some(b)
-        } else {
-            None
-        };
-        let tick = |n: u64| {
-            if let Some(b) = &bar {
-                b.inc(n);
-            }
-        };
-        let r = map(m, &base, &self.axes, &self.orientations, &tick)?;
-        if let Some(b) = bar {
-            b.finish_and_clear();
+/// The grid map (`pkm::analysis::workspace::grid`) with a progress bar on large grids.
+pub fn run_grid(
+    machine: &Machine,
+    base: &[f64],
+    axes: &[GridAxis],
+    orientations: &[[f64; 3]],
+    progress: bool,
+) -> Result<WorkspaceMap> {
+    let total: usize = axes.iter().map(|a| a.count()).product();
+    let bar = (progress && total > 200_000).then(|| {
+        let b = ProgressBar::new(total as u64);
+        b.set_style(
+            ProgressStyle::with_template("{bar:40} {pos}/{len} points {eta}")
+                .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        );
+        b
+    });
+    let tick = |n: u64| {
+        if let Some(b) = &bar {
+            b.inc(n);
         }
-        Ok(r)
+    };
+    let r = pkm::analysis::workspace::grid(machine, base, axes, orientations, &tick)?;
+    if let Some(b) = bar {
+        b.finish_and_clear();
     }
-}
-
-/// Tilt orientation workspace at a point as a [`Visitor`] (spatial machines only).
-struct TiltJob {
-    x: Vec<f64>,
-    azimuths: Vec<f64>,
-    max: f64,
-}
-
-impl Visitor for TiltJob {
-    type Output = Result<Vec<f64>>;
-    fn visit<M: Mechanism<P, A>, const P: usize, const A: usize>(self, m: &M) -> Result<Vec<f64>> {
-        let x = pkm::dynamic::fixed::<P>("--at", &self.x)?;
-        Ok(reachable_tilt(m, &x, &self.azimuths, self.max, 1e-4)?)
-    }
+    Ok(r)
 }
 
 /// Default grid of the machine (see [`pkm::workspace::default_grid`]).
@@ -232,11 +203,8 @@ pub fn run(a: &WorkspaceArgs) -> Result<u8> {
             x[3..6].copy_from_slice(&base[3..6]);
         }
         let az: Vec<f64> = (0..36).map(|k| (k as f64 * 10.0).to_radians()).collect();
-        let tilts = machine.visit(TiltJob {
-            x: x.clone(),
-            azimuths: az.clone(),
-            max: a.max_tilt.to_radians(),
-        })?;
+        let tilts =
+            pkm::analysis::workspace::reachable_tilt(&machine, &x, &az, a.max_tilt.to_radians())?;
         let min = tilts.iter().copied().fold(f64::INFINITY, f64::min);
         let v = json!({
             "position": &p[..3.min(p.len())],
@@ -277,12 +245,7 @@ pub fn run(a: &WorkspaceArgs) -> Result<u8> {
         None => Vec::new(),
     };
     let start = std::time::Instant::now();
-    let wm = machine.visit(MapJob {
-        base: base.clone(),
-        axes: axes.clone(),
-        orientations,
-        progress: true,
-    })?;
+    let wm = run_grid(&machine, &base, &axes, &orientations, true)?;
     let secs = start.elapsed().as_secs_f64();
     let s = summarise(m, &wm);
     let mut binding = serde_json::Map::new();
@@ -303,13 +266,13 @@ pub fn run(a: &WorkspaceArgs) -> Result<u8> {
         };
         let v = list(&a.atlas_velocity, "--atlas-velocity")?;
         let acc = list(&a.atlas_acceleration, "--atlas-acceleration")?;
-        let job = super::atlas::AtlasJob {
-            base: base.clone(),
-            axes: axes.clone(),
-            velocity: super::atlas::capacity(m, v.as_deref(), "--atlas-velocity")?,
-            acceleration: super::atlas::capacity(m, acc.as_deref(), "--atlas-acceleration")?,
-        };
-        let at = machine.visit(job)?;
+        let at = super::atlas::run_atlas(
+            &machine,
+            &base,
+            &axes,
+            &super::atlas::capacity(m, v.as_deref(), "--atlas-velocity")?,
+            &super::atlas::capacity(m, acc.as_deref(), "--atlas-acceleration")?,
+        )?;
         let coords_user = |k: usize| {
             let x = wm.coords(k);
             axes.iter()
@@ -332,10 +295,7 @@ pub fn run(a: &WorkspaceArgs) -> Result<u8> {
     }
     if a.forward {
         let faxes = super::atlas::forward_axes(m, a.forward_step)?;
-        let fm = machine.visit(super::atlas::ForwardJob {
-            axes: faxes.clone(),
-            start: base.clone(),
-        })?;
+        let fm = super::atlas::run_forward(&machine, &faxes, &base)?;
         let base_q = m.inverse(&base)?;
         let o = super::atlas::forward_outputs(m, &faxes, &base_q, &fm)?;
         write_atomic(&a.out.join("forward.csv"), o.csv.as_bytes(), &inputs)?;

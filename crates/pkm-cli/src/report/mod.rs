@@ -9,7 +9,7 @@ mod p3rp;
 pub mod plot;
 
 use anyhow::{Context, Result};
-use pkm::verify::{check_references, CheckRow, CheckTable, ReferenceCheck};
+use pkm::verify::{check_references, machine_check_table, CheckRow, ReferenceCheck};
 use pkm::Machine;
 
 use crate::io::write_atomic;
@@ -209,10 +209,7 @@ pub fn build(machine: &Machine) -> Result<String> {
          Jacobian against central finite differences (pass: relative ≤ {JACOBIAN_TOL:.0e}) \
          and the condition number of the Jacobian's driven columns."
     ));
-    let table = machine.visit(CheckTable {
-        step_len: 20.0,
-        step_ang: 5f64.to_radians(),
-    });
+    let table = machine_check_table(machine, 20.0, 5f64.to_radians());
     h.raw(&check_table_html(machine, &table));
 
     // The analyses' sections: each asked whether the machine has it; one that fails
@@ -309,16 +306,11 @@ fn check_table_html(machine: &Machine, rows: &[CheckRow]) -> String {
 /// Workspace at the home orientation: summary, slices through home with the condition
 /// number, and the limits that bind outside.
 fn workspace_section(h: &mut Html, machine: &Machine) -> Result<()> {
-    use crate::commands::workspace::{default_axes, slices, summarise, MapJob};
+    use crate::commands::workspace::{default_axes, run_grid, slices, summarise};
     let m = machine.mechanism();
     let home = m.home();
     let axes = default_axes(m, &home, None, None)?;
-    let wm = machine.visit(MapJob {
-        base: home.clone(),
-        axes: axes.clone(),
-        orientations: Vec::new(),
-        progress: false,
-    })?;
+    let wm = run_grid(machine, &home, &axes, &[], false)?;
     let s = summarise(m, &wm);
     h.h2_id("workspace", "Workspace and conditioning");
     let names: Vec<String> = axes
@@ -332,7 +324,7 @@ fn workspace_section(h: &mut Html, machine: &Machine) -> Result<()> {
          length of {:.1} mm (1 = isotropic).",
         s.points,
         names.join(", "),
-        machine.visit(CharLength)
+        machine.mechanism().characteristic_length()
     ));
     let bbox: Vec<String> = s
         .bounding_box
@@ -370,15 +362,6 @@ fn workspace_section(h: &mut Html, machine: &Machine) -> Result<()> {
     Ok(())
 }
 
-struct CharLength;
-
-impl pkm::Visitor for CharLength {
-    type Output = f64;
-    fn visit<M: pkm::Mechanism<P, A>, const P: usize, const A: usize>(self, m: &M) -> f64 {
-        m.characteristic_length()
-    }
-}
-
 /// Feeds of seed 000's arc study (mm/min).
 const ARC_FEEDS: [f64; 4] = [10.0, 100.0, 1000.0, 10_000.0];
 
@@ -386,7 +369,8 @@ const ARC_FEEDS: [f64; 4] = [10.0, 100.0, 1000.0, 10_000.0];
 /// XY plane at the home height, from home + (32, -32) about home + (-32, -32), at
 /// constant feed, sampled at 101 points (0.9 deg apart).
 fn motion_section(h: &mut Html, machine: &Machine) -> Result<()> {
-    use crate::commands::motion::{plots, Simulate, Source};
+    use crate::commands::motion::plots;
+    use pkm::analysis::motion::{run_motion, MotionSource, NoSink};
     use pkm::motion::program::{FeedOptions, ProfileKind};
     use pkm::motion::Sampling;
     let m = machine.mechanism();
@@ -428,20 +412,19 @@ fn motion_section(h: &mut Html, machine: &Machine) -> Result<()> {
             start[0] - 64.0,
             start[1] + 64.0
         );
-        let out = machine.visit(Simulate {
-            source: Source::Gcode {
+        let out = run_motion(
+            machine,
+            MotionSource::Gcode {
                 reader: Box::new(std::io::Cursor::new(program.into_bytes())),
-                bytes: 0,
-                start,
+                from: Some(start.to_vec()),
             },
-            feed: FeedOptions {
+            &FeedOptions {
                 profile: ProfileKind::Constant,
                 ..Default::default()
             },
-            sampling: Sampling::Points(101),
-            csv: None,
-            progress: false,
-        });
+            Sampling::Points(101),
+            &mut NoSink,
+        );
         let out = match out {
             Ok(o) => o,
             Err(e) => {

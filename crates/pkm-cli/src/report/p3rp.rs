@@ -2,12 +2,14 @@
 //! numbers reproduced, its figs. 4-7 redrawn from the model.
 
 use anyhow::Result;
-use pkm::p3rp::seed004::reproduction;
+use pkm::analysis::seed004::reproduction;
 use pkm::workspace::GridAxis;
-use pkm::{Machine, Mechanism, Visitor};
+use pkm::Machine;
 
 use super::html::{esc, Html};
-use crate::commands::atlas::{atlas_outputs, forward_axes, forward_outputs, AtlasJob, ForwardJob};
+use crate::commands::atlas::{
+    atlas_outputs, forward_axes, forward_outputs, run_atlas, run_forward,
+};
 
 fn num(v: &[f64]) -> String {
     match v {
@@ -24,8 +26,11 @@ const FIG6_VELOCITY: [f64; 2] = [150.0, 1.0];
 const FIG6_ACCELERATION: [f64; 2] = [9806.65, 30.0];
 
 pub fn section(h: &mut Html, machine: &Machine) -> Result<()> {
-    let head = &machine.p3rp_head()?;
-    let g = &head.geometry;
+    let geometry = machine.p3rp_head()?;
+    let g = &geometry.geometry;
+    // The head as a machine of its own (for the hybrid machine, its head at home).
+    let hm = machine.p3rp_head_machine()?;
+    let head = hm.mechanism();
     h.h2_id("seed004", "P3RP head: seed 004 reproduced");
     h.p(&format!(
         "The head's structural parameters: l1 = |AB| = {:.2} mm, l2 = |BC| = {:.2} mm, \
@@ -39,7 +44,7 @@ pub fn section(h: &mut Html, machine: &Machine) -> Result<()> {
         g.tool_length,
         g.branch
     ));
-    let rows: Vec<Vec<String>> = reproduction(head)?
+    let rows: Vec<Vec<String>> = reproduction(machine)?
         .iter()
         .map(|r| {
             vec![
@@ -76,14 +81,8 @@ pub fn section(h: &mut Html, machine: &Machine) -> Result<()> {
             step: 2f64.to_radians(),
         },
     ];
-    let base = head.home().as_slice().to_vec();
-    let at = AtlasJob {
-        base: base.clone(),
-        axes: axes.clone(),
-        velocity: FIG6_VELOCITY.to_vec(),
-        acceleration: FIG6_ACCELERATION.to_vec(),
-    }
-    .visit(head)?;
+    let base = head.home();
+    let at = run_atlas(&hm, &base, &axes, &FIG6_VELOCITY, &FIG6_ACCELERATION)?;
     let coords_user = |k: usize| {
         let n1 = axes[1].count();
         vec![axes[0].value(k / n1), axes[1].value(k % n1).to_degrees()]
@@ -121,13 +120,9 @@ pub fn section(h: &mut Html, machine: &Machine) -> Result<()> {
 
     // Fig. 5: forward workspace over the slider strokes.
     let faxes = forward_axes(head, Some(8.0))?;
-    let fm = ForwardJob {
-        axes: faxes.clone(),
-        start: base.clone(),
-    }
-    .visit(head)?;
+    let fm = run_forward(&hm, &faxes, &base)?;
     let q0 = head.inverse(&head.home())?;
-    let fo = forward_outputs(head, &faxes, q0.as_slice(), &fm)?;
+    let fo = forward_outputs(head, &faxes, &q0, &fm)?;
     let svgs: String = fo.plots.iter().map(|(_, s)| s.as_str()).collect();
     h.p(&format!(
         "<b>Forward workspace (fig. 5)</b>: the pose the head takes over the slider strokes \
@@ -138,24 +133,24 @@ pub fn section(h: &mut Html, machine: &Machine) -> Result<()> {
     h.raw(&format!("<div class=\"views\">{svgs}</div>"));
 
     // Fig. 7: the paper's move.
-    use crate::commands::motion::{plots, Simulate, Source};
+    use crate::commands::motion::plots;
+    use pkm::analysis::motion::{run_motion, MotionSource, NoSink};
     use pkm::motion::program::{FeedOptions, ProfileKind};
-    let sim = Simulate {
-        source: Source::PointToPoint {
+    let sim = run_motion(
+        &hm,
+        MotionSource::PointToPoint {
             from: vec![200.0, 0.0],
             to: vec![335.0, 0.9],
             duration: Some(1.0),
             accel_time: Some(0.1),
         },
-        feed: FeedOptions {
+        &FeedOptions {
             profile: ProfileKind::Trapezoid,
             ..Default::default()
         },
-        sampling: pkm::motion::Sampling::Rate(1000.0),
-        csv: None,
-        progress: false,
-    }
-    .visit(head)?;
+        pkm::motion::Sampling::Rate(1000.0),
+        &mut NoSink,
+    )?;
     let (a, b) = plots(head, &sim, "fig. 7 move")?;
     h.p(
         "<b>The fig. 7 move</b>: (z, theta) from (200 mm, 0) to (335 mm, 0.9 rad) in 1 s, \

@@ -121,7 +121,7 @@ pub fn write_measurements(machine: &Machine, m: &Measurements, comment: &str) ->
 #[derive(Debug, Clone, PartialEq)]
 pub struct CalibrateOptions {
     /// Measurement equations.
-    pub model: identify::Model,
+    pub model: identify::MeasurementModel,
     /// Parameters held at their nominal values: names, `*` matching any run of
     /// characters (`A1.z`, `C.*`).
     pub fix: Vec<String>,
@@ -133,7 +133,7 @@ pub struct CalibrateOptions {
 impl Default for CalibrateOptions {
     fn default() -> Self {
         CalibrateOptions {
-            model: identify::Model::Pose,
+            model: identify::MeasurementModel::Pose,
             fix: Vec::new(),
             seed_procedure: false,
         }

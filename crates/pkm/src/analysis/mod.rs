@@ -8,6 +8,9 @@
 pub mod accuracy;
 pub mod identification;
 pub mod kinematics;
+pub mod motion;
+pub mod seed004;
+pub mod workspace;
 
 pub use accuracy::{
     accuracy, AccuracyOptions, AccuracyReport, KindTolerances, MapRequest, ToleranceSource,

@@ -8,12 +8,12 @@
 //! can be held at its nominal value ([`Options::fixed`]).
 //!
 //! Two measurement models, per state `i` (the readings `dL_i` and the measured points):
-//! * [`Model::Pose`]: the fixture's points (`N >= 3` known points of the moving
+//! * [`MeasurementModel::Pose`]: the fixture's points (`N >= 3` known points of the moving
 //!   platform, e.g. the vertices of seed 001's triangle, eqs. 4-5) give the platform's
 //!   full pose by a best-fit rigid transform ([`fit::rigid_transform`]); residuals are
 //!   the actuator equations `q_j(x_i; g) - L_j^(0) - dL_ij` (seed 001 eq. 1), `A` per
 //!   state. Their Jacobian is analytic and decoupled per actuator.
-//! * [`Model::Points`]: the points alone (a laser tracker on the tool: 3 equations per
+//! * [`MeasurementModel::Points`]: the points alone (a laser tracker on the tool: 3 equations per
 //!   point per state). The pose is not measured: `x_i` solves `q(x_i; g) = L^(0) +
 //!   dL_i` (forward kinematics of the candidate machine) and the residual is measured
 //!   minus predicted point. By the implicit function theorem
@@ -118,7 +118,7 @@ impl Measurements {
 /// Which measurement equations to use.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
-pub enum Model {
+pub enum MeasurementModel {
     /// Full pose per state from the fixture (`>= 3` points), actuator equations.
     Pose,
     /// Measured points only, pose through forward kinematics.
@@ -129,7 +129,7 @@ pub enum Model {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Options {
     /// Measurement equations.
-    pub model: Model,
+    pub model: MeasurementModel,
     /// Indices of parameters held at their starting values.
     pub fixed: Vec<usize>,
     /// Singular values of the scaled Jacobian below this fraction of the largest mark
@@ -147,7 +147,7 @@ pub struct Options {
 impl Default for Options {
     fn default() -> Self {
         Options {
-            model: Model::Pose,
+            model: MeasurementModel::Pose,
             fixed: Vec::new(),
             rank_tolerance: 1e-9,
             max_evaluations: 400,
@@ -208,7 +208,7 @@ pub struct Identification {
 struct Problem<'a, M, const P: usize, const A: usize> {
     nominal: &'a M,
     meas: &'a Measurements,
-    model: Model,
+    model: MeasurementModel,
     /// Measured poses (pose model).
     poses: Vec<SVector<f64, P>>,
     /// Last forward-kinematics poses (point model), warm starts.
@@ -227,8 +227,8 @@ impl<M: Identifiable<P, A>, const P: usize, const A: usize> Problem<'_, M, P, A>
 
     fn rows_per_state(&self) -> usize {
         match self.model {
-            Model::Pose => A,
-            Model::Points => 3 * self.meas.fixture.len(),
+            MeasurementModel::Pose => A,
+            MeasurementModel::Points => 3 * self.meas.fixture.len(),
         }
     }
 
@@ -248,7 +248,7 @@ impl<M: Identifiable<P, A>, const P: usize, const A: usize> Problem<'_, M, P, A>
         for (i, st) in self.meas.states.iter().enumerate() {
             let base = i * rows;
             match self.model {
-                Model::Pose => {
+                MeasurementModel::Pose => {
                     let q = m.inverse_with_geometry_jacobian(&self.poses[i], &mut jg)?;
                     for j in 0..A {
                         r[base + j] = q[j] - zero[j] - st.readings[j];
@@ -258,7 +258,7 @@ impl<M: Identifiable<P, A>, const P: usize, const A: usize> Problem<'_, M, P, A>
                         jac[(base + j, ng + j)] = -1.0;
                     }
                 }
-                Model::Points => {
+                MeasurementModel::Points => {
                     let target = SVector::<f64, A>::from_fn(|j, _| zero[j] + st.readings[j]);
                     let f = m.forward(&target, &self.fk[i])?;
                     self.fk[i] = f.pose;
@@ -372,12 +372,12 @@ pub fn measured_poses<M: Identifiable<P, A>, const P: usize, const A: usize>(
 pub fn residuals<M: Identifiable<P, A>, const P: usize, const A: usize>(
     nominal: &M,
     meas: &Measurements,
-    model: Model,
+    model: MeasurementModel,
     theta: &[f64],
 ) -> Result<(DVector<f64>, DMatrix<f64>)> {
     let poses = match model {
-        Model::Pose => measured_poses(nominal, meas)?,
-        Model::Points => Vec::new(),
+        MeasurementModel::Pose => measured_poses(nominal, meas)?,
+        MeasurementModel::Points => Vec::new(),
     };
     let mut problem = Problem {
         nominal,
@@ -411,13 +411,13 @@ pub fn identify<M: Identifiable<P, A>, const P: usize, const A: usize>(
     let n = theta.len();
     let free: Vec<usize> = (0..n).filter(|i| !o.fixed.contains(i)).collect();
     let poses = match o.model {
-        Model::Pose => measured_poses(nominal, meas)?,
-        Model::Points => Vec::new(),
+        MeasurementModel::Pose => measured_poses(nominal, meas)?,
+        MeasurementModel::Points => Vec::new(),
     };
     // Warm starts of the point model: the nominal machine's forward kinematics from
     // home.
     let fk = match o.model {
-        Model::Points => meas
+        MeasurementModel::Points => meas
             .states
             .iter()
             .map(|st| {
@@ -428,7 +428,7 @@ pub fn identify<M: Identifiable<P, A>, const P: usize, const A: usize>(
                     .unwrap_or_else(|_| nominal.home())
             })
             .collect(),
-        Model::Pose => Vec::new(),
+        MeasurementModel::Pose => Vec::new(),
     };
     let mut problem = Problem {
         nominal,
@@ -559,8 +559,8 @@ fn validate<M: Identifiable<P, A>, const P: usize, const A: usize>(
         )));
     }
     let need = match o.model {
-        Model::Pose => 3,
-        Model::Points => 1,
+        MeasurementModel::Pose => 3,
+        MeasurementModel::Points => 1,
     };
     if meas.fixture.len() < need {
         return Err(bad(format!(
@@ -582,8 +582,8 @@ fn validate<M: Identifiable<P, A>, const P: usize, const A: usize>(
     }
     let free = n - o.fixed.len();
     let per_state = match o.model {
-        Model::Pose => A,
-        Model::Points => 3 * meas.fixture.len(),
+        MeasurementModel::Pose => A,
+        MeasurementModel::Points => 3 * meas.fixture.len(),
     };
     if meas.states.len() * per_state < free {
         return Err(bad(format!(

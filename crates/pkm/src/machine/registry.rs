@@ -242,6 +242,20 @@ impl Machine {
         }
     }
 
+    /// The P3RP head of a P3RP machine as a machine of its own (the head alone, or the
+    /// hybrid machine's head at its home configuration), for seed 004's analyses.
+    pub fn p3rp_head_machine(&self) -> Result<Machine> {
+        let head = self.p3rp_head()?;
+        Ok(Machine {
+            source: self.source.clone(),
+            name: Some(head.name.clone()),
+            description: None,
+            model: Model::P3rpHead(Box::new(head)),
+            references: Vec::new(),
+            rapid: self.rapid,
+        })
+    }
+
     /// The P3RP head of a P3RP machine (the head alone, or the hybrid machine's head at
     /// its home configuration), for seed 004's analyses.
     pub fn p3rp_head(&self) -> Result<crate::p3rp::P3rpHead> {

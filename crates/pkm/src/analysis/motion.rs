@@ -1,0 +1,300 @@
+//! Motion on a loaded machine: a G-code program (streamed line by line) or a
+//! point-to-point move through the mechanism, every sample handed to a sink (a front
+//! end writes them where it likes), the statistics, limits and serial comparison of
+//! [`crate::motion::Runner`], and decimated series for plots.
+
+// Parallel arrays (actuators, coordinates, sample vectors) are indexed together.
+#![allow(clippy::needless_range_loop)]
+
+use std::io::BufRead;
+
+use crate::error::{Error, Result};
+use crate::machine::{Analysable, Machine, Visitor};
+use crate::mechanism::PoseSpace;
+use crate::motion::gcode::Interpreter;
+use crate::motion::program::{profile, to_move, FeedOptions, ProfileKind};
+use crate::motion::{MotionSummary, Move, Profile, Runner, Sample, Sampling, Segment};
+
+/// Where the moves come from.
+pub enum MotionSource<'a> {
+    /// A G-code program, read line by line, starting at `from` (pose coordinates,
+    /// internal units; `None`: home). Needs a machine whose pose is X, Y, Z[, A, B, C].
+    Gcode {
+        /// The program text.
+        reader: Box<dyn BufRead + 'a>,
+        /// Start pose.
+        from: Option<Vec<f64>>,
+    },
+    /// One straight move in the machine's own coordinates (internal units).
+    PointToPoint {
+        /// Start pose coordinates.
+        from: Vec<f64>,
+        /// End pose coordinates.
+        to: Vec<f64>,
+        /// Duration (s), instead of a feed.
+        duration: Option<f64>,
+        /// Acceleration time of a timed trapezoid (s).
+        accel_time: Option<f64>,
+    },
+}
+
+/// One sample of a run (internal units: mm, rad, s).
+#[derive(Debug, Clone, Copy)]
+pub struct SampleRow<'a> {
+    /// Time from the start (s).
+    pub t: f64,
+    /// G-code line of the move.
+    pub line: Option<u64>,
+    /// Pose coordinates.
+    pub x: &'a [f64],
+    /// Actuator positions.
+    pub q: &'a [f64],
+    /// Actuator velocities.
+    pub qd: &'a [f64],
+    /// Actuator accelerations.
+    pub qdd: &'a [f64],
+}
+
+/// Receives a run's samples and progress.
+pub trait SampleSink {
+    /// One sample; an error stops the run.
+    fn sample(&mut self, s: &SampleRow) -> Result<()>;
+    /// `bytes` more of the program were read (for progress bars).
+    fn progress(&mut self, _bytes: u64) {}
+}
+
+/// A sink that keeps nothing (summary only).
+pub struct NoSink;
+
+impl SampleSink for NoSink {
+    fn sample(&mut self, _s: &SampleRow) -> Result<()> {
+        Ok(())
+    }
+}
+
+/// Decimated time series kept for plots (at most 4000 rows, flat memory): per row
+/// `t`, then per actuator `q, q', q''`, then per serial axis `x, x', x''`, in user
+/// units (mm, deg).
+#[derive(Debug, Clone, Default)]
+pub struct Traces {
+    /// The rows.
+    pub rows: Vec<Vec<f64>>,
+    stride: u64,
+    seen: u64,
+}
+
+const CAP: usize = 4000;
+
+impl Traces {
+    fn push(&mut self, row: impl FnOnce() -> Vec<f64>) {
+        if self.stride == 0 {
+            self.stride = 1;
+        }
+        if self.seen.is_multiple_of(self.stride) {
+            if self.rows.len() >= CAP {
+                let kept: Vec<Vec<f64>> = self.rows.drain(..).step_by(2).collect();
+                self.rows = kept;
+                self.stride *= 2;
+            }
+            if self.seen.is_multiple_of(self.stride) {
+                self.rows.push(row());
+            }
+        }
+        self.seen += 1;
+    }
+}
+
+/// What a run produces besides its samples.
+#[derive(Debug, Clone)]
+pub struct MotionRun {
+    /// Statistics, limits along the path, serial comparison, feed override.
+    pub summary: MotionSummary,
+    /// Decimated series for plots.
+    pub traces: Traces,
+}
+
+/// The columns of a sample row for tables: `t_s`, `line`, the pose coordinates with
+/// their units, then per actuator position, velocity and acceleration.
+pub fn sample_columns(machine: &Machine) -> Vec<String> {
+    let m = machine.mechanism();
+    let mut h = vec!["t_s".to_string(), "line".to_string()];
+    for c in m.coordinates() {
+        h.push(format!("{}_{}", c.name, c.quantity.unit()));
+    }
+    for a in m.actuators() {
+        let u = a.quantity.unit();
+        h.push(format!("{}_{u}", a.name));
+        h.push(format!("{}_{u}_per_s", a.name));
+        h.push(format!("{}_{u}_per_s2", a.name));
+    }
+    h
+}
+
+/// Runs `source` through `machine` with feed and sampling settings, every sample to
+/// `sink`.
+pub fn run_motion(
+    machine: &Machine,
+    source: MotionSource<'_>,
+    feed: &FeedOptions,
+    sampling: Sampling,
+    sink: &mut dyn SampleSink,
+) -> Result<MotionRun> {
+    machine.visit(Simulate {
+        source,
+        feed,
+        sampling,
+        sink,
+    })
+}
+
+struct Simulate<'a, 'b> {
+    source: MotionSource<'b>,
+    feed: &'a FeedOptions,
+    sampling: Sampling,
+    sink: &'a mut dyn SampleSink,
+}
+
+fn invalid(what: &str, message: impl Into<String>) -> Error {
+    Error::InvalidInput {
+        what: what.into(),
+        message: message.into(),
+    }
+}
+
+impl Visitor for Simulate<'_, '_> {
+    type Output = Result<MotionRun>;
+
+    fn visit<M: Analysable<P, A>, const P: usize, const A: usize>(
+        self,
+        m: &M,
+    ) -> Result<MotionRun> {
+        let mut runner = Runner::new(m, self.sampling)?;
+        let serial_idx: Vec<usize> = match m.pose_space() {
+            PoseSpace::Own => (0..P).collect(),
+            _ => (0..3).collect(),
+        };
+        let mut traces = Traces::default();
+        // Samples and progress go to the same sink: shared by a RefCell, borrowed
+        // once per sample and once per program line.
+        let out = std::cell::RefCell::new(self.sink);
+        let mut sink = |s: &Sample<P, A>| -> Result<()> {
+            let act = m.actuators();
+            let coords = m.coordinates();
+            traces.push(|| {
+                let mut r = Vec::with_capacity(1 + 3 * A + 3 * serial_idx.len());
+                r.push(s.t);
+                for i in 0..A {
+                    let qn = act[i].quantity;
+                    r.extend([
+                        qn.to_user(s.act.q[i]),
+                        qn.to_user(s.act.qd[i]),
+                        qn.to_user(s.act.qdd[i]),
+                    ]);
+                }
+                for &k in &serial_idx {
+                    let qn = coords[k].quantity;
+                    r.extend([
+                        qn.to_user(s.x[k]),
+                        qn.to_user(s.xd[k]),
+                        qn.to_user(s.xdd[k]),
+                    ]);
+                }
+                r
+            });
+            out.borrow_mut().sample(&SampleRow {
+                t: s.t,
+                line: s.line,
+                x: s.x.as_slice(),
+                q: s.act.q.as_slice(),
+                qd: s.act.qd.as_slice(),
+                qdd: s.act.qdd.as_slice(),
+            })
+        };
+        match self.source {
+            MotionSource::PointToPoint {
+                from,
+                to,
+                duration,
+                accel_time,
+            } => {
+                let from = crate::dynamic::fixed::<P>("--from", &from)?;
+                let to = crate::dynamic::fixed::<P>("--to", &to)?;
+                let q = crate::motion::run::quantities(m);
+                let spatial = m.pose_space() != PoseSpace::Own;
+                let segment = Segment::line(from, to, &q, spatial);
+                let prof = match (duration, accel_time, self.feed.profile) {
+                    (Some(d), Some(ta), ProfileKind::Trapezoid) => {
+                        Profile::trapezoid_timed(segment.length, d, ta)?
+                    }
+                    (Some(_), Some(_), _) => {
+                        return Err(invalid("--accel-time", "needs --profile trapezoid"))
+                    }
+                    (Some(d), None, ProfileKind::Constant) => {
+                        Profile::constant(segment.length, segment.length / d)?
+                    }
+                    (Some(_), None, _) => {
+                        return Err(invalid(
+                            "--duration",
+                            "with --profile trapezoid needs --accel-time; with scurve give --feed instead",
+                        ))
+                    }
+                    (None, _, kind) => {
+                        let v = self
+                            .feed
+                            .feed
+                            .ok_or_else(|| invalid("feed", "give --feed or --duration"))?;
+                        profile(kind, segment.length, v, self.feed)?
+                    }
+                };
+                runner.run_move(
+                    &Move {
+                        segment,
+                        profile: prof,
+                        line: None,
+                    },
+                    true,
+                    &mut sink,
+                )?;
+            }
+            MotionSource::Gcode { reader, from } => {
+                if m.pose_space() == PoseSpace::Own {
+                    return Err(invalid(
+                        "G-code",
+                        "needs a machine whose pose is X, Y, Z[, A, B, C]",
+                    ));
+                }
+                let x = match from {
+                    Some(x) => x,
+                    None => m.home().as_slice().to_vec(),
+                };
+                let mut start = [0.0; 6];
+                let n = x.len().min(6);
+                start[..n].copy_from_slice(&x[..n]);
+                let mut interp = Interpreter::new(start);
+                let mut pending: Option<Move<P>> = None;
+                for (i, line) in reader.lines().enumerate() {
+                    let text = line
+                        .map_err(|e| invalid("G-code", format!("reading line {}: {e}", i + 1)))?;
+                    out.borrow_mut().progress(text.len() as u64 + 1);
+                    if interp.ended {
+                        break;
+                    }
+                    if let Some(g) = interp.line(&text, i as u64 + 1)? {
+                        let mv = to_move(m, &g, self.feed)?;
+                        if let Some(p) = pending.take() {
+                            runner.run_move(&p, false, &mut sink)?;
+                        }
+                        pending = Some(mv);
+                    }
+                }
+                if let Some(p) = pending.take() {
+                    runner.run_move(&p, true, &mut sink)?;
+                }
+            }
+        }
+        Ok(MotionRun {
+            summary: runner.finish(),
+            traces,
+        })
+    }
+}

@@ -1,0 +1,182 @@
+//! Workspace analyses on a loaded machine: pose grids with the binding limit and the
+//! conditioning (constant or total orientation), the reachable tilt at a point, the
+//! performance atlas, the forward workspace over the actuator strokes, and the
+//! assembly modes of an actuator set. Results with run-time sizes, internal units.
+
+use serde::Serialize;
+
+use crate::dynamic::DynForward;
+use crate::error::Result;
+use crate::machine::{Analysable, Analysis, Machine, Visitor};
+use crate::workspace::atlas::Capacity;
+use crate::workspace::{GridAxis, WorkspaceMap};
+
+/// The pose grid `axes` around `base` (internal units), reachable at every orientation
+/// of `orientations` (A, B, C rad; empty: the base orientation), with the binding limit
+/// and the condition number per point (rayon); `progress` is told of points done.
+pub fn grid(
+    machine: &Machine,
+    base: &[f64],
+    axes: &[GridAxis],
+    orientations: &[[f64; 3]],
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<WorkspaceMap> {
+    struct Job<'a> {
+        base: &'a [f64],
+        axes: &'a [GridAxis],
+        orientations: &'a [[f64; 3]],
+        progress: &'a (dyn Fn(u64) + Sync),
+    }
+    impl Visitor for Job<'_> {
+        type Output = Result<WorkspaceMap>;
+        fn visit<M: Analysable<P, A>, const P: usize, const A: usize>(self, m: &M) -> Self::Output {
+            let base = crate::dynamic::fixed::<P>("base pose", self.base)?;
+            crate::workspace::map(m, &base, self.axes, self.orientations, self.progress)
+        }
+    }
+    machine.visit(Job {
+        base,
+        axes,
+        orientations,
+        progress,
+    })
+}
+
+/// The largest reachable tilt (rad) per azimuth of `azimuths` at pose `x`, searched up
+/// to `max_tilt` (spatial machines).
+pub fn reachable_tilt(
+    machine: &Machine,
+    x: &[f64],
+    azimuths: &[f64],
+    max_tilt: f64,
+) -> Result<Vec<f64>> {
+    struct Job<'a>(&'a [f64], &'a [f64], f64);
+    impl Visitor for Job<'_> {
+        type Output = Result<Vec<f64>>;
+        fn visit<M: Analysable<P, A>, const P: usize, const A: usize>(self, m: &M) -> Self::Output {
+            let x = crate::dynamic::fixed::<P>("pose", self.0)?;
+            crate::workspace::reachable_tilt(m, &x, self.1, self.2, 1e-4)
+        }
+    }
+    machine.visit(Job(x, azimuths, max_tilt))
+}
+
+/// One atlas point with run-time sizes (internal units).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct AtlasRow {
+    /// Within every limit.
+    pub reachable: bool,
+    /// Actuator positions.
+    pub q: Vec<f64>,
+    /// Actuator velocities the capacities need (worst direction).
+    pub velocity: Vec<f64>,
+    /// Actuator accelerations the capacities need (worst direction).
+    pub acceleration: Vec<f64>,
+}
+
+impl AtlasRow {
+    /// Position (`sel` 0), velocity (1) or acceleration (2) of actuator `i`.
+    pub fn get(&self, sel: usize, i: usize) -> f64 {
+        match sel {
+            0 => self.q[i],
+            1 => self.velocity[i],
+            _ => self.acceleration[i],
+        }
+    }
+}
+
+/// The performance atlas over `axes` around `base`: per point the actuator positions
+/// and the actuator velocities and accelerations that pose rates up to `velocity` and
+/// accelerations up to `acceleration` (one per pose coordinate) need
+/// ([`crate::workspace::atlas::atlas`]).
+pub fn atlas(
+    machine: &Machine,
+    base: &[f64],
+    axes: &[GridAxis],
+    velocity: &[f64],
+    acceleration: &[f64],
+) -> Result<Vec<AtlasRow>> {
+    struct Job<'a>(&'a [f64], &'a [GridAxis], &'a [f64], &'a [f64]);
+    impl Visitor for Job<'_> {
+        type Output = Result<Vec<AtlasRow>>;
+        fn visit<M: Analysable<P, A>, const P: usize, const A: usize>(self, m: &M) -> Self::Output {
+            let base = crate::dynamic::fixed::<P>("base pose", self.0)?;
+            let cap = Capacity {
+                velocity: crate::dynamic::fixed::<P>("velocity capacity", self.2)?,
+                acceleration: crate::dynamic::fixed::<P>("acceleration capacity", self.3)?,
+            };
+            let a = crate::workspace::atlas::atlas(m, &base, self.1, &cap, &|_| {})?;
+            Ok(a.points
+                .into_iter()
+                .map(|p| AtlasRow {
+                    reachable: p.reachable,
+                    q: p.q.as_slice().to_vec(),
+                    velocity: p.velocity.as_slice().to_vec(),
+                    acceleration: p.acceleration.as_slice().to_vec(),
+                })
+                .collect())
+        }
+    }
+    machine.visit(Job(base, axes, velocity, acceleration))
+}
+
+/// One point of a forward map (internal units).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ForwardPoint {
+    /// A pose was found within every limit.
+    pub reachable: bool,
+    /// The limit that binds, or why no pose was found.
+    pub binding: Option<String>,
+    /// The pose, when found.
+    pub pose: Option<Vec<f64>>,
+}
+
+/// The forward workspace ([`Analysis::ForwardWorkspace`]): forward kinematics over the
+/// grid `axes` of actuator values, every solution started from `start`.
+pub fn forward_map(
+    machine: &Machine,
+    axes: &[GridAxis],
+    start: &[f64],
+) -> Result<Vec<ForwardPoint>> {
+    machine.supports(Analysis::ForwardWorkspace)?;
+    struct Job<'a>(&'a [GridAxis], &'a [f64]);
+    impl Visitor for Job<'_> {
+        type Output = Result<Vec<ForwardPoint>>;
+        fn visit<M: Analysable<P, A>, const P: usize, const A: usize>(self, m: &M) -> Self::Output {
+            let start = crate::dynamic::fixed::<P>("start pose", self.1)?;
+            let base = m.inverse(&start)?;
+            let f = crate::workspace::forward::forward_map(m, &base, self.0, &start, &|_| {})?;
+            Ok(f.points
+                .into_iter()
+                .map(|p| ForwardPoint {
+                    reachable: p.reachable,
+                    binding: p.binding,
+                    pose: p.pose.map(|x| x.as_slice().to_vec()),
+                })
+                .collect())
+        }
+    }
+    machine.visit(Job(axes, start))
+}
+
+/// The distinct forward solutions (assembly modes) of actuator set `q` found from `n`
+/// starts spread around home ([`crate::mechanism::spread_starts`]).
+pub fn assembly_modes(machine: &Machine, q: &[f64], n: usize) -> Result<Vec<DynForward>> {
+    struct Job<'a>(&'a [f64], usize);
+    impl Visitor for Job<'_> {
+        type Output = Result<Vec<DynForward>>;
+        fn visit<M: Analysable<P, A>, const P: usize, const A: usize>(self, m: &M) -> Self::Output {
+            let q = crate::dynamic::fixed::<A>("actuators", self.0)?;
+            let starts = crate::mechanism::spread_starts(m, self.1.max(1));
+            Ok(crate::mechanism::assembly_modes(m, &q, &starts, 1e-6)
+                .into_iter()
+                .map(|f| DynForward {
+                    pose: f.pose.as_slice().to_vec(),
+                    iterations: f.iterations,
+                    residual: f.residual,
+                })
+                .collect())
+        }
+    }
+    machine.visit(Job(q, n))
+}
