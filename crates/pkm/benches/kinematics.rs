@@ -309,7 +309,7 @@ fn serial(c: &mut Criterion) {
         "serial 6R pose + geometric Jacobian (prepared chain)",
         |b| b.iter(|| prepared.jacobian(black_box(&q))),
     );
-    let serial_m = pkm::serial::accuracy::SerialMachine {
+    let serial_m = pkm::serial::machine::SerialMachine {
         name: "arm".into(),
         tool: chain.clone(),
         workpiece: None,

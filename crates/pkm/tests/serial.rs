@@ -226,10 +226,10 @@ fn revolute(name: &str) -> Option<Joint> {
 }
 
 /// A 5-axis machine like seed 003's MC-300: tool chain X, Y, Z; workpiece chain B, C.
-fn five_axis() -> pkm::serial::accuracy::SerialMachine {
+fn five_axis() -> pkm::serial::machine::SerialMachine {
     let to_y = Matrix3::new(0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0); // z* = world Y
     let back = to_y.transpose();
-    pkm::serial::accuracy::SerialMachine {
+    pkm::serial::machine::SerialMachine {
         name: "5-axis".into(),
         tool: xyz_chain(),
         workpiece: Some(Chain {
@@ -260,7 +260,7 @@ fn five_axis() -> pkm::serial::accuracy::SerialMachine {
 
 #[test]
 fn sensitivities_equal_central_differences() {
-    use pkm::serial::accuracy::{ChainDeviations, Parameter};
+    use pkm::serial::machine::{ChainDeviations, Parameter};
     let m = five_axis();
     let (qt, qw) = ([35.0, -20.0, 60.0], [0.4, -1.1]);
     // A deviated state (derivatives are checked there, not only at nominal).
@@ -345,7 +345,7 @@ fn sensitivities_equal_central_differences() {
 #[test]
 fn monte_carlo_converges_to_the_first_order_prediction() {
     use pkm::accuracy::{budget, monte_carlo, Distribution, Tolerance};
-    use pkm::serial::accuracy::Parameter;
+    use pkm::serial::machine::Parameter;
     let m = five_axis();
     let (qt, qw) = ([35.0, -20.0, 60.0], [0.4, -1.1]);
     // The generic engine runs on the machine as a joint-space mechanism; its
@@ -507,7 +507,7 @@ fn dh_table_equals_the_hand_built_product() {
     assert!((p[(0, 3)] - 1440.0).abs() < 1e-9 && (p[(2, 3)] - 1810.0).abs() < 1e-9);
 }
 
-fn kr30() -> pkm::serial::accuracy::SerialMachine {
+fn kr30() -> pkm::serial::machine::SerialMachine {
     let m = pkm::Machine::from_path(format!(
         "{}/../../examples/machines/kr30-dh.toml",
         env!("CARGO_MANIFEST_DIR")
@@ -626,8 +626,8 @@ fn prepared_jacobian_equals_the_tool_jacobian() {
 
 #[test]
 fn installation_angles_cancel_relative_to_the_part_and_turn_a_robot_about_the_world() {
-    use pkm::serial::accuracy::{ChainDeviations, Parameter};
     use pkm::serial::deviations::{deviations_from, pose_error};
+    use pkm::serial::machine::{ChainDeviations, Parameter};
     // Two chains: the installation turns both alike, the tool relative to the part
     // does not move (exactly zero sensitivity, and no change of the exact pose).
     let m = five_axis();

@@ -9,27 +9,8 @@ use serde_json::json;
 use super::workspace::{slice_pairs, slice_plot};
 use crate::report::heatmap::Scale;
 
-/// One atlas point with run-time sizes, user units.
-pub struct AtlasRow {
-    /// Within every limit.
-    pub reachable: bool,
-    /// Actuator positions.
-    pub q: Vec<f64>,
-    /// Actuator velocities needed.
-    pub velocity: Vec<f64>,
-    /// Actuator accelerations needed.
-    pub acceleration: Vec<f64>,
-}
-
-impl AtlasRow {
-    fn get(&self, sel: usize, i: usize) -> f64 {
-        match sel {
-            0 => self.q[i],
-            1 => self.velocity[i],
-            _ => self.acceleration[i],
-        }
-    }
-}
+/// One atlas point (the library's row, here in user units).
+pub use pkm::analysis::workspace::AtlasRow;
 
 /// Atlas results with run-time sizes, user units.
 pub struct DynAtlas {

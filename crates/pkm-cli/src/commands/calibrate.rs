@@ -2,7 +2,9 @@
 //! geometric parameters (seed 001) from a measurement campaign, real or simulated
 //! (`pkm::analysis::identification`).
 
+use clap::Args;
 use std::path::Path;
+use std::path::PathBuf;
 
 use anyhow::{bail, Context, Result};
 use pkm::analysis::identification::{
@@ -17,7 +19,80 @@ use serde_json::json;
 use super::load;
 use crate::io::write_atomic;
 use crate::report::plot::{panels_svg_x, Series};
-use crate::{CalibrateArgs, SimulateArgs};
+
+#[derive(Args)]
+pub struct SimulateArgs {
+    /// Machine file (TOML, type = "hexapod"): the nominal machine.
+    pub machine: PathBuf,
+    /// Half-width of the uniform deviations of every joint coordinate and zero length of
+    /// the true machine (mm).
+    #[arg(long, default_value_t = 1.0)]
+    pub deviation: f64,
+    /// Standard deviation of the measured point coordinates (mm).
+    #[arg(long, default_value_t = 0.005)]
+    pub point_noise: f64,
+    /// Standard deviation of the strut length readings (mm).
+    #[arg(long, default_value_t = 0.001)]
+    pub length_noise: f64,
+    /// Number of states for identification.
+    #[arg(long, default_value_t = 50)]
+    pub states: usize,
+    /// Further states on the same true machine, written to validation.csv.
+    #[arg(long, default_value_t = 0)]
+    pub holdout: usize,
+    /// `random` (poses around home within every limit) or `one-strut` (seed 001: the
+    /// zero state, then one more strut changed per state).
+    #[arg(long, default_value = "random")]
+    pub design: String,
+    /// Half-width of the random poses' translations (mm).
+    #[arg(long, default_value_t = 100.0)]
+    pub translation: f64,
+    /// Half-width of the random poses' angles (deg).
+    #[arg(long, default_value_t = 10.0)]
+    pub rotation: f64,
+    /// Strut change per state of the one-strut design (mm).
+    #[arg(long, default_value_t = 40.0)]
+    pub step: f64,
+    /// Circumradius of the triangular fixture (mm).
+    #[arg(long, default_value_t = 200.0)]
+    pub fixture_radius: f64,
+    /// Random seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Output directory.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+#[derive(Args)]
+pub struct CalibrateArgs {
+    /// Machine file (TOML, type = "hexapod"): the nominal machine, start of the fit.
+    pub machine: PathBuf,
+    /// Measurement file (CSV, see `pkm simulate-measurements --help`).
+    #[arg(long)]
+    pub measurements: PathBuf,
+    /// `pose` (full pose per state from >= 3 fixture points) or `points` (points only,
+    /// e.g. one laser-tracker target).
+    #[arg(long, default_value = "pose")]
+    pub model: String,
+    /// Parameters held at their nominal values (names as in report.json, e.g. A1.z).
+    #[arg(long)]
+    pub fix: Option<String>,
+    /// Write the seed 001 procedure's solution (first seven states, six systems of seven
+    /// equations) to identified.toml instead of Levenberg-Marquardt's.
+    #[arg(long)]
+    pub seed_procedure: bool,
+    /// States not used for identification: point errors of the nominal and identified
+    /// models.
+    #[arg(long)]
+    pub validation: Option<PathBuf>,
+    /// Output directory.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Print report.json to stdout.
+    #[arg(long)]
+    pub json: bool,
+}
 
 fn read(path: &Path) -> Result<String> {
     std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))

@@ -1,13 +1,23 @@
 //! `pkm check`: validate a machine file and summarise it.
 
 use anyhow::Result;
+use clap::Args;
 use pkm::verify::check_references;
 use pkm::Convention;
 use serde_json::json;
+use std::path::PathBuf;
 
 use super::load;
 use crate::poses::{actuators_json, coords_text, tool_json};
-use crate::CheckArgs;
+
+#[derive(Args, Debug)]
+pub struct CheckArgs {
+    /// Machine file (TOML).
+    pub machine: PathBuf,
+    /// Print machine-readable JSON instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
 
 pub fn run(a: &CheckArgs) -> Result<u8> {
     let machine = load(&a.machine)?;

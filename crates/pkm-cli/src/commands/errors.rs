@@ -2,17 +2,78 @@
 //! the exact error of given deviations, the sensitivity to every parameter, the error
 //! budget of the tolerances, a Monte Carlo of them and an error map.
 
+use crate::parse_convention;
 use anyhow::{bail, Context, Result};
+use clap::Args;
 use pkm::analysis::{
     accuracy, AccuracyOptions, AccuracyReport, KindTolerances, MapRequest, Tolerances,
 };
+use pkm::Convention;
 use serde_json::json;
+use std::path::PathBuf;
 
 use super::load;
 use crate::io::write_atomic;
 use crate::poses::{coords_json, coords_text, parse_list, pose_from_user};
 use crate::report::plot::{bars_svg, histogram_svg};
-use crate::ErrorsArgs;
+
+#[derive(Args)]
+pub struct ErrorsArgs {
+    /// Machine file (TOML or URDF): any machine type.
+    pub machine: PathBuf,
+    /// Pose (as `pkm ik --pose`); default: home.
+    #[arg(long, allow_hyphen_values = true)]
+    pub pose: Option<String>,
+    /// Actuator values instead of a pose (mm, deg; forward kinematics from home).
+    #[arg(long, allow_hyphen_values = true)]
+    pub actuators: Option<String>,
+    /// Convention of the angles in --pose.
+    #[arg(long, default_value = "rpy", value_parser = parse_convention)]
+    pub rotation: Convention,
+    /// Tolerance of every joint-centre coordinate (mm).
+    #[arg(long)]
+    pub joint_tolerance: Option<f64>,
+    /// Tolerance of every zero length and linear drive positioning (mm).
+    #[arg(long)]
+    pub length_tolerance: Option<f64>,
+    /// Tolerance of every link dimension and linear link deviation (mm).
+    #[arg(long)]
+    pub link_tolerance: Option<f64>,
+    /// Tolerance of every angular parameter, revolute drives included (deg).
+    #[arg(long)]
+    pub angle_tolerance: Option<f64>,
+    /// With the per-kind tolerances: `uniform` (in +-tolerance) or `normal`
+    /// (tolerance = 3 sigma).
+    #[arg(long, default_value = "uniform")]
+    pub distribution: String,
+    /// TOML file of deviation values by parameter name (mm; deg for angles): their
+    /// exact tool-pose error.
+    #[arg(long)]
+    pub deviations: Option<PathBuf>,
+    /// Tolerances file (`[[tolerance]]` entries with `deviation`, `value`, optional
+    /// `distribution`) instead of the machine file's or the per-kind ones.
+    #[arg(long)]
+    pub tolerances: Option<PathBuf>,
+    /// Monte Carlo of the tolerances with this many machines.
+    #[arg(long)]
+    pub monte_carlo: Option<usize>,
+    /// Seed of the Monte Carlo.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Error map over two pose coordinates (names, e.g. X,Y; a joint-space machine's
+    /// joints over their travel), the others at the pose: RSS and worst case per point.
+    #[arg(long)]
+    pub map: Option<String>,
+    /// Points per axis of the error map.
+    #[arg(long, default_value_t = 41)]
+    pub map_points: usize,
+    /// Output directory.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Print errors.json to stdout.
+    #[arg(long)]
+    pub json: bool,
+}
 
 pub fn run(a: &ErrorsArgs) -> Result<u8> {
     let machine = load(&a.machine)?;

@@ -1,6 +1,9 @@
 //! `pkm fk`: forward kinematics, one actuator set or a CSV batch.
 
+use crate::PoseOptions;
+use clap::Args;
 use std::path::Path;
+use std::path::PathBuf;
 
 use anyhow::Result;
 use pkm::pose::rotation_matrix;
@@ -14,7 +17,36 @@ use crate::poses::{
     actuators_from_user, actuators_json, clean, coords_json, coords_text, parse_list,
     pose_from_user, tool_json,
 };
-use crate::{FkArgs, EXIT_UNREACHABLE};
+use crate::EXIT_UNREACHABLE;
+
+#[derive(Args)]
+pub struct FkArgs {
+    /// Machine file (TOML).
+    pub machine: PathBuf,
+    /// Actuator values v1,v2,... (mm for linear, deg for revolute drives).
+    #[arg(
+        long,
+        allow_hyphen_values = true,
+        required_unless_present = "input",
+        conflicts_with = "input"
+    )]
+    pub actuators: Option<String>,
+    /// Starting pose (same form as `pkm ik --pose`); default: the home pose.
+    #[arg(long, allow_hyphen_values = true)]
+    pub from: Option<String>,
+    /// Also search for other assembly modes: solve from this many starting poses spread
+    /// around home (and mirrored through the base plane) and list every distinct pose.
+    #[arg(long, conflicts_with = "input")]
+    pub assembly_modes: Option<usize>,
+    /// CSV of many actuator sets (header row naming the actuators).
+    #[arg(long, requires = "output")]
+    pub input: Option<PathBuf>,
+    /// CSV to write the batch results to.
+    #[arg(long, requires = "input")]
+    pub output: Option<PathBuf>,
+    #[command(flatten)]
+    pub opts: PoseOptions,
+}
 
 fn start_pose(m: &dyn DynMechanism, a: &FkArgs) -> Result<Vec<f64>> {
     match &a.from {

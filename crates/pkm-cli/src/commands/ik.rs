@@ -1,6 +1,9 @@
 //! `pkm ik`: inverse kinematics, one pose or a CSV batch.
 
+use crate::PoseOptions;
+use clap::Args;
 use std::collections::BTreeMap;
+use std::path::PathBuf;
 
 use anyhow::Result;
 use pkm::analysis::kinematics::{inverse, inverse_solutions, transmission, InverseSolution};
@@ -12,7 +15,33 @@ use super::load;
 use crate::poses::{
     actuators_json, coords_json, coords_text, parse_list, pose_from_user, pose_names, tool_json,
 };
-use crate::{IkArgs, EXIT_UNREACHABLE};
+use crate::EXIT_UNREACHABLE;
+
+#[derive(Args)]
+pub struct IkArgs {
+    /// Machine file (TOML).
+    pub machine: PathBuf,
+    /// Pose: X,Y,Z[,A,B,C] (mm, deg) for spatial machines, the machine's own coordinates otherwise.
+    #[arg(
+        long,
+        allow_hyphen_values = true,
+        required_unless_present = "input",
+        conflicts_with = "input"
+    )]
+    pub pose: Option<String>,
+    /// CSV of many poses (header row naming the values).
+    #[arg(long, requires = "output")]
+    pub input: Option<PathBuf>,
+    /// CSV to write the batch results to.
+    #[arg(long, requires = "input")]
+    pub output: Option<PathBuf>,
+    /// Six-axis robots: every inverse solution found (postures: shoulder, elbow, wrist),
+    /// nearest to home first, each with its limit status.
+    #[arg(long, conflicts_with = "input")]
+    pub all_solutions: bool,
+    #[command(flatten)]
+    pub opts: PoseOptions,
+}
 
 /// Inverse kinematics with the limit check (`pkm::analysis::kinematics::inverse`).
 pub fn solve(machine: &Machine, x: Vec<f64>) -> Result<InverseSolution> {

@@ -4,6 +4,9 @@
 // Parallel arrays (actuators, coordinates, sample vectors) are indexed together.
 #![allow(clippy::needless_range_loop)]
 
+use crate::parse_convention;
+use clap::Args;
+use pkm::Convention;
 use std::fs::File;
 use std::io::{BufReader, BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -22,7 +25,82 @@ use super::load;
 use crate::io::{refuse_overwrite, write_atomic};
 use crate::poses::{parse_list, pose_from_user};
 use crate::report::plot::{panels_svg, Series};
-use crate::{MotionArgs, EXIT_UNREACHABLE};
+use crate::EXIT_UNREACHABLE;
+
+#[derive(Args)]
+pub struct MotionArgs {
+    /// Machine file (TOML).
+    pub machine: PathBuf,
+    /// G-code program.
+    #[arg(long, conflicts_with = "to")]
+    pub gcode: Option<PathBuf>,
+    /// Start pose (as `pkm ik --pose`); default: the home pose.
+    #[arg(long, allow_hyphen_values = true)]
+    pub from: Option<String>,
+    /// End pose of a point-to-point move.
+    #[arg(long, allow_hyphen_values = true)]
+    pub to: Option<String>,
+    /// Feed (mm/min), replacing the program's F words.
+    #[arg(long)]
+    pub feed: Option<f64>,
+    /// Velocity profile of each move.
+    #[arg(long, value_enum, default_value = "constant")]
+    pub profile: ProfileArg,
+    /// Path acceleration for trapezoid and scurve (mm/s^2).
+    #[arg(long, default_value_t = 1000.0)]
+    pub accel: f64,
+    /// Path jerk for scurve (mm/s^3).
+    #[arg(long, default_value_t = 20000.0)]
+    pub jerk: f64,
+    /// Rapid (G0) rate (mm/min); default: the machine file's `[motion] rapid`, else 10000.
+    #[arg(long)]
+    pub rapid: Option<f64>,
+    /// Duration of a point-to-point move (s), instead of --feed.
+    #[arg(long)]
+    pub duration: Option<f64>,
+    /// Acceleration (and deceleration) time of a timed trapezoid (s).
+    #[arg(long)]
+    pub accel_time: Option<f64>,
+    /// Sampling rate (Hz); default 1000.
+    #[arg(long, conflicts_with = "points")]
+    pub rate: Option<f64>,
+    /// Points per move instead of a rate (seed 000: 101).
+    #[arg(long)]
+    pub points: Option<usize>,
+    /// Convention of angles in --from/--to.
+    #[arg(long, default_value = "rpy", value_parser = parse_convention)]
+    pub rotation: Convention,
+    /// Output directory.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Skip actuators.csv (summary and plots only), for very long programs.
+    #[arg(long)]
+    pub summary_only: bool,
+    /// Print summary.json to stdout.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Velocity profile names on the command line.
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum ProfileArg {
+    /// Constant feed.
+    Constant,
+    /// Trapezoidal velocity.
+    Trapezoid,
+    /// Jerk-limited S-curve.
+    Scurve,
+}
+
+impl From<ProfileArg> for pkm::motion::program::ProfileKind {
+    fn from(p: ProfileArg) -> Self {
+        match p {
+            ProfileArg::Constant => Self::Constant,
+            ProfileArg::Trapezoid => Self::Trapezoid,
+            ProfileArg::Scurve => Self::Scurve,
+        }
+    }
+}
 
 /// Writes samples as CSV rows (user units) and drives the progress bar.
 pub struct CsvSink<'a> {

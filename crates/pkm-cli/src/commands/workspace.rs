@@ -1,16 +1,68 @@
 //! `pkm workspace`: reachable workspace, binding limits and conditioning on a grid.
 
+use crate::parse_convention;
 use anyhow::{bail, Context, Result};
+use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use pkm::workspace::{flat_index, GridAxis, WorkspaceMap, WorkspaceSummary};
+use pkm::Convention;
 use pkm::{DynMechanism, Machine, PoseSpace};
 use serde_json::json;
+use std::path::PathBuf;
 
 use super::load;
 use crate::io::write_atomic;
 use crate::poses::{parse_list, pose_from_user};
 use crate::report::heatmap::{slice_svg, Cell, Scale};
-use crate::WorkspaceArgs;
+
+#[derive(Args)]
+pub struct WorkspaceArgs {
+    /// Machine file (TOML).
+    pub machine: PathBuf,
+    /// Constant orientation A,B,C (deg) of the map; default: the home orientation.
+    #[arg(long, allow_hyphen_values = true)]
+    pub orientation: Option<String>,
+    /// Grid bounds min,max per axis (X,Y,Z in mm for spatial machines).
+    #[arg(long, allow_hyphen_values = true)]
+    pub bounds: Option<String>,
+    /// Grid step (mm, or deg for angle axes); default: 1/40 of each range.
+    #[arg(long)]
+    pub step: Option<f64>,
+    /// Total orientation workspace: reachable only if reachable at tilts of this many
+    /// degrees in 8 directions as well as untilted.
+    #[arg(long)]
+    pub tilt: Option<f64>,
+    /// Orientation workspace at a point X,Y,Z: the largest reachable tilt per direction.
+    #[arg(long, allow_hyphen_values = true)]
+    pub at: Option<String>,
+    /// Largest tilt searched with --at (deg).
+    #[arg(long, default_value_t = 60.0)]
+    pub max_tilt: f64,
+    /// Convention of --orientation.
+    #[arg(long, default_value = "rpy", value_parser = parse_convention)]
+    pub rotation: Convention,
+    /// Performance atlas: largest rate of every pose coordinate (mm/s, deg/s), one value
+    /// per coordinate; writes atlas.csv and maps of the actuator positions and of the
+    /// actuator velocities and accelerations these capacities need.
+    #[arg(long, allow_hyphen_values = true)]
+    pub atlas_velocity: Option<String>,
+    /// Performance atlas: largest acceleration of every pose coordinate (mm/s^2, deg/s^2).
+    #[arg(long, allow_hyphen_values = true)]
+    pub atlas_acceleration: Option<String>,
+    /// Forward workspace: forward kinematics over a grid of the actuator strokes
+    /// (machines with at most 3 actuators); writes forward.csv and maps of the pose.
+    #[arg(long)]
+    pub forward: bool,
+    /// Step of the --forward grid (mm or deg); default 1/40 of each stroke.
+    #[arg(long)]
+    pub forward_step: Option<f64>,
+    /// Output directory.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Print summary.json to stdout.
+    #[arg(long)]
+    pub json: bool,
+}
 
 /// The grid map (`pkm::analysis::workspace::grid`) with a progress bar on large grids.
 pub fn run_grid(

@@ -9,13 +9,23 @@ mod p3rp;
 pub mod plot;
 
 use anyhow::{Context, Result};
+use clap::Args;
 use pkm::verify::{check_references, machine_check_table, CheckRow, ReferenceCheck};
 use pkm::Machine;
+use std::path::PathBuf;
 
 use crate::io::write_atomic;
 use crate::poses::clean;
-use crate::ReportArgs;
 use html::{esc, Html};
+
+#[derive(Args)]
+pub struct ReportArgs {
+    /// Machine file (TOML); default: the bundled seed-000 tripod.
+    pub machine: Option<PathBuf>,
+    /// Output directory.
+    #[arg(long, default_value = "pkm-report")]
+    pub out: PathBuf,
+}
 
 /// The bundled default machine: seed 000's tripod.
 pub const DEFAULT_MACHINE: &str = include_str!("../../../../examples/machines/tripod-seed000.toml");

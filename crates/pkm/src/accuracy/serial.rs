@@ -7,8 +7,8 @@ use nalgebra::{Matrix4, SVector, Vector3};
 use super::{Evaluate, Parameter, ParameterKind, Parametric, PoseError};
 use crate::error::{Error, Result};
 use crate::mechanism::Mechanism;
-use crate::serial::accuracy::{ChainDeviations, Parameter as Deviation, SerialMachine};
 use crate::serial::deviations::{apply, zero_deviations};
+use crate::serial::machine::{ChainDeviations, Parameter as Deviation, SerialMachine};
 use crate::units::Quantity;
 
 /// The engine's parameter list of a serial machine, in the order of

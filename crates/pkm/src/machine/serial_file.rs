@@ -9,7 +9,7 @@ use super::source::{Seg, Source};
 use super::{v3, Model};
 use crate::error::Error;
 use crate::limits::Range;
-use crate::serial::accuracy::SerialMachine;
+use crate::serial::machine::SerialMachine;
 use crate::serial::mechanism::SerialAny;
 use crate::serial::{Chain, Joint, JointKind, Link};
 

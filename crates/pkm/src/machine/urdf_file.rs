@@ -12,7 +12,7 @@ use nalgebra::{Matrix3, Matrix4, Rotation3, Unit, Vector3};
 use super::Model;
 use crate::error::Error;
 use crate::limits::Range;
-use crate::serial::accuracy::SerialMachine;
+use crate::serial::machine::SerialMachine;
 use crate::serial::mechanism::SerialAny;
 use crate::serial::{Chain, Joint, JointKind, Link, SerialModel};
 

@@ -13,7 +13,7 @@
 
 use nalgebra::{Matrix3, Matrix4, Matrix6, SMatrix, Vector3, Vector6};
 
-use super::accuracy::SerialMachine;
+use super::machine::SerialMachine;
 use super::mechanism::chain_skeleton;
 use super::PreparedChain;
 use crate::error::{Error, Result};

@@ -4,7 +4,7 @@
 
 use nalgebra::Vector3;
 
-use super::accuracy::{ChainDeviations, Parameter, SerialMachine};
+use super::machine::{ChainDeviations, Parameter, SerialMachine};
 use super::LinkDeviation;
 use crate::error::Result;
 

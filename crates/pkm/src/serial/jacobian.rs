@@ -3,7 +3,7 @@
 
 use nalgebra::DMatrix;
 
-use super::accuracy::{Parameter, SerialMachine};
+use super::machine::{Parameter, SerialMachine};
 use crate::error::Result;
 
 impl SerialMachine {

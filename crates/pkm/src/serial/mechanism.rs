@@ -7,7 +7,7 @@
 
 use nalgebra::{Isometry3, Matrix3, SMatrix, SVector, Translation3, UnitQuaternion, Vector3};
 
-use super::accuracy::SerialMachine;
+use super::machine::SerialMachine;
 use super::JointKind;
 use crate::error::{Error, Result};
 use crate::limits::{LimitKind, Violation};

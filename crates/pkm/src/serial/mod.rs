@@ -21,6 +21,7 @@ pub mod arm;
 pub mod completion;
 pub mod deviations;
 pub mod jacobian;
+pub mod machine;
 pub mod mechanism;
 
 use nalgebra::{Matrix3, Matrix4, Vector3};
@@ -353,3 +354,5 @@ impl PreparedChain {
         t
     }
 }
+
+pub use machine::{ChainDeviations, Parameter as Deviation, SerialMachine};

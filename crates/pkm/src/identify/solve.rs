@@ -1,0 +1,213 @@
+//! Levenberg-Marquardt over the residual equations, standard errors, and the
+//! refusal of results the data cannot determine.
+
+use levenberg_marquardt::LevenbergMarquardt;
+use nalgebra::{DVector, SVector};
+
+use super::identifiability::analyse;
+use super::problem::Problem;
+use super::*;
+use crate::error::{Error, Result};
+
+/// Identifies the parameters of `nominal` (geometry, then the actuators' zero readings
+/// `zero`) from `meas`: Levenberg-Marquardt from the nominal values, with the
+/// identifiability analysis. Fails with [`Error::NotIdentifiable`] naming the
+/// combination when the free parameters are not all determined by the data (hold one
+/// of its parameters, or measure states that move it), and with
+/// [`Error::InvalidInput`] for inconsistent measurements.
+pub fn identify<M: Identifiable<P, A>, const P: usize, const A: usize>(
+    nominal: &M,
+    zero: &SVector<f64, A>,
+    meas: &Measurements,
+    o: &Options,
+) -> Result<Identification> {
+    validate(nominal, meas, o)?;
+    let names = parameter_names(nominal);
+    let mut theta = nominal.geometry();
+    theta.extend(zero.iter());
+    let n = theta.len();
+    let free: Vec<usize> = (0..n).filter(|i| !o.fixed.contains(i)).collect();
+    let poses = match o.model {
+        MeasurementModel::Pose => measured_poses(nominal, meas)?,
+        MeasurementModel::Points => Vec::new(),
+    };
+    // Warm starts of the point model: the nominal machine's forward kinematics from
+    // home.
+    let fk = match o.model {
+        MeasurementModel::Points => meas
+            .states
+            .iter()
+            .map(|st| {
+                let q = SVector::<f64, A>::from_fn(|j, _| zero[j] + st.readings[j]);
+                nominal
+                    .forward(&q, &nominal.home())
+                    .map(|f| f.pose)
+                    .unwrap_or_else(|_| nominal.home())
+            })
+            .collect(),
+        MeasurementModel::Pose => Vec::new(),
+    };
+    let mut problem = Problem {
+        nominal,
+        meas,
+        model: o.model,
+        poses,
+        fk,
+        theta: theta.clone(),
+        free: free.clone(),
+        eval: None,
+    };
+    problem.evaluate();
+    let Some((r0, j0)) = problem.eval.clone() else {
+        return Err(Error::InvalidInput {
+            what: "identification".into(),
+            message: "the nominal machine cannot reach the measured states".into(),
+        });
+    };
+    let per_state = problem.rows_per_state();
+    let state_rms = |r: &DVector<f64>| -> Vec<f64> {
+        r.as_slice()
+            .chunks(per_state)
+            .map(|c| (c.iter().map(|v| v * v).sum::<f64>() / c.len() as f64).sqrt())
+            .collect()
+    };
+    let rms = |r: &DVector<f64>| (r.norm_squared() / r.len().max(1) as f64).sqrt();
+    // Identifiability at the start: a rank-deficient problem is reported, not solved.
+    let jf0 = problem.free_jacobian(&j0);
+    let explain = |t: &[(usize, f64)]| nominal.explain(t);
+    let (sv0, weak0) = analyse(&jf0, &free, &names, &explain);
+    let null: Vec<&Combination> = weak0
+        .iter()
+        .filter(|w| w.relative_singular_value < o.rank_tolerance)
+        .collect();
+    if let Some(w) = null.first() {
+        let more = if null.len() > 1 {
+            format!(" (and {} more such combinations)", null.len() - 1)
+        } else {
+            String::new()
+        };
+        return Err(Error::NotIdentifiable {
+            combination: format!("{}{more}", w.description),
+            relative_singular_value: w.relative_singular_value,
+        });
+    }
+    let _ = sv0;
+    let lm = LevenbergMarquardt::new()
+        .with_ftol(1e-15)
+        .with_xtol(1e-15)
+        .with_gtol(1e-15)
+        .with_patience(o.max_evaluations.div_ceil(n.max(1) + 1));
+    let (problem, report) = lm.minimize(problem);
+    let Some((r1, j1)) = problem.eval.clone() else {
+        return Err(Error::NotConverged {
+            solver: "identification (Levenberg-Marquardt)",
+            iterations: report.number_of_evaluations,
+            residual: f64::NAN,
+        });
+    };
+    let jf = problem.free_jacobian(&j1);
+    let (sv, weak) = analyse(&jf, &free, &names, &explain);
+    // Standard errors: s^2 (J^T J)^-1, s^2 = |r|^2 / (m - n).
+    let dof = (r1.len() as f64 - free.len() as f64).max(1.0);
+    let s2 = r1.norm_squared() / dof;
+    let jtj = jf.transpose() * &jf;
+    let cov = jtj
+        .clone()
+        .try_inverse()
+        .or_else(|| jtj.pseudo_inverse(1e-300).ok());
+    let mut se = vec![0.0; n];
+    if let Some(c) = cov {
+        for (k, &i) in free.iter().enumerate() {
+            se[i] = (s2 * c[(k, k)].max(0.0)).sqrt();
+        }
+    }
+    let condition = sv.first().copied().unwrap_or(0.0) / sv.last().copied().unwrap_or(0.0);
+    let (worst, worst_se) =
+        se.iter()
+            .enumerate()
+            .fold((0, 0.0), |a, (i, v)| if *v > a.1 { (i, *v) } else { a });
+    if worst_se > o.max_standard_error {
+        let (what, rel) = match weak.first() {
+            Some(w) => (w.description.clone(), w.relative_singular_value),
+            None => (
+                format!("`{}` is poorly determined by these states", names[worst]),
+                sv.last().copied().unwrap_or(0.0) / sv.first().copied().unwrap_or(1.0),
+            ),
+        };
+        return Err(Error::NotIdentifiable {
+            combination: format!(
+                "{what}; with this data the standard error of `{}` is {worst_se:.3} (limit {})",
+                names[worst], o.max_standard_error
+            ),
+            relative_singular_value: rel,
+        });
+    }
+    Ok(Identification {
+        free: (0..n).map(|i| free.contains(&i)).collect(),
+        names,
+        start: theta,
+        values: problem.theta.clone(),
+        standard_errors: se,
+        rms_before: rms(&r0),
+        rms_after: rms(&r1),
+        state_rms_before: state_rms(&r0),
+        state_rms_after: state_rms(&r1),
+        singular_values: sv,
+        condition,
+        weak,
+        evaluations: report.number_of_evaluations,
+        equations: r1.len(),
+    })
+}
+
+fn validate<M: Identifiable<P, A>, const P: usize, const A: usize>(
+    m: &M,
+    meas: &Measurements,
+    o: &Options,
+) -> Result<()> {
+    let bad = |message: String| Error::InvalidInput {
+        what: "measurements".into(),
+        message,
+    };
+    let n = m.geometry().len() + A;
+    if let Some(i) = o.fixed.iter().find(|&&i| i >= n) {
+        return Err(bad(format!(
+            "fixed parameter {i} does not exist ({n} parameters)"
+        )));
+    }
+    let need = match o.model {
+        MeasurementModel::Pose => 3,
+        MeasurementModel::Points => 1,
+    };
+    if meas.fixture.len() < need {
+        return Err(bad(format!(
+            "the {:?} model needs at least {need} fixture points, the file gives {}",
+            o.model,
+            meas.fixture.len()
+        )));
+    }
+    for (i, st) in meas.states.iter().enumerate() {
+        if st.readings.len() != A || st.points.len() != meas.fixture.len() {
+            return Err(bad(format!(
+                "state {}: expected {A} readings and {} points, found {} and {}",
+                i + 1,
+                meas.fixture.len(),
+                st.readings.len(),
+                st.points.len()
+            )));
+        }
+    }
+    let free = n - o.fixed.len();
+    let per_state = match o.model {
+        MeasurementModel::Pose => A,
+        MeasurementModel::Points => 3 * meas.fixture.len(),
+    };
+    if meas.states.len() * per_state < free {
+        return Err(bad(format!(
+            "{} states give {} equations for {free} free parameters",
+            meas.states.len(),
+            meas.states.len() * per_state
+        )));
+    }
+    Ok(())
+}
