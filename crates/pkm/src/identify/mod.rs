@@ -103,7 +103,7 @@ pub struct State {
 }
 
 /// A measurement campaign: the fixture's points (platform frame) and the states.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Default, Serialize)]
 pub struct Measurements {
     /// Known fixture points in the platform frame (mm).
     pub fixture: Vec<Vector3<f64>>,

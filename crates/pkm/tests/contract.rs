@@ -1,0 +1,369 @@
+//! The contract of the analysis layer: every machine file in `examples/machines/` and
+//! `examples/robots/` (found by listing the folders, so a new example is covered by
+//! adding it) runs through every analysis its type supports, with the results'
+//! invariants checked, and every other analysis answers `Error::Unsupported`.
+
+use pkm::analysis::identification::{
+    calibrate, simulate_measurements, CalibrateOptions, SimulateOptions,
+};
+use pkm::analysis::kinematics::{inverse, inverse_solutions, transmission, ForwardStream};
+use pkm::analysis::motion::{run_motion, MotionSource, NoSink};
+use pkm::analysis::{accuracy, workspace, AccuracyOptions, KindTolerances, Tolerances};
+use pkm::identify::simulate::{triangle, Design, Experiment};
+use pkm::machine::Analysis;
+use pkm::motion::program::{FeedOptions, ProfileKind};
+use pkm::motion::Sampling;
+use pkm::workspace::GridAxis;
+use pkm::{Error, Machine, Quantity};
+
+fn examples() -> Vec<std::path::PathBuf> {
+    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples");
+    let mut v: Vec<_> = ["machines", "robots"]
+        .iter()
+        .flat_map(|d| std::fs::read_dir(format!("{root}/{d}")).unwrap())
+        .map(|e| e.unwrap().path())
+        .filter(|p| {
+            matches!(
+                p.extension().and_then(|e| e.to_str()),
+                Some("toml" | "urdf")
+            )
+        })
+        .collect();
+    v.sort();
+    assert!(v.len() >= 9, "{v:?}");
+    v
+}
+
+/// A pose near home that is not home and not singular (a robot's stretched home is):
+/// each driven length coordinate 1 % of the characteristic length off and angles 2
+/// degrees; failing that, every actuator 5 % of its stroke off home, through forward
+/// kinematics.
+fn near_home(machine: &Machine) -> Vec<f64> {
+    let x = shifted_pose(machine);
+    if transmission(machine, &x).is_ok_and(|t| t.condition < 1e3) {
+        return x;
+    }
+    let m = machine.mechanism();
+    let q: Vec<f64> = m
+        .inverse(&m.home())
+        .unwrap()
+        .iter()
+        .zip(m.actuators())
+        .map(|(q, a)| q + 0.05 * (a.range.max - a.range.min))
+        .collect();
+    let x = m.forward(&q, &m.home()).unwrap().pose;
+    assert!(
+        transmission(machine, &x).is_ok(),
+        "no regular pose near home"
+    );
+    x
+}
+
+fn shifted_pose(machine: &Machine) -> Vec<f64> {
+    let m = machine.mechanism();
+    let home = m.home();
+    let d = m.driven();
+    let mut x = home.clone();
+    for (i, c) in m.coordinates().iter().enumerate() {
+        if !d.contains(&i) {
+            continue;
+        }
+        x[i] += match c.quantity {
+            Quantity::Length => 0.01 * m.characteristic_length().max(10.0),
+            Quantity::Angle => 2f64.to_radians(),
+        };
+    }
+    match inverse(machine, &x) {
+        Ok(s) if s.violations.is_empty() => x,
+        _ => home,
+    }
+}
+
+fn kinematics(name: &str, machine: &Machine) {
+    let m = machine.mechanism();
+    let x = near_home(machine);
+    // IK then FK from home reproduces the pose.
+    let ik = inverse(machine, &x).unwrap();
+    assert!(ik.violations.is_empty(), "{name}: {:?}", ik.violations);
+    let f = m.forward(&ik.actuators, &m.home()).unwrap();
+    let (a, b) = (m.tool_pose(&x).unwrap(), m.tool_pose(&f.pose).unwrap());
+    assert!(
+        (a.translation.vector - b.translation.vector).norm() < 1e-8
+            && a.rotation.angle_to(&b.rotation) < 1e-9,
+        "{name}: FK(IK(x)) != x"
+    );
+    // The analytic Jacobian against central differences, at every pose of the check
+    // table away from singular configurations (a robot's stretched home: differences of
+    // a numeric inverse there say nothing).
+    for row in pkm::verify::machine_check_table(machine, 5.0, 2f64.to_radians()) {
+        if let (Some(e), Some(c)) = (row.jacobian_error, row.condition) {
+            if c > 1e3 {
+                continue;
+            }
+            assert!(
+                e < 1e-5,
+                "{name} {}: Jacobian vs differences {e}",
+                row.label
+            );
+        }
+    }
+    // A stream of forward solves along a small move returns the poses it was given.
+    let mut stream = ForwardStream::new(machine, &m.home()).unwrap();
+    for k in 0..=4 {
+        let t = k as f64 / 4.0;
+        let xk: Vec<f64> = m
+            .home()
+            .iter()
+            .zip(&x)
+            .map(|(h, v)| h + t * (v - h))
+            .collect();
+        let q = m.inverse(&xk).unwrap();
+        let (f, _) = stream.next(&q).unwrap();
+        let (a, b) = (m.tool_pose(&xk).unwrap(), m.tool_pose(&f.pose).unwrap());
+        assert!(
+            (a.translation.vector - b.translation.vector).norm() < 1e-8,
+            "{name}"
+        );
+    }
+    let t = transmission(machine, &x).unwrap();
+    assert!(
+        t.condition >= 1.0 && t.distance_to_singularity > 0.0,
+        "{name}"
+    );
+}
+
+fn motion_and_workspace(name: &str, machine: &Machine) {
+    let m = machine.mechanism();
+    // A small move from a regular pose near home: the first driven coordinate 1 mm or
+    // 0.5 degree on.
+    let home = near_home(machine);
+    let mut x = home.clone();
+    let k = m.driven()[0];
+    x[k] += match m.coordinates()[k].quantity {
+        Quantity::Length => 1.0,
+        Quantity::Angle => 0.5f64.to_radians(),
+    };
+    let run = run_motion(
+        machine,
+        MotionSource::PointToPoint {
+            from: home.clone(),
+            to: x.clone(),
+            duration: Some(0.5),
+            accel_time: None,
+        },
+        &FeedOptions {
+            profile: ProfileKind::Constant,
+            ..Default::default()
+        },
+        Sampling::Points(21),
+        &mut NoSink,
+    )
+    .unwrap();
+    assert_eq!(run.summary.samples, 21, "{name}");
+    assert_eq!(run.summary.actuators.len(), m.actuators().len(), "{name}");
+    // The actuators travel what inverse kinematics says between the two poses (the
+    // move is straight in the pose coordinates; travel is at least the difference).
+    let (q0, q1) = (m.inverse(&home).unwrap(), m.inverse(&x).unwrap());
+    for (i, (n, st)) in run.summary.actuators.iter().enumerate() {
+        let d = m.actuators()[i].quantity.to_user((q1[i] - q0[i]).abs());
+        assert!(st.travel >= d - 1e-6, "{name} {n}: {} < {d}", st.travel);
+    }
+    // A small grid around that pose: the pose itself is reachable.
+    let axes: Vec<GridAxis> = pkm::workspace::default_grid(m, &home, None, None)
+        .unwrap()
+        .into_iter()
+        .map(|a| {
+            let mid = home[a.coordinate];
+            let h = 2.0 * a.step;
+            GridAxis {
+                coordinate: a.coordinate,
+                min: mid - h,
+                max: mid + h,
+                step: a.step,
+            }
+        })
+        .collect();
+    let wm = workspace::grid(machine, &home, &axes, &[], &|_| {}).unwrap();
+    let n: usize = axes.iter().map(|a| a.count()).product();
+    assert_eq!(wm.points.len(), n, "{name}");
+    let centre = wm.points[n / 2].clone();
+    assert!(
+        centre.reachable,
+        "{name}: the centre of the grid is not reachable"
+    );
+}
+
+fn accuracy_checks(name: &str, machine: &Machine) {
+    let tol = KindTolerances {
+        angle: 2e-5,
+        ..KindTolerances::default()
+    };
+    let r = accuracy(
+        machine,
+        &AccuracyOptions {
+            pose: Some(near_home(machine)),
+            tolerances: Tolerances::ByKind(tol),
+            monte_carlo: Some(20_000),
+            seed: 5,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert!(!r.budget.items.is_empty(), "{name}");
+    assert_eq!(r.sensitivities.len(), r.parameters.len());
+    // Monte Carlo spread per component against the budget's first order.
+    let mc = r.monte_carlo.as_ref().unwrap();
+    assert_eq!(mc.failed, 0, "{name}");
+    for c in 0..3 {
+        let predicted = r
+            .tolerances
+            .iter()
+            .map(|t| (r.sensitivities[t.parameter].position[c] * t.std()).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        if predicted < 1e-7 {
+            continue;
+        }
+        let ratio = mc.std_vector[c] / predicted;
+        assert!(
+            (ratio - 1.0).abs() < 0.05,
+            "{name}: component {c} Monte Carlo std {} vs first order {predicted}",
+            mc.std_vector[c]
+        );
+    }
+    assert!(mc.max <= r.budget.worst_case * 1.001, "{name}");
+}
+
+fn identification(name: &str, machine: &Machine) {
+    let e = Experiment {
+        deviation: 0.5,
+        point_noise: 0.0,
+        length_noise: 0.0,
+        states: 30,
+        design: Design::Random,
+        translation: 30.0,
+        rotation: 5f64.to_radians(),
+        step: 20.0,
+        fixture: triangle(100.0, 0.0),
+        seed: 3,
+    };
+    let s = simulate_measurements(
+        machine,
+        None,
+        &SimulateOptions {
+            experiment: e,
+            holdout: 5,
+            comment: String::new(),
+        },
+    )
+    .unwrap();
+    assert_eq!(s.measurements.states.len(), 30);
+    assert_eq!(s.validation.states.len(), 5);
+    // Hold what trades exactly for this machine (a translational tripod's platform
+    // joints): the fit is then exact on noise-free data and on held-out states.
+    let trading = if machine.kind() == "tripod/translational" {
+        vec!["C.*".into(), "D.*".into(), "E.*".into()]
+    } else {
+        Vec::new()
+    };
+    let c = calibrate(
+        machine,
+        &s.measurements,
+        Some(&s.validation),
+        &CalibrateOptions {
+            fix: trading,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert!(
+        c.identification.rms_after < 1e-6,
+        "{name}: {}",
+        c.identification.rms_after
+    );
+    let v = c.validation.unwrap();
+    assert!(
+        v.identified.rms < 1e-5 && v.nominal.rms > 1e-2,
+        "{name}: {v:?}"
+    );
+}
+
+fn all_solutions(name: &str, machine: &Machine) {
+    let m = machine.mechanism();
+    let x = near_home(machine);
+    let sols = inverse_solutions(machine, &x, 64).unwrap();
+    assert!(!sols.is_empty(), "{name}");
+    let p0 = m.tool_pose(&x).unwrap();
+    for s in &sols {
+        // Every posture reaches the pose: FK of its joints from the posture itself.
+        let f = m.forward(&s.actuators, &x).unwrap();
+        let p = m.tool_pose(&f.pose).unwrap();
+        assert!(
+            (p.translation.vector - p0.translation.vector).norm() < 1e-6,
+            "{name}"
+        );
+    }
+}
+
+#[test]
+fn every_example_runs_every_analysis_it_supports() {
+    for path in examples() {
+        let name = path.file_name().unwrap().to_string_lossy().to_string();
+        let machine = Machine::from_path(&path).unwrap();
+        kinematics(&name, &machine);
+        motion_and_workspace(&name, &machine);
+        accuracy_checks(&name, &machine);
+        let caps = machine.capabilities();
+        for a in Analysis::ALL {
+            let supported = caps.contains(&a);
+            let r: Result<(), Error> = match a {
+                Analysis::Identification if supported => {
+                    identification(&name, &machine);
+                    Ok(())
+                }
+                Analysis::Identification => calibrate(
+                    &machine,
+                    &Default::default(),
+                    None,
+                    &CalibrateOptions::default(),
+                )
+                .map(|_| ()),
+                Analysis::InverseSolutions if supported => {
+                    all_solutions(&name, &machine);
+                    Ok(())
+                }
+                Analysis::InverseSolutions => {
+                    inverse_solutions(&machine, &machine.mechanism().home(), 4).map(|_| ())
+                }
+                Analysis::ForwardWorkspace => {
+                    let m = machine.mechanism();
+                    let axes: Vec<GridAxis> = m
+                        .actuators()
+                        .iter()
+                        .enumerate()
+                        .map(|(k, a)| GridAxis {
+                            coordinate: k,
+                            min: a.range.min,
+                            max: a.range.max,
+                            step: (a.range.max - a.range.min) / 3.0,
+                        })
+                        .collect();
+                    workspace::forward_map(&machine, &axes, &m.home()).map(|p| {
+                        assert_eq!(p.len(), 4usize.pow(axes.len() as u32), "{name}");
+                    })
+                }
+                Analysis::Seed004 => pkm::analysis::seed004::reproduction(&machine).map(|rows| {
+                    assert!(!rows.is_empty());
+                }),
+                _ => Ok(()),
+            };
+            match (supported, r) {
+                (true, r) => r.unwrap_or_else(|e| panic!("{name}: {a:?}: {e}")),
+                (false, Err(Error::Unsupported { analysis, .. })) => {
+                    assert_eq!(analysis, a.name())
+                }
+                (false, other) => panic!("{name}: {a:?} should be unsupported, got {other:?}"),
+            }
+        }
+    }
+}
