@@ -42,7 +42,7 @@ pub use budget::{budget, Budget, BudgetItem, Distribution, Tolerance};
 pub use map::{error_map, ErrorMap};
 pub use monte_carlo::{monte_carlo, statistics, MonteCarlo};
 pub use rebuild::Rebuild;
-pub use serial::serial_parameters;
+pub use serial::{serial_completions, serial_parameters, serial_tolerable, LinkCompletion};
 
 /// What a geometric parameter of a machine is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
@@ -156,6 +156,23 @@ pub trait Parametric<const P: usize, const A: usize>: Mechanism<P, A> {
     /// (per unit of the parameter, internal units), where the machine has them.
     fn analytic_sensitivities(&self, _x: &SVector<f64, P>) -> Option<Result<Vec<PoseError>>> {
         None
+    }
+
+    /// The machine prepared for deviations of the parameters `given` (the toleranced or
+    /// measured ones): `None` when nothing changes, an error saying why when one of them
+    /// cannot be given (a serial machine completes a link's angular deviations from the
+    /// ones given, eq. 3, and refuses those that mean nothing alone).
+    fn with_given(&self, _given: &[usize]) -> Result<Option<Self>>
+    where
+        Self: Sized,
+    {
+        Ok(None)
+    }
+
+    /// Which parameters can be toleranced one by one (default tolerances skip the
+    /// others): all, by default.
+    fn tolerable(&self) -> Vec<bool> {
+        vec![true; self.parameters().len()]
     }
 }
 

@@ -1,12 +1,23 @@
 //! Serial chains (seed 003) in the accuracy engine: the primary deviations of every
 //! link and joint and the installation angles, the deviated pose from the product of
 //! the deviated transforms (eqs. 1-4), analytic sensitivities.
+//!
+//! Angular deviations are completed where the paper completes them (eq. 3): the
+//! angular deviations given for a link (measured or toleranced, at most three) are
+//! those of a triple that determines the link's rotation, and the other six follow from
+//! orthonormality, per evaluation (so per Monte Carlo sample): the link turns rigidly.
+//! Deviations that mean nothing alone are refused with the reason: an angle between two
+//! nominally aligned axes (`cos(0 + alpha)`: no first-order effect, no sign), more than
+//! three angles of one link, triples that leave a rotation open (a whole row or column),
+//! and the installation angles of a machine with a workpiece chain (they turn tool and
+//! part alike).
 
 use nalgebra::{Matrix4, SVector, Vector3};
 
 use super::{Evaluate, Parameter, ParameterKind, Parametric, PoseError};
 use crate::error::{Error, Result};
 use crate::mechanism::Mechanism;
+use crate::serial::completion::TripleCompletion;
 use crate::serial::deviations::{apply, zero_deviations};
 use crate::serial::machine::{ChainDeviations, Parameter as Deviation, SerialMachine};
 use crate::units::Quantity;
@@ -33,10 +44,166 @@ pub fn serial_parameters(m: &SerialMachine) -> Vec<Parameter> {
         .collect()
 }
 
+/// A link whose angular deviations are completed from a triple (eq. 3).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LinkCompletion {
+    /// 0 = tool chain, 1 = workpiece chain.
+    pub chain: usize,
+    /// Link index in the chain.
+    pub link: usize,
+    /// The triple and its solver.
+    pub triple: TripleCompletion,
+}
+
+/// Every triple of the nine positions, in order.
+fn triples() -> impl Iterator<Item = [(usize, usize); 3]> {
+    let pos: Vec<(usize, usize)> = (0..9).map(|e| (e / 3, e % 3)).collect();
+    (0..9).flat_map(move |a| {
+        let pos = pos.clone();
+        (a + 1..9).flat_map(move |b| {
+            let pos = pos.clone();
+            (b + 1..9).map(move |c| [pos[a], pos[b], pos[c]])
+        })
+    })
+}
+
+/// The first triple containing `given` positions that determines a link's rotation, or
+/// the reason none does.
+fn triple_for(
+    nominal: &nalgebra::Matrix3<f64>,
+    given: &[(usize, usize)],
+) -> std::result::Result<TripleCompletion, String> {
+    let mut reason = None;
+    for t in triples().filter(|t| given.iter().all(|g| t.contains(g))) {
+        match TripleCompletion::new(nominal, t) {
+            Ok(c) => return Ok(c),
+            Err(r) => {
+                reason.get_or_insert(r);
+            }
+        }
+    }
+    Err(reason.unwrap_or_else(|| "no triple of positions contains them".into()))
+}
+
+/// The completions for deviations given on the parameters `given` (indices of
+/// [`SerialMachine::all_parameters`]), or the reason a given parameter cannot be given.
+pub fn serial_completions(m: &SerialMachine, given: &[usize]) -> Result<Vec<LinkCompletion>> {
+    let params = m.all_parameters();
+    let refuse = |names: Vec<String>, reason: String| Error::InvalidInput {
+        what: "deviation".into(),
+        message: format!("{} cannot be given: {reason}", names.join(", ")),
+    };
+    let mut per_link: std::collections::BTreeMap<(usize, usize), Vec<(usize, usize)>> =
+        Default::default();
+    for &k in given {
+        match params.get(k) {
+            None => {
+                return Err(Error::InvalidInput {
+                    what: "deviation".into(),
+                    message: format!("parameter index {k} beyond the machine's {}", params.len()),
+                })
+            }
+            Some(p @ Deviation::Installation { .. }) if m.workpiece.is_some() => {
+                return Err(refuse(
+                    vec![m.parameter_name(p)],
+                    "the installation angles turn the bed, and with it tool and part alike: \
+                     they cannot change the tool relative to a part on the workpiece chain"
+                        .into(),
+                ))
+            }
+            Some(Deviation::Alpha {
+                chain,
+                link,
+                row,
+                col,
+            }) => {
+                let v = per_link.entry((*chain, *link)).or_default();
+                if !v.contains(&(*row, *col)) {
+                    v.push((*row, *col));
+                }
+            }
+            Some(_) => {}
+        }
+    }
+    let mut out = Vec::new();
+    for ((chain, link), pos) in per_link {
+        let names = || {
+            pos.iter()
+                .map(|&(row, col)| {
+                    m.parameter_name(&Deviation::Alpha {
+                        chain,
+                        link,
+                        row,
+                        col,
+                    })
+                })
+                .collect::<Vec<_>>()
+        };
+        if pos.len() > 3 {
+            return Err(refuse(
+                names(),
+                "at most three angular deviations of a link are independent (eq. 3: the \
+                 other six follow from the orthonormality of its block)"
+                    .into(),
+            ));
+        }
+        let ch = if chain == 0 {
+            &m.tool
+        } else {
+            m.workpiece
+                .as_ref()
+                .expect("a workpiece parameter has its chain")
+        };
+        let nominal = ch.links[link].rotation;
+        let triple = triple_for(&nominal, &pos).map_err(|r| refuse(names(), r))?;
+        out.push(LinkCompletion {
+            chain,
+            link,
+            triple,
+        });
+    }
+    Ok(out)
+}
+
+/// Which parameters can be toleranced one by one: per link the angular deviations of
+/// the first triple that determines its rotation (the others follow from it), every
+/// other parameter but the installation angles of a machine with a workpiece chain.
+pub fn serial_tolerable(m: &SerialMachine) -> Vec<bool> {
+    let params = m.all_parameters();
+    let mut chosen: std::collections::BTreeMap<(usize, usize), Vec<(usize, usize)>> =
+        Default::default();
+    params
+        .iter()
+        .map(|p| match *p {
+            Deviation::Installation { .. } => m.workpiece.is_none(),
+            Deviation::Alpha {
+                chain,
+                link,
+                row,
+                col,
+            } => {
+                let triple = chosen.entry((chain, link)).or_insert_with(|| {
+                    let ch = if chain == 0 {
+                        &m.tool
+                    } else {
+                        m.workpiece.as_ref().expect("chain")
+                    };
+                    triple_for(&ch.links[link].rotation, &[])
+                        .map(|t| t.positions().to_vec())
+                        .unwrap_or_default()
+                });
+                triple.contains(&(row, col))
+            }
+            _ => true,
+        })
+        .collect()
+}
+
 /// The exact tool pose of the deviated chains against the nominal one at fixed joints.
 #[derive(Clone)]
 pub struct SerialEvaluator<'a> {
     m: &'a SerialMachine,
+    completions: &'a [LinkCompletion],
     params: Vec<Deviation>,
     qt: Vec<f64>,
     qw: Vec<f64>,
@@ -45,10 +212,11 @@ pub struct SerialEvaluator<'a> {
 }
 
 impl<'a> SerialEvaluator<'a> {
-    fn new(m: &'a SerialMachine, q: &[f64]) -> Result<Self> {
+    fn new(m: &'a SerialMachine, completions: &'a [LinkCompletion], q: &[f64]) -> Result<Self> {
         let (qt, qw) = q.split_at(m.tool.dof().min(q.len()));
         Ok(SerialEvaluator {
             m,
+            completions,
             params: m.all_parameters(),
             qt: qt.to_vec(),
             qw: qw.to_vec(),
@@ -57,8 +225,10 @@ impl<'a> SerialEvaluator<'a> {
         })
     }
 
+    /// Analytic sensitivities; those of completed triples by central differences of
+    /// the completed evaluation (the link turns rigidly, its other angles follow).
     fn analytic(&self) -> Result<Vec<PoseError>> {
-        Ok(self
+        let mut s: Vec<PoseError> = self
             .m
             .sensitivities(&self.qt, &self.qw, &[], &self.params)?
             .into_iter()
@@ -66,7 +236,29 @@ impl<'a> SerialEvaluator<'a> {
                 position,
                 orientation,
             })
-            .collect())
+            .collect();
+        let mut ev = self.clone();
+        for c in self.completions {
+            for (row, col) in c.triple.positions() {
+                let p = Deviation::Alpha {
+                    chain: c.chain,
+                    link: c.link,
+                    row,
+                    col,
+                };
+                let Some(k) = self.params.iter().position(|x| *x == p) else {
+                    continue;
+                };
+                let h = 1e-6;
+                let plus = ev.pose_error(&[(k, h)])?;
+                let minus = ev.pose_error(&[(k, -h)])?;
+                s[k] = PoseError {
+                    position: (plus.position - minus.position) / (2.0 * h),
+                    orientation: (plus.orientation - minus.orientation) / (2.0 * h),
+                };
+            }
+        }
+        Ok(s)
     }
 }
 
@@ -87,6 +279,15 @@ impl Evaluate for SerialEvaluator<'_> {
             })?;
             apply(&mut self.dev, p, v);
         }
+        for c in self.completions {
+            let a = &mut self.dev[c.chain].links[c.link].alpha;
+            let measured = c.triple.positions().map(|(r, k)| a[(r, k)]);
+            *a = if measured == [0.0; 3] {
+                nalgebra::Matrix3::zeros()
+            } else {
+                c.triple.complete(measured)?
+            };
+        }
         let b = self.m.pose(&self.qt, &self.qw, &self.dev)?;
         let a = &self.nominal;
         let dp = b.fixed_view::<3, 1>(0, 3) - a.fixed_view::<3, 1>(0, 3);
@@ -105,16 +306,41 @@ impl Evaluate for SerialEvaluator<'_> {
     }
 }
 
+/// `mech` with the completions for `given`, `None` when they are its own already.
+fn with_completions<T: Clone>(
+    mech: &T,
+    machine: &SerialMachine,
+    current: &[LinkCompletion],
+    given: &[usize],
+    field: fn(&mut T) -> &mut Vec<LinkCompletion>,
+) -> Result<Option<T>> {
+    let completions = serial_completions(machine, given)?;
+    if completions == current {
+        return Ok(None);
+    }
+    let mut m = mech.clone();
+    *field(&mut m) = completions;
+    Ok(Some(m))
+}
+
 impl<const N: usize> Parametric<N, N> for crate::serial::mechanism::SerialMechanism<N> {
     type Evaluator<'a> = SerialEvaluator<'a>;
     fn parameters(&self) -> Vec<Parameter> {
         serial_parameters(&self.machine)
     }
     fn evaluator(&self, x: &SVector<f64, N>) -> Result<SerialEvaluator<'_>> {
-        SerialEvaluator::new(&self.machine, x.as_slice())
+        SerialEvaluator::new(&self.machine, &self.completions, x.as_slice())
     }
     fn analytic_sensitivities(&self, x: &SVector<f64, N>) -> Option<Result<Vec<PoseError>>> {
-        Some(SerialEvaluator::new(&self.machine, x.as_slice()).and_then(|e| e.analytic()))
+        Some(self.evaluator(x).and_then(|e| e.analytic()))
+    }
+    fn with_given(&self, given: &[usize]) -> Result<Option<Self>> {
+        with_completions(self, &self.machine, &self.completions, given, |m| {
+            &mut m.completions
+        })
+    }
+    fn tolerable(&self) -> Vec<bool> {
+        serial_tolerable(&self.machine)
     }
 }
 
@@ -126,9 +352,17 @@ impl Parametric<6, 6> for crate::serial::arm::SerialArm {
     /// The joints commanded for tool pose `x` are the nominal inverse solution.
     fn evaluator(&self, x: &SVector<f64, 6>) -> Result<SerialEvaluator<'_>> {
         let q = self.inverse(x)?;
-        SerialEvaluator::new(&self.machine, q.as_slice())
+        SerialEvaluator::new(&self.machine, &self.completions, q.as_slice())
     }
     fn analytic_sensitivities(&self, x: &SVector<f64, 6>) -> Option<Result<Vec<PoseError>>> {
         Some(self.evaluator(x).and_then(|e| e.analytic()))
+    }
+    fn with_given(&self, given: &[usize]) -> Result<Option<Self>> {
+        with_completions(self, &self.machine, &self.completions, given, |m| {
+            &mut m.completions
+        })
+    }
+    fn tolerable(&self) -> Vec<bool> {
+        serial_tolerable(&self.machine)
     }
 }

@@ -57,11 +57,13 @@ impl KindTolerances {
         (t > 0.0).then_some(t)
     }
 
-    /// The tolerances of every parameter of `params` whose kind has one.
-    pub fn tolerances(&self, params: &[Parameter]) -> Vec<Tolerance> {
+    /// The tolerances of every parameter of `params` whose kind has one and that can
+    /// be toleranced alone (`tolerable`, [`crate::accuracy::Parametric::tolerable`]).
+    pub fn tolerances(&self, params: &[Parameter], tolerable: &[bool]) -> Vec<Tolerance> {
         params
             .iter()
             .enumerate()
+            .filter(|(k, _)| tolerable.get(*k).copied().unwrap_or(true))
             .filter_map(|(k, p)| {
                 self.of(p).map(|value| Tolerance {
                     parameter: k,
@@ -233,6 +235,30 @@ impl Visitor for AccuracyJob<'_> {
     fn visit<M: Analysable<P, A>, const P: usize, const A: usize>(self, m: &M) -> Self::Output {
         let x = crate::dynamic::fixed::<P>("pose", self.pose)?;
         let params = m.parameters();
+        let tolerable = m.tolerable();
+        let (tolerance_source, tolerances) = match &self.opt.tolerances {
+            Tolerances::Given(t) => (ToleranceSource::Given, t.clone()),
+            Tolerances::ByKind(k) => (ToleranceSource::ByKind, k.tolerances(&params, &tolerable)),
+            Tolerances::Default if !self.file.is_empty() => {
+                (ToleranceSource::MachineFile, self.file.to_vec())
+            }
+            Tolerances::Default => (
+                ToleranceSource::ByKind,
+                KindTolerances::default().tolerances(&params, &tolerable),
+            ),
+        };
+        // The machine prepared for what is given (a serial machine completes the
+        // angular deviations of a link from the ones given, and refuses what means
+        // nothing alone).
+        let mut given: Vec<usize> = tolerances
+            .iter()
+            .map(|t| t.parameter)
+            .chain(self.opt.deviations.iter().map(|d| d.0))
+            .collect();
+        given.sort_unstable();
+        given.dedup();
+        let prepared = m.with_given(&given)?;
+        let m = prepared.as_ref().unwrap_or(m);
         let q = m.inverse(&x)?;
         let mut violations = Vec::new();
         m.check_limits(&x, &q, &mut violations);
@@ -242,17 +268,6 @@ impl Visitor for AccuracyJob<'_> {
         let sensitivities = match analytic {
             Some(s) => s?,
             None => accuracy::finite_difference_sensitivities(m, &x)?,
-        };
-        let (tolerance_source, tolerances) = match &self.opt.tolerances {
-            Tolerances::Given(t) => (ToleranceSource::Given, t.clone()),
-            Tolerances::ByKind(k) => (ToleranceSource::ByKind, k.tolerances(&params)),
-            Tolerances::Default if !self.file.is_empty() => {
-                (ToleranceSource::MachineFile, self.file.to_vec())
-            }
-            Tolerances::Default => (
-                ToleranceSource::ByKind,
-                KindTolerances::default().tolerances(&params),
-            ),
         };
         let budget = Budget::from_sensitivities(&params, &sensitivities, &tolerances)?;
         let monte_carlo = match self.opt.monte_carlo {

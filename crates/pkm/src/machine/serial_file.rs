@@ -312,6 +312,11 @@ pub(super) fn build(src: &Source, f: SerialFile) -> Result<super::Parts, Error> 
         &crate::accuracy::serial_parameters(&machine),
         &f.tolerance,
     )?;
+    // Each toleranced deviation must mean something: refused with the reason when it
+    // cannot be given (an angle between aligned axes, a fourth angle of a link, ...).
+    let given: Vec<usize> = tolerances.iter().map(|t| t.parameter).collect();
+    crate::accuracy::serial_completions(&machine, &given)
+        .map_err(|e| src.error(&[key("tolerance")], e.to_string()))?;
     let spatial = match f.pose.as_deref() {
         None => SerialAny::can_be_spatial(&machine),
         Some("tool") => {

@@ -53,6 +53,8 @@ pub struct SerialArm {
     coordinates: [Coordinate; 6],
     actuators: [Actuator; 6],
     characteristic_length: f64,
+    /// Links whose angular deviations are completed from a triple (accuracy engine).
+    pub(crate) completions: Vec<crate::accuracy::LinkCompletion>,
     /// The base origin in the part frame and an upper bound of the tool's distance from
     /// it (sum of the link translations and prismatic travels): a target beyond it is
     /// out of reach without iterating.
@@ -107,6 +109,7 @@ impl SerialArm {
             part_inverse,
             coordinates: spatial_coordinates(),
             actuators,
+            completions: Vec::new(),
             characteristic_length: 1.0,
             base_origin: Vector3::zeros(),
             reach: f64::INFINITY,

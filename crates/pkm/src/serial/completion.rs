@@ -205,3 +205,149 @@ pub fn complete(
         ambiguous,
     })
 }
+
+/// The rotation-preserving completion used by the accuracy engine: a link whose three
+/// angular deviations at `positions` are measured or toleranced turns rigidly, its block
+/// `M = N exp([w]x)` (`N` the nominal block, `w` a small rotation in the link's output
+/// frame) with the three measured entries `M_rc = cos(phi_rc + alpha_rc)`; the six
+/// others follow (eq. 3, orthonormality, solved for the root nearest the nominal).
+///
+/// The triple must determine `w` to first order: the 3 x 3 matrix
+/// `d M_rc / d w = (N [e_j]x)_rc` must be regular. It is not when a position is an
+/// aligned entry (`N_rc = +-1`: `cos(0 + alpha)` has no first-order effect and no sign)
+/// or when two positions measure the same rotation component (a full row or column of
+/// the block is such a triple: it leaves the rotation about that axis open).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TripleCompletion {
+    nominal: Matrix3<f64>,
+    phi: Matrix3<f64>,
+    positions: [(usize, usize); 3],
+    /// Inverse of `d M_rc / d w` at the nominal block.
+    j0_inv: Matrix3<f64>,
+}
+
+fn skew_basis(j: usize) -> Matrix3<f64> {
+    let mut e = nalgebra::Vector3::zeros();
+    e[j] = 1.0;
+    nalgebra::Matrix3::new(0.0, -e.z, e.y, e.z, 0.0, -e.x, -e.y, e.x, 0.0)
+}
+
+const AXIS: [char; 3] = ['x', 'y', 'z'];
+
+impl TripleCompletion {
+    /// Prepares the completion of a link with nominal block `nominal` from the
+    /// deviations at `positions` (row: axis of `S_i`, column: axis of `S_i*`); the error
+    /// says why a triple cannot determine the link's rotation.
+    pub fn new(
+        nominal: &Matrix3<f64>,
+        positions: [(usize, usize); 3],
+    ) -> std::result::Result<Self, String> {
+        let name = |(r, c): (usize, usize)| format!("alpha_{}{}", AXIS[r], AXIS[c]);
+        for (i, &(r, c)) in positions.iter().enumerate() {
+            if r > 2 || c > 2 || positions[..i].contains(&(r, c)) {
+                return Err("three distinct positions (row, column) in 0..3 are needed".into());
+            }
+            if (nominal[(r, c)].abs() - 1.0).abs() < 1e-9 {
+                return Err(format!(
+                    "{} is the angle between two nominally aligned axes: cos(0 + alpha) has no \
+                     first-order effect and no sign, so it cannot be measured or toleranced; \
+                     give the angles of the crossed axes instead",
+                    name((r, c))
+                ));
+            }
+        }
+        let j0 = Matrix3::from_fn(|i, j| {
+            let (r, c) = positions[i];
+            (nominal * skew_basis(j))[(r, c)]
+        });
+        let j0_inv = match j0.try_inverse() {
+            Some(inv) if j0.determinant().abs() > 1e-6 => inv,
+            _ => {
+                return Err(format!(
+                    "{}, {} and {} do not determine the link's rotation (two of them measure \
+                     the same rotation component, e.g. a whole row or column of the block, \
+                     which leaves the rotation about that axis open)",
+                    name(positions[0]),
+                    name(positions[1]),
+                    name(positions[2])
+                ))
+            }
+        };
+        Ok(TripleCompletion {
+            nominal: *nominal,
+            phi: nominal.map(|c| c.clamp(-1.0, 1.0).acos()),
+            positions,
+            j0_inv,
+        })
+    }
+
+    /// The positions of the triple.
+    pub fn positions(&self) -> [(usize, usize); 3] {
+        self.positions
+    }
+
+    /// All nine angular deviations (rad) of the link whose three measured deviations
+    /// are `measured` (in the order of the positions): `alpha = acos(M) - phi` (the
+    /// measured ones exactly as given), so `cos(phi + alpha)` is the rigid block `M`.
+    /// A chord iteration on `w` with the nominal Jacobian (its error shrinks by a
+    /// factor of about `|w|` per step), then Newton with a difference Jacobian when
+    /// deviations are large.
+    pub fn complete(&self, measured: [f64; 3]) -> Result<Matrix3<f64>> {
+        let target = nalgebra::Vector3::from_fn(|i, _| {
+            let (r, c) = self.positions[i];
+            (self.phi[(r, c)] + measured[i]).cos()
+        });
+        let block =
+            |w: &nalgebra::Vector3<f64>| self.nominal * nalgebra::Rotation3::new(*w).into_inner();
+        let residual = |w: &nalgebra::Vector3<f64>| {
+            let m = block(w);
+            nalgebra::Vector3::from_fn(|i, _| {
+                let (r, c) = self.positions[i];
+                m[(r, c)] - target[i]
+            })
+        };
+        let mut w = nalgebra::Vector3::zeros();
+        let mut f = residual(&w);
+        for _ in 0..8 {
+            if f.amax() < 1e-15 {
+                break;
+            }
+            w -= self.j0_inv * f;
+            f = residual(&w);
+        }
+        let mut it = 0;
+        while f.amax() >= 1e-14 && it < 30 {
+            let h = 1e-7;
+            let j = Matrix3::from_fn(|_, _| 0.0);
+            let mut j = j;
+            for k in 0..3 {
+                let mut wp = w;
+                wp[k] += h;
+                let col = (residual(&wp) - f) / h;
+                j.set_column(k, &col);
+            }
+            let Some(inv) = j.try_inverse() else { break };
+            w -= inv * f;
+            f = residual(&w);
+            it += 1;
+        }
+        if !(f.amax() < 1e-12) {
+            return Err(Error::NotAttainable {
+                reason: format!(
+                    "no rigid turn of the link has the angular deviations {:?} deg at {:?} \
+                     (residual {:.3e})",
+                    measured.map(f64::to_degrees),
+                    self.positions,
+                    f.amax()
+                ),
+            });
+        }
+        let m = block(&w);
+        let mut alpha =
+            Matrix3::from_fn(|r, c| m[(r, c)].clamp(-1.0, 1.0).acos() - self.phi[(r, c)]);
+        for (i, &(r, c)) in self.positions.iter().enumerate() {
+            alpha[(r, c)] = measured[i];
+        }
+        Ok(alpha)
+    }
+}

@@ -28,6 +28,8 @@ pub struct SerialMechanism<const N: usize> {
     actuators: [Actuator; N],
     /// Joints of the tool chain (the first ones).
     tool_joints: usize,
+    /// Links whose angular deviations are completed from a triple (accuracy engine).
+    pub(crate) completions: Vec<crate::accuracy::LinkCompletion>,
 }
 
 impl<const N: usize> SerialMechanism<N> {
@@ -66,6 +68,7 @@ impl<const N: usize> SerialMechanism<N> {
             home,
             coordinates,
             actuators,
+            completions: Vec::new(),
         })
     }
 
