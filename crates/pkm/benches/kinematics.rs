@@ -294,6 +294,7 @@ fn serial(c: &mut Criterion) {
         .map(|i| LinkDeviation {
             delta: Vector3::new(0.01, -0.02, 0.003 * i as f64),
             alpha: Matrix3::from_fn(|r, k| 1e-4 * ((r + 2 * k + i) % 4) as f64),
+            ..Default::default()
         })
         .collect();
     let dq = [1e-3, -2e-3, 5e-4, 0.0, 1e-4, -1e-4];

@@ -454,6 +454,7 @@ fn prepared_chain_equals_the_general_pose() {
         .map(|i| LinkDeviation {
             delta: Vector3::new(0.01, -0.02 * i as f64, 0.003),
             alpha: Matrix3::from_fn(|r, k| 1e-4 * ((r + 2 * k + i) % 4) as f64),
+            ..Default::default()
         })
         .collect();
     let dq = [1e-3, -2e-3, 5e-4, 0.0, 1e-4, -1e-4];

@@ -280,12 +280,12 @@ impl Evaluate for SerialEvaluator<'_> {
             apply(&mut self.dev, p, v);
         }
         for c in self.completions {
-            let a = &mut self.dev[c.chain].links[c.link].alpha;
-            let measured = c.triple.positions().map(|(r, k)| a[(r, k)]);
-            *a = if measured == [0.0; 3] {
-                nalgebra::Matrix3::zeros()
+            let l = &mut self.dev[c.chain].links[c.link];
+            let measured = c.triple.positions().map(|(r, k)| l.alpha[(r, k)]);
+            l.block = if measured == [0.0; 3] {
+                None
             } else {
-                c.triple.complete(measured)?
+                Some(c.triple.complete_block(measured)?)
             };
         }
         let b = self.m.pose(&self.qt, &self.qw, &self.dev)?;

@@ -293,6 +293,18 @@ impl TripleCompletion {
     /// factor of about `|w|` per step), then Newton with a difference Jacobian when
     /// deviations are large.
     pub fn complete(&self, measured: [f64; 3]) -> Result<Matrix3<f64>> {
+        let m = self.complete_block(measured)?;
+        let mut alpha =
+            Matrix3::from_fn(|r, c| m[(r, c)].clamp(-1.0, 1.0).acos() - self.phi[(r, c)]);
+        for (i, &(r, c)) in self.positions.iter().enumerate() {
+            alpha[(r, c)] = measured[i];
+        }
+        Ok(alpha)
+    }
+
+    /// The rigid block `M = N exp([w]x)` whose entries at the positions are
+    /// `cos(phi + measured)` (see [`TripleCompletion::complete`]).
+    pub fn complete_block(&self, measured: [f64; 3]) -> Result<Matrix3<f64>> {
         let target = nalgebra::Vector3::from_fn(|i, _| {
             let (r, c) = self.positions[i];
             (self.phi[(r, c)] + measured[i]).cos()
@@ -306,8 +318,12 @@ impl TripleCompletion {
                 m[(r, c)] - target[i]
             })
         };
+        // At w = 0 the block is the nominal one: the first residual needs no exponential.
         let mut w = nalgebra::Vector3::zeros();
-        let mut f = residual(&w);
+        let mut f = nalgebra::Vector3::from_fn(|i, _| {
+            let (r, c) = self.positions[i];
+            self.nominal[(r, c)] - target[i]
+        });
         for _ in 0..8 {
             if f.amax() < 1e-15 {
                 break;
@@ -342,12 +358,6 @@ impl TripleCompletion {
                 ),
             });
         }
-        let m = block(&w);
-        let mut alpha =
-            Matrix3::from_fn(|r, c| m[(r, c)].clamp(-1.0, 1.0).acos() - self.phi[(r, c)]);
-        for (i, &(r, c)) in self.positions.iter().enumerate() {
-            alpha[(r, c)] = measured[i];
-        }
-        Ok(alpha)
+        Ok(block(&w))
     }
 }

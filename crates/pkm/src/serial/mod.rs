@@ -89,6 +89,9 @@ pub struct LinkDeviation {
     pub delta: Vector3<f64>,
     /// `alpha_ab` (row: axis of `S_i`, column: axis of `S_i*`).
     pub alpha: Matrix3<f64>,
+    /// The deviated block itself, when a completion (eq. 3) has found it: it replaces
+    /// `cos(phi + alpha)` (the same block, without the `acos`/`cos` round trip).
+    pub block: Option<Matrix3<f64>>,
 }
 
 /// An open chain of links.
@@ -104,7 +107,9 @@ pub struct Chain {
 #[inline]
 pub fn link_transform(link: &Link, dev: &LinkDeviation) -> Matrix4<f64> {
     let mut m = Matrix4::identity();
-    if dev.alpha == Matrix3::zeros() {
+    if let Some(b) = &dev.block {
+        m.fixed_view_mut::<3, 3>(0, 0).copy_from(b);
+    } else if dev.alpha == Matrix3::zeros() {
         m.fixed_view_mut::<3, 3>(0, 0).copy_from(&link.rotation);
     } else {
         let phi = link.angles();
