@@ -13,7 +13,7 @@ use crate::pose::{pose_from_angles, Pose};
 use crate::rotation::Convention;
 
 /// Forward-kinematics result with a dynamic pose vector.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct DynForward {
     /// Pose coordinates (mm, rad).
     pub pose: Vec<f64>,

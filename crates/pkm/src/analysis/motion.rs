@@ -75,11 +75,13 @@ impl SampleSink for NoSink {
 /// Decimated time series kept for plots (at most 4000 rows, flat memory): per row
 /// `t`, then per actuator `q, q', q''`, then per serial axis `x, x', x''`, in user
 /// units (mm, deg).
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, serde::Serialize)]
 pub struct Traces {
     /// The rows.
     pub rows: Vec<Vec<f64>>,
+    #[serde(skip)]
     stride: u64,
+    #[serde(skip)]
     seen: u64,
 }
 
@@ -105,7 +107,7 @@ impl Traces {
 }
 
 /// What a run produces besides its samples.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize)]
 pub struct MotionRun {
     /// Statistics, limits along the path, serial comparison, feed override.
     pub summary: MotionSummary,

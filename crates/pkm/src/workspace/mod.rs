@@ -44,7 +44,7 @@ impl GridAxis {
 }
 
 /// What one grid point found.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct PointResult {
     /// Within every limit (for every orientation of the set).
     pub reachable: bool,
@@ -70,7 +70,7 @@ pub struct ConditionStats {
 }
 
 /// A map of a grid.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct WorkspaceMap {
     /// The grid axes (first varies slowest).
     pub axes: Vec<GridAxis>,
