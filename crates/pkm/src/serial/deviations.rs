@@ -68,3 +68,22 @@ pub(crate) fn apply(d: &mut [ChainDeviations], p: &Parameter, v: f64) {
         Parameter::Installation { axis } => d[0].installation[axis.min(2)] += v,
     }
 }
+
+/// Sets the slot of deviation `p` back to zero (and a completed block with it).
+pub(crate) fn clear(d: &mut [ChainDeviations], p: &Parameter) {
+    match *p {
+        Parameter::Delta { chain, link, axis } => d[chain].links[link].delta[axis] = 0.0,
+        Parameter::Alpha {
+            chain,
+            link,
+            row,
+            col,
+        } => {
+            let l = &mut d[chain].links[link];
+            l.alpha[(row, col)] = 0.0;
+            l.block = None;
+        }
+        Parameter::Dq { chain, joint } => d[chain].dq[joint] = 0.0,
+        Parameter::Installation { axis } => d[0].installation[axis.min(2)] = 0.0,
+    }
+}
