@@ -135,13 +135,36 @@ fn every_example_machine_gets_a_budget() {
             mc["max"].as_f64().unwrap() <= v["budget_worst_case"].as_f64().unwrap() * 1.01,
             "{f}"
         );
-        assert_eq!(
-            v["sensitivities"].as_array().unwrap().len(),
-            v["budget_items"]
+        // Each budget row is |sensitivity| x tolerance of its parameter, and the RSS is
+        // the root sum of squares of the rows.
+        let sens = v["sensitivities"].as_array().unwrap();
+        let mut sum2 = 0.0;
+        for item in v["budget_items"].as_array().unwrap() {
+            let name = item["parameter"].as_str().unwrap();
+            let s = sens.iter().find(|s| s["parameter"] == name).unwrap();
+            let t = v["tolerances"]
                 .as_array()
                 .unwrap()
-                .len()
-                .max(v["sensitivities"].as_array().unwrap().len())
+                .iter()
+                .find(|t| t["parameter"] == name)
+                .unwrap();
+            let per_unit: f64 = s["position_mm_per_unit"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|x| x.as_f64().unwrap().powi(2))
+                .sum::<f64>()
+                .sqrt();
+            let row = item["position_mm"].as_f64().unwrap();
+            assert!(
+                (row - per_unit * t["value"].as_f64().unwrap()).abs() < 1e-12,
+                "{f} {name}"
+            );
+            sum2 += row * row;
+        }
+        assert!(
+            (sum2.sqrt() - v["budget_rss"].as_f64().unwrap()).abs() < 1e-12,
+            "{f}"
         );
     }
 }
@@ -509,4 +532,47 @@ fn strut_machine_error_map_over_two_pose_coordinates() {
     assert!(csv.starts_with("X_mm,Y_mm,rss_mm,worst_case_mm\n"));
     assert_eq!(csv.lines().count(), 1 + 21 * 21);
     assert!(out.join("error-map.svg").exists());
+}
+
+#[test]
+fn per_kind_tolerances_are_checked_and_the_distribution_alone_selects_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = pkm()
+        .args([
+            "errors",
+            &path("examples/machines/p3rp-seed004.toml"),
+            "--length-tolerance",
+            "-1",
+            "--out",
+        ])
+        .arg(dir.path().join("a"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("expected a value >= 0, found -1"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    // `--distribution normal` alone: the default per-kind values, drawn normally.
+    let o = pkm()
+        .args([
+            "errors",
+            &path("examples/machines/mc300.toml"),
+            "--distribution",
+            "normal",
+            "--json",
+            "--out",
+        ])
+        .arg(dir.path().join("b"))
+        .output()
+        .unwrap();
+    ok(&o);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["tolerance_source"], "by-kind");
+    assert!(v["tolerances"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .all(|t| t["distribution"] == "normal"));
 }

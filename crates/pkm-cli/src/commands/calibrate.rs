@@ -6,7 +6,7 @@ use clap::Args;
 use std::path::Path;
 use std::path::PathBuf;
 
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 use pkm::analysis::identification::{
     calibrate, identified_machine_file, parse_design, parse_measurements, simulate_measurements,
     write_measurements, CalibrateOptions, Calibration, SimulateOptions, Validation,
@@ -193,11 +193,7 @@ pub fn calibrate_run(a: &CalibrateArgs) -> Result<u8> {
         Some(p) => Some(read_measurements(p, &machine)?),
         None => None,
     };
-    let model = match a.model.as_str() {
-        "pose" => identify::MeasurementModel::Pose,
-        "points" => identify::MeasurementModel::Points,
-        m => bail!("--model: expected `pose` or `points`, found `{m}`"),
-    };
+    let model: identify::MeasurementModel = a.model.parse().context("--model")?;
     let opt = CalibrateOptions {
         model,
         fix: a

@@ -31,21 +31,21 @@ pub struct ErrorsArgs {
     #[arg(long, default_value = "rpy", value_parser = parse_convention)]
     pub rotation: Convention,
     /// Tolerance of every joint-centre coordinate (mm).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub joint_tolerance: Option<f64>,
     /// Tolerance of every zero length and linear drive positioning (mm).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub length_tolerance: Option<f64>,
     /// Tolerance of every link dimension and linear link deviation (mm).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub link_tolerance: Option<f64>,
     /// Tolerance of every angular parameter, revolute drives included (deg).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub angle_tolerance: Option<f64>,
-    /// With the per-kind tolerances: `uniform` (in +-tolerance) or `normal`
+    /// With the per-kind tolerances: `uniform` (in +-tolerance, the default) or `normal`
     /// (tolerance = 3 sigma).
-    #[arg(long, default_value = "uniform")]
-    pub distribution: String,
+    #[arg(long)]
+    pub distribution: Option<String>,
     /// TOML file of deviation values by parameter name (mm; deg for angles): their
     /// exact tool-pose error.
     #[arg(long)]
@@ -114,33 +114,21 @@ pub fn run(a: &ErrorsArgs) -> Result<u8> {
                 &p.display().to_string(),
             )?)
         }
-        None if by_kind.iter().any(Option::is_some) => {
+        None if by_kind.iter().any(Option::is_some) || a.distribution.is_some() => {
             let d = KindTolerances::default();
-            for (v, what) in by_kind.iter().zip([
-                "--joint-tolerance",
-                "--length-tolerance",
-                "--link-tolerance",
-                "--angle-tolerance",
-            ]) {
-                if let Some(v) = v {
-                    if !(*v >= 0.0 && v.is_finite()) {
-                        bail!("{what}: expected a value >= 0, found {v}");
-                    }
-                }
-            }
             Tolerances::ByKind(KindTolerances {
                 joint: a.joint_tolerance.unwrap_or(d.joint),
                 zero: a.length_tolerance.unwrap_or(d.zero),
                 length: a.link_tolerance.unwrap_or(d.length),
                 angle: a.angle_tolerance.map(f64::to_radians).unwrap_or(d.angle),
-                distribution: a.distribution.parse()?,
+                distribution: match &a.distribution {
+                    Some(t) => t.parse()?,
+                    None => d.distribution,
+                },
             })
         }
         None => Tolerances::Default,
     };
-    if a.monte_carlo == Some(0) {
-        bail!("--monte-carlo: expected a number of samples > 0");
-    }
     let map = match &a.map {
         None => None,
         Some(spec) => {
@@ -165,9 +153,6 @@ pub fn run(a: &ErrorsArgs) -> Result<u8> {
                 .collect::<Result<Vec<usize>>>()?;
             if idx.len() != 2 || idx[0] == idx[1] {
                 bail!("--map: expected two different axes, e.g. X,Y");
-            }
-            if a.map_points < 2 || a.map_points > 401 {
-                bail!("--map-points: expected 2 to 401");
             }
             Some(MapRequest {
                 coordinates: [idx[0], idx[1]],

@@ -106,8 +106,9 @@ impl From<ProfileArg> for pkm::motion::program::ProfileKind {
 pub struct CsvSink<'a> {
     /// Where the rows go, if anywhere.
     pub out: Option<&'a mut dyn Write>,
-    /// Actuator and coordinate quantities, for the units.
-    machine: &'a Machine,
+    /// Coordinate and actuator quantities, for the units (read once, not per sample).
+    coords: Vec<pkm::Quantity>,
+    acts: Vec<pkm::Quantity>,
     line: String,
     bar: Option<ProgressBar>,
 }
@@ -131,9 +132,11 @@ impl<'a> CsvSink<'a> {
             );
             b
         });
+        let m = machine.mechanism();
         Ok(CsvSink {
             out,
-            machine,
+            coords: m.coordinates().iter().map(|c| c.quantity).collect(),
+            acts: m.actuators().iter().map(|a| a.quantity).collect(),
             line: String::with_capacity(256),
             bar,
         })
@@ -152,7 +155,6 @@ impl SampleSink for CsvSink<'_> {
         let Some(w) = self.out.as_deref_mut() else {
             return Ok(());
         };
-        let m = self.machine.mechanism();
         let b = &mut self.line;
         b.clear();
         let _ = write!(b, "{:.6}", s.t);
@@ -162,11 +164,10 @@ impl SampleSink for CsvSink<'_> {
             }
             None => b.push(','),
         }
-        for (c, x) in m.coordinates().iter().zip(s.x) {
-            let _ = write!(b, ",{:.6}", c.quantity.to_user(*x));
+        for (qn, x) in self.coords.iter().zip(s.x) {
+            let _ = write!(b, ",{:.6}", qn.to_user(*x));
         }
-        for (i, a) in m.actuators().iter().enumerate() {
-            let qn = a.quantity;
+        for (i, qn) in self.acts.iter().enumerate() {
             let _ = write!(
                 b,
                 ",{:.6},{:.6},{:.6}",

@@ -32,7 +32,7 @@ pub fn section(h: &mut Html, machine: &Machine) -> Result<()> {
             .to_string(),
     };
     h.p(&format!(
-        "At home, the {} toleranced parameters of the machine's {} ({source}): the tool-point \
+        "At home, {} of the machine's {} geometric parameters toleranced ({source}): the tool-point \
          error each causes with the control's nominal readings (first order, {} sensitivities), \
          their worst-case sum and root sum of squares, and a Monte Carlo of {SAMPLES} machines \
          with every parameter drawn from its distribution and the tool pose solved exactly. \

@@ -5,7 +5,7 @@ use nalgebra::SVector;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::{budget, Parametric, Tolerance};
+use super::{sensitivities, Budget, Parametric, Tolerance};
 use crate::error::{Error, Result};
 use crate::mechanism::inverse_checked;
 use crate::workspace::GridAxis;
@@ -61,6 +61,7 @@ where
         });
     }
     let (n0, n1) = (axes[0].count(), axes[1].count());
+    let params = m.parameters();
     let cells: Vec<MapCell> = (0..n0 * n1)
         .into_par_iter()
         .map(|flat| {
@@ -70,7 +71,8 @@ where
             y[axes[1].coordinate] = axes[1].value(k);
             let b = inverse_checked(m, &y)
                 .ok()
-                .and_then(|_| budget(m, &y, tol).ok())
+                .and_then(|_| sensitivities(m, &y).ok())
+                .and_then(|s| Budget::from_sensitivities(&params, &s, tol).ok())
                 .map(|b| [b.rss, b.worst_case]);
             MapCell {
                 at: [axes[0].value(i), axes[1].value(k)],

@@ -222,7 +222,7 @@ where
 }
 
 /// The exact tool-pose error at `x` with the named deviations (`(parameter index,
-/// value)`, internal units).
+/// value)`, internal units); an index beyond the machine's parameters is an error.
 pub fn pose_error<M, const P: usize, const A: usize>(
     m: &M,
     x: &SVector<f64, P>,
@@ -231,13 +231,6 @@ pub fn pose_error<M, const P: usize, const A: usize>(
 where
     M: Parametric<P, A>,
 {
-    let n = m.parameters().len();
-    if let Some((k, _)) = deviations.iter().find(|(k, _)| *k >= n) {
-        return Err(Error::InvalidInput {
-            what: "deviation".into(),
-            message: format!("parameter index {k} beyond the machine's {n} parameters"),
-        });
-    }
     m.evaluator(x)?.pose_error(deviations)
 }
 

@@ -328,46 +328,44 @@ fn with_completions<T: Clone>(
     Ok(Some(m))
 }
 
+/// The methods both serial mechanisms share (they differ in the joints commanded for
+/// a pose: the pose itself in joint space, the inverse solution for a robot).
+macro_rules! serial_parametric_common {
+    ($p:literal) => {
+        serial_parametric_common!(@ SVector<f64, $p>);
+    };
+    (@ $x:ty) => {
+        fn parameters(&self) -> Vec<Parameter> {
+            serial_parameters(&self.machine)
+        }
+        fn analytic_sensitivities(&self, x: &$x) -> Option<Result<Vec<PoseError>>> {
+            Some(self.evaluator(x).and_then(|e| e.analytic()))
+        }
+        fn with_given(&self, given: &[usize]) -> Result<Option<Self>> {
+            with_completions(self, &self.machine, &self.completions, given, |m| {
+                &mut m.completions
+            })
+        }
+        fn tolerable(&self) -> Vec<bool> {
+            serial_tolerable(&self.machine)
+        }
+    };
+}
+
 impl<const N: usize> Parametric<N, N> for crate::serial::mechanism::SerialMechanism<N> {
     type Evaluator<'a> = SerialEvaluator<'a>;
-    fn parameters(&self) -> Vec<Parameter> {
-        serial_parameters(&self.machine)
-    }
+    serial_parametric_common!(@ SVector<f64, N>);
     fn evaluator(&self, x: &SVector<f64, N>) -> Result<SerialEvaluator<'_>> {
         SerialEvaluator::new(&self.machine, &self.completions, x.as_slice())
-    }
-    fn analytic_sensitivities(&self, x: &SVector<f64, N>) -> Option<Result<Vec<PoseError>>> {
-        Some(self.evaluator(x).and_then(|e| e.analytic()))
-    }
-    fn with_given(&self, given: &[usize]) -> Result<Option<Self>> {
-        with_completions(self, &self.machine, &self.completions, given, |m| {
-            &mut m.completions
-        })
-    }
-    fn tolerable(&self) -> Vec<bool> {
-        serial_tolerable(&self.machine)
     }
 }
 
 impl Parametric<6, 6> for crate::serial::arm::SerialArm {
     type Evaluator<'a> = SerialEvaluator<'a>;
-    fn parameters(&self) -> Vec<Parameter> {
-        serial_parameters(&self.machine)
-    }
+    serial_parametric_common!(6);
     /// The joints commanded for tool pose `x` are the nominal inverse solution.
     fn evaluator(&self, x: &SVector<f64, 6>) -> Result<SerialEvaluator<'_>> {
         let q = self.inverse(x)?;
         SerialEvaluator::new(&self.machine, &self.completions, q.as_slice())
-    }
-    fn analytic_sensitivities(&self, x: &SVector<f64, 6>) -> Option<Result<Vec<PoseError>>> {
-        Some(self.evaluator(x).and_then(|e| e.analytic()))
-    }
-    fn with_given(&self, given: &[usize]) -> Result<Option<Self>> {
-        with_completions(self, &self.machine, &self.completions, given, |m| {
-            &mut m.completions
-        })
-    }
-    fn tolerable(&self) -> Vec<bool> {
-        serial_tolerable(&self.machine)
     }
 }

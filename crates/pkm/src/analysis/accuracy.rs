@@ -45,6 +45,24 @@ impl Default for KindTolerances {
 }
 
 impl KindTolerances {
+    /// Checks the values: finite and `>= 0`.
+    pub fn validate(&self) -> Result<()> {
+        for (v, what) in [
+            (self.joint, "joint-centre tolerance"),
+            (self.length, "link tolerance"),
+            (self.zero, "zero-length / drive tolerance"),
+            (self.angle, "angle tolerance"),
+        ] {
+            if !(v >= 0.0 && v.is_finite()) {
+                return Err(Error::InvalidInput {
+                    what: what.into(),
+                    message: format!("expected a value >= 0, found {v}"),
+                });
+            }
+        }
+        Ok(())
+    }
+
     /// The tolerance of parameter `p`, `None` when its kind is left out.
     pub fn of(&self, p: &Parameter) -> Option<f64> {
         let t = match (p.kind, p.quantity) {
@@ -238,7 +256,10 @@ impl Visitor for AccuracyJob<'_> {
         let tolerable = m.tolerable();
         let (tolerance_source, tolerances) = match &self.opt.tolerances {
             Tolerances::Given(t) => (ToleranceSource::Given, t.clone()),
-            Tolerances::ByKind(k) => (ToleranceSource::ByKind, k.tolerances(&params, &tolerable)),
+            Tolerances::ByKind(k) => {
+                k.validate()?;
+                (ToleranceSource::ByKind, k.tolerances(&params, &tolerable))
+            }
             Tolerances::Default if !self.file.is_empty() => {
                 (ToleranceSource::MachineFile, self.file.to_vec())
             }

@@ -7,7 +7,7 @@ use serde::Serialize;
 use crate::dynamic::DynForward;
 use crate::error::Result;
 use crate::limits::Violation;
-use crate::machine::{Analysis, Machine, Model};
+use crate::machine::Machine;
 
 /// An inverse solution with its limit check.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -32,7 +32,7 @@ pub fn inverse(machine: &Machine, x: &[f64]) -> Result<InverseSolution> {
     })
 }
 
-/// Every inverse solution found for pose `x` ([`Analysis::InverseSolutions`]: six-axis
+/// Every inverse solution found for pose `x` ([`crate::machine::Analysis::InverseSolutions`]: six-axis
 /// robots, Newton from home and `starts - 1` spread starts, deduplicated, nearest home
 /// first), each with its limit status.
 pub fn inverse_solutions(
@@ -40,13 +40,7 @@ pub fn inverse_solutions(
     x: &[f64],
     starts: usize,
 ) -> Result<Vec<InverseSolution>> {
-    machine.supports(Analysis::InverseSolutions)?;
-    let Model::Serial(s) = &machine.model else {
-        unreachable!("supports() checked the machine type")
-    };
-    let crate::serial::mechanism::SerialAny::Arm(arm) = &s.mechanism else {
-        unreachable!("supports() checked the machine type")
-    };
+    let arm = machine.robot_arm()?;
     let xv = crate::dynamic::fixed::<6>("pose", x)?;
     let m = machine.mechanism();
     arm.inverse_solutions(&xv, starts)
@@ -74,15 +68,15 @@ pub struct ForwardStream<'a> {
 impl<'a> ForwardStream<'a> {
     /// A stream starting at pose `start` (internal units).
     pub fn new(machine: &'a Machine, start: &[f64]) -> Result<Self> {
-        let tracker = match &machine.model {
-            Model::Hexapod(h) => Some((
-                h.as_ref(),
+        let tracker = match machine.tracked_hexapod() {
+            Some(h) => Some((
+                h,
                 crate::hexapod::FkTracker::new(
                     &crate::dynamic::fixed::<6>("start pose", start)?,
                     Default::default(),
                 ),
             )),
-            _ => None,
+            None => None,
         };
         Ok(ForwardStream {
             machine,

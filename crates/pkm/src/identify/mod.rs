@@ -128,6 +128,21 @@ pub enum MeasurementModel {
     Points,
 }
 
+impl std::str::FromStr for MeasurementModel {
+    type Err = crate::error::Error;
+    /// `pose` or `points`.
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "pose" => Ok(MeasurementModel::Pose),
+            "points" => Ok(MeasurementModel::Points),
+            m => Err(crate::error::Error::InvalidInput {
+                what: "measurement model".into(),
+                message: format!("expected `pose` or `points`, found `{m}`"),
+            }),
+        }
+    }
+}
+
 /// Settings of [`identify`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct Options {

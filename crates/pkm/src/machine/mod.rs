@@ -324,15 +324,6 @@ impl Machine {
         })
     }
 
-    /// Tolerances of the machine's parameters given in its file (`[[tolerance]]`),
-    /// indices into its [`crate::accuracy::Parametric::parameters`]; empty when none.
-    pub fn tolerances(&self) -> &[crate::accuracy::Tolerance] {
-        match &self.model {
-            Model::Serial(s) => &s.tolerances,
-            _ => &[],
-        }
-    }
-
     /// The machine's geometric parameters (the accuracy engine's list).
     pub fn parameters(&self) -> Vec<crate::accuracy::Parameter> {
         struct Params;

@@ -192,10 +192,7 @@ impl Machine {
                 self.model,
                 Model::Hexapod(_) | Model::TranslationalTripod(_)
             ),
-            Analysis::InverseSolutions => matches!(
-                &self.model,
-                Model::Serial(s) if matches!(s.mechanism, crate::serial::mechanism::SerialAny::Arm(_))
-            ),
+            Analysis::InverseSolutions => self.robot_arm().is_ok(),
             Analysis::ForwardWorkspace => self.mechanism().actuators().len() <= 3,
             Analysis::Seed004 => matches!(self.model, Model::P3rpHead(_) | Model::P3rpHybrid(_)),
         };
@@ -239,6 +236,35 @@ impl Machine {
             kind: m.kind().to_string(),
             analysis: analysis.name(),
             reason,
+        }
+    }
+
+    /// The six-axis robot of a machine whose inverse has several solutions
+    /// ([`Analysis::InverseSolutions`]).
+    pub(crate) fn robot_arm(&self) -> Result<&crate::serial::arm::SerialArm> {
+        match &self.model {
+            Model::Serial(s) => match &s.mechanism {
+                crate::serial::mechanism::SerialAny::Arm(a) => Ok(a),
+                _ => Err(self.unsupported(Analysis::InverseSolutions)),
+            },
+            _ => Err(self.unsupported(Analysis::InverseSolutions)),
+        }
+    }
+
+    /// The hexapod, for the stream solver that tracks it ([`crate::hexapod::FkTracker`]).
+    pub(crate) fn tracked_hexapod(&self) -> Option<&crate::hexapod::Hexapod> {
+        match &self.model {
+            Model::Hexapod(h) => Some(h),
+            _ => None,
+        }
+    }
+
+    /// Tolerances of the machine's parameters given in its file (`[[tolerance]]`),
+    /// indices into its [`crate::accuracy::Parametric::parameters`]; empty when none.
+    pub fn tolerances(&self) -> &[crate::accuracy::Tolerance] {
+        match &self.model {
+            Model::Serial(s) => &s.tolerances,
+            _ => &[],
         }
     }
 
