@@ -5,6 +5,7 @@ use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use nalgebra::{Matrix3, Vector3, Vector6};
+use pkm::accuracy::Parametric;
 use pkm::machine::Model;
 use pkm::rotation::Convention;
 use pkm::{Machine, Mechanism};
@@ -340,6 +341,98 @@ fn serial(c: &mut Criterion) {
         |b| {
             b.iter(|| {
                 pkm::accuracy::monte_carlo(mc300, &x300, &s.tolerances, 1_000_000, 1)
+                    .unwrap()
+                    .mean
+            })
+        },
+    );
+    // The same engine on the rows of the file before issue 13 (c008e08: the paper's
+    // 43, aligned-entry angles and installation angles included; evaluated, not
+    // completed), so that before/after compare the same work.
+    let names = mc300.parameters();
+    let by_name = |name: &str, value: f64| pkm::accuracy::Tolerance {
+        parameter: names
+            .iter()
+            .position(|p| p.name == name)
+            .unwrap_or_else(|| panic!("{name}")),
+        value,
+        distribution: pkm::accuracy::Distribution::Uniform,
+    };
+    let deg = 1f64.to_radians();
+    let mut rows_43 = Vec::new();
+    for (links, axes, value) in [
+        (
+            &["1 slide", "2 column", "3 spindle"][..],
+            &["xx", "xy", "xz"][..],
+            0.002 * deg,
+        ),
+        (
+            &["4 tilting table", "5 face plate"][..],
+            &["xz", "yz", "zz"][..],
+            0.003 * deg,
+        ),
+        (&["0 bed"][..], &["xz", "yz", "zz"][..], 0.002 * deg),
+    ] {
+        for l in links {
+            for a in axes {
+                rows_43.push(by_name(&format!("alpha_{a}({l})"), value));
+            }
+        }
+    }
+    for (links, axes, value) in [
+        (
+            &["1 slide", "2 column", "3 spindle"][..],
+            &["x", "y"][..],
+            0.005,
+        ),
+        (&["1 slide", "2 column", "3 spindle"][..], &["z"][..], 0.01),
+        (
+            &["4 tilting table", "5 face plate"][..],
+            &["x", "y"][..],
+            0.005,
+        ),
+        (&["4 tilting table", "5 face plate"][..], &["z"][..], 0.003),
+        (&["0 bed"][..], &["x", "y", "z"][..], 0.01),
+    ] {
+        for l in links {
+            for a in axes {
+                rows_43.push(by_name(&format!("delta_{a}({l})"), value));
+            }
+        }
+    }
+    for (j, v) in [
+        ("X", 0.004),
+        ("Y", 0.004),
+        ("Z", 0.004),
+        ("B", 0.003 * deg),
+        ("C", 0.003 * deg),
+    ] {
+        rows_43.push(by_name(&format!("dq({j})"), v));
+    }
+    rows_43.push(by_name("theta_x0", 0.01 * deg));
+    rows_43.push(by_name("theta_z0", 0.01 * deg));
+    assert_eq!(rows_43.len(), 43);
+    g.bench_function(
+        "MC-300 1e6 machines, c008e08's 43 tolerances, uncompleted (rayon, all cores)",
+        |b| {
+            b.iter(|| {
+                pkm::accuracy::monte_carlo(mc300, &x300, &rows_43, 1_000_000, 1)
+                    .unwrap()
+                    .mean
+            })
+        },
+    );
+    // What `pkm errors` runs: the file's angles completed per sample (eq. 3).
+    let given: Vec<usize> = s.tolerances.iter().map(|t| t.parameter).collect();
+    let completed = mc300
+        .with_given(&given)
+        .unwrap()
+        .expect("angles to complete");
+    g.bench_function(
+        "MC-300 1e6 machines, its file's 39 tolerances, completed per sample (rayon, all cores)",
+        |b| {
+            b.iter(|| {
+                pkm::accuracy::monte_carlo(&completed, &x300, &s.tolerances, 1_000_000, 1)
                     .unwrap()
                     .mean
             })

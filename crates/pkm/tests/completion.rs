@@ -119,8 +119,30 @@ fn the_fast_completion_agrees_with_the_general_solver() {
     let n = Matrix3::new(0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0);
     let pos = [(0, 0), (0, 1), (1, 1)];
     let t = TripleCompletion::new(&n, pos).unwrap();
-    for a in [[1e-4, -2e-4, 3e-4], [0.02, 0.01, -0.03], [-0.1, 0.05, 0.08]] {
+    // Tolerance-sized angles, both sides of the Rodrigues series' switch (|w| = 1e-3),
+    // and large ones (the Newton fallback).
+    for a in [
+        [1e-4, -2e-4, 3e-4],
+        [3.5e-5, 1e-5, -2e-5],
+        [6e-4, -5e-4, 4e-4],
+        [9e-4, -8e-4, 7e-4],
+        [0.02, 0.01, -0.03],
+        [-0.1, 0.05, 0.08],
+    ] {
         let fast = t.complete(a).unwrap();
+        let b = t.complete_block(a).unwrap();
+        for (i, &(r, c)) in pos.iter().enumerate() {
+            let want = (n[(r, c)].clamp(-1.0, 1.0).acos() + a[i]).cos();
+            assert!(
+                (b[(r, c)] - want).abs() < 1e-14,
+                "{a:?}: {}",
+                b[(r, c)] - want
+            );
+        }
+        assert!(
+            (b.transpose() * b - Matrix3::identity()).amax() < 1e-14,
+            "{a:?}"
+        );
         let general = complete(&n, &[(pos[0], a[0]), (pos[1], a[1]), (pos[2], a[2])]).unwrap();
         let phi = n.map(|c: f64| c.clamp(-1.0, 1.0).acos());
         let block = Matrix3::from_fn(|r, c| (phi[(r, c)] + fast[(r, c)]).cos());

@@ -677,3 +677,63 @@ fn installation_angles_cancel_relative_to_the_part_and_turn_a_robot_about_the_wo
         assert!((w - fdw).amax() < 1e-8, "{axis}: {w} {fdw}");
     }
 }
+
+/// The chain's pose by the book: the 4 x 4 product of eq. 4's joint transforms and
+/// eq. 2's link transforms with all nine `cos(phi + alpha)`, written out here.
+fn pose_by_the_book(c: &Chain, q: &[f64], dq: &[f64], dev: &[LinkDeviation]) -> Matrix4<f64> {
+    let mut t = Matrix4::identity();
+    let mut k = 0;
+    for (link, d) in c.links.iter().zip(dev) {
+        if let Some(j) = &link.joint {
+            let v = q[k] + dq[k];
+            t *= match j.kind {
+                JointKind::Revolute => rz4(v),
+                JointKind::Prismatic => tr4(0.0, 0.0, v),
+            };
+            k += 1;
+        }
+        let phi = link.rotation.map(|x| x.clamp(-1.0, 1.0).acos());
+        let mut a = Matrix4::identity();
+        for r in 0..3 {
+            for col in 0..3 {
+                a[(r, col)] = (phi[(r, col)] + d.alpha[(r, col)]).cos();
+            }
+            a[(r, 3)] = link.translation[r] + d.delta[r];
+        }
+        t *= a;
+    }
+    t
+}
+
+proptest::proptest! {
+    /// `Chain::pose` (affine products, joints as column operations, only deviated
+    /// entries through `acos`/`cos`) is the book's product of 4 x 4 transforms, for any
+    /// joints and any sparse or dense deviations, on both chains of a 5-axis machine.
+    #[test]
+    fn chain_pose_is_the_product_of_the_transforms(
+        q in proptest::collection::vec(-3.0f64..3.0, 3),
+        dq in proptest::collection::vec(-0.01f64..0.01, 3),
+        alpha in proptest::collection::vec(
+            proptest::prop_oneof![proptest::strategy::Just(0.0), -2e-3f64..2e-3], 36),
+        delta in proptest::collection::vec(-0.05f64..0.05, 12),
+    ) {
+        let m = five_axis();
+        for c in [&m.tool, m.workpiece.as_ref().unwrap()] {
+            let n = c.dof();
+            let q: Vec<f64> = q[..n].iter().map(|x| x * 40.0).collect();
+            let dev: Vec<LinkDeviation> = (0..c.links.len())
+                .map(|i| LinkDeviation {
+                    delta: Vector3::from_column_slice(&delta[3 * i..3 * i + 3]),
+                    alpha: Matrix3::from_column_slice(&alpha[9 * i..9 * i + 9]),
+                    block: None,
+                })
+                .collect();
+            let fast = c.pose(&q, &dq[..n], &dev).unwrap();
+            let book = pose_by_the_book(c, &q, &dq[..n], &dev);
+            // Rounding only: translations of some 100 mm, blocks of unit size.
+            let err = (fast - book).abs();
+            proptest::prop_assert!(err.fixed_view::<3, 3>(0, 0).max() < 1e-13, "{fast} {book}");
+            proptest::prop_assert!(err.fixed_view::<3, 1>(0, 3).max() < 1e-10, "{fast} {book}");
+        }
+    }
+}

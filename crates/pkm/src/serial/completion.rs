@@ -304,18 +304,36 @@ impl TripleCompletion {
 
     /// The rigid block `M = N exp([w]x)` whose entries at the positions are
     /// `cos(phi + measured)` (see [`TripleCompletion::complete`]).
+    ///
+    /// Per iteration only the three entries at the positions are evaluated (row `r` of
+    /// `N` times column `c` of `exp([w]x)`, Rodrigues' formula with its series for small
+    /// `|w|`, no trigonometry); the iteration stops when the residual is at rounding
+    /// level or no longer falls.
     pub fn complete_block(&self, measured: [f64; 3]) -> Result<Matrix3<f64>> {
         let target = nalgebra::Vector3::from_fn(|i, _| {
             let (r, c) = self.positions[i];
             (self.phi[(r, c)] + measured[i]).cos()
         });
-        let block =
-            |w: &nalgebra::Vector3<f64>| self.nominal * nalgebra::Rotation3::new(*w).into_inner();
         let residual = |w: &nalgebra::Vector3<f64>| {
-            let m = block(w);
+            let (a, b) = rodrigues_coefficients(w);
+            let diag = 1.0 - b * w.norm_squared();
             nalgebra::Vector3::from_fn(|i, _| {
                 let (r, c) = self.positions[i];
-                m[(r, c)] - target[i]
+                // Column c of exp([w]x) = diag e_c + a (w x e_c) + b w_c w.
+                let e = nalgebra::Vector3::from_fn(|k, _| {
+                    let cross = match (c, k) {
+                        (0, 1) => w.z,
+                        (0, 2) => -w.y,
+                        (1, 0) => -w.z,
+                        (1, 2) => w.x,
+                        (2, 0) => w.y,
+                        (2, 1) => -w.x,
+                        _ => 0.0,
+                    };
+                    let d = if k == c { diag } else { 0.0 };
+                    d + a * cross + b * w[c] * w[k]
+                });
+                self.nominal.row(r).transpose().dot(&e) - target[i]
             })
         };
         // At w = 0 the block is the nominal one: the first residual needs no exponential.
@@ -324,18 +342,23 @@ impl TripleCompletion {
             let (r, c) = self.positions[i];
             self.nominal[(r, c)] - target[i]
         });
+        // Chord steps with the nominal Jacobian: the error shrinks by about |w| a step.
         for _ in 0..8 {
             if f.amax() < 1e-15 {
                 break;
             }
-            w -= self.j0_inv * f;
-            f = residual(&w);
+            let wn = w - self.j0_inv * f;
+            let fn_ = residual(&wn);
+            if fn_.amax() >= f.amax() {
+                break; // rounding level reached, or too large for the chord
+            }
+            (w, f) = (wn, fn_);
         }
+        // Newton with a difference Jacobian for large deviations.
         let mut it = 0;
         while f.amax() >= 1e-14 && it < 30 {
             let h = 1e-7;
-            let j = Matrix3::from_fn(|_, _| 0.0);
-            let mut j = j;
+            let mut j = Matrix3::zeros();
             for k in 0..3 {
                 let mut wp = w;
                 wp[k] += h;
@@ -343,8 +366,12 @@ impl TripleCompletion {
                 j.set_column(k, &col);
             }
             let Some(inv) = j.try_inverse() else { break };
-            w -= inv * f;
-            f = residual(&w);
+            let wn = w - inv * f;
+            let fn_ = residual(&wn);
+            if fn_.amax() >= f.amax() {
+                break;
+            }
+            (w, f) = (wn, fn_);
             it += 1;
         }
         if !(f.amax() < 1e-12) {
@@ -358,6 +385,27 @@ impl TripleCompletion {
                 ),
             });
         }
-        Ok(block(&w))
+        let (a, b) = rodrigues_coefficients(&w);
+        let k = w.cross_matrix();
+        let r = Matrix3::identity() + k * a + k * k * b;
+        Ok(self.nominal * r)
+    }
+}
+
+/// `(sin t / t, (1 - cos t) / t^2)` for `t = |w|`, so that
+/// `exp([w]x) = I + a [w]x + b [w]x^2` (Rodrigues); their series below `t = 1e-3`
+/// (truncation below `t^6 / 5040`, under 1e-21).
+#[inline]
+fn rodrigues_coefficients(w: &nalgebra::Vector3<f64>) -> (f64, f64) {
+    let t2 = w.norm_squared();
+    if t2 < 1e-6 {
+        (
+            1.0 - t2 / 6.0 + t2 * t2 / 120.0,
+            0.5 - t2 / 24.0 + t2 * t2 / 720.0,
+        )
+    } else {
+        let t = t2.sqrt();
+        let (s, c) = t.sin_cos();
+        (s / t, (1.0 - c) / t2)
     }
 }

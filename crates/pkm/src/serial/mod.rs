@@ -106,24 +106,58 @@ pub struct Chain {
 /// `A_(i,i*)` with deviations (eq. 2).
 #[inline]
 pub fn link_transform(link: &Link, dev: &LinkDeviation) -> Matrix4<f64> {
-    let mut m = Matrix4::identity();
+    matrix_of(&link_affine(link, dev))
+}
+
+/// The rotation block of a deviated link (eq. 2): the completed block where a
+/// completion (eq. 3) found it, else `cos(phi_ab + alpha_ab)` entry by entry. An entry
+/// without angular deviation is the nominal direction cosine itself (`cos(acos c) = c`,
+/// without the round trip's rounding), so only deviated entries cost an `acos`/`cos`.
+#[inline]
+pub fn deviated_block(link: &Link, dev: &LinkDeviation) -> Matrix3<f64> {
     if let Some(b) = &dev.block {
-        m.fixed_view_mut::<3, 3>(0, 0).copy_from(b);
-    } else if dev.alpha == Matrix3::zeros() {
-        m.fixed_view_mut::<3, 3>(0, 0).copy_from(&link.rotation);
-    } else {
-        let phi = link.angles();
-        for r in 0..3 {
-            for c in 0..3 {
-                m[(r, c)] = (phi[(r, c)] + dev.alpha[(r, c)]).cos();
+        return *b;
+    }
+    let mut b = link.rotation;
+    for (c, a) in b.iter_mut().zip(dev.alpha.iter()) {
+        if *a != 0.0 {
+            *c = (c.clamp(-1.0, 1.0).acos() + a).cos();
+        }
+    }
+    b
+}
+
+/// `A_(i,i*)` with deviations as a 3 x 4 affine block.
+#[inline(always)]
+fn link_affine(link: &Link, dev: &LinkDeviation) -> Affine {
+    let r = deviated_block(link, dev);
+    let t = link.translation + dev.delta;
+    [
+        [r[(0, 0)], r[(0, 1)], r[(0, 2)], t.x],
+        [r[(1, 0)], r[(1, 1)], r[(1, 2)], t.y],
+        [r[(2, 0)], r[(2, 1)], r[(2, 2)], t.z],
+    ]
+}
+
+/// `t A_((i-1)*,i)(v)` in place (eq. 4) as the column operation it is: a turn about Z
+/// mixes the first two columns (`(s, c)` its sine and cosine), a slide along Z adds `v`
+/// times the third column to the translation.
+#[inline(always)]
+fn apply_joint(t: &mut Affine, kind: JointKind, v: f64, (s, c): (f64, f64)) {
+    match kind {
+        JointKind::Revolute => {
+            for row in t {
+                let (a, b) = (row[0], row[1]);
+                row[0] = c * a + s * b;
+                row[1] = c * b - s * a;
+            }
+        }
+        JointKind::Prismatic => {
+            for row in t {
+                row[3] += v * row[2];
             }
         }
     }
-    let t = link.translation + dev.delta;
-    m[(0, 3)] = t.x;
-    m[(1, 3)] = t.y;
-    m[(2, 3)] = t.z;
-    m
 }
 
 /// `A_((i-1)*,i)(q)` (eq. 4): a turn about Z by `q` (revolute) or a slide along Z.
@@ -179,18 +213,24 @@ impl Chain {
                 ),
             });
         }
+        // 3 x 4 affine products and joints as column operations: the same product as
+        // `prod joint_transform * link_transform`, in half the arithmetic.
         let zero = LinkDeviation::default();
-        let mut t = Matrix4::identity();
+        let mut t = AFFINE_IDENTITY;
         let mut k = 0;
         for (i, link) in self.links.iter().enumerate() {
             if let Some(j) = &link.joint {
-                let d = dq.get(k).copied().unwrap_or(0.0);
-                t *= joint_transform(j.kind, q[k] + d);
+                let v = q[k] + dq.get(k).copied().unwrap_or(0.0);
+                let sc = match j.kind {
+                    JointKind::Revolute => v.sin_cos(),
+                    JointKind::Prismatic => (0.0, 1.0),
+                };
+                apply_joint(&mut t, j.kind, v, sc);
                 k += 1;
             }
-            t *= link_transform(link, dev.get(i).unwrap_or(&zero));
+            t = affine_mul(&t, &link_affine(link, dev.get(i).unwrap_or(&zero)));
         }
-        Ok(t)
+        Ok(matrix_of(&t))
     }
 }
 
@@ -229,10 +269,6 @@ fn affine_mul(a: &Affine, b: &Affine) -> Affine {
     n
 }
 
-fn affine_of(m: &Matrix4<f64>) -> Affine {
-    std::array::from_fn(|r| std::array::from_fn(|c| m[(r, c)]))
-}
-
 fn matrix_of(a: &Affine) -> Matrix4<f64> {
     let mut m = Matrix4::identity();
     for r in 0..3 {
@@ -256,7 +292,7 @@ impl PreparedChain {
                 steps.push((j.kind, dq.get(k).copied().unwrap_or(0.0), AFFINE_IDENTITY));
                 k += 1;
             }
-            let l = affine_of(&link_transform(link, dev.get(i).unwrap_or(&zero)));
+            let l = link_affine(link, dev.get(i).unwrap_or(&zero));
             match steps.last_mut() {
                 Some(s) => s.2 = affine_mul(&s.2, &l),
                 None => head = affine_mul(&head, &l),
@@ -334,26 +370,13 @@ impl PreparedChain {
         let mut t = self.head;
         for (k, ((kind, dq, link), qk)) in self.steps.iter().zip(q).enumerate() {
             at_joint(&t, *kind);
-            match kind {
-                JointKind::Revolute => {
-                    let (s, c) = if k < MAX {
-                        (sn[k], cs[k])
-                    } else {
-                        (qk + dq).sin_cos()
-                    };
-                    for row in &mut t {
-                        let (a, b) = (row[0], row[1]);
-                        row[0] = c * a + s * b;
-                        row[1] = c * b - s * a;
-                    }
-                }
-                JointKind::Prismatic => {
-                    let v = qk + dq;
-                    for row in &mut t {
-                        row[3] += v * row[2];
-                    }
-                }
-            }
+            let v = qk + dq;
+            let sc = match kind {
+                JointKind::Revolute if k < MAX => (sn[k], cs[k]),
+                JointKind::Revolute => v.sin_cos(),
+                JointKind::Prismatic => (0.0, 1.0),
+            };
+            apply_joint(&mut t, *kind, v, sc);
             t = affine_mul(&t, link);
         }
         t
