@@ -576,3 +576,72 @@ fn per_kind_tolerances_are_checked_and_the_distribution_alone_selects_them() {
         .iter()
         .all(|t| t["distribution"] == "normal"));
 }
+
+#[test]
+fn clearance_bounds_in_errors_json() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = pkm()
+        .args([
+            "errors",
+            &path("examples/machines/hexapod-seed001.toml"),
+            "--pose",
+            "0,0,550,5,0,0",
+            "--clearance",
+            "0.02",
+            "--direction",
+            "0,0,1",
+            "--clearance-samples",
+            "2000",
+            "--tolerance",
+            "0.01",
+            "--json",
+            "--out",
+        ])
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    ok(&o);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let c = &v["clearance"];
+    assert_eq!(c["direction"], serde_json::json!([0.0, 0.0, 1.0]));
+    let (upper, lower) = (c["upper"].as_f64().unwrap(), c["lower"].as_f64().unwrap());
+    assert!(upper > 0.0 && lower < 0.0, "{c}");
+    assert_eq!(c["method"], "first-order");
+    let states = c["worst_joint_states"]["upper"].as_array().unwrap();
+    assert_eq!(states.len(), 12);
+    for s in states {
+        assert!(s["joint"].is_string());
+        let d: Vec<f64> = s["displacement"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect();
+        assert_eq!(d.len(), 3);
+        assert!((d.iter().map(|x| x * x).sum::<f64>().sqrt() - 0.01).abs() < 1e-12);
+    }
+    let mc = &c["monte_carlo"];
+    assert_eq!(mc["samples"], 2000);
+    assert!(mc["max"].as_f64().unwrap() <= upper + 1e-12);
+    let largest = c["largest_clearance_mm"].as_f64().unwrap();
+    assert!(largest > 0.0 && largest < 0.02, "{largest}");
+    // The file on disk is the same document.
+    let on_disk: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("errors.json")).unwrap()).unwrap();
+    assert_eq!(on_disk["clearance"], v["clearance"]);
+    // A serial machine has no modelled passive joints: a named refusal, exit != 0.
+    let o = pkm()
+        .args([
+            "errors",
+            &path("examples/machines/mc300.toml"),
+            "--clearance",
+            "0.02",
+            "--out",
+        ])
+        .arg(dir.path().join("mc"))
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("joint clearances"), "{err}");
+}

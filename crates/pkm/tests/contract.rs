@@ -355,6 +355,26 @@ fn every_example_runs_every_analysis_it_supports() {
                 Analysis::Seed004 => pkm::analysis::seed004::reproduction(&machine).map(|rows| {
                     assert!(!rows.is_empty());
                 }),
+                Analysis::Clearance => pkm::analysis::clearance::clearance(
+                    &machine,
+                    None,
+                    &pkm::analysis::clearance::ClearanceRequest {
+                        diametral: Some(0.02),
+                        monte_carlo: Some(500),
+                        ..Default::default()
+                    },
+                )
+                .map(|r| {
+                    // Bounds hold the samples, and grow with the clearance.
+                    let b = &r.bounds;
+                    let mc = r.monte_carlo.as_ref().unwrap();
+                    assert!(b.upper > 0.0 && b.lower < 0.0, "{name}: {b:?}");
+                    assert!(
+                        mc.max <= b.upper + 1e-12 && mc.min >= b.lower - 1e-12,
+                        "{name}"
+                    );
+                    assert_eq!(r.clearances.len(), machine.passive_joints().len());
+                }),
                 _ => Ok(()),
             };
             match (supported, r) {

@@ -67,6 +67,26 @@ pub struct ErrorsArgs {
     /// Points per axis of the error map.
     #[arg(long, default_value_t = 41)]
     pub map_points: usize,
+    /// Joint clearances (seed 002): one diametral clearance (mm) for every passive
+    /// joint (the file's joint types, bearing lengths and axes kept). Without it the
+    /// machine file's `[[clearance]]` entries are used when there are any.
+    #[arg(long, allow_negative_numbers = true)]
+    pub clearance: Option<f64>,
+    /// Direction of the clearance bounds (X,Y,Z in the base or workpiece frame, e.g. the
+    /// surface normal); default: the tool axis.
+    #[arg(long, allow_hyphen_values = true)]
+    pub direction: Option<String>,
+    /// Method of the clearance bounds: `first-order` (support functions re-solved
+    /// exactly; scales) or `enumeration` (seed 002: every combination of extreme joint
+    /// states, 6 per ball and 4 per disc; refused above 2^20 solves).
+    #[arg(long, default_value = "first-order")]
+    pub clearance_method: String,
+    /// Monte Carlo of this many joint states inside their clearances.
+    #[arg(long)]
+    pub clearance_samples: Option<usize>,
+    /// Tolerance on the error along the direction (mm): the largest clearance within it.
+    #[arg(long, allow_negative_numbers = true)]
+    pub tolerance: Option<f64>,
     /// Output directory.
     #[arg(long)]
     pub out: PathBuf,
@@ -160,6 +180,7 @@ pub fn run(a: &ErrorsArgs) -> Result<u8> {
             })
         }
     };
+    let clearance = clearance_request(a, &machine)?;
     let r = accuracy(
         &machine,
         &AccuracyOptions {
@@ -169,6 +190,7 @@ pub fn run(a: &ErrorsArgs) -> Result<u8> {
             monte_carlo: a.monte_carlo,
             seed: a.seed,
             map,
+            clearance,
         },
     )?;
     std::fs::create_dir_all(&a.out)
@@ -192,6 +214,9 @@ pub fn run(a: &ErrorsArgs) -> Result<u8> {
             write_map(&a.out, m, &r.pose, em, &inputs)?,
         );
     }
+    if let Some(c) = &r.clearance {
+        o.insert("clearance".into(), serde_json::to_value(c)?);
+    }
     let text = serde_json::to_string_pretty(&out)?;
     write_atomic(&a.out.join("errors.json"), text.as_bytes(), &inputs)?;
     if a.json {
@@ -201,6 +226,46 @@ pub fn run(a: &ErrorsArgs) -> Result<u8> {
         println!("wrote {}", a.out.display());
     }
     Ok(0)
+}
+
+/// The clearance request of the arguments: asked for by `--clearance`, or by the
+/// machine file's `[[clearance]]` entries.
+fn clearance_request(
+    a: &ErrorsArgs,
+    machine: &pkm::Machine,
+) -> Result<Option<pkm::analysis::clearance::ClearanceRequest>> {
+    let asked = a.clearance.is_some()
+        || a.direction.is_some()
+        || a.clearance_samples.is_some()
+        || a.tolerance.is_some();
+    if !asked && machine.clearances.is_empty() {
+        return Ok(None);
+    }
+    let direction = match &a.direction {
+        None => None,
+        Some(d) => {
+            let v = parse_list(d, "--direction")?;
+            if v.len() != 3 {
+                bail!("--direction: expected X,Y,Z, got {} values", v.len());
+            }
+            Some(nalgebra::Vector3::new(v[0], v[1], v[2]))
+        }
+    };
+    let method = a
+        .clearance_method
+        .parse()
+        .map_err(|e: String| anyhow::anyhow!("--clearance-method: {e}"))?;
+    Ok(Some(pkm::analysis::clearance::ClearanceRequest {
+        diametral: a.clearance,
+        options: pkm::accuracy::clearance::ClearanceOptions {
+            direction,
+            method,
+            ..Default::default()
+        },
+        monte_carlo: a.clearance_samples,
+        seed: a.seed,
+        tolerance: a.tolerance,
+    }))
 }
 
 /// The `errors.json` contract (user units: mm, deg for angular parameters).
@@ -302,6 +367,41 @@ fn print_text(m: &dyn pkm::DynMechanism, r: &AccuracyReport) {
             mc.samples, mc.mean, mc.std, mc.p95, mc.p99, mc.max,
             if mc.failed > 0 { format!(" ({} machines without a forward solution left out)", mc.failed) } else { String::new() }
         );
+    }
+    if let Some(c) = &r.clearance {
+        let b = &c.bounds;
+        let d = b.direction;
+        println!(
+            "clearance        {} joints, along ({:.4}, {:.4}, {:.4}): upper {:+.5} mm, lower {:+.5} mm ({}, {} solves{})",
+            c.clearances.len(), d[0], d[1], d[2], b.upper, b.lower,
+            match b.method { pkm::accuracy::clearance::ClearanceMethod::FirstOrder => "first-order states re-solved", _ => "enumeration" },
+            b.solves,
+            if b.refined { ", refined" } else { "" }
+        );
+        println!(
+            "  largest |e|    {:.5} mm (first order {:.5} mm)",
+            b.deviation_3d.norm, b.deviation_3d.first_order
+        );
+        for j in b.contributions.iter().take(5) {
+            println!(
+                "  largest        {:<28} {:.5} mm ({:.0} %)",
+                j.joint,
+                j.first_order,
+                100.0 * j.share
+            );
+        }
+        if let Some(mc) = &c.monte_carlo {
+            println!(
+                "  monte carlo    {} states: along the direction {:+.5} .. {:+.5} mm (std {:.5}), largest |e| {:.5} mm",
+                mc.samples, mc.min, mc.max, mc.std, mc.max_norm
+            );
+        }
+        if let (Some(t), Some(s)) = (c.tolerance, c.largest_clearance_scale) {
+            match c.largest_clearance_mm {
+                Some(mm) => println!("  tolerance      {t} mm: largest clearance {mm:.5} mm"),
+                None => println!("  tolerance      {t} mm: every clearance times {s:.4}"),
+            }
+        }
     }
     if let Some(em) = &r.map {
         println!(

@@ -24,6 +24,7 @@
 //! tests hold one against the other).
 
 pub mod budget;
+pub mod clearance;
 pub mod map;
 pub mod monte_carlo;
 mod rebuild;
@@ -173,6 +174,12 @@ pub trait Parametric<const P: usize, const A: usize>: Mechanism<P, A> {
     /// others): all, by default.
     fn tolerable(&self) -> Vec<bool> {
         vec![true; self.parameters().len()]
+    }
+
+    /// The passive joints whose centres are parameters of the machine (the joints a
+    /// clearance can be given for, [`clearance`]): none, by default.
+    fn passive_joints(&self) -> Vec<clearance::PassiveJoint> {
+        Vec::new()
     }
 }
 

@@ -22,6 +22,11 @@ pub trait Rebuild<const P: usize, const A: usize>: Mechanism<P, A> + Sized + Syn
     fn geometry_values(&self) -> Vec<f64>;
     /// The same machine with other values (names, limits and home kept).
     fn with_geometry_values(&self, v: &[f64]) -> Result<Self>;
+    /// The passive joints whose centres are among the geometric parameters (see
+    /// [`Parametric::passive_joints`]): none, by default.
+    fn passive_joints(&self) -> Vec<super::clearance::PassiveJoint> {
+        Vec::new()
+    }
     /// Kind and name of the drive offsets: strut machines' zero lengths
     /// (`zero(L1)`), otherwise drive positioning deviations (`dq(U)`).
     fn drive_parameter(&self, actuator: usize) -> Parameter {
@@ -123,6 +128,9 @@ macro_rules! parametric_by_rebuild {
                 let f: fn(&$t, &SVector<f64, $p>) -> Option<Result<Vec<PoseError>>> = $analytic;
                 f(self, x)
             }
+            fn passive_joints(&self) -> Vec<super::clearance::PassiveJoint> {
+                Rebuild::passive_joints(self)
+            }
         }
     };
 }
@@ -154,9 +162,38 @@ macro_rules! strut_rebuild {
                     ParameterKind::ZeroLength,
                 )
             }
+            fn passive_joints(&self) -> Vec<super::clearance::PassiveJoint> {
+                let s = crate::identify::struts::StrutMachine::struts(self);
+                let base: Vec<&str> = s.iter().map(|s| s.base_name.as_str()).collect();
+                let platform: Vec<&str> = s.iter().map(|s| s.platform_name.as_str()).collect();
+                strut_joints(&base, &platform)
+            }
         }
         parametric_by_rebuild!($t, 6, $a, |m, x| Some(strut_sensitivities(m, x)));
     };
+}
+
+/// The passive joints of struts whose base joints are named `base` and platform joints
+/// `platform` (per strut; a name used by several struts is one joint): the base
+/// joints' centres are the first `3 n` geometric parameters, the platform joints' the
+/// next `3 n` (the order of [`crate::identify::struts::names`]).
+fn strut_joints(base: &[&str], platform: &[&str]) -> Vec<super::clearance::PassiveJoint> {
+    let n = base.len();
+    let mut out: Vec<super::clearance::PassiveJoint> = Vec::new();
+    for (body, names, offset) in [("base", base, 0), ("platform", platform, 3 * n)] {
+        for (i, name) in names.iter().enumerate() {
+            let c = [offset + 3 * i, offset + 3 * i + 1, offset + 3 * i + 2];
+            match out.iter_mut().find(|j| j.body == body && j.name == *name) {
+                Some(j) => j.centres.push(c),
+                None => out.push(super::clearance::PassiveJoint {
+                    name: name.to_string(),
+                    body: body.into(),
+                    centres: vec![c],
+                }),
+            }
+        }
+    }
+    out
 }
 
 /// Analytic sensitivities of a strut machine (implicit function theorem): the readings
@@ -263,6 +300,18 @@ impl Rebuild<3, 3> for crate::tripod::CentreLegTripod {
             Quantity::Length,
             ParameterKind::ZeroLength,
         )
+    }
+    fn passive_joints(&self) -> Vec<super::clearance::PassiveJoint> {
+        let s = &self.geometry.struts;
+        let b: Vec<&str> = s.iter().map(|s| s.base_name.as_str()).collect();
+        let p: Vec<&str> = s.iter().map(|s| s.platform_name.as_str()).collect();
+        let mut j = strut_joints(&b, &p);
+        j.push(super::clearance::PassiveJoint {
+            name: "leg".into(),
+            body: "base".into(),
+            centres: vec![[18, 19, 20]],
+        });
+        j
     }
 }
 parametric_by_rebuild!(crate::tripod::CentreLegTripod, 3, 3);

@@ -142,6 +142,8 @@ pub struct AccuracyOptions {
     pub seed: u64,
     /// Error map.
     pub map: Option<MapRequest>,
+    /// Bounds of the error from joint clearances (machines with passive joints).
+    pub clearance: Option<super::clearance::ClearanceRequest>,
 }
 
 impl Default for AccuracyOptions {
@@ -153,6 +155,7 @@ impl Default for AccuracyOptions {
             monte_carlo: None,
             seed: 1,
             map: None,
+            clearance: None,
         }
     }
 }
@@ -189,6 +192,8 @@ pub struct AccuracyReport {
     pub monte_carlo: Option<MonteCarlo>,
     /// The error map, when asked for.
     pub map: Option<ErrorMap>,
+    /// The clearance analysis, when asked for.
+    pub clearance: Option<super::clearance::ClearanceReport>,
 }
 
 /// The accuracy of `machine` at one pose: exact error of the given deviations,
@@ -233,11 +238,23 @@ pub fn accuracy(machine: &Machine, opt: &AccuracyOptions) -> Result<AccuracyRepo
             }))
         }
     };
+    let clearance = match &opt.clearance {
+        Some(req) => {
+            machine.supports(crate::machine::Analysis::Clearance)?;
+            let joints = machine.passive_joints();
+            let c = super::clearance::effective_clearances(machine, &joints, req)?;
+            Some((req, joints, c))
+        }
+        None => None,
+    };
     machine.visit(AccuracyJob {
         pose: &pose,
         opt,
         file: machine.tolerances(),
         map_axes,
+        clearance: clearance
+            .as_ref()
+            .map(|(r, j, c)| (*r, j.as_slice(), c.as_slice())),
     })
 }
 
@@ -246,6 +263,11 @@ struct AccuracyJob<'a> {
     opt: &'a AccuracyOptions,
     file: &'a [Tolerance],
     map_axes: Option<[GridAxis; 2]>,
+    clearance: Option<(
+        &'a super::clearance::ClearanceRequest,
+        &'a [crate::accuracy::clearance::PassiveJoint],
+        &'a [crate::accuracy::clearance::JointClearance],
+    )>,
 }
 
 impl Visitor for AccuracyJob<'_> {
@@ -304,6 +326,10 @@ impl Visitor for AccuracyJob<'_> {
             )?),
             None => None,
         };
+        let clearance = match self.clearance {
+            Some((req, joints, c)) => Some(super::clearance::clearance_at(m, &x, joints, c, req)?),
+            None => None,
+        };
         Ok(AccuracyReport {
             machine: m.name().to_string(),
             kind: m.kind().to_string(),
@@ -319,6 +345,7 @@ impl Visitor for AccuracyJob<'_> {
             budget,
             monte_carlo,
             map,
+            clearance,
         })
     }
 }

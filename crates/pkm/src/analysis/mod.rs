@@ -6,6 +6,7 @@
 //! [`Machine`]: crate::Machine
 
 pub mod accuracy;
+pub mod clearance;
 pub mod identification;
 pub mod kinematics;
 pub mod motion;

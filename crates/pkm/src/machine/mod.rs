@@ -4,6 +4,7 @@
 //! The file format is documented in `docs/machine-file.md`. Every file has a `type`
 //! field; unknown keys are rejected; errors name the file, line, column and field.
 
+mod clearance_file;
 mod hexapod_file;
 mod p3rp_file;
 mod reference;
@@ -235,6 +236,8 @@ pub struct Machine {
     pub references: Vec<Reference>,
     /// Rapid (G0) rate from the file's `[motion]` table (mm/s).
     pub rapid: Option<f64>,
+    /// Clearances of its passive joints from the file's `[[clearance]]` entries.
+    pub clearances: Vec<crate::accuracy::clearance::JointClearance>,
 }
 
 impl Machine {
@@ -269,6 +272,7 @@ impl Machine {
             model: parts.model,
             references: parts.references,
             rapid: parts.rapid,
+            clearances: Vec::new(),
         })
     }
 
@@ -314,14 +318,33 @@ impl Machine {
                 ))
             }
         };
-        Ok(Machine {
+        let mut machine = Machine {
             source: file.into(),
             name: parts.name,
             description: parts.description,
             model: parts.model,
             references: parts.references,
             rapid: parts.rapid,
-        })
+            clearances: Vec::new(),
+        };
+        machine.clearances = clearance_file::clearances(&src, &machine.passive_joints())?;
+        Ok(machine)
+    }
+
+    /// The passive joints whose centres are parameters of the machine (those a
+    /// clearance can be given for).
+    pub fn passive_joints(&self) -> Vec<crate::accuracy::clearance::PassiveJoint> {
+        struct Joints;
+        impl Visitor for Joints {
+            type Output = Vec<crate::accuracy::clearance::PassiveJoint>;
+            fn visit<M: Analysable<P, A>, const P: usize, const A: usize>(
+                self,
+                m: &M,
+            ) -> Self::Output {
+                m.passive_joints()
+            }
+        }
+        self.visit(Joints)
     }
 
     /// The machine's geometric parameters (the accuracy engine's list).

@@ -20,6 +20,9 @@ use crate::units::Quantity;
 pub(super) struct P3rpFile {
     #[serde(rename = "type")]
     _kind: String,
+    /// `[[clearance]]` entries, read for every machine type by `clearance_file`.
+    #[serde(default, rename = "clearance")]
+    _clearance: Option<serde::de::IgnoredAny>,
     #[serde(default)]
     name: Option<String>,
     #[serde(default)]

@@ -18,6 +18,9 @@ use crate::serial::{Chain, Joint, JointKind, Link};
 pub(super) struct SerialFile {
     #[serde(rename = "type")]
     _kind: String,
+    /// `[[clearance]]` entries, read for every machine type by `clearance_file`.
+    #[serde(default, rename = "clearance")]
+    _clearance: Option<serde::de::IgnoredAny>,
     #[serde(default)]
     name: Option<String>,
     #[serde(default)]

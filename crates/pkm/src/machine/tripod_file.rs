@@ -17,6 +17,9 @@ use crate::tripod::{CentreLeg, CentreLegTripod, Strut, TranslationalTripod, Trip
 pub(super) struct TripodFile {
     #[serde(rename = "type")]
     _kind: String,
+    /// `[[clearance]]` entries, read for every machine type by `clearance_file`.
+    #[serde(default, rename = "clearance")]
+    _clearance: Option<serde::de::IgnoredAny>,
     #[serde(default)]
     name: Option<String>,
     #[serde(default)]

@@ -1,0 +1,408 @@
+//! Joint clearances (seed 002) on the generic engine: bounds, worst states, Monte Carlo,
+//! enumeration, the designer's question, checked against re-solving by hand.
+
+use nalgebra::Vector3;
+use pkm::accuracy::clearance::{ClearanceMethod, ClearanceOptions, JointClearance, JointType};
+use pkm::analysis::clearance::{clearance, ClearanceReport, ClearanceRequest};
+use pkm::{Error, Machine};
+
+fn example(name: &str) -> String {
+    format!(
+        "{}/../../examples/machines/{name}",
+        env!("CARGO_MANIFEST_DIR")
+    )
+}
+
+fn hexapod() -> Machine {
+    Machine::from_path(example("hexapod-seed001.toml")).unwrap()
+}
+
+/// Seed 001's hexapod at (0, 0, 550, 5 deg, 0, 0).
+fn pose() -> Vec<f64> {
+    vec![0.0, 0.0, 550.0, 5f64.to_radians(), 0.0, 0.0]
+}
+
+fn request(c: f64) -> ClearanceRequest {
+    ClearanceRequest {
+        diametral: Some(c),
+        ..Default::default()
+    }
+}
+
+fn run(m: &Machine, req: &ClearanceRequest) -> ClearanceReport {
+    clearance(m, Some(&pose()), req).unwrap()
+}
+
+/// The tool point after moving the named joints' centres by `d` (mm) in the machine
+/// file itself and solving forward kinematics at the nominal readings: an
+/// independent path (the file's text, the loader, the plain forward solver).
+fn moved_by_hand(moves: &[(&str, [f64; 3])]) -> Vector3<f64> {
+    let text = std::fs::read_to_string(example("hexapod-seed001.toml")).unwrap();
+    let nominal = Machine::from_toml_str(&text, "nominal").unwrap();
+    let m0 = nominal.mechanism();
+    let q = m0.inverse(&pose()).unwrap();
+    let mut moved = text.clone();
+    for (joint, d) in moves {
+        let prefix = format!("{joint} = [");
+        let line = moved
+            .lines()
+            .find(|l| l.starts_with(&prefix))
+            .unwrap()
+            .to_string();
+        let v: Vec<f64> = line[prefix.len()..line.len() - 1]
+            .split(',')
+            .map(|s| s.trim().parse().unwrap())
+            .collect();
+        let new = format!(
+            "{joint} = [{:.12}, {:.12}, {:.12}]",
+            v[0] + d[0],
+            v[1] + d[1],
+            v[2] + d[2]
+        );
+        moved = moved.replace(&line, &new);
+    }
+    let m = Machine::from_toml_str(&moved, "moved").unwrap();
+    let dm = m.mechanism();
+    let f = dm.forward(&q, &pose()).unwrap();
+    let p = dm.tool_pose(&f.pose).unwrap().translation.vector;
+    p - m0.tool_pose(&pose()).unwrap().translation.vector
+}
+
+#[test]
+fn zero_clearance_gives_zero_error() {
+    let mut req = request(0.0);
+    req.monte_carlo = Some(200);
+    let r = run(&hexapod(), &req);
+    assert_eq!(r.bounds.upper, 0.0);
+    assert_eq!(r.bounds.lower, 0.0);
+    assert_eq!(r.bounds.first_order_upper, 0.0);
+    assert_eq!(r.bounds.deviation_3d.norm, 0.0);
+    let mc = r.monte_carlo.unwrap();
+    assert_eq!((mc.min, mc.max, mc.max_norm), (0.0, 0.0, 0.0));
+}
+
+#[test]
+fn bounds_grow_in_proportion_to_small_clearances() {
+    let m = hexapod();
+    let a = run(&m, &request(0.01));
+    let b = run(&m, &request(0.02));
+    assert!(a.bounds.upper > 1e-4, "{}", a.bounds.upper);
+    for (x, y) in [
+        (a.bounds.upper, b.bounds.upper),
+        (a.bounds.lower, b.bounds.lower),
+        (a.bounds.deviation_3d.norm, b.bounds.deviation_3d.norm),
+    ] {
+        assert!((y / x - 2.0).abs() < 0.02 * 2.0, "{x} {y}");
+    }
+    // The exact value of the first-order states is the first-order bound to second
+    // order: (c / L)^2 relative, far below 1e-3 here.
+    assert!((a.bounds.upper - a.bounds.first_order_upper).abs() < 1e-3 * a.bounds.upper);
+}
+
+#[test]
+fn no_monte_carlo_sample_lies_outside_the_bounds() {
+    let m = hexapod();
+    for direction in [None, Some(Vector3::new(1.0, 0.3, -0.2))] {
+        let req = ClearanceRequest {
+            diametral: Some(0.05),
+            options: ClearanceOptions {
+                direction,
+                ..Default::default()
+            },
+            monte_carlo: Some(20_000),
+            ..Default::default()
+        };
+        let r = run(&m, &req);
+        let mc = r.monte_carlo.unwrap();
+        assert_eq!(mc.samples, 20_000);
+        assert!(
+            mc.max <= r.bounds.upper + 1e-12,
+            "{} > {}",
+            mc.max,
+            r.bounds.upper
+        );
+        assert!(
+            mc.min >= r.bounds.lower - 1e-12,
+            "{} < {}",
+            mc.min,
+            r.bounds.lower
+        );
+        assert!(mc.max_norm <= r.bounds.deviation_3d.first_order * (1.0 + 1e-3));
+        // The samples fill a good part of the range (not a degenerate draw).
+        assert!(
+            mc.max > 0.3 * r.bounds.upper,
+            "{} {}",
+            mc.max,
+            r.bounds.upper
+        );
+    }
+}
+
+#[test]
+fn worst_joint_states_reapplied_by_hand_reproduce_upper() {
+    let m = hexapod();
+    let r = run(&m, &request(0.04));
+    let n = Vector3::from(r.bounds.direction);
+    for (states, value) in [
+        (&r.bounds.worst_joint_states.upper, r.bounds.upper),
+        (&r.bounds.worst_joint_states.lower, r.bounds.lower),
+    ] {
+        assert_eq!(states.len(), 12);
+        for s in states.iter() {
+            // Each joint at the edge of its ball (radius c/2).
+            let d = Vector3::from(s.displacement);
+            assert!((d.norm() - 0.02).abs() < 1e-12, "{}: {}", s.joint, d.norm());
+        }
+        let moves: Vec<(&str, [f64; 3])> = states
+            .iter()
+            .map(|s| (s.joint.as_str(), s.displacement))
+            .collect();
+        let e = moved_by_hand(&moves);
+        assert!((n.dot(&e) - value).abs() < 1e-9, "{} vs {value}", n.dot(&e));
+    }
+}
+
+#[test]
+fn first_order_bound_of_one_joint_matches_moving_it_by_hand() {
+    // One joint, A1, with a clearance: the first-order bound along the tool axis is
+    // (c/2) |g|, g the tool point's sensitivity to A1 projected on the axis; by hand,
+    // moving A1 by +-h along each axis gives g by differences of forward solutions.
+    let m = Machine::from_toml_str(
+        &format!(
+            "{}\n[[clearance]]\njoints = [\"A1\"]\ndiametral = 0.03\n",
+            std::fs::read_to_string(example("hexapod-seed001.toml")).unwrap()
+        ),
+        "one-joint",
+    )
+    .unwrap();
+    let r = run(&m, &ClearanceRequest::default());
+    let n = Vector3::from(r.bounds.direction);
+    let h = 1e-3;
+    let g = Vector3::from_fn(|k, _| {
+        let mut d = [0.0; 3];
+        d[k] = h;
+        let plus = moved_by_hand(&[("A1", d)]);
+        d[k] = -h;
+        let minus = moved_by_hand(&[("A1", d)]);
+        n.dot(&(plus - minus)) / (2.0 * h)
+    });
+    let by_hand = 0.015 * g.norm();
+    assert!(
+        (r.bounds.first_order_upper - by_hand).abs() < 1e-6 * by_hand,
+        "{} vs {by_hand}",
+        r.bounds.first_order_upper
+    );
+    assert_eq!(r.bounds.contributions.len(), 1);
+    assert_eq!(r.bounds.worst_joint_states.upper[0].joint, "A1");
+    // The worst state is A1 moved along g.
+    let d = Vector3::from(r.bounds.worst_joint_states.upper[0].displacement);
+    assert!((d.normalize() - g.normalize()).norm() < 1e-6);
+}
+
+#[test]
+fn enumeration_agrees_with_the_first_order_bound_where_it_must() {
+    let text = std::fs::read_to_string(example("hexapod-seed001.toml")).unwrap();
+    let m = Machine::from_toml_str(
+        &format!("{text}\n[[clearance]]\njoints = [\"B2\"]\ndiametral = 0.03\n"),
+        "one-joint",
+    )
+    .unwrap();
+    // Along the tool axis: enumeration visits +-c/2 along x, y, z only, so it cannot
+    // exceed the first-order maximum (along g)...
+    let fo = run(&m, &ClearanceRequest::default());
+    let en = run(
+        &m,
+        &ClearanceRequest {
+            options: ClearanceOptions {
+                method: ClearanceMethod::Enumeration,
+                ..Default::default()
+            },
+            ..Default::default()
+        },
+    );
+    assert_eq!(en.bounds.solves, 1 + 6);
+    assert!(en.bounds.upper <= fo.bounds.upper + 1e-12);
+    assert!(en.bounds.upper >= fo.bounds.upper / 3f64.sqrt() - 1e-12);
+    // ...and, one joint answering linearly, it finds exactly the best of its axis
+    // extremes: (c/2) max_k |g_k| against the first-order (c/2) |g|, g along the
+    // first-order worst displacement (for a strut's joint, the strut's direction).
+    let g = Vector3::from(fo.bounds.worst_joint_states.upper[0].displacement).normalize();
+    let expected = fo.bounds.upper * g.amax();
+    // (To first order: the second-order terms are about (c/2) / L = 2e-5 relative.)
+    assert!(
+        (en.bounds.upper - expected).abs() < 1e-4 * expected,
+        "{} vs {expected}",
+        en.bounds.upper
+    );
+    let expected_low = fo.bounds.lower * g.amax();
+    assert!(
+        (en.bounds.lower - expected_low).abs() < 1e-4 * expected,
+        "{} vs {expected_low}",
+        en.bounds.lower
+    );
+}
+
+#[test]
+fn enumeration_of_many_joints_is_refused_with_its_cost() {
+    let r = clearance(
+        &hexapod(),
+        Some(&pose()),
+        &ClearanceRequest {
+            diametral: Some(0.02),
+            options: ClearanceOptions {
+                method: ClearanceMethod::Enumeration,
+                ..Default::default()
+            },
+            ..Default::default()
+        },
+    );
+    let e = r.unwrap_err().to_string();
+    assert!(e.contains("2176782336 combinations"), "{e}");
+    assert!(e.contains("first-order"), "{e}");
+}
+
+#[test]
+fn revolute_joints_move_in_a_disc_and_tilt_through_their_lever() {
+    let text = std::fs::read_to_string(example("hexapod-seed001.toml")).unwrap();
+    let file = |lever: f64| {
+        format!(
+            "{text}\n[[clearance]]\njoints = [\"base\"]\ntype = \"universal\"\ndiametral = 0.04\n\
+             bearing_length = 20.0\naxis = [0.0, 0.0, 1.0]\nlever = {lever}\n\
+             [[clearance]]\njoints = [\"platform\"]\ndiametral = 0.04\n"
+        )
+    };
+    let m0 = Machine::from_toml_str(&file(0.0), "universal").unwrap();
+    let m1 = Machine::from_toml_str(&file(30.0), "universal").unwrap();
+    assert_eq!(m0.clearances.len(), 12);
+    assert_eq!(m0.clearances[0].kind, JointType::Universal);
+    let mut req = ClearanceRequest {
+        monte_carlo: Some(5000),
+        ..Default::default()
+    };
+    req.options.direction = Some(Vector3::new(1.0, 0.0, 0.0));
+    let (r0, r1) = (run(&m0, &req), run(&m1, &req));
+    // Base joints in discs normal to z: their worst displacement has no z part; with
+    // lever 0 the tilt moves nothing.
+    for s in &r0.bounds.worst_joint_states.upper[..6] {
+        assert!(s.displacement[2].abs() < 1e-15);
+        assert!((Vector3::from(s.displacement).norm() - 0.02).abs() < 1e-12);
+    }
+    // With a 30 mm lever the tilt atan(0.04 / 20) adds 30 sin(theta) = 0.06 mm.
+    let theta = (0.04f64 / 20.0).atan();
+    for s in &r1.bounds.worst_joint_states.upper[..6] {
+        let d = Vector3::from(s.displacement);
+        let planar = (d.x * d.x + d.y * d.y).sqrt();
+        assert!(
+            (planar - (0.02 + 30.0 * theta.sin())).abs() < 1e-9,
+            "{planar}"
+        );
+        // The lever's end also drops by h (1 - cos theta), second order.
+        assert!((d.z + 30.0 * (1.0 - theta.cos())).abs() < 1e-12, "{}", d.z);
+    }
+    assert!(r1.bounds.upper > r0.bounds.upper);
+    for r in [&r0, &r1] {
+        let mc = r.monte_carlo.as_ref().unwrap();
+        assert!(mc.max <= r.bounds.upper + 1e-12 && mc.min >= r.bounds.lower - 1e-12);
+    }
+}
+
+#[test]
+fn the_largest_clearance_within_a_tolerance_meets_it() {
+    let m = hexapod();
+    let mut req = request(0.02);
+    req.tolerance = Some(0.01);
+    let r = run(&m, &req);
+    let c = r.largest_clearance_mm.unwrap();
+    let check = run(&m, &request(c));
+    let worst = check.bounds.upper.max(-check.bounds.lower);
+    assert!((worst - 0.01).abs() < 1e-8, "{worst}");
+    assert!((r.largest_clearance_scale.unwrap() * 0.02 - c).abs() < 1e-15);
+}
+
+#[test]
+fn machines_without_modelled_passive_joints_say_so() {
+    let m = Machine::from_path(example("mc300.toml")).unwrap();
+    match clearance(&m, None, &request(0.01)) {
+        Err(Error::Unsupported {
+            analysis, reason, ..
+        }) => {
+            assert_eq!(analysis, "joint clearances");
+            assert!(reason.contains("strut machines"), "{reason}");
+        }
+        other => panic!("{other:?}"),
+    }
+    // A file giving clearances to such a machine names the entry.
+    let text = std::fs::read_to_string(example("mc300.toml")).unwrap();
+    let e = Machine::from_toml_str(
+        &format!("{text}\n[[clearance]]\njoints = [\"all\"]\ndiametral = 0.01\n"),
+        "mc300-clearance.toml",
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("mc300-clearance.toml") && e.contains("clearance"),
+        "{e}"
+    );
+    assert!(e.contains("no passive joints"), "{e}");
+}
+
+#[test]
+fn clearance_entries_are_checked_with_file_line_and_field() {
+    let text = std::fs::read_to_string(example("hexapod-seed001.toml")).unwrap();
+    let lines = text.lines().count();
+    for (entry, field, words) in [
+        (
+            "joints = [\"A9\"]\ndiametral = 0.01",
+            "joints",
+            "unknown joint `A9`",
+        ),
+        (
+            "joints = [\"A1\"]\ntype = \"revolute\"\ndiametral = 0.01",
+            "axis",
+            "needs its `axis`",
+        ),
+        ("joints = [\"A1\"]\ndiametral = -0.01", "diametral", ">= 0"),
+        (
+            "joints = [\"A1\"]\ntype = \"ball\"\ndiametral = 0.01",
+            "type",
+            "spherical, revolute or universal",
+        ),
+        (
+            "joints = [\"A1\"]\ndiametral = 0.01\nbearing_length = 0.0",
+            "bearing_length",
+            "> 0",
+        ),
+    ] {
+        let e = Machine::from_toml_str(&format!("{text}\n[[clearance]]\n{entry}\n"), "m.toml")
+            .unwrap_err();
+        match &e {
+            Error::MachineFile {
+                file,
+                line,
+                field: f,
+                message,
+                ..
+            } => {
+                assert_eq!(file, "m.toml");
+                assert!(line.unwrap() > lines, "{e}");
+                assert!(f.contains(field), "{f} {e}");
+                assert!(message.contains(words), "{message}");
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+    // A joint given twice.
+    let e = Machine::from_toml_str(
+        &format!(
+            "{text}\n[[clearance]]\njoints = [\"base\"]\ndiametral = 0.01\n\
+             [[clearance]]\njoints = [\"A3\"]\ndiametral = 0.02\n"
+        ),
+        "m.toml",
+    )
+    .unwrap_err();
+    assert!(
+        e.to_string().contains("`A3` has a clearance already"),
+        "{e}"
+    );
+    let _ = JointClearance::spherical("A1", 0.01);
+}
