@@ -458,6 +458,29 @@ fn accuracy(c: &mut Criterion) {
             distribution: pkm::accuracy::Distribution::Uniform,
         })
         .collect();
+    // Joint clearances (seed 002): the bound along the tool axis with all 12 joints
+    // in 0.02 mm balls (first-order states re-solved exactly; 3D length included).
+    let joints = h.passive_joints();
+    let clearances: Vec<_> = joints
+        .iter()
+        .map(|j| pkm::accuracy::clearance::JointClearance::spherical(j.name.clone(), 0.02))
+        .collect();
+    let regions = pkm::accuracy::clearance::regions(&joints, &clearances).unwrap();
+    c.bench_function(
+        "hexapod clearance bound at one pose, 12 joints (first order + exact)",
+        |b| {
+            b.iter(|| {
+                pkm::accuracy::clearance::bounds(
+                    h.as_ref(),
+                    black_box(&x),
+                    &regions,
+                    &Default::default(),
+                )
+                .unwrap()
+                .upper
+            })
+        },
+    );
     let mut g = c.benchmark_group("accuracy monte carlo");
     g.sample_size(10);
     g.bench_function(

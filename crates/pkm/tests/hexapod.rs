@@ -499,3 +499,25 @@ fn simd_lengths_equal_portable_lengths() {
         assert!(worst <= 1e-15, "{file}: {worst:e}");
     }
 }
+
+#[test]
+fn joint_centres_moved_in_place_equal_a_rebuilt_machine() {
+    use pkm::identify::struts::StrutMachine;
+    let h = load("hexapod-seed001.toml");
+    let mut rng = rand::rngs::StdRng::seed_from_u64(7);
+    let mut moved = h.clone();
+    for _ in 0..3 {
+        let mut s = h.struts();
+        for st in s.iter_mut() {
+            st.base += Vector3::from_fn(|_, _| rng.random_range(-0.5..0.5));
+            st.platform += Vector3::from_fn(|_, _| rng.random_range(-0.5..0.5));
+        }
+        let rebuilt = h.with_struts(&s);
+        moved.set_joint_centres(
+            &std::array::from_fn(|j| s[j].base),
+            &std::array::from_fn(|j| s[j].platform),
+        );
+        // Every derived field (strut set, SIMD lanes, characteristic length) too.
+        assert_eq!(moved, rebuilt);
+    }
+}

@@ -14,7 +14,9 @@ use crate::units::Quantity;
 
 /// A machine that can be rebuilt with other values of its geometric parameters.
 /// Its [`Parametric::parameters`] are these, then one drive offset per actuator.
-pub trait Rebuild<const P: usize, const A: usize>: Mechanism<P, A> + Sized + Sync {
+pub trait Rebuild<const P: usize, const A: usize>:
+    Mechanism<P, A> + Sized + Sync + Send + Clone
+{
     /// The geometric parameters (without the drives), in the order of
     /// [`Rebuild::geometry_values`].
     fn geometry_parameters(&self) -> Vec<Parameter>;
@@ -22,6 +24,12 @@ pub trait Rebuild<const P: usize, const A: usize>: Mechanism<P, A> + Sized + Syn
     fn geometry_values(&self) -> Vec<f64>;
     /// The same machine with other values (names, limits and home kept).
     fn with_geometry_values(&self, v: &[f64]) -> Result<Self>;
+    /// Sets `target` (a clone of this machine) to this machine with geometry `v`: by
+    /// default a rebuild; a type can do it in place without allocating.
+    fn update_geometry(&self, target: &mut Self, v: &[f64]) -> Result<()> {
+        *target = self.with_geometry_values(v)?;
+        Ok(())
+    }
     /// The passive joints whose centres are among the geometric parameters (see
     /// [`Parametric::passive_joints`]): none, by default.
     fn passive_joints(&self) -> Vec<super::clearance::PassiveJoint> {
@@ -48,6 +56,8 @@ pub struct RebuildEvaluator<'a, M, const P: usize, const A: usize> {
     nominal: Pose,
     g0: Vec<f64>,
     g: Vec<f64>,
+    /// The deviated machine, updated per evaluation (per-thread scratch).
+    scratch: M,
 }
 
 impl<M: Rebuild<P, A>, const P: usize, const A: usize> Evaluate for RebuildEvaluator<'_, M, P, A> {
@@ -70,9 +80,9 @@ impl<M: Rebuild<P, A>, const P: usize, const A: usize> Evaluate for RebuildEvalu
             }
         }
         let actual = if geometry {
-            let mm = self.m.with_geometry_values(&self.g)?;
-            let f = mm.forward(&(self.q + dq), &self.x)?;
-            mm.tool_pose(&f.pose)?
+            self.m.update_geometry(&mut self.scratch, &self.g)?;
+            let f = self.scratch.forward(&(self.q + dq), &self.x)?;
+            self.scratch.tool_pose(&f.pose)?
         } else {
             let f = self.m.forward(&(self.q + dq), &self.x)?;
             self.m.tool_pose(&f.pose)?
@@ -103,6 +113,7 @@ pub(crate) fn rebuild_evaluator<'a, M: Rebuild<P, A>, const P: usize, const A: u
         nominal: m.tool_pose(x)?,
         g: g0.clone(),
         g0,
+        scratch: m.clone(),
     })
 }
 
@@ -154,6 +165,11 @@ macro_rules! strut_rebuild {
             }
             fn with_geometry_values(&self, v: &[f64]) -> Result<Self> {
                 self.with_geometry(v)
+            }
+            fn update_geometry(&self, target: &mut Self, v: &[f64]) -> Result<()> {
+                let (base, platform) = crate::identify::struts::split(v)?;
+                crate::identify::struts::StrutMachine::set_joints(target, &base, &platform);
+                Ok(())
             }
             fn drive_parameter(&self, k: usize) -> Parameter {
                 Parameter::new(

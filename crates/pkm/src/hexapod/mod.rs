@@ -170,6 +170,21 @@ impl Hexapod {
         }
     }
 
+    /// Moves the joint centres in place (names, limits, home and calibration kept):
+    /// what [`Hexapod::new`] derives from them is derived again, nothing is allocated
+    /// (the accuracy engine re-solves a deviated machine per sample this way).
+    pub fn set_joint_centres(&mut self, base: &[Vector3<f64>; 6], platform: &[Vector3<f64>; 6]) {
+        for (s, (b, p)) in self.struts.iter_mut().zip(base.iter().zip(platform)) {
+            s.base = *b;
+            s.platform = *p;
+        }
+        self.set = StrutSet::new(*base, *platform, self.tool);
+        self.characteristic_length =
+            (self.set.arms.iter().map(|a| a.norm()).sum::<f64>() / 6.0).max(1e-9);
+        self.soa = (&self.set).into();
+        self.lanes = simd::Lanes::new(&self.set.arms, &self.set.base);
+    }
+
     /// The strut geometry.
     pub fn strut_set(&self) -> &StrutSet<6> {
         &self.set

@@ -49,6 +49,10 @@ impl StrutMachine<6> for Hexapod {
     fn calibrated_zero(&self) -> Option<Vector6<f64>> {
         self.zero_lengths
     }
+
+    fn set_joints(&mut self, base: &[Vector3<f64>; 6], platform: &[Vector3<f64>; 6]) {
+        self.set_joint_centres(base, platform);
+    }
 }
 
 /// Result of seed 001's procedure.

@@ -34,6 +34,17 @@ pub trait StrutMachine<const A: usize>: Mechanism<6, A> + Sized + Sync {
         Vec::new()
     }
 
+    /// Moves the joint centres in place (see [`StrutMachine::with_struts`]); a type can
+    /// do it without allocating.
+    fn set_joints(&mut self, base: &[Vector3<f64>; A], platform: &[Vector3<f64>; A]) {
+        let mut s = self.struts();
+        for (st, (b, p)) in s.iter_mut().zip(base.iter().zip(platform)) {
+            st.base = *b;
+            st.platform = *p;
+        }
+        *self = self.with_struts(&s);
+    }
+
     /// The joint centres as arrays.
     fn joints(&self) -> Joints<A> {
         let s = self.struts();

@@ -236,37 +236,37 @@ fn first_order(regions: &[Region], g: &[Matrix3<f64>], n: &Vector3<f64>) -> (f64
 }
 
 /// The direction `n` (unit) of largest first-order `sum_j support_j(G_j^T n)`: ascent
-/// by the fixed point `n <- sum_j reach_j G_j P u_j` (`u_j` the unit in-plane part of
-/// `G_j^T n`), from the three axes and their best; each step cannot decrease it
-/// (a convex function's linearisation bounds it from below).
+/// by the fixed point `n <- sum_j G_j d_j(n)` (`d_j` joint `j`'s maximising
+/// displacement for `G_j^T n`), which cannot decrease it (a convex function lies above
+/// its linearisation), started from the dominant eigenvector of
+/// `sum_j reach_j^2 G_j G_j^T` (the direction the joints move the tool most, jointly).
 fn largest_direction(regions: &[Region], g: &[Matrix3<f64>]) -> (f64, Vector3<f64>) {
-    let f = |n: &Vector3<f64>| first_order(regions, g, n).0;
-    let mut best = (0.0, Vector3::z());
-    for start in [Vector3::x(), Vector3::y(), Vector3::z()] {
-        let mut n = start;
-        for _ in 0..50 {
-            let mut next = Vector3::zeros();
-            for (r, gj) in regions.iter().zip(g) {
-                let s = r.argmax(&(gj.transpose() * n));
-                next += gj * Vector3::from(s.displacement);
-            }
-            let norm = next.norm();
-            if norm == 0.0 {
-                break;
-            }
-            let next = next / norm;
-            if (next - n).norm() < 1e-12 {
-                n = next;
-                break;
-            }
-            n = next;
+    let m = regions.iter().zip(g).fold(Matrix3::zeros(), |a, (r, gj)| {
+        a + gj * gj.transpose() * r.reach().powi(2)
+    });
+    let eig = m.symmetric_eigen();
+    let mut n: Vector3<f64> = eig.eigenvectors.column(eig.eigenvalues.imax()).into_owned();
+    let mut value = first_order(regions, g, &n).0;
+    for _ in 0..100 {
+        let mut next = Vector3::zeros();
+        for (r, gj) in regions.iter().zip(g) {
+            next += gj * Vector3::from(r.argmax(&(gj.transpose() * n)).displacement);
         }
-        let v = f(&n);
-        if v > best.0 {
-            best = (v, n);
+        let norm = next.norm();
+        if norm == 0.0 {
+            break;
         }
+        let next = next / norm;
+        let v = first_order(regions, g, &next).0;
+        if v <= value * (1.0 + 1e-12) {
+            if v > value {
+                (value, n) = (v, next);
+            }
+            break;
+        }
+        (value, n) = (v, next);
     }
-    best
+    (value, n)
 }
 
 /// Bounds of the error the clearances of `regions` allow at pose `x` of `m`: along the
