@@ -100,7 +100,7 @@ enum Command {
         Writes DIR/errors.json (pose, parameters' sensitivities, tolerances, budget,\n\
         monte_carlo, error_map), DIR/budget.svg, DIR/monte-carlo.svg, DIR/error-map.csv/svg.\n\
         Units: mm; deg for angular parameters and rotary axes.")]
-    Errors(ErrorsArgs),
+    Errors(Box<ErrorsArgs>),
     /// Simulate an identification campaign (seed 001): a true machine drawn around the
     /// file's, states measured with a triangular fixture, noise on points and readings.
     #[command(after_help = "Examples:\n  \

@@ -645,3 +645,64 @@ fn clearance_bounds_in_errors_json() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("joint clearances"), "{err}");
 }
+
+#[test]
+fn clearance_over_a_hemisphere_writes_surface_csv_and_svg() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = pkm()
+        .args([
+            "errors",
+            &path("examples/machines/hexapod-seed001.toml"),
+            "--clearance",
+            "0.02",
+            "--surface",
+            "hemisphere:75",
+            "--surface-points",
+            "31",
+            "--tolerance",
+            "0.01",
+            "--json",
+            "--out",
+        ])
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    ok(&o);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let csv = std::fs::read_to_string(dir.path().join("surface.csv")).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(lines.next(), Some("z_mm,lower_mm,upper_mm"));
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 31);
+    let reachable: Vec<&Vec<&str>> = rows.iter().filter(|r| !r[2].is_empty()).collect();
+    assert!(!reachable.is_empty() && reachable.len() < 31);
+    for r in &reachable {
+        let (l, u): (f64, f64) = (r[1].parse().unwrap(), r[2].parse().unwrap());
+        assert!(l < 0.0 && u > 0.0);
+    }
+    let svg = std::fs::read_to_string(dir.path().join("surface.svg")).unwrap();
+    assert!(svg.starts_with("<svg") && svg.contains("upper") && svg.contains("lower"));
+    let largest = v["clearance"]["largest_clearance_mm"].as_f64().unwrap();
+    assert_eq!(
+        largest,
+        v["clearance"]["surface"]["largest_clearance_mm"]
+            .as_f64()
+            .unwrap()
+    );
+    // Malformed surface specs are refused with what is expected.
+    let o = pkm()
+        .args([
+            "errors",
+            &path("examples/machines/hexapod-seed001.toml"),
+            "--clearance",
+            "0.02",
+            "--surface",
+            "sphere:75",
+            "--out",
+        ])
+        .arg(dir.path().join("bad"))
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("hemisphere:R"));
+}

@@ -481,6 +481,34 @@ fn accuracy(c: &mut Criterion) {
             })
         },
     );
+    // The hemisphere sweep (seed 002's Fig. 4) on the same hexapod: R = 75 mm, pole at
+    // the home tool point, 1000 heights (only the cap the hexapod can tilt to is
+    // reachable; the others are refused after the inverse kinematics).
+    let surface = pkm::accuracy::clearance::surface::Hemisphere {
+        radius: 75.0,
+        centre: [
+            0.0,
+            0.0,
+            h.tool_pose(&h.home()).unwrap().translation.vector.z - 75.0,
+        ],
+        azimuth: 0.0,
+    };
+    c.bench_function(
+        "hexapod clearance bounds over a hemisphere, 1000 heights (rayon, 2 threads)",
+        |b| {
+            b.iter(|| {
+                pkm::accuracy::clearance::surface::hemisphere_sweep(
+                    h.as_ref(),
+                    &surface,
+                    &regions,
+                    &Default::default(),
+                    1000,
+                )
+                .unwrap()
+                .len()
+            })
+        },
+    );
     let mut g = c.benchmark_group("accuracy monte carlo");
     g.sample_size(10);
     g.bench_function(

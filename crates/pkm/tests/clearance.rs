@@ -406,3 +406,104 @@ fn clearance_entries_are_checked_with_file_line_and_field() {
     );
     let _ = JointClearance::spherical("A1", 0.01);
 }
+
+#[test]
+fn hemisphere_points_normals_and_tool_poses() {
+    use pkm::accuracy::clearance::surface::{pose_on_surface, Hemisphere};
+    let h = Hemisphere {
+        radius: 75.0,
+        centre: [10.0, -5.0, 400.0],
+        azimuth: 0.5,
+    };
+    let (p0, n0) = h.at(0.0);
+    assert!(
+        (p0 - Vector3::new(
+            10.0 + 75.0 * 0.5f64.cos(),
+            -5.0 + 75.0 * 0.5f64.sin(),
+            400.0
+        ))
+        .norm()
+            < 1e-12
+    );
+    assert!((n0 - (p0 - Vector3::new(10.0, -5.0, 400.0)) / 75.0).norm() < 1e-15);
+    let (p1, n1) = h.at(75.0);
+    assert!(
+        (p1 - Vector3::new(10.0, -5.0, 475.0)).norm() < 1e-12 && (n1 - Vector3::z()).norm() < 1e-15
+    );
+    for z in [0.0, 20.0, 60.0] {
+        let (p, n) = h.at(z);
+        assert!(((p - Vector3::new(10.0, -5.0, 400.0)).norm() - 75.0).abs() < 1e-12);
+        // The home orientation turned so that its z (here the tool axis) is the normal.
+        let home = pkm::Pose::from_parts(
+            Vector3::new(0.0, 0.0, 500.0).into(),
+            nalgebra::UnitQuaternion::from_euler_angles(0.0, 0.0, 0.3),
+        );
+        let t = pose_on_surface(&home, &p, &n);
+        assert!((t.rotation * Vector3::z() - n).norm() < 1e-12);
+        assert!((t.translation.vector - p).norm() < 1e-12);
+    }
+}
+
+#[test]
+fn bounds_over_a_hemisphere_agree_with_each_pose_and_meet_the_tolerance() {
+    let m = hexapod();
+    let req = ClearanceRequest {
+        diametral: Some(0.02),
+        tolerance: Some(0.01),
+        surface: Some(pkm::analysis::clearance::SurfaceRequest {
+            radius: 75.0,
+            centre: None,
+            azimuth: 0.0,
+            heights: 41,
+        }),
+        ..Default::default()
+    };
+    let r = clearance(&m, None, &req).unwrap();
+    let sf = r.surface.as_ref().unwrap();
+    assert_eq!(sf.points.len(), 41);
+    // The pole is the home tool point, where the hexapod is: reachable.
+    let pole = sf.points.last().unwrap();
+    assert!(pole.upper.is_some(), "{pole:?}");
+    // Seed 001's hexapod cannot tilt its tool 90 degrees: the equator is out of reach,
+    // with the reason.
+    let eq = &sf.points[0];
+    assert!(eq.upper.is_none() && eq.unreachable.is_some());
+    assert!(sf.unreachable > 0 && sf.unreachable < 41);
+    // Each reachable row is the bound at that pose along the normal, computed alone.
+    let dm = m.mechanism();
+    let home = dm.tool_pose(&dm.home()).unwrap();
+    for p in sf.points.iter().filter(|p| p.upper.is_some()).step_by(2) {
+        let pose = pkm::accuracy::clearance::surface::pose_on_surface(
+            &home,
+            &Vector3::from(p.point),
+            &Vector3::from(p.normal),
+        );
+        let x = dm.coords_from_pose(&pose, true).unwrap();
+        let alone = clearance(
+            &m,
+            Some(&x),
+            &ClearanceRequest {
+                diametral: Some(0.02),
+                options: ClearanceOptions {
+                    direction: Some(Vector3::from(p.normal)),
+                    ..Default::default()
+                },
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        assert!((alone.bounds.upper - p.upper.unwrap()).abs() < 1e-12);
+        assert!((alone.bounds.lower - p.lower.unwrap()).abs() < 1e-12);
+    }
+    // The largest clearance over the surface keeps every reachable height within the
+    // tolerance, the worst one at it.
+    let c = r.largest_clearance_mm.unwrap();
+    assert_eq!(Some(c), sf.largest_clearance_mm);
+    assert!(c <= r.largest_clearance_at_pose_mm.unwrap() + 1e-15);
+    let mut check = req.clone();
+    check.diametral = Some(c);
+    check.tolerance = None;
+    let again = clearance(&m, None, &check).unwrap();
+    let worst = again.surface.unwrap().worst.unwrap();
+    assert!((worst - 0.01).abs() < 1e-8, "{worst}");
+}

@@ -87,6 +87,17 @@ pub struct ErrorsArgs {
     /// Tolerance on the error along the direction (mm): the largest clearance within it.
     #[arg(long, allow_negative_numbers = true)]
     pub tolerance: Option<f64>,
+    /// Clearance bounds over a part surface along its normal (seed 002's Figs. 4, 5):
+    /// `hemisphere:R` (mm), swept by the height z above its equator. Writes
+    /// DIR/surface.csv (z_mm,lower_mm,upper_mm) and DIR/surface.svg.
+    #[arg(long)]
+    pub surface: Option<String>,
+    /// Centre of the surface (X,Y,Z mm); default: R below the home tool point.
+    #[arg(long, allow_hyphen_values = true)]
+    pub surface_centre: Option<String>,
+    /// Heights of the surface sweep.
+    #[arg(long, default_value_t = 101)]
+    pub surface_points: usize,
     /// Output directory.
     #[arg(long)]
     pub out: PathBuf,
@@ -216,6 +227,9 @@ pub fn run(a: &ErrorsArgs) -> Result<u8> {
     }
     if let Some(c) = &r.clearance {
         o.insert("clearance".into(), serde_json::to_value(c)?);
+        if let Some(sf) = &c.surface {
+            write_surface(&a.out, sf, &inputs)?;
+        }
     }
     let text = serde_json::to_string_pretty(&out)?;
     write_atomic(&a.out.join("errors.json"), text.as_bytes(), &inputs)?;
@@ -237,7 +251,8 @@ fn clearance_request(
     let asked = a.clearance.is_some()
         || a.direction.is_some()
         || a.clearance_samples.is_some()
-        || a.tolerance.is_some();
+        || a.tolerance.is_some()
+        || a.surface.is_some();
     if !asked && machine.clearances.is_empty() {
         return Ok(None);
     }
@@ -249,6 +264,33 @@ fn clearance_request(
                 bail!("--direction: expected X,Y,Z, got {} values", v.len());
             }
             Some(nalgebra::Vector3::new(v[0], v[1], v[2]))
+        }
+    };
+    let surface = match &a.surface {
+        None => None,
+        Some(spec) => {
+            let radius = spec
+                .strip_prefix("hemisphere:")
+                .and_then(|r| r.trim().parse::<f64>().ok())
+                .with_context(|| {
+                    format!("--surface: expected hemisphere:R (R in mm), found `{spec}`")
+                })?;
+            let centre = match &a.surface_centre {
+                None => None,
+                Some(c) => {
+                    let v = parse_list(c, "--surface-centre")?;
+                    if v.len() != 3 {
+                        bail!("--surface-centre: expected X,Y,Z, got {} values", v.len());
+                    }
+                    Some([v[0], v[1], v[2]])
+                }
+            };
+            Some(pkm::analysis::clearance::SurfaceRequest {
+                radius,
+                centre,
+                azimuth: 0.0,
+                heights: a.surface_points,
+            })
         }
     };
     let method = a
@@ -265,6 +307,7 @@ fn clearance_request(
         monte_carlo: a.clearance_samples,
         seed: a.seed,
         tolerance: a.tolerance,
+        surface,
     }))
 }
 
@@ -396,10 +439,27 @@ fn print_text(m: &dyn pkm::DynMechanism, r: &AccuracyReport) {
                 mc.samples, mc.min, mc.max, mc.std, mc.max_norm
             );
         }
+        if let Some(sf) = &c.surface {
+            println!(
+                "  surface        hemisphere R = {} mm, {} heights ({} unreachable): largest {}",
+                sf.hemisphere.radius,
+                sf.points.len(),
+                sf.unreachable,
+                match (sf.worst, sf.worst_z) {
+                    (Some(w), Some(z)) => format!("{w:.5} mm at z = {z:.3} mm"),
+                    _ => "- (no reachable height)".into(),
+                }
+            );
+        }
         if let (Some(t), Some(s)) = (c.tolerance, c.largest_clearance_scale) {
+            let over = if c.surface.is_some() {
+                " over the surface"
+            } else {
+                " at the pose"
+            };
             match c.largest_clearance_mm {
-                Some(mm) => println!("  tolerance      {t} mm: largest clearance {mm:.5} mm"),
-                None => println!("  tolerance      {t} mm: every clearance times {s:.4}"),
+                Some(mm) => println!("  tolerance      {t} mm: largest clearance{over} {mm:.5} mm"),
+                None => println!("  tolerance      {t} mm: every clearance times {s:.4}{over}"),
             }
         }
     }
@@ -411,6 +471,58 @@ fn print_text(m: &dyn pkm::DynMechanism, r: &AccuracyReport) {
             em.max_rss
         );
     }
+}
+
+/// DIR/surface.csv (`z_mm,lower_mm,upper_mm`; empty bounds where the tool cannot be
+/// placed) and DIR/surface.svg (the bounds against z, seed 002's Fig. 4).
+fn write_surface(
+    out: &std::path::Path,
+    sf: &pkm::analysis::clearance::SurfaceReport,
+    inputs: &[&std::path::Path],
+) -> Result<()> {
+    use crate::report::plot::{panels_svg_x, Series};
+    let mut csv = String::from("z_mm,lower_mm,upper_mm\n");
+    for p in &sf.points {
+        match (p.lower, p.upper) {
+            (Some(l), Some(u)) => csv.push_str(&format!("{:.6},{l:.9},{u:.9}\n", p.z)),
+            _ => csv.push_str(&format!("{:.6},,\n", p.z)),
+        }
+    }
+    write_atomic(&out.join("surface.csv"), csv.as_bytes(), inputs)?;
+    let series =
+        |name: &str, pick: fn(&pkm::accuracy::clearance::surface::SurfacePoint) -> Option<f64>| {
+            Series {
+                name: name.into(),
+                points: sf
+                    .points
+                    .iter()
+                    .filter_map(|p| pick(p).map(|v| (p.z, 1000.0 * v)))
+                    .collect(),
+            }
+        };
+    let svg = panels_svg_x(
+        &format!(
+            "shaping error from joint clearances over a hemisphere R = {} mm{}",
+            sf.hemisphere.radius,
+            if sf.unreachable > 0 {
+                format!(
+                    " ({} of {} heights unreachable)",
+                    sf.unreachable,
+                    sf.points.len()
+                )
+            } else {
+                String::new()
+            }
+        ),
+        "z [mm]",
+        &[(
+            "bounds along the surface normal".into(),
+            "error [µm]".into(),
+            vec![series("upper", |p| p.upper), series("lower", |p| p.lower)],
+        )],
+        (760, 420),
+    )?;
+    write_atomic(&out.join("surface.svg"), svg.as_bytes(), inputs)
 }
 
 /// The budget's largest 25 lines as a bar chart, DIR/budget.svg.

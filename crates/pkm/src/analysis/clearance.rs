@@ -6,6 +6,7 @@
 use nalgebra::SVector;
 use serde::Serialize;
 
+use crate::accuracy::clearance::surface::{hemisphere_sweep, Hemisphere, SurfacePoint};
 use crate::accuracy::clearance::{
     self, ClearanceBounds, ClearanceMonteCarlo, ClearanceOptions, JointClearance, PassiveJoint,
     Region,
@@ -27,8 +28,43 @@ pub struct ClearanceRequest {
     /// Its seed.
     pub seed: u64,
     /// Tolerance on the error along the direction (mm): the largest clearance within it
-    /// is wanted.
+    /// is wanted (over the surface too, when one is given).
     pub tolerance: Option<f64>,
+    /// Bounds over a part surface.
+    pub surface: Option<SurfaceRequest>,
+}
+
+/// A hemisphere to sweep (seed 002's Figs. 4 and 5).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SurfaceRequest {
+    /// Radius (mm).
+    pub radius: f64,
+    /// Centre (mm); `None`: `R` below the home tool point (the pole there).
+    pub centre: Option<[f64; 3]>,
+    /// Azimuth of the meridian (rad).
+    pub azimuth: f64,
+    /// Heights from the equator to the pole (2 to 100000).
+    pub heights: usize,
+}
+
+/// The bounds over a surface.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SurfaceReport {
+    /// The surface.
+    pub hemisphere: Hemisphere,
+    /// Every height.
+    pub points: Vec<SurfacePoint>,
+    /// Heights the tool cannot reach along the normal.
+    pub unreachable: usize,
+    /// Height of the largest `max(upper, -lower)`.
+    pub worst_z: Option<f64>,
+    /// That largest value (mm).
+    pub worst: Option<f64>,
+    /// The factor on every clearance that keeps every reachable height within the
+    /// tolerance.
+    pub largest_clearance_scale: Option<f64>,
+    /// The same as a uniform diametral clearance (mm).
+    pub largest_clearance_mm: Option<f64>,
 }
 
 impl Default for ClearanceRequest {
@@ -39,6 +75,7 @@ impl Default for ClearanceRequest {
             monte_carlo: None,
             seed: 1,
             tolerance: None,
+            surface: None,
         }
     }
 }
@@ -55,12 +92,16 @@ pub struct ClearanceReport {
     pub monte_carlo: Option<ClearanceMonteCarlo>,
     /// The tolerance asked about.
     pub tolerance: Option<f64>,
-    /// The factor on every clearance that brings the larger of `upper` and `-lower` to
-    /// the tolerance.
+    /// The factor on every clearance that keeps the error along the direction within
+    /// the tolerance: at the pose, or over the whole surface when one is given.
     pub largest_clearance_scale: Option<f64>,
-    /// The largest uniform diametral clearance within the tolerance (when every joint
-    /// has the same clearance).
+    /// The same as a uniform diametral clearance (when every joint has the same
+    /// clearance).
     pub largest_clearance_mm: Option<f64>,
+    /// The largest uniform diametral clearance within the tolerance at the pose alone.
+    pub largest_clearance_at_pose_mm: Option<f64>,
+    /// The bounds over the surface, when asked for.
+    pub surface: Option<SurfaceReport>,
 }
 
 /// The clearances of `req` on `machine`: one diametral value for every joint, or the
@@ -146,6 +187,10 @@ where
         }
     }
     let regions = clearance::regions(joints, clearances)?;
+    let uniform = clearances
+        .first()
+        .map(|c| c.diametral)
+        .filter(|c| clearances.iter().all(|o| o.diametral == *c));
     let bounds = clearance::bounds(m, x, &regions, &req.options)?;
     let direction = nalgebra::Vector3::from(bounds.direction);
     let monte_carlo = match req.monte_carlo {
@@ -164,18 +209,106 @@ where
         }
         Some(t) => {
             let s = largest_scale(m, x, &regions, &req.options, &bounds, t)?;
-            let first = clearances.first().map(|c| c.diametral);
-            let uniform = first.filter(|c| clearances.iter().all(|o| o.diametral == *c));
             (Some(s), uniform.map(|c| c * s))
         }
+    };
+    let surface = match &req.surface {
+        None => None,
+        Some(sr) => Some(surface_report(m, &regions, req, sr, uniform)?),
+    };
+    // Over the surface, when there is one, the designer's answer is the surface's.
+    let (overall_scale, overall_mm) = match &surface {
+        Some(sf) => (sf.largest_clearance_scale, sf.largest_clearance_mm),
+        None => (scale, mm),
     };
     Ok(ClearanceReport {
         clearances: clearances.to_vec(),
         bounds,
         monte_carlo,
         tolerance: req.tolerance,
+        largest_clearance_scale: overall_scale,
+        largest_clearance_mm: overall_mm,
+        largest_clearance_at_pose_mm: mm,
+        surface,
+    })
+}
+
+/// Regions with every clearance times `s`.
+fn scaled(regions: &[Region], s: f64) -> Result<Vec<Region>> {
+    regions
+        .iter()
+        .map(|r| {
+            Region::new(
+                r.joint.clone(),
+                r.clearance.with_diametral(r.clearance.diametral * s),
+            )
+        })
+        .collect()
+}
+
+/// The largest `max(upper, -lower)` over the reachable points and its height.
+fn worst_of(points: &[SurfacePoint]) -> Option<(f64, f64)> {
+    points
+        .iter()
+        .filter_map(|p| Some((p.z, p.upper?.max(-p.lower?))))
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+}
+
+/// The sweep of `sr`, and with a tolerance the factor on the clearances that keeps the
+/// whole surface within it (`s <- s t / worst(s)` on exact sweeps, to 1e-9).
+fn surface_report<M, const P: usize, const A: usize>(
+    m: &M,
+    regions: &[Region],
+    req: &ClearanceRequest,
+    sr: &SurfaceRequest,
+    uniform: Option<f64>,
+) -> Result<SurfaceReport>
+where
+    M: Analysable<P, A>,
+{
+    let centre = match sr.centre {
+        Some(c) => c,
+        None => {
+            let p = m.tool_pose(&m.home())?.translation.vector;
+            [p.x, p.y, p.z - sr.radius]
+        }
+    };
+    let hemisphere = Hemisphere {
+        radius: sr.radius,
+        centre,
+        azimuth: sr.azimuth,
+    };
+    let points = hemisphere_sweep(m, &hemisphere, regions, &req.options, sr.heights)?;
+    let worst = worst_of(&points);
+    let scale = match (req.tolerance, worst) {
+        (Some(t), Some((_, w))) if w > 0.0 && t > 0.0 => {
+            let mut s = t / w;
+            for _ in 0..8 {
+                let sweep = hemisphere_sweep(
+                    m,
+                    &hemisphere,
+                    &scaled(regions, s)?,
+                    &req.options,
+                    sr.heights,
+                )?;
+                let f = worst_of(&sweep).map_or(w * s, |v| v.1);
+                if (f - t).abs() <= 1e-9 * t {
+                    break;
+                }
+                s *= t / f;
+            }
+            Some(s)
+        }
+        _ => None,
+    };
+    Ok(SurfaceReport {
+        hemisphere,
+        unreachable: points.iter().filter(|p| p.unreachable.is_some()).count(),
+        worst_z: worst.map(|w| w.0),
+        worst: worst.map(|w| w.1),
         largest_clearance_scale: scale,
-        largest_clearance_mm: mm,
+        largest_clearance_mm: scale.zip(uniform).map(|(s, c)| s * c),
+        points,
     })
 }
 
@@ -205,16 +338,7 @@ where
     }
     let mut s = t / f1;
     for _ in 0..8 {
-        let scaled: Vec<Region> = regions
-            .iter()
-            .map(|r| {
-                Region::new(
-                    r.joint.clone(),
-                    r.clearance.with_diametral(r.clearance.diametral * s),
-                )
-            })
-            .collect::<Result<_>>()?;
-        let f = worst(&clearance::bounds(m, x, &scaled, opt)?);
+        let f = worst(&clearance::bounds(m, x, &scaled(regions, s)?, opt)?);
         if (f - t).abs() <= 1e-9 * t {
             break;
         }

@@ -21,6 +21,7 @@
 
 mod bounds;
 mod sample;
+pub mod surface;
 
 use nalgebra::{Rotation3, Vector3};
 use rand::Rng;
