@@ -507,3 +507,44 @@ fn bounds_over_a_hemisphere_agree_with_each_pose_and_meet_the_tolerance() {
     let worst = again.surface.unwrap().worst.unwrap();
     assert!((worst - 0.01).abs() < 1e-8, "{worst}");
 }
+
+#[test]
+fn large_clearances_are_refined_beyond_first_order() {
+    // Millimetre clearances on a hexapod: the first-order states, solved exactly, are
+    // off the first-order bound by more than 1e-3; re-linearising at them must not lose
+    // and the Monte Carlo must stay inside.
+    let m = hexapod();
+    let run_with = |refine_above: f64| {
+        clearance(
+            &m,
+            Some(&pose()),
+            &ClearanceRequest {
+                diametral: Some(8.0),
+                options: ClearanceOptions {
+                    direction: Some(Vector3::new(0.3, 0.2, 1.0)),
+                    refine_above,
+                    ..Default::default()
+                },
+                monte_carlo: Some(5000),
+                ..Default::default()
+            },
+        )
+        .unwrap()
+    };
+    let plain = run_with(f64::INFINITY);
+    let refined = run_with(0.0);
+    assert!(!plain.bounds.refined && refined.bounds.refined);
+    // (At 8 mm on this pose: 16.068 mm first-order states, 16.104 mm refined.)
+    assert!(refined.bounds.upper > plain.bounds.upper + 1e-3);
+    assert!(refined.bounds.lower <= plain.bounds.lower + 1e-12);
+    assert!(refined.bounds.solves > plain.bounds.solves);
+    let rel = (plain.bounds.upper - plain.bounds.first_order_upper).abs()
+        / plain.bounds.first_order_upper;
+    assert!(rel > 1e-3, "first order is still enough at 8 mm: {rel}");
+    let mc = refined.monte_carlo.unwrap();
+    assert!(mc.max <= refined.bounds.upper + 1e-9 && mc.min >= refined.bounds.lower - 1e-9);
+    // The refined states are still inside their balls.
+    for s in &refined.bounds.worst_joint_states.upper {
+        assert!(Vector3::from(s.displacement).norm() <= 4.0 + 1e-12);
+    }
+}
