@@ -689,6 +689,25 @@ fn clearance_over_a_hemisphere_writes_surface_csv_and_svg() {
             .as_f64()
             .unwrap()
     );
+    // Fig. 5: the bounds against the clearance.
+    let o = pkm()
+        .args([
+            "errors",
+            &path("examples/machines/hexapod-seed001.toml"),
+            "--clearance-series",
+            "0.02,0.05,0.1",
+            "--out",
+        ])
+        .arg(dir.path().join("series"))
+        .output()
+        .unwrap();
+    ok(&o);
+    let csv = std::fs::read_to_string(dir.path().join("series/clearance-series.csv")).unwrap();
+    let lines: Vec<&str> = csv.lines().collect();
+    assert_eq!(lines[0], "clearance_mm,lower_mm,upper_mm");
+    assert_eq!(lines.len(), 4);
+    assert!(lines[3].starts_with("0.100000,-"));
+    assert!(dir.path().join("series/clearance-series.svg").exists());
     // Malformed surface specs are refused with what is expected.
     let o = pkm()
         .args([

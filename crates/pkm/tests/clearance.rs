@@ -548,3 +548,31 @@ fn large_clearances_are_refined_beyond_first_order() {
         assert!(Vector3::from(s.displacement).norm() <= 4.0 + 1e-12);
     }
 }
+
+#[test]
+fn a_clearance_series_gives_each_clearance_its_bounds() {
+    let m = hexapod();
+    let series = vec![0.0, 0.01, 0.05, 0.1];
+    let r = run(
+        &m,
+        &ClearanceRequest {
+            series: series.clone(),
+            ..Default::default()
+        },
+    );
+    assert_eq!(r.series.len(), 4);
+    // Without --clearance the series' first value stands for it.
+    assert_eq!(r.clearances[0].diametral, 0.0);
+    assert_eq!((r.series[0].upper, r.series[0].lower), (0.0, 0.0));
+    for (p, c) in r.series.iter().zip(&series).skip(1) {
+        let alone = run(&m, &request(*c));
+        assert_eq!(p.clearance_mm, *c);
+        assert_eq!((p.upper, p.lower), (alone.bounds.upper, alone.bounds.lower));
+    }
+    // Growing with the clearance (Fig. 5), about in proportion.
+    assert!(r
+        .series
+        .windows(2)
+        .all(|w| w[1].upper > w[0].upper && w[1].lower < w[0].lower));
+    assert!((r.series[3].upper / r.series[1].upper - 10.0).abs() < 0.01);
+}

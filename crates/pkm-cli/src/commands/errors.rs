@@ -98,6 +98,10 @@ pub struct ErrorsArgs {
     /// Heights of the surface sweep.
     #[arg(long, default_value_t = 101)]
     pub surface_points: usize,
+    /// Bounds at the pose for each of these diametral clearances (mm, e.g.
+    /// 0.05,0.1,0.2; seed 002's Fig. 5): DIR/clearance-series.csv and .svg.
+    #[arg(long)]
+    pub clearance_series: Option<String>,
     /// Output directory.
     #[arg(long)]
     pub out: PathBuf,
@@ -230,6 +234,9 @@ pub fn run(a: &ErrorsArgs) -> Result<u8> {
         if let Some(sf) = &c.surface {
             write_surface(&a.out, sf, &inputs)?;
         }
+        if !c.series.is_empty() {
+            write_series(&a.out, &c.series, &inputs)?;
+        }
     }
     let text = serde_json::to_string_pretty(&out)?;
     write_atomic(&a.out.join("errors.json"), text.as_bytes(), &inputs)?;
@@ -252,7 +259,8 @@ fn clearance_request(
         || a.direction.is_some()
         || a.clearance_samples.is_some()
         || a.tolerance.is_some()
-        || a.surface.is_some();
+        || a.surface.is_some()
+        || a.clearance_series.is_some();
     if !asked && machine.clearances.is_empty() {
         return Ok(None);
     }
@@ -308,6 +316,10 @@ fn clearance_request(
         seed: a.seed,
         tolerance: a.tolerance,
         surface,
+        series: match &a.clearance_series {
+            Some(list) => parse_list(list, "--clearance-series")?,
+            None => Vec::new(),
+        },
     }))
 }
 
@@ -523,6 +535,42 @@ fn write_surface(
         (760, 420),
     )?;
     write_atomic(&out.join("surface.svg"), svg.as_bytes(), inputs)
+}
+
+/// DIR/clearance-series.csv (`clearance_mm,lower_mm,upper_mm`) and .svg: the bounds
+/// against the clearance (seed 002's Fig. 5).
+fn write_series(
+    out: &std::path::Path,
+    series: &[pkm::analysis::clearance::SeriesPoint],
+    inputs: &[&std::path::Path],
+) -> Result<()> {
+    use crate::report::plot::{panels_svg_x, Series};
+    let mut csv = String::from("clearance_mm,lower_mm,upper_mm\n");
+    for p in series {
+        csv.push_str(&format!(
+            "{:.6},{:.9},{:.9}\n",
+            p.clearance_mm, p.lower, p.upper
+        ));
+    }
+    write_atomic(&out.join("clearance-series.csv"), csv.as_bytes(), inputs)?;
+    let line = |name: &str, pick: fn(&pkm::analysis::clearance::SeriesPoint) -> f64| Series {
+        name: name.into(),
+        points: series
+            .iter()
+            .map(|p| (p.clearance_mm, 1000.0 * pick(p)))
+            .collect(),
+    };
+    let svg = panels_svg_x(
+        "bounds of the error from joint clearances against the clearance",
+        "diametral clearance [mm]",
+        &[(
+            "bounds along the direction at the pose".into(),
+            "error [µm]".into(),
+            vec![line("upper", |p| p.upper), line("lower", |p| p.lower)],
+        )],
+        (760, 420),
+    )?;
+    write_atomic(&out.join("clearance-series.svg"), svg.as_bytes(), inputs)
 }
 
 /// The budget's largest 25 lines as a bar chart, DIR/budget.svg.

@@ -32,6 +32,9 @@ pub struct ClearanceRequest {
     pub tolerance: Option<f64>,
     /// Bounds over a part surface.
     pub surface: Option<SurfaceRequest>,
+    /// Diametral clearances (mm) for every joint at which the bounds at the pose are
+    /// wanted (seed 002's Fig. 5: the bounds against the clearance).
+    pub series: Vec<f64>,
 }
 
 /// A hemisphere to sweep (seed 002's Figs. 4 and 5).
@@ -76,6 +79,7 @@ impl Default for ClearanceRequest {
             seed: 1,
             tolerance: None,
             surface: None,
+            series: Vec::new(),
         }
     }
 }
@@ -102,6 +106,19 @@ pub struct ClearanceReport {
     pub largest_clearance_at_pose_mm: Option<f64>,
     /// The bounds over the surface, when asked for.
     pub surface: Option<SurfaceReport>,
+    /// The bounds at the pose for each clearance of the request's series.
+    pub series: Vec<SeriesPoint>,
+}
+
+/// The bounds at one clearance of a series (mm).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct SeriesPoint {
+    /// Diametral clearance of every joint (mm).
+    pub clearance_mm: f64,
+    /// Largest error along the direction.
+    pub upper: f64,
+    /// Smallest error along the direction.
+    pub lower: f64,
 }
 
 /// The clearances of `req` on `machine`: one diametral value for every joint, or the
@@ -111,7 +128,12 @@ pub fn effective_clearances(
     joints: &[PassiveJoint],
     req: &ClearanceRequest,
 ) -> Result<Vec<JointClearance>> {
-    match req.diametral {
+    // Without a clearance of its own, a series' first value stands for it.
+    let diametral = match req.diametral {
+        None if machine.clearances.is_empty() => req.series.first().copied(),
+        d => d,
+    };
+    match diametral {
         Some(c) => Ok(joints
             .iter()
             .map(|j| {
@@ -126,7 +148,7 @@ pub fn effective_clearances(
         None if machine.clearances.is_empty() => Err(Error::InvalidInput {
             what: "clearance".into(),
             message: "the machine file gives no [[clearance]] entries: give one diametral \
-                      clearance for every joint (--clearance C)"
+                      clearance for every joint (--clearance C, or a --clearance-series)"
                 .into(),
         }),
         None => Ok(machine.clearances.clone()),
@@ -216,6 +238,28 @@ where
         None => None,
         Some(sr) => Some(surface_report(m, &regions, req, sr, uniform)?),
     };
+    if req.series.len() > 1000 {
+        return Err(Error::InvalidInput {
+            what: "clearance series".into(),
+            message: format!("expected at most 1000 clearances, got {}", req.series.len()),
+        });
+    }
+    let series = req
+        .series
+        .iter()
+        .map(|&c| {
+            let r: Vec<Region> = regions
+                .iter()
+                .map(|r| Region::new(r.joint.clone(), r.clearance.with_diametral(c)))
+                .collect::<Result<_>>()?;
+            let b = clearance::bounds(m, x, &r, &req.options)?;
+            Ok(SeriesPoint {
+                clearance_mm: c,
+                upper: b.upper,
+                lower: b.lower,
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
     // Over the surface, when there is one, the designer's answer is the surface's.
     let (overall_scale, overall_mm) = match &surface {
         Some(sf) => (sf.largest_clearance_scale, sf.largest_clearance_mm),
@@ -230,6 +274,7 @@ where
         largest_clearance_mm: overall_mm,
         largest_clearance_at_pose_mm: mm,
         surface,
+        series,
     })
 }
 
