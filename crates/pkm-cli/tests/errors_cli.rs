@@ -708,6 +708,36 @@ fn clearance_over_a_hemisphere_writes_surface_csv_and_svg() {
     assert_eq!(lines.len(), 4);
     assert!(lines[3].starts_with("0.100000,-"));
     assert!(dir.path().join("series/clearance-series.svg").exists());
+    // Along a G-code path.
+    let ngc = dir.path().join("p.ngc");
+    std::fs::write(&ngc, "G21 G90\nG0 X0 Y0 Z550\nG1 X20 Y10 Z540 F1200\n").unwrap();
+    let o = pkm()
+        .args([
+            "errors",
+            &path("examples/machines/hexapod-seed001.toml"),
+            "--clearance",
+            "0.02",
+            "--path",
+        ])
+        .arg(&ngc)
+        .args(["--path-rate", "20", "--out"])
+        .arg(dir.path().join("path"))
+        .output()
+        .unwrap();
+    ok(&o);
+    let csv = std::fs::read_to_string(dir.path().join("path/clearance-path.csv")).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(
+        lines.next(),
+        Some("t_s,line,X_mm,Y_mm,Z_mm,A_deg,B_deg,C_deg,lower_mm,upper_mm")
+    );
+    let rows: Vec<&str> = lines.collect();
+    assert!(rows.len() > 10);
+    for r in rows {
+        let v: Vec<&str> = r.split(',').collect();
+        assert_eq!(v.len(), 10);
+        assert!(v[8].parse::<f64>().unwrap() < 0.0 && v[9].parse::<f64>().unwrap() > 0.0);
+    }
     // Malformed surface specs are refused with what is expected.
     let o = pkm()
         .args([

@@ -576,3 +576,72 @@ fn a_clearance_series_gives_each_clearance_its_bounds() {
         .all(|w| w[1].upper > w[0].upper && w[1].lower < w[0].lower));
     assert!((r.series[3].upper / r.series[1].upper - 10.0).abs() < 0.01);
 }
+
+#[test]
+fn bounds_along_a_gcode_path_agree_with_each_pose_and_meet_the_tolerance() {
+    use pkm::analysis::clearance_path::PathRequest;
+    let m = hexapod();
+    let program = "G21 G90\nG0 X0 Y0 Z550\nG1 X20 Y10 Z540 F1200\nG1 X-20 Y10 Z545\n";
+    let path = |every| PathRequest {
+        program: program.into(),
+        from: None,
+        feed: Default::default(),
+        sampling: pkm::motion::Sampling::Rate(50.0),
+        every,
+    };
+    let req = ClearanceRequest {
+        diametral: Some(0.02),
+        tolerance: Some(0.01),
+        path: Some(path(1)),
+        ..Default::default()
+    };
+    let r = clearance(&m, None, &req).unwrap();
+    let p = r.path.as_ref().unwrap();
+    assert_eq!(p.points.len() as u64, p.samples);
+    assert!(p.samples > 50);
+    // Along the tool axis at each sample: the bound computed alone at that pose.
+    for pt in p.points.iter().step_by(17) {
+        let alone = clearance(&m, Some(&pt.sample.x), &request(0.02)).unwrap();
+        assert_eq!(
+            (pt.upper, pt.lower),
+            (alone.bounds.upper, alone.bounds.lower)
+        );
+        assert_eq!(pt.direction, alone.bounds.direction);
+    }
+    // The largest clearance along the path brings its worst sample to the tolerance.
+    let c = r.largest_clearance_mm.unwrap();
+    let mut check = req.clone();
+    check.diametral = Some(c);
+    check.tolerance = None;
+    let again = clearance(&m, None, &check).unwrap();
+    let pa = again.path.unwrap();
+    let worst = pa.points[pa.worst.unwrap()]
+        .upper
+        .max(-pa.points[pa.worst.unwrap()].lower);
+    assert!((worst - 0.01).abs() < 1e-8, "{worst}");
+    // Every 10th sample, and the last.
+    let mut sparse = req.clone();
+    sparse.path = Some(path(10));
+    sparse.tolerance = None;
+    let s = clearance(&m, None, &sparse).unwrap().path.unwrap();
+    assert_eq!(
+        s.points.len() as u64,
+        p.samples.div_ceil(10) + u64::from(!(p.samples - 1).is_multiple_of(10))
+    );
+    assert_eq!(
+        s.points.last().unwrap().sample.t,
+        p.points.last().unwrap().sample.t
+    );
+    // A program without motion, and a zero step, are refused.
+    let mut bad = req.clone();
+    bad.path = Some(PathRequest {
+        program: "G21\n".into(),
+        ..path(1)
+    });
+    assert!(clearance(&m, None, &bad)
+        .unwrap_err()
+        .to_string()
+        .contains("no motion"));
+    bad.path = Some(path(0));
+    assert!(clearance(&m, None, &bad).is_err());
+}

@@ -102,6 +102,17 @@ pub struct ErrorsArgs {
     /// 0.05,0.1,0.2; seed 002's Fig. 5): DIR/clearance-series.csv and .svg.
     #[arg(long)]
     pub clearance_series: Option<String>,
+    /// Clearance bounds along a G-code path (the tool axis as the surface normal, or
+    /// --direction): DIR/clearance-path.csv. The program runs from home with a constant
+    /// feed profile.
+    #[arg(long)]
+    pub path: Option<PathBuf>,
+    /// Sampling rate of the path (Hz).
+    #[arg(long, default_value_t = 100.0)]
+    pub path_rate: f64,
+    /// Bounds at every N-th path sample.
+    #[arg(long, default_value_t = 1)]
+    pub path_every: usize,
     /// Output directory.
     #[arg(long)]
     pub out: PathBuf,
@@ -237,6 +248,9 @@ pub fn run(a: &ErrorsArgs) -> Result<u8> {
         if !c.series.is_empty() {
             write_series(&a.out, &c.series, &inputs)?;
         }
+        if let Some(p) = &c.path {
+            write_path(&a.out, m, p, &inputs)?;
+        }
     }
     let text = serde_json::to_string_pretty(&out)?;
     write_atomic(&a.out.join("errors.json"), text.as_bytes(), &inputs)?;
@@ -260,7 +274,8 @@ fn clearance_request(
         || a.clearance_samples.is_some()
         || a.tolerance.is_some()
         || a.surface.is_some()
-        || a.clearance_series.is_some();
+        || a.clearance_series.is_some()
+        || a.path.is_some();
     if !asked && machine.clearances.is_empty() {
         return Ok(None);
     }
@@ -319,6 +334,29 @@ fn clearance_request(
         series: match &a.clearance_series {
             Some(list) => parse_list(list, "--clearance-series")?,
             None => Vec::new(),
+        },
+        path: match &a.path {
+            None => None,
+            Some(p) => {
+                if !(a.path_rate > 0.0 && a.path_rate <= 1e6) {
+                    bail!(
+                        "--path-rate: expected 0 < rate <= 1e6 Hz, got {}",
+                        a.path_rate
+                    );
+                }
+                let mut feed = pkm::motion::program::FeedOptions::default();
+                if let Some(r) = machine.rapid {
+                    feed.rapid = r;
+                }
+                Some(pkm::analysis::clearance_path::PathRequest {
+                    program: std::fs::read_to_string(p)
+                        .with_context(|| format!("cannot read {}", p.display()))?,
+                    from: None,
+                    feed,
+                    sampling: pkm::motion::Sampling::Rate(a.path_rate),
+                    every: a.path_every,
+                })
+            }
         },
     }))
 }
@@ -463,11 +501,27 @@ fn print_text(m: &dyn pkm::DynMechanism, r: &AccuracyReport) {
                 }
             );
         }
+        if let Some(p) = &c.path {
+            if let Some(w) = p.worst.and_then(|i| p.points.get(i)) {
+                println!(
+                    "  path           {} of {} samples bounded: largest {:.5} mm at t = {:.3} s{}",
+                    p.points.len(),
+                    p.samples,
+                    w.upper.max(-w.lower),
+                    w.sample.t,
+                    w.sample
+                        .line
+                        .map(|l| format!(" (line {l})"))
+                        .unwrap_or_default()
+                );
+            }
+        }
         if let (Some(t), Some(s)) = (c.tolerance, c.largest_clearance_scale) {
-            let over = if c.surface.is_some() {
-                " over the surface"
-            } else {
-                " at the pose"
+            let over = match (&c.surface, &c.path) {
+                (None, None) => " at the pose",
+                (Some(_), None) => " over the surface",
+                (None, Some(_)) => " along the path",
+                (Some(_), Some(_)) => " over the surface and the path",
             };
             match c.largest_clearance_mm {
                 Some(mm) => println!("  tolerance      {t} mm: largest clearance{over} {mm:.5} mm"),
@@ -571,6 +625,33 @@ fn write_series(
         (760, 420),
     )?;
     write_atomic(&out.join("clearance-series.svg"), svg.as_bytes(), inputs)
+}
+
+/// DIR/clearance-path.csv: per bounded sample `t_s,line`, the pose coordinates (user
+/// units), `lower_mm,upper_mm`.
+fn write_path(
+    out: &std::path::Path,
+    m: &dyn pkm::DynMechanism,
+    p: &pkm::analysis::clearance_path::PathReport,
+    inputs: &[&std::path::Path],
+) -> Result<()> {
+    let mut csv = String::from("t_s,line");
+    for c in m.coordinates() {
+        csv.push_str(&format!(",{}_{}", c.name, c.quantity.unit()));
+    }
+    csv.push_str(",lower_mm,upper_mm\n");
+    for pt in &p.points {
+        csv.push_str(&format!(
+            "{:.6},{}",
+            pt.sample.t,
+            pt.sample.line.map(|l| l.to_string()).unwrap_or_default()
+        ));
+        for (c, v) in m.coordinates().iter().zip(&pt.sample.x) {
+            csv.push_str(&format!(",{:.6}", c.quantity.to_user(*v)));
+        }
+        csv.push_str(&format!(",{:.9},{:.9}\n", pt.lower, pt.upper));
+    }
+    write_atomic(&out.join("clearance-path.csv"), csv.as_bytes(), inputs)
 }
 
 /// The budget's largest 25 lines as a bar chart, DIR/budget.svg.

@@ -239,12 +239,7 @@ pub fn accuracy(machine: &Machine, opt: &AccuracyOptions) -> Result<AccuracyRepo
         }
     };
     let clearance = match &opt.clearance {
-        Some(req) => {
-            machine.supports(crate::machine::Analysis::Clearance)?;
-            let joints = machine.passive_joints();
-            let c = super::clearance::effective_clearances(machine, &joints, req)?;
-            Some((req, joints, c))
-        }
+        Some(req) => Some((req, super::clearance::prepare(machine, req)?)),
         None => None,
     };
     machine.visit(AccuracyJob {
@@ -252,9 +247,7 @@ pub fn accuracy(machine: &Machine, opt: &AccuracyOptions) -> Result<AccuracyRepo
         opt,
         file: machine.tolerances(),
         map_axes,
-        clearance: clearance
-            .as_ref()
-            .map(|(r, j, c)| (*r, j.as_slice(), c.as_slice())),
+        clearance: clearance.as_ref().map(|(r, p)| (*r, p)),
     })
 }
 
@@ -265,8 +258,7 @@ struct AccuracyJob<'a> {
     map_axes: Option<[GridAxis; 2]>,
     clearance: Option<(
         &'a super::clearance::ClearanceRequest,
-        &'a [crate::accuracy::clearance::PassiveJoint],
-        &'a [crate::accuracy::clearance::JointClearance],
+        &'a super::clearance::Prepared,
     )>,
 }
 
@@ -327,7 +319,7 @@ impl Visitor for AccuracyJob<'_> {
             None => None,
         };
         let clearance = match self.clearance {
-            Some((req, joints, c)) => Some(super::clearance::clearance_at(m, &x, joints, c, req)?),
+            Some((req, prepared)) => Some(super::clearance::clearance_at(m, &x, req, prepared)?),
             None => None,
         };
         Ok(AccuracyReport {

@@ -6,6 +6,7 @@
 use nalgebra::SVector;
 use serde::Serialize;
 
+use super::clearance_path::{path_samples, PathPoint, PathReport, PathRequest, PathSample};
 use crate::accuracy::clearance::surface::{hemisphere_sweep, Hemisphere, SurfacePoint};
 use crate::accuracy::clearance::{
     self, ClearanceBounds, ClearanceMonteCarlo, ClearanceOptions, JointClearance, PassiveJoint,
@@ -13,6 +14,7 @@ use crate::accuracy::clearance::{
 };
 use crate::error::{Error, Result};
 use crate::machine::{Analysable, Analysis, Machine, Visitor};
+use rayon::prelude::*;
 
 /// What [`clearance()`] computes.
 #[derive(Debug, Clone, PartialEq)]
@@ -35,6 +37,8 @@ pub struct ClearanceRequest {
     /// Diametral clearances (mm) for every joint at which the bounds at the pose are
     /// wanted (seed 002's Fig. 5: the bounds against the clearance).
     pub series: Vec<f64>,
+    /// Bounds along a G-code path.
+    pub path: Option<PathRequest>,
 }
 
 /// A hemisphere to sweep (seed 002's Figs. 4 and 5).
@@ -80,6 +84,7 @@ impl Default for ClearanceRequest {
             tolerance: None,
             surface: None,
             series: Vec::new(),
+            path: None,
         }
     }
 }
@@ -108,6 +113,8 @@ pub struct ClearanceReport {
     pub surface: Option<SurfaceReport>,
     /// The bounds at the pose for each clearance of the request's series.
     pub series: Vec<SeriesPoint>,
+    /// The bounds along the path, when asked for.
+    pub path: Option<PathReport>,
 }
 
 /// The bounds at one clearance of a series (mm).
@@ -155,51 +162,77 @@ pub fn effective_clearances(
     }
 }
 
+/// What a clearance analysis needs from the loaded machine before it visits the
+/// concrete type: its passive joints, the clearances in effect, the path's samples.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Prepared {
+    /// The machine's passive joints.
+    pub joints: Vec<PassiveJoint>,
+    /// The clearances in effect.
+    pub clearances: Vec<JointClearance>,
+    /// The path's samples to bound and the run's sample count (the motion run makes
+    /// its own visit, so it comes first).
+    pub path: Option<(Vec<PathSample>, u64)>,
+}
+
+/// Checks that `machine` supports clearances and prepares `req` on it.
+pub fn prepare(machine: &Machine, req: &ClearanceRequest) -> Result<Prepared> {
+    machine.supports(Analysis::Clearance)?;
+    let joints = machine.passive_joints();
+    let clearances = effective_clearances(machine, &joints, req)?;
+    let path = req
+        .path
+        .as_ref()
+        .map(|p| path_samples(machine, p))
+        .transpose()?;
+    Ok(Prepared {
+        joints,
+        clearances,
+        path,
+    })
+}
+
 /// The clearance analysis of `machine` at `pose` (internal units; `None`: home).
 pub fn clearance(
     machine: &Machine,
     pose: Option<&[f64]>,
     req: &ClearanceRequest,
 ) -> Result<ClearanceReport> {
-    machine.supports(Analysis::Clearance)?;
-    let joints = machine.passive_joints();
-    let clearances = effective_clearances(machine, &joints, req)?;
+    let prepared = prepare(machine, req)?;
     let home = machine.mechanism().home();
     let pose = pose.unwrap_or(&home);
     machine.visit(ClearanceJob {
         pose,
-        joints: &joints,
-        clearances: &clearances,
         req,
+        prepared: &prepared,
     })
 }
 
 struct ClearanceJob<'a> {
     pose: &'a [f64],
-    joints: &'a [PassiveJoint],
-    clearances: &'a [JointClearance],
     req: &'a ClearanceRequest,
+    prepared: &'a Prepared,
 }
 
 impl Visitor for ClearanceJob<'_> {
     type Output = Result<ClearanceReport>;
     fn visit<M: Analysable<P, A>, const P: usize, const A: usize>(self, m: &M) -> Self::Output {
         let x = crate::dynamic::fixed::<P>("pose", self.pose)?;
-        clearance_at(m, &x, self.joints, self.clearances, self.req)
+        clearance_at(m, &x, self.req, self.prepared)
     }
 }
 
-/// [`clearance()`] on a concrete machine.
+/// [`clearance()`] on a concrete machine, `prepared` by [`prepare`].
 pub fn clearance_at<M, const P: usize, const A: usize>(
     m: &M,
     x: &SVector<f64, P>,
-    joints: &[PassiveJoint],
-    clearances: &[JointClearance],
     req: &ClearanceRequest,
+    prepared: &Prepared,
 ) -> Result<ClearanceReport>
 where
     M: Analysable<P, A>,
 {
+    let (joints, clearances) = (&prepared.joints, &prepared.clearances);
     if let Some(n) = req.monte_carlo {
         if n > 100_000_000 {
             return Err(Error::InvalidInput {
@@ -260,10 +293,30 @@ where
             })
         })
         .collect::<Result<Vec<_>>>()?;
-    // Over the surface, when there is one, the designer's answer is the surface's.
-    let (overall_scale, overall_mm) = match &surface {
-        Some(sf) => (sf.largest_clearance_scale, sf.largest_clearance_mm),
-        None => (scale, mm),
+    let path = match &prepared.path {
+        None => None,
+        Some((samples, total)) => Some(path_report(m, &regions, req, samples, *total, uniform)?),
+    };
+    // Over the surface and the path, when given, the designer's answer is theirs (the
+    // smaller of the two).
+    let wholes: Vec<(Option<f64>, Option<f64>)> = surface
+        .iter()
+        .map(|s| (s.largest_clearance_scale, s.largest_clearance_mm))
+        .chain(
+            path.iter()
+                .map(|p| (p.largest_clearance_scale, p.largest_clearance_mm)),
+        )
+        .collect();
+    let (overall_scale, overall_mm) = if wholes.is_empty() {
+        (scale, mm)
+    } else {
+        wholes
+            .into_iter()
+            .min_by(|a, b| {
+                a.0.unwrap_or(f64::INFINITY)
+                    .total_cmp(&b.0.unwrap_or(f64::INFINITY))
+            })
+            .unwrap_or((None, None))
     };
     Ok(ClearanceReport {
         clearances: clearances.to_vec(),
@@ -275,6 +328,66 @@ where
         largest_clearance_at_pose_mm: mm,
         surface,
         series,
+        path,
+    })
+}
+
+/// The bounds at each path sample (rayon), and with a tolerance the factor on the
+/// clearances that keeps every sample within it (`s <- s t / worst(s)`, to 1e-9).
+fn path_report<M, const P: usize, const A: usize>(
+    m: &M,
+    regions: &[Region],
+    req: &ClearanceRequest,
+    samples: &[PathSample],
+    total: u64,
+    uniform: Option<f64>,
+) -> Result<PathReport>
+where
+    M: Analysable<P, A>,
+{
+    let at = |regions: &[Region]| -> Result<Vec<PathPoint>> {
+        samples
+            .par_iter()
+            .map(|s| {
+                let x = crate::dynamic::fixed::<P>("path sample", &s.x)?;
+                let b = clearance::bounds(m, &x, regions, &req.options)?;
+                Ok(PathPoint {
+                    sample: s.clone(),
+                    direction: b.direction,
+                    upper: b.upper,
+                    lower: b.lower,
+                })
+            })
+            .collect()
+    };
+    let worst_of = |pts: &[PathPoint]| {
+        pts.iter()
+            .enumerate()
+            .map(|(i, p)| (i, p.upper.max(-p.lower)))
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+    };
+    let points = at(regions)?;
+    let worst = worst_of(&points);
+    let scale = match (req.tolerance, worst) {
+        (Some(t), Some((_, w))) if w > 0.0 && t > 0.0 => {
+            let mut s = t / w;
+            for _ in 0..8 {
+                let f = worst_of(&at(&scaled(regions, s)?)?).map_or(w * s, |v| v.1);
+                if (f - t).abs() <= 1e-9 * t {
+                    break;
+                }
+                s *= t / f;
+            }
+            Some(s)
+        }
+        _ => None,
+    };
+    Ok(PathReport {
+        samples: total,
+        worst: worst.map(|w| w.0),
+        largest_clearance_scale: scale,
+        largest_clearance_mm: scale.zip(uniform).map(|(s, c)| s * c),
+        points,
     })
 }
 

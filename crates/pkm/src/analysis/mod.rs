@@ -7,6 +7,7 @@
 
 pub mod accuracy;
 pub mod clearance;
+pub mod clearance_path;
 pub mod identification;
 pub mod kinematics;
 pub mod motion;
