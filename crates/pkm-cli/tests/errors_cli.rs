@@ -755,3 +755,45 @@ fn clearance_over_a_hemisphere_writes_surface_csv_and_svg() {
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("hemisphere:R"));
 }
+
+#[test]
+fn report_has_a_clearance_section_when_the_file_gives_clearances() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(path("examples/machines/hexapod-seed001.toml")).unwrap();
+    let file = dir.path().join("hex-clearances.toml");
+    std::fs::write(
+        &file,
+        format!(
+            "{text}\n[[clearance]]\njoints = [\"base\"]\ntype = \"universal\"\ndiametral = 0.02\n\
+             bearing_length = 40.0\naxis = [0.0, 0.0, 1.0]\nlever = 20.0\n\
+             [[clearance]]\njoints = [\"platform\"]\ndiametral = 0.015\n"
+        ),
+    )
+    .unwrap();
+    let out = dir.path().join("rep");
+    ok(&pkm()
+        .arg("report")
+        .arg(&file)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap());
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    assert!(html.contains("id=\"clearance\""), "no clearance section");
+    assert!(html.contains("Joint clearances"));
+    assert!(html.contains("The joint states that give the upper bound"));
+    assert!(html.contains("universal") && html.contains("spherical"));
+    // Without clearances in the file there is no such section.
+    let plain = dir.path().join("plain");
+    ok(&pkm()
+        .args([
+            "report",
+            &path("examples/machines/hexapod-seed001.toml"),
+            "--out",
+        ])
+        .arg(&plain)
+        .output()
+        .unwrap());
+    let html = std::fs::read_to_string(plain.join("index.html")).unwrap();
+    assert!(!html.contains("id=\"clearance\""));
+}

@@ -2,6 +2,7 @@
 
 mod accuracy;
 mod calibration;
+mod clearance;
 mod drawing;
 pub mod heatmap;
 mod html;
@@ -88,6 +89,12 @@ const SECTIONS: &[Section] = &[
         title: "Accuracy",
         shown: |_| true,
         render: accuracy::section,
+    },
+    Section {
+        id: "clearance",
+        title: "Clearances",
+        shown: |m| !m.clearances.is_empty(),
+        render: clearance::section,
     },
     Section {
         id: "calibration",
