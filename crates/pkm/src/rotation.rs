@@ -276,6 +276,17 @@ pub fn axis_angle(m: &Matrix3<f64>) -> (Vector3<f64>, f64) {
     }
 }
 
+/// The axial vector of the skew part of `m`, `vee((m - m^T) / 2)`: for `m = dR R^T` the
+/// small rotation `dR` applies, exact to first order and defined for blocks that are not
+/// exactly orthonormal (seed 003's deviated links).
+pub fn skew_vee(m: &Matrix3<f64>) -> Vector3<f64> {
+    Vector3::new(
+        0.5 * (m[(2, 1)] - m[(1, 2)]),
+        0.5 * (m[(0, 2)] - m[(2, 0)]),
+        0.5 * (m[(1, 0)] - m[(0, 1)]),
+    )
+}
+
 /// Rotation vector (axis times angle, angle in `[0, pi]`) of a rotation matrix.
 ///
 /// The angle is `atan2(|w| / 2, (tr R - 1) / 2)` with `w = vee(R - R^T) = 2 sin(angle) n`.
@@ -284,11 +295,7 @@ pub fn axis_angle(m: &Matrix3<f64>) -> (Vector3<f64>, f64) {
 /// (its largest column), signed by `w`. The usual `acos`/`w`-only formula loses digits
 /// near 180 deg (4e-13 matrix error found by the rotation proptest), this does not.
 pub fn rotation_vector(m: &Matrix3<f64>) -> Vector3<f64> {
-    let w = Vector3::new(
-        m[(2, 1)] - m[(1, 2)],
-        m[(0, 2)] - m[(2, 0)],
-        m[(1, 0)] - m[(0, 1)],
-    );
+    let w = 2.0 * skew_vee(m);
     let s = 0.5 * w.norm();
     let c = 0.5 * (m.trace() - 1.0);
     let angle = s.atan2(c);

@@ -2,7 +2,7 @@
 //! enumeration, the designer's question, checked against re-solving by hand.
 
 use nalgebra::Vector3;
-use pkm::accuracy::clearance::{ClearanceMethod, ClearanceOptions, JointClearance, JointType};
+use pkm::accuracy::clearance::{ClearanceMethod, ClearanceOptions, JointType};
 use pkm::analysis::clearance::{clearance, ClearanceReport, ClearanceRequest};
 use pkm::{Error, Machine};
 
@@ -404,7 +404,67 @@ fn clearance_entries_are_checked_with_file_line_and_field() {
         e.to_string().contains("`A3` has a clearance already"),
         "{e}"
     );
-    let _ = JointClearance::spherical("A1", 0.01);
+}
+
+#[test]
+fn a_joint_name_names_one_joint() {
+    // A platform joint named like a base joint would make two parameters `A1.x` and an
+    // ambiguous clearance: the file is refused at that joint.
+    let text = std::fs::read_to_string(example("hexapod-seed001.toml")).unwrap();
+    let clash = text
+        .replace("B1 = [", "A1 = [")
+        .replace("platform = \"B1\"", "platform = \"A1\"");
+    let e = Machine::from_toml_str(&clash, "clash.toml").unwrap_err();
+    match &e {
+        Error::MachineFile {
+            line,
+            field,
+            message,
+            ..
+        } => {
+            assert!(field.contains("platform_joints.A1"), "{e}");
+            assert!(message.contains("names a base joint too"), "{e}");
+            // The line of the platform table's A1 (the second `A1 = [`).
+            let lines: Vec<usize> = clash
+                .lines()
+                .enumerate()
+                .filter(|(_, l)| l.starts_with("A1 = ["))
+                .map(|(i, _)| i + 1)
+                .collect();
+            assert_eq!(*line, Some(lines[1]), "{e}");
+        }
+        other => panic!("{other:?}"),
+    }
+    // The centre-leg tripod's leg joint is `leg`; no file joint may take the name.
+    let tri = std::fs::read_to_string(example("tripod-centre-leg.toml")).unwrap();
+    let first = tri
+        .lines()
+        .skip_while(|l| !l.starts_with("[base_joints]"))
+        .nth(1)
+        .unwrap()
+        .split('=')
+        .next()
+        .unwrap()
+        .trim()
+        .to_string();
+    let renamed = tri
+        .replace(&format!("{first} = ["), "leg = [")
+        .replace(&format!("base = \"{first}\""), "base = \"leg\"");
+    let e = Machine::from_toml_str(&renamed, "leg.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("reserved"), "{e}");
+    // The example's passive joints: strut joints and the leg, each once, the leg's
+    // centre its `leg.x, leg.y, leg.z` parameters.
+    let m = Machine::from_path(example("tripod-centre-leg.toml")).unwrap();
+    let j = m.passive_joints();
+    assert_eq!(j.len(), 7);
+    assert_eq!(j[6].name, "leg");
+    let params = m.parameters();
+    assert_eq!(
+        j[6].centres[0].map(|k| params[k].name.clone()),
+        ["leg.x", "leg.y", "leg.z"]
+    );
 }
 
 #[test]

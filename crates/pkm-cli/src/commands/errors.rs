@@ -546,7 +546,7 @@ fn write_surface(
     sf: &pkm::analysis::clearance::SurfaceReport,
     inputs: &[&std::path::Path],
 ) -> Result<()> {
-    use crate::report::plot::{panels_svg_x, Series};
+    use crate::report::plot::{panels_svg_span, Series};
     let mut csv = String::from("z_mm,lower_mm,upper_mm\n");
     for p in &sf.points {
         match (p.lower, p.upper) {
@@ -566,7 +566,7 @@ fn write_surface(
                     .collect(),
             }
         };
-    let svg = panels_svg_x(
+    let svg = panels_svg_span(
         &format!(
             "shaping error from joint clearances over a hemisphere R = {} mm{}",
             sf.hemisphere.radius,
@@ -581,6 +581,8 @@ fn write_surface(
             }
         ),
         "z [mm]",
+        // The whole meridian, equator to pole: heights out of reach stay empty.
+        Some((0.0, sf.hemisphere.radius)),
         &[(
             "bounds along the surface normal".into(),
             "error [µm]".into(),

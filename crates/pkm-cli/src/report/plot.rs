@@ -38,6 +38,19 @@ pub fn panels_svg_x(
     panels: &[(String, String, Vec<Series>)],
     size: (u32, u32),
 ) -> Result<String> {
+    panels_svg_span(title, xlabel, None, panels, size)
+}
+
+/// [`panels_svg_x`] over the x span `span` when given (where the curves have no
+/// points, the plot stays empty: a quantity undefined there shows as a gap), else the
+/// curves' own.
+pub fn panels_svg_span(
+    title: &str,
+    xlabel: &str,
+    span: Option<(f64, f64)>,
+    panels: &[(String, String, Vec<Series>)],
+    size: (u32, u32),
+) -> Result<String> {
     let mut out = String::new();
     {
         let root = SVGBackend::with_string(&mut out, size).into_drawing_area();
@@ -60,6 +73,9 @@ pub fn panels_svg_x(
                     y0 = y0.min(y);
                     y1 = y1.max(y);
                 }
+            }
+            if let Some((a, b)) = span {
+                (t0, t1) = (a, b);
             }
             if !t0.is_finite() {
                 continue;
@@ -166,6 +182,8 @@ pub fn histogram_svg(
         1.0
     };
     let w = if w > 0.0 { w } else { 1.0 };
+    // From 0 for norms; from the first bin for signed values (errors along a direction).
+    let x0 = bins.first().map_or(0.0, |b| b.0.min(0.0));
     let x1 = bins.last().map(|b| b.0 + w).unwrap_or(1.0);
     let cmax = bins.iter().map(|b| b.1).max().unwrap_or(1).max(1) as f64 * 1.05;
     let mut out = String::new();
@@ -177,7 +195,7 @@ pub fn histogram_svg(
             .caption(title, ("sans-serif", 15))
             .x_label_area_size(32)
             .y_label_area_size(56)
-            .build_cartesian_2d(0.0..x1, 0.0..cmax)
+            .build_cartesian_2d(x0..x1, 0.0..cmax)
             .map_err(|e| anyhow!("{e}"))?;
         chart
             .configure_mesh()

@@ -322,10 +322,12 @@ impl Rebuild<3, 3> for crate::tripod::CentreLegTripod {
         let b: Vec<&str> = s.iter().map(|s| s.base_name.as_str()).collect();
         let p: Vec<&str> = s.iter().map(|s| s.platform_name.as_str()).collect();
         let mut j = strut_joints(&b, &p);
+        // The leg's base joint follows the struts' base and platform joints.
+        let k = 6 * s.len();
         j.push(super::clearance::PassiveJoint {
             name: "leg".into(),
             body: "base".into(),
-            centres: vec![[18, 19, 20]],
+            centres: vec![[k, k + 1, k + 2]],
         });
         j
     }

@@ -12,13 +12,13 @@
 //! and the installation angles of a machine with a workpiece chain (they turn tool and
 //! part alike).
 
-use nalgebra::{Matrix4, SVector, Vector3};
+use nalgebra::{Matrix4, SVector};
 
 use super::{Evaluate, Parameter, ParameterKind, Parametric, PoseError};
 use crate::error::{Error, Result};
 use crate::mechanism::Mechanism;
 use crate::serial::completion::TripleCompletion;
-use crate::serial::deviations::{apply, clear, zero_deviations};
+use crate::serial::deviations::{apply, clear, error_between, zero_deviations};
 use crate::serial::machine::{ChainDeviations, Parameter as Deviation, SerialMachine};
 use crate::units::Quantity;
 
@@ -294,19 +294,10 @@ impl Evaluate for SerialEvaluator<'_> {
             };
         }
         let b = self.m.pose(&self.qt, &self.qw, &self.dev)?;
-        let a = &self.nominal;
-        let dp = b.fixed_view::<3, 1>(0, 3) - a.fixed_view::<3, 1>(0, 3);
-        // Seed 003's rotation block with angular deviations (cos(phi + alpha)) is not
-        // exactly orthonormal: the rotation is read from the skew part of
-        // R_dev R_nom^T, which is exact to first order and never undefined.
-        let dr = b.fixed_view::<3, 3>(0, 0) * a.fixed_view::<3, 3>(0, 0).transpose();
+        let (position, orientation) = error_between(&self.nominal, &b);
         Ok(PoseError {
-            position: dp.into_owned(),
-            orientation: Vector3::new(
-                0.5 * (dr[(2, 1)] - dr[(1, 2)]),
-                0.5 * (dr[(0, 2)] - dr[(2, 0)]),
-                0.5 * (dr[(1, 0)] - dr[(0, 1)]),
-            ),
+            position,
+            orientation,
         })
     }
 }

@@ -233,6 +233,7 @@ where
     M: Analysable<P, A>,
 {
     let (joints, clearances) = (&prepared.joints, &prepared.clearances);
+    // Sizes and values refused before any work.
     if let Some(n) = req.monte_carlo {
         if n > 100_000_000 {
             return Err(Error::InvalidInput {
@@ -240,6 +241,27 @@ where
                 message: format!("expected at most 1e8 samples, got {n}"),
             });
         }
+    }
+    if req.series.len() > 1000 {
+        return Err(Error::InvalidInput {
+            what: "clearance series".into(),
+            message: format!("expected at most 1000 clearances, got {}", req.series.len()),
+        });
+    }
+    if let Some(sr) = &req.surface {
+        Hemisphere {
+            radius: sr.radius,
+            centre: sr.centre.unwrap_or_default(),
+            azimuth: sr.azimuth,
+        }
+        .validate()?;
+        crate::accuracy::clearance::surface::check_heights(sr.heights)?;
+    }
+    if let Some(t) = req.tolerance.filter(|t| !(*t > 0.0 && t.is_finite())) {
+        return Err(Error::InvalidInput {
+            what: "clearance tolerance".into(),
+            message: format!("expected a tolerance > 0 mm, found {t}"),
+        });
     }
     let regions = clearance::regions(joints, clearances)?;
     let uniform = clearances
@@ -256,14 +278,20 @@ where
     };
     let (scale, mm) = match req.tolerance {
         None => (None, None),
-        Some(t) if !(t > 0.0 && t.is_finite()) => {
-            return Err(Error::InvalidInput {
-                what: "clearance tolerance".into(),
-                message: format!("expected a tolerance > 0 mm, found {t}"),
-            })
-        }
         Some(t) => {
-            let s = largest_scale(m, x, &regions, &req.options, &bounds, t)?;
+            let w1 = bounds.upper.max(-bounds.lower);
+            if !(w1 > 0.0) {
+                return Err(Error::InvalidInput {
+                    what: "clearance tolerance".into(),
+                    message: "the clearances cause no error along the direction at this pose: \
+                              any clearance keeps it within the tolerance"
+                        .into(),
+                });
+            }
+            let s = fit_scale(t, w1, |s| {
+                let (_, u, l) = clearance::bounds_along(m, x, &scaled(&regions, s)?, &req.options)?;
+                Ok(u.max(-l))
+            })?;
             (Some(s), uniform.map(|c| c * s))
         }
     };
@@ -271,12 +299,6 @@ where
         None => None,
         Some(sr) => Some(surface_report(m, &regions, req, sr, uniform)?),
     };
-    if req.series.len() > 1000 {
-        return Err(Error::InvalidInput {
-            what: "clearance series".into(),
-            message: format!("expected at most 1000 clearances, got {}", req.series.len()),
-        });
-    }
     let series = req
         .series
         .iter()
@@ -285,11 +307,11 @@ where
                 .iter()
                 .map(|r| Region::new(r.joint.clone(), r.clearance.with_diametral(c)))
                 .collect::<Result<_>>()?;
-            let b = clearance::bounds(m, x, &r, &req.options)?;
+            let (_, upper, lower) = clearance::bounds_along(m, x, &r, &req.options)?;
             Ok(SeriesPoint {
                 clearance_mm: c,
-                upper: b.upper,
-                lower: b.lower,
+                upper,
+                lower,
             })
         })
         .collect::<Result<Vec<_>>>()?;
@@ -350,12 +372,13 @@ where
             .par_iter()
             .map(|s| {
                 let x = crate::dynamic::fixed::<P>("path sample", &s.x)?;
-                let b = clearance::bounds(m, &x, regions, &req.options)?;
+                let (direction, upper, lower) =
+                    clearance::bounds_along(m, &x, regions, &req.options)?;
                 Ok(PathPoint {
                     sample: s.clone(),
-                    direction: b.direction,
-                    upper: b.upper,
-                    lower: b.lower,
+                    direction,
+                    upper,
+                    lower,
                 })
             })
             .collect()
@@ -369,17 +392,9 @@ where
     let points = at(regions)?;
     let worst = worst_of(&points);
     let scale = match (req.tolerance, worst) {
-        (Some(t), Some((_, w))) if w > 0.0 && t > 0.0 => {
-            let mut s = t / w;
-            for _ in 0..8 {
-                let f = worst_of(&at(&scaled(regions, s)?)?).map_or(w * s, |v| v.1);
-                if (f - t).abs() <= 1e-9 * t {
-                    break;
-                }
-                s *= t / f;
-            }
-            Some(s)
-        }
+        (Some(t), Some((_, w))) if w > 0.0 => Some(fit_scale(t, w, |s| {
+            Ok(worst_of(&at(&scaled(regions, s)?)?).map_or(0.0, |v| v.1))
+        })?),
         _ => None,
     };
     Ok(PathReport {
@@ -439,24 +454,16 @@ where
     let points = hemisphere_sweep(m, &hemisphere, regions, &req.options, sr.heights)?;
     let worst = worst_of(&points);
     let scale = match (req.tolerance, worst) {
-        (Some(t), Some((_, w))) if w > 0.0 && t > 0.0 => {
-            let mut s = t / w;
-            for _ in 0..8 {
-                let sweep = hemisphere_sweep(
-                    m,
-                    &hemisphere,
-                    &scaled(regions, s)?,
-                    &req.options,
-                    sr.heights,
-                )?;
-                let f = worst_of(&sweep).map_or(w * s, |v| v.1);
-                if (f - t).abs() <= 1e-9 * t {
-                    break;
-                }
-                s *= t / f;
-            }
-            Some(s)
-        }
+        (Some(t), Some((_, w))) if w > 0.0 => Some(fit_scale(t, w, |s| {
+            let sweep = hemisphere_sweep(
+                m,
+                &hemisphere,
+                &scaled(regions, s)?,
+                &req.options,
+                sr.heights,
+            )?;
+            Ok(worst_of(&sweep).map_or(0.0, |v| v.1))
+        })?),
         _ => None,
     };
     Ok(SurfaceReport {
@@ -470,34 +477,14 @@ where
     })
 }
 
-/// The factor `s` on every clearance with `max(upper, -lower)(s) = t`: the bounds grow
-/// about linearly with the clearance, so `s <- s t / f(s)` from `s = t / f(1)`, with
-/// exact bounds at each step (to `1e-9` relative, at most 8 steps).
-fn largest_scale<M, const P: usize, const A: usize>(
-    m: &M,
-    x: &SVector<f64, P>,
-    regions: &[Region],
-    opt: &ClearanceOptions,
-    at_one: &ClearanceBounds,
-    t: f64,
-) -> Result<f64>
-where
-    M: Analysable<P, A>,
-{
-    let worst = |b: &ClearanceBounds| b.upper.max(-b.lower);
-    let f1 = worst(at_one);
-    if !(f1 > 0.0) {
-        return Err(Error::InvalidInput {
-            what: "clearance tolerance".into(),
-            message: "the clearances cause no error along the direction at this pose: any \
-                      clearance keeps it within the tolerance"
-                .into(),
-        });
-    }
-    let mut s = t / f1;
+/// The factor `s` on every clearance with `worst(s) = t`, from `worst(1) = w1 > 0`: the
+/// bounds grow about linearly with the clearance, so `s <- s t / worst(s)` from
+/// `s = t / w1`, each step on exact bounds (to `1e-9` relative, at most 8 steps).
+fn fit_scale(t: f64, w1: f64, mut worst: impl FnMut(f64) -> Result<f64>) -> Result<f64> {
+    let mut s = t / w1;
     for _ in 0..8 {
-        let f = worst(&clearance::bounds(m, x, &scaled(regions, s)?, opt)?);
-        if (f - t).abs() <= 1e-9 * t {
+        let f = worst(s)?;
+        if !(f > 0.0) || (f - t).abs() <= 1e-9 * t {
             break;
         }
         s *= t / f;

@@ -82,6 +82,21 @@ pub struct Hexapod {
     shares: [[bool; 6]; 6],
 }
 
+/// What a hexapod derives from its joint centres and tool: the strut set, the
+/// characteristic length (mean distance of the platform joints from the tool tip), the
+/// struct-of-arrays and SIMD lanes of its inverse kinematics.
+fn derived(
+    base: &[Vector3<f64>; 6],
+    platform: &[Vector3<f64>; 6],
+    tool: Vector3<f64>,
+) -> (StrutSet<6>, f64, crate::legs::StrutSoa<6>, simd::Lanes) {
+    let set = StrutSet::new(*base, *platform, tool);
+    let characteristic_length = (set.arms.iter().map(|a| a.norm()).sum::<f64>() / 6.0).max(1e-9);
+    let soa = (&set).into();
+    let lanes = simd::Lanes::new(&set.arms, &set.base);
+    (set, characteristic_length, soa, lanes)
+}
+
 /// Distance between segments `p0-p1` and `q0-q1`.
 pub fn segment_distance(
     p0: &Vector3<f64>,
@@ -139,12 +154,11 @@ impl Hexapod {
         strut_diameter: Option<f64>,
         home: Vector6<f64>,
     ) -> Self {
-        let set = StrutSet::new(
-            std::array::from_fn(|i| struts[i].base),
-            std::array::from_fn(|i| struts[i].platform),
+        let (set, characteristic_length, soa, lanes) = derived(
+            &std::array::from_fn(|i| struts[i].base),
+            &std::array::from_fn(|i| struts[i].platform),
             tool,
         );
-        let characteristic_length = set.arms.iter().map(|a| a.norm()).sum::<f64>() / 6.0;
         let actuators = std::array::from_fn(|i| struts[i].actuator.clone());
         let shares = std::array::from_fn(|i| {
             std::array::from_fn(|k| {
@@ -160,9 +174,9 @@ impl Hexapod {
             strut_diameter,
             home,
             zero_lengths: None,
-            characteristic_length: characteristic_length.max(1e-9),
-            soa: (&set).into(),
-            lanes: simd::Lanes::new(&set.arms, &set.base),
+            characteristic_length,
+            soa,
+            lanes,
             set,
             actuators,
             coordinates: spatial_coordinates(),
@@ -178,11 +192,8 @@ impl Hexapod {
             s.base = *b;
             s.platform = *p;
         }
-        self.set = StrutSet::new(*base, *platform, self.tool);
-        self.characteristic_length =
-            (self.set.arms.iter().map(|a| a.norm()).sum::<f64>() / 6.0).max(1e-9);
-        self.soa = (&self.set).into();
-        self.lanes = simd::Lanes::new(&self.set.arms, &self.set.base);
+        (self.set, self.characteristic_length, self.soa, self.lanes) =
+            derived(base, platform, self.tool);
     }
 
     /// The strut geometry.

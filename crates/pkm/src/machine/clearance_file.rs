@@ -53,11 +53,7 @@ pub(crate) fn clearances(src: &Source, joints: &[PassiveJoint]) -> Result<Vec<Jo
             ]
         };
         if joints.is_empty() {
-            return Err(src.error(
-                &at("joints"),
-                "this machine type has no passive joints whose centres pkm models \
-                 (clearances are for strut machines: tripods, hexapods)",
-            ));
+            return Err(src.error(&at("joints"), crate::accuracy::clearance::NO_PASSIVE_JOINTS));
         }
         let kind = match e.kind.as_deref() {
             None => JointType::Spherical,
@@ -108,25 +104,8 @@ pub(crate) fn clearances(src: &Source, joints: &[PassiveJoint]) -> Result<Vec<Jo
                 axis: e.axis.map(super::v3),
                 lever: e.lever.unwrap_or(0.0),
             };
-            c.validate().map_err(|err| {
-                let field = match &err {
-                    crate::Error::InvalidInput { message, .. } if message.contains("axis") => {
-                        "axis"
-                    }
-                    crate::Error::InvalidInput { message, .. } if message.contains("bearing") => {
-                        "bearing_length"
-                    }
-                    crate::Error::InvalidInput { message, .. } if message.contains("lever") => {
-                        "lever"
-                    }
-                    _ => "diametral",
-                };
-                let message = match err {
-                    crate::Error::InvalidInput { message, .. } => message,
-                    other => other.to_string(),
-                };
-                src.error(&at(field), message)
-            })?;
+            c.check()
+                .map_err(|(field, message)| src.error(&at(field), message))?;
             out.push(c);
         }
     }

@@ -188,6 +188,7 @@ pub(super) fn build(src: &Source, f: HexapodFile) -> Result<super::Parts, Error>
         &f.platform_joints,
         plat_cone,
     )?;
+    super::distinct_joint_names(src, &f.base_joints, &f.platform_joints, &[])?;
     let mut struts = Vec::with_capacity(6);
     for (i, s) in f.struts.iter().enumerate() {
         let (actuator, base, platform) =

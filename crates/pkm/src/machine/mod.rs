@@ -139,6 +139,36 @@ pub(crate) fn strut_entry(
     Ok((actuator, base, plat))
 }
 
+/// Checks that no joint name is used in both `[base_joints]` and `[platform_joints]`, nor
+/// is one of `reserved` (other joints of the machine): parameters, tolerances and
+/// clearances are named after the joints and must name one each.
+pub(crate) fn distinct_joint_names(
+    src: &source::Source,
+    base: &Joints,
+    platform: &Joints,
+    reserved: &[&str],
+) -> Result<()> {
+    use source::Seg;
+    for (table, names) in [("base_joints", base), ("platform_joints", platform)] {
+        if let Some(n) = names.keys().find(|n| reserved.contains(&n.as_str())) {
+            return Err(src.error(
+                &[Seg::Key(table.into()), Seg::Key(n.clone())],
+                format!("joint name `{n}` is reserved for another joint of this machine"),
+            ));
+        }
+    }
+    if let Some(n) = platform.keys().find(|n| base.contains_key(*n)) {
+        return Err(src.error(
+            &[Seg::Key("platform_joints".into()), Seg::Key(n.clone())],
+            format!(
+                "joint name `{n}` names a base joint too: give the two joints different names \
+                 (parameters, tolerances and clearances are named after them)"
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// What a machine-type loader returns.
 pub(crate) struct Parts {
     model: Model,

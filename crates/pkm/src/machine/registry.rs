@@ -234,10 +234,7 @@ impl Machine {
                 self.mechanism().actuators().len()
             ),
             Analysis::Seed004 => "seed 004's reproduction is for P3RP heads".to_string(),
-            Analysis::Clearance => "joint clearances move the centres of passive joints that are \
-                 parameters of the machine: strut machines (tripods, hexapods) have them; this \
-                 type's passive joints are not modelled by their centres yet"
-                .to_string(),
+            Analysis::Clearance => crate::accuracy::clearance::NO_PASSIVE_JOINTS.to_string(),
         };
         let m = self.mechanism();
         Error::Unsupported {

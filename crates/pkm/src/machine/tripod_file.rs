@@ -118,6 +118,13 @@ pub(super) fn build(src: &Source, f: TripodFile) -> Result<super::Parts, Error> 
             format!("a tripod has exactly 3 struts, found {}", f.struts.len()),
         ));
     }
+    // The centre leg's joint is named `leg` (its parameters `leg.x`, ...).
+    let reserved: &[&str] = if f.centre_leg.is_some() {
+        &["leg"]
+    } else {
+        &[]
+    };
+    super::distinct_joint_names(src, &f.base_joints, &f.platform_joints, reserved)?;
     let mut struts = Vec::with_capacity(3);
     for (i, s) in f.struts.iter().enumerate() {
         let p = |k: &str| vec![key("struts"), Seg::Index(i), key(k)];

@@ -64,11 +64,7 @@ impl SerialMachine {
                 let dp = d_rel.fixed_view::<3, 1>(0, 3).into_owned();
                 let dr = d_rel.fixed_view::<3, 3>(0, 0) * rot.transpose();
                 // The skew part of dR R^T is the small rotation.
-                let w = Vector3::new(
-                    0.5 * (dr[(2, 1)] - dr[(1, 2)]),
-                    0.5 * (dr[(0, 2)] - dr[(2, 0)]),
-                    0.5 * (dr[(1, 0)] - dr[(0, 1)]),
-                );
+                let w = crate::rotation::skew_vee(&dr);
                 Ok((dp, w))
             })
             .collect()

@@ -43,16 +43,19 @@ pub fn pose_error(
     qw: &[f64],
     dev: &[ChainDeviations],
 ) -> Result<(Vector3<f64>, Vector3<f64>)> {
-    let a = m.pose(qt, qw, &[])?;
-    let b = m.pose(qt, qw, dev)?;
+    Ok(error_between(&m.pose(qt, qw, &[])?, &m.pose(qt, qw, dev)?))
+}
+
+/// The error of pose `b` against `a`: `t_b - t_a` and the skew part of `R_b R_a^T`.
+/// Seed 003's blocks with angular deviations (`cos(phi + alpha)`) are not exactly
+/// orthonormal; the skew part is exact to first order and never undefined.
+pub(crate) fn error_between(
+    a: &nalgebra::Matrix4<f64>,
+    b: &nalgebra::Matrix4<f64>,
+) -> (Vector3<f64>, Vector3<f64>) {
     let dp = b.fixed_view::<3, 1>(0, 3) - a.fixed_view::<3, 1>(0, 3);
     let dr = b.fixed_view::<3, 3>(0, 0) * a.fixed_view::<3, 3>(0, 0).transpose();
-    let w = Vector3::new(
-        0.5 * (dr[(2, 1)] - dr[(1, 2)]),
-        0.5 * (dr[(0, 2)] - dr[(2, 0)]),
-        0.5 * (dr[(1, 0)] - dr[(0, 1)]),
-    );
-    Ok((dp.into_owned(), w))
+    (dp.into_owned(), crate::rotation::skew_vee(&dr))
 }
 
 pub(crate) fn apply(d: &mut [ChainDeviations], p: &Parameter, v: f64) {

@@ -269,77 +269,66 @@ fn largest_direction(regions: &[Region], g: &[Matrix3<f64>]) -> (f64, Vector3<f6
     (value, n)
 }
 
-/// Bounds of the error the clearances of `regions` allow at pose `x` of `m`: along the
-/// direction (the tool axis unless given) and as a length.
-pub fn bounds<M, const P: usize, const A: usize>(
+/// The direction of the bounds at `x`: the option's, normalised, or the tool axis.
+fn direction_at<M, const P: usize, const A: usize>(
     m: &M,
     x: &SVector<f64, P>,
-    regions: &[Region],
     opt: &ClearanceOptions,
-) -> Result<ClearanceBounds>
+) -> Result<Vector3<f64>>
 where
     M: Parametric<P, A>,
 {
-    let n = match opt.direction {
-        Some(d) if d.norm() > 1e-12 && d.iter().all(|v| v.is_finite()) => d.normalize(),
-        Some(d) => {
-            return Err(Error::InvalidInput {
-                what: "clearance direction".into(),
-                message: format!("expected a non-zero finite vector, found {d:?}"),
-            })
-        }
-        None => m.tool_pose(x)?.rotation * Vector3::z(),
-    };
-    let mut ev = m.evaluator(x)?;
-    let mut buf = Vec::with_capacity(6 * regions.len());
-    let mut solves = 0u64;
-    let g = centre_sensitivities(regions, &sensitivities(m, x)?)?;
-    let (fo, up_states) = first_order(regions, &g, &n);
-    let contributions = {
-        let mut c: Vec<JointContribution> = regions
-            .iter()
-            .zip(&g)
-            .map(|(r, gj)| {
-                let v = r.support(&(gj.transpose() * n));
-                JointContribution {
-                    joint: r.joint.name.clone(),
-                    first_order: v,
-                    share: if fo > 0.0 { v / fo } else { 0.0 },
-                }
-            })
-            .collect();
-        c.sort_by(|a, b| b.first_order.total_cmp(&a.first_order));
-        c
-    };
-    let (_, low_states) = first_order(regions, &g, &-n);
-    // The 3D length: the first-order direction of largest reach, re-solved.
-    let (fo3, n3) = largest_direction(regions, &g);
-    let (_, states3) = first_order(regions, &g, &n3);
-    let e3 = solve(&mut ev, regions, &states3, &mut buf)?;
-    solves += 1;
-    let deviation_3d = Deviation3d {
-        norm: e3.norm(),
-        vector: e3.into(),
-        first_order: fo3,
-        states: report(regions, &states3),
-    };
+    match opt.direction {
+        Some(d) if d.norm() > 1e-12 && d.iter().all(|v| v.is_finite()) => Ok(d.normalize()),
+        Some(d) => Err(Error::InvalidInput {
+            what: "clearance direction".into(),
+            message: format!("expected a non-zero finite vector, found {d:?}"),
+        }),
+        None => Ok(m.tool_pose(x)?.rotation * Vector3::z()),
+    }
+}
 
-    let (upper, lower, up_states, low_states, refined) = match opt.method {
+/// The bounds along `n`: the exact errors of the states that give them, the states,
+/// the first-order bound, whether they were refined, and the solves it took.
+struct Along {
+    upper: f64,
+    lower: f64,
+    up: Vec<JointState>,
+    low: Vec<JointState>,
+    first_order: f64,
+    refined: bool,
+    solves: u64,
+}
+
+/// The bounds along unit `n` by `opt.method`, with `g` the centre sensitivities at the
+/// evaluator's pose.
+fn along<E: Evaluate + Clone + Send + Sync>(
+    ev: &mut E,
+    regions: &[Region],
+    g: &[Matrix3<f64>],
+    n: &Vector3<f64>,
+    opt: &ClearanceOptions,
+) -> Result<Along> {
+    let mut buf = Vec::with_capacity(6 * regions.len());
+    let (fo, up_states) = first_order(regions, g, n);
+    match opt.method {
         ClearanceMethod::FirstOrder => {
+            let (_, low_states) = first_order(regions, g, &-n);
             let mut refined = false;
+            let mut solves = 0u64;
             let mut side =
                 |sign: f64, mut states: Vec<JointState>| -> Result<(f64, Vec<JointState>)> {
-                    let mut v = sign * n.dot(&solve(&mut ev, regions, &states, &mut buf)?);
+                    let mut v = sign * n.dot(&solve(ev, regions, &states, &mut buf)?);
                     solves += 1;
                     if (v - fo).abs() > opt.refine_above * fo {
                         refined = true;
                         // Re-linearise at the states and pick the maximiser again, while
                         // that gains.
                         for _ in 0..6 {
-                            let gj = centre_sensitivities_at(&mut ev, regions, &states, &mut buf)?;
+                            let gj = centre_sensitivities_at(ev, regions, &states, &mut buf)?;
                             solves += 6 * regions.len() as u64;
                             let (_, next) = first_order(regions, &gj, &(n * sign));
-                            let w = sign * n.dot(&solve(&mut ev, regions, &next, &mut buf)?);
+                            let w = sign * n.dot(&solve(ev, regions, &next, &mut buf)?);
                             solves += 1;
                             if w <= v + 1e-12 * (1.0 + v.abs()) {
                                 break;
@@ -351,7 +340,15 @@ where
                 };
             let (upper, up) = side(1.0, up_states)?;
             let (lower, low) = side(-1.0, low_states)?;
-            (upper, lower, up, low, refined)
+            Ok(Along {
+                upper,
+                lower,
+                up,
+                low,
+                first_order: fo,
+                refined,
+                solves,
+            })
         }
         ClearanceMethod::Enumeration => {
             let size = enumeration_size(regions);
@@ -372,23 +369,22 @@ where
                 });
             }
             let extremes: Vec<Vec<JointState>> = regions.iter().map(Region::extremes).collect();
-            let states_of = |mut i: u64| -> Vec<JointState> {
-                extremes
-                    .iter()
-                    .map(|e| {
-                        let k = (i % e.len() as u64) as usize;
-                        i /= e.len() as u64;
-                        e[k]
-                    })
-                    .collect()
+            let states_of = |mut i: u64, out: &mut Vec<JointState>| {
+                out.clear();
+                out.extend(extremes.iter().map(|e| {
+                    let k = (i % e.len() as u64) as usize;
+                    i /= e.len() as u64;
+                    e[k]
+                }));
             };
             let base = ev.clone();
             let (hi, lo) = (0..size)
                 .into_par_iter()
                 .map_init(
-                    || (base.clone(), Vec::new()),
-                    |(ev, buf), i| {
-                        let v = solve(ev, regions, &states_of(i), buf).map(|e| n.dot(&e));
+                    || (base.clone(), Vec::new(), Vec::new()),
+                    |(ev, buf, states), i| {
+                        states_of(i, states);
+                        let v = solve(ev, regions, states, buf).map(|e| n.dot(&e));
                         v.map(|v| ((v, i), (v, i)))
                     },
                 )
@@ -401,24 +397,93 @@ where
                         ))
                     },
                 )?;
-            solves += size;
-            (hi.0, lo.0, states_of(hi.1), states_of(lo.1), false)
+            let (mut up, mut low) = (Vec::new(), Vec::new());
+            states_of(hi.1, &mut up);
+            states_of(lo.1, &mut low);
+            Ok(Along {
+                upper: hi.0,
+                lower: lo.0,
+                up,
+                low,
+                first_order: fo,
+                refined: false,
+                solves: size,
+            })
         }
-    };
+    }
+}
+
+/// The bounds along the direction alone (`(direction, upper, lower)`, mm): what sweeps
+/// over surfaces, paths and clearances need, without the length, the shares and the
+/// reported states of [`bounds()`].
+pub fn bounds_along<M, const P: usize, const A: usize>(
+    m: &M,
+    x: &SVector<f64, P>,
+    regions: &[Region],
+    opt: &ClearanceOptions,
+) -> Result<([f64; 3], f64, f64)>
+where
+    M: Parametric<P, A>,
+{
+    let n = direction_at(m, x, opt)?;
+    let mut ev = m.evaluator(x)?;
+    let g = centre_sensitivities(regions, &sensitivities(m, x)?)?;
+    let a = along(&mut ev, regions, &g, &n, opt)?;
+    Ok((n.into(), a.upper, a.lower))
+}
+
+/// Bounds of the error the clearances of `regions` allow at pose `x` of `m`: along the
+/// direction (the tool axis unless given) and as a length.
+pub fn bounds<M, const P: usize, const A: usize>(
+    m: &M,
+    x: &SVector<f64, P>,
+    regions: &[Region],
+    opt: &ClearanceOptions,
+) -> Result<ClearanceBounds>
+where
+    M: Parametric<P, A>,
+{
+    let n = direction_at(m, x, opt)?;
+    let mut ev = m.evaluator(x)?;
+    let g = centre_sensitivities(regions, &sensitivities(m, x)?)?;
+    let a = along(&mut ev, regions, &g, &n, opt)?;
+    let fo = a.first_order;
+    let mut contributions: Vec<JointContribution> = regions
+        .iter()
+        .zip(&g)
+        .map(|(r, gj)| {
+            let v = r.support(&(gj.transpose() * n));
+            JointContribution {
+                joint: r.joint.name.clone(),
+                first_order: v,
+                share: if fo > 0.0 { v / fo } else { 0.0 },
+            }
+        })
+        .collect();
+    contributions.sort_by(|a, b| b.first_order.total_cmp(&a.first_order));
+    // The length: the first-order direction of largest reach, re-solved.
+    let (fo3, n3) = largest_direction(regions, &g);
+    let (_, states3) = first_order(regions, &g, &n3);
+    let e3 = solve(&mut ev, regions, &states3, &mut Vec::new())?;
     Ok(ClearanceBounds {
         direction: n.into(),
-        upper,
-        lower,
+        upper: a.upper,
+        lower: a.lower,
         first_order_upper: fo,
         first_order_lower: -fo,
         method: opt.method,
-        refined,
-        solves,
+        refined: a.refined,
+        solves: a.solves + 1,
         worst_joint_states: WorstStates {
-            upper: report(regions, &up_states),
-            lower: report(regions, &low_states),
+            upper: report(regions, &a.up),
+            lower: report(regions, &a.low),
         },
         contributions,
-        deviation_3d,
+        deviation_3d: Deviation3d {
+            norm: e3.norm(),
+            vector: e3.into(),
+            first_order: fo3,
+            states: report(regions, &states3),
+        },
     })
 }

@@ -30,10 +30,16 @@ use serde::Serialize;
 use crate::error::{Error, Result};
 
 pub use bounds::{
-    bounds, enumeration_size, ClearanceBounds, ClearanceMethod, ClearanceOptions, Deviation3d,
-    JointContribution, WorstStates, MAX_ENUMERATION,
+    bounds, bounds_along, enumeration_size, ClearanceBounds, ClearanceMethod, ClearanceOptions,
+    Deviation3d, JointContribution, WorstStates, MAX_ENUMERATION,
 };
 pub use sample::{clearance_monte_carlo, ClearanceMonteCarlo};
+
+/// Why a machine type cannot take clearances (the registry's `Unsupported` reason and
+/// the machine-file reader's message).
+pub(crate) const NO_PASSIVE_JOINTS: &str = "this machine type has no passive joints whose \
+     centres pkm models: clearances move the centres of passive joints that are parameters of \
+     the machine, which strut machines (tripods, hexapods) have";
 
 /// Kind of a passive joint, for its clearance.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -110,33 +116,50 @@ impl JointClearance {
     /// Checks the values: `c >= 0`, `b > 0`, a unit-normalisable axis for revolute and
     /// universal joints, finite lever.
     pub fn validate(&self) -> Result<()> {
-        let bad = |message: String| Error::InvalidInput {
+        self.check().map_err(|(_, message)| Error::InvalidInput {
             what: format!("clearance of joint `{}`", self.joint),
             message,
-        };
+        })
+    }
+
+    /// [`JointClearance::validate`] naming the field at fault (`diametral`,
+    /// `bearing_length`, `lever`, `axis`) with the message, for file readers.
+    pub fn check(&self) -> std::result::Result<(), (&'static str, String)> {
         if !(self.diametral >= 0.0 && self.diametral.is_finite()) {
-            return Err(bad(format!(
-                "expected a diametral clearance >= 0 mm, found {}",
-                self.diametral
-            )));
+            return Err((
+                "diametral",
+                format!(
+                    "expected a diametral clearance >= 0 mm, found {}",
+                    self.diametral
+                ),
+            ));
         }
         if let Some(b) = self.bearing_length {
             if !(b > 0.0 && b.is_finite()) {
-                return Err(bad(format!("expected a bearing length > 0 mm, found {b}")));
+                return Err((
+                    "bearing_length",
+                    format!("expected a bearing length > 0 mm, found {b}"),
+                ));
             }
         }
         if !self.lever.is_finite() {
-            return Err(bad(format!(
-                "expected a finite lever, found {}",
-                self.lever
-            )));
+            return Err((
+                "lever",
+                format!("expected a finite lever, found {}", self.lever),
+            ));
         }
         if self.kind != JointType::Spherical {
             match self.axis {
                 Some(a) if a.norm() > 1e-9 && a.iter().all(|v| v.is_finite()) => {}
-                Some(a) => return Err(bad(format!("expected a non-zero axis, found {a:?}"))),
+                Some(a) => {
+                    return Err((
+                        "axis",
+                        format!("expected a non-zero axis, found {:?}", a.as_slice()),
+                    ))
+                }
                 None => {
-                    return Err(bad(
+                    return Err((
+                        "axis",
                         "a revolute or universal joint needs its `axis` (in its body's frame)"
                             .into(),
                     ))

@@ -6,7 +6,7 @@ use nalgebra::{SVector, UnitQuaternion, Vector3};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::{bounds, ClearanceOptions, Region};
+use super::{bounds_along, ClearanceOptions, Region};
 use crate::accuracy::Parametric;
 use crate::error::{Error, Result};
 use crate::pose::Pose;
@@ -85,6 +85,17 @@ pub fn pose_on_surface(home: &Pose, point: &Vector3<f64>, n: &Vector3<f64>) -> P
     Pose::from_parts((*point).into(), turn * home.rotation)
 }
 
+/// Checks a number of heights of a sweep: 2 to 100000.
+pub fn check_heights(heights: usize) -> Result<()> {
+    if !(2..=100_000).contains(&heights) {
+        return Err(Error::InvalidInput {
+            what: "surface heights".into(),
+            message: format!("expected 2 to 100000 heights, got {heights}"),
+        });
+    }
+    Ok(())
+}
+
 /// Bounds along the normal at `heights` heights from `z = 0` (the equator) to `z = R`,
 /// each point solved independently (rayon).
 pub fn hemisphere_sweep<M, const P: usize, const A: usize>(
@@ -98,12 +109,7 @@ where
     M: Parametric<P, A>,
 {
     surface.validate()?;
-    if !(2..=100_000).contains(&heights) {
-        return Err(Error::InvalidInput {
-            what: "surface heights".into(),
-            message: format!("expected 2 to 100000 heights, got {heights}"),
-        });
-    }
+    check_heights(heights)?;
     let home = m.tool_pose(&m.home())?;
     (0..heights)
         .into_par_iter()
@@ -121,7 +127,7 @@ where
             match place(m, &home, &p, &n) {
                 Err(e) => row.unreachable = Some(e.to_string()),
                 Ok(x) => {
-                    let b = bounds(
+                    let (_, upper, lower) = bounds_along(
                         m,
                         &x,
                         regions,
@@ -130,7 +136,7 @@ where
                             ..*options
                         },
                     )?;
-                    (row.upper, row.lower) = (Some(b.upper), Some(b.lower));
+                    (row.upper, row.lower) = (Some(upper), Some(lower));
                 }
             }
             Ok(row)
