@@ -29,6 +29,7 @@ pub mod analysis;
 pub mod dynamic;
 pub mod error;
 pub mod hexapod;
+pub mod hybrid_am;
 pub mod identify;
 pub mod legs;
 pub mod limits;

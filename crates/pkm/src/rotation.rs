@@ -154,6 +154,17 @@ pub fn rpy_matrix(a: f64, b: f64, c: f64) -> Matrix3<f64> {
     )
 }
 
+/// The angle `a` (rad) wrapped into `(-pi, pi]`.
+pub fn wrap_angle(a: f64) -> f64 {
+    let pi = std::f64::consts::PI;
+    let w = (a + pi).rem_euclid(2.0 * pi) - pi;
+    if w <= -pi {
+        w + 2.0 * pi
+    } else {
+        w
+    }
+}
+
 /// Right-hand rotation about the X axis.
 pub fn rx(a: f64) -> Matrix3<f64> {
     let (s, c) = a.sin_cos();

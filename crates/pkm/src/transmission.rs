@@ -38,7 +38,8 @@ pub struct Transmission {
     pub moment: Option<f64>,
     /// Smallest singular value of the scaled driven Jacobian (0 at a singularity).
     pub distance_to_singularity: f64,
-    /// Condition number of the scaled driven Jacobian.
+    /// Condition number of the mechanism ([`Mechanism::condition`]: the scaled driven
+    /// Jacobian's, unless the machine defines its own).
     pub condition: f64,
     /// The characteristic length the angle columns are scaled by (mm).
     pub characteristic_length: f64,
@@ -89,11 +90,8 @@ where
         force,
         moment,
         distance_to_singularity: smin,
-        condition: if smin > 0.0 {
-            smax_all / smin
-        } else {
-            f64::INFINITY
-        },
+        // The mechanism's own measure (a machine with a serial table axis leaves it out).
+        condition: m.condition(x).unwrap_or(f64::INFINITY),
         characteristic_length: lc,
     })
 }

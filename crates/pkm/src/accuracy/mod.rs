@@ -27,7 +27,7 @@ pub mod budget;
 pub mod clearance;
 pub mod map;
 pub mod monte_carlo;
-mod rebuild;
+pub(crate) mod rebuild;
 mod serial;
 pub use budget::tolerances_of_kind;
 

@@ -5,7 +5,7 @@
 
 use nalgebra::{DMatrix, SVector, Vector3};
 
-use super::{Evaluate, Parameter, ParameterKind, Parametric, PoseError};
+use super::{Evaluate, Parameter, ParameterKind, PoseError};
 use crate::error::{Error, Result};
 use crate::identify::Identifiable;
 use crate::mechanism::{Mechanism, PoseSpace};
@@ -121,30 +121,38 @@ pub(crate) fn rebuild_evaluator<'a, M: Rebuild<P, A>, const P: usize, const A: u
 /// `fn(&M, &SVector<f64, P>) -> Result<Vec<PoseError>>` giving its sensitivities.
 macro_rules! parametric_by_rebuild {
     ($t:ty, $p:literal, $a:literal) => {
-        parametric_by_rebuild!($t, $p, $a, |_m, _x| None);
+        $crate::accuracy::rebuild::parametric_by_rebuild!($t, $p, $a, |_m, _x| None);
     };
     ($t:ty, $p:literal, $a:literal, $analytic:expr) => {
-        impl Parametric<$p, $a> for $t {
-            type Evaluator<'a> = RebuildEvaluator<'a, $t, $p, $a>;
-            fn parameters(&self) -> Vec<Parameter> {
-                rebuild_parameters(self)
+        impl $crate::accuracy::Parametric<$p, $a> for $t {
+            type Evaluator<'a> = $crate::accuracy::rebuild::RebuildEvaluator<'a, $t, $p, $a>;
+            fn parameters(&self) -> Vec<$crate::accuracy::Parameter> {
+                $crate::accuracy::rebuild::rebuild_parameters(self)
             }
-            fn evaluator(&self, x: &SVector<f64, $p>) -> Result<Self::Evaluator<'_>> {
-                rebuild_evaluator(self, x)
+            fn evaluator(
+                &self,
+                x: &nalgebra::SVector<f64, $p>,
+            ) -> $crate::error::Result<Self::Evaluator<'_>> {
+                $crate::accuracy::rebuild::rebuild_evaluator(self, x)
             }
             fn analytic_sensitivities(
                 &self,
-                x: &SVector<f64, $p>,
-            ) -> Option<Result<Vec<PoseError>>> {
-                let f: fn(&$t, &SVector<f64, $p>) -> Option<Result<Vec<PoseError>>> = $analytic;
+                x: &nalgebra::SVector<f64, $p>,
+            ) -> Option<$crate::error::Result<Vec<$crate::accuracy::PoseError>>> {
+                let f: fn(
+                    &$t,
+                    &nalgebra::SVector<f64, $p>,
+                )
+                    -> Option<$crate::error::Result<Vec<$crate::accuracy::PoseError>>> = $analytic;
                 f(self, x)
             }
-            fn passive_joints(&self) -> Vec<super::clearance::PassiveJoint> {
-                Rebuild::passive_joints(self)
+            fn passive_joints(&self) -> Vec<$crate::accuracy::clearance::PassiveJoint> {
+                $crate::accuracy::Rebuild::passive_joints(self)
             }
         }
     };
 }
+pub(crate) use parametric_by_rebuild;
 
 // ---- strut machines (hexapod, translational tripod): their identifiable geometry ----
 
@@ -212,12 +220,26 @@ fn strut_joints(base: &[&str], platform: &[&str]) -> Vec<super::clearance::Passi
     out
 }
 
-/// Analytic sensitivities of a strut machine (implicit function theorem): the readings
-/// held, `q(x'; g) = q + dz`, so `dx/d(g, z) = -J_d^-1 [dq/dg, -I]`; the tool point
-/// moves by `dx[X, Y, Z]` and turns by `E(A, B, C) dx[A, B, C]`.
+/// Analytic sensitivities of a strut machine (implicit function theorem, see
+/// [`implicit_sensitivities`]).
 fn strut_sensitivities<M: Identifiable<6, A>, const A: usize>(
     m: &M,
     x: &SVector<f64, 6>,
+) -> Result<Vec<PoseError>> {
+    let mut jg = DMatrix::zeros(A, m.geometry().len());
+    m.inverse_with_geometry_jacobian(x, &mut jg)?;
+    implicit_sensitivities(m, x, &jg)
+}
+
+/// Sensitivities of a spatial machine's tool pose to its geometry and drives by the
+/// implicit function theorem: the readings held, `q(x'; g) = q + dz`, so
+/// `dx/d(g, z) = -J_d^-1 [dq/dg, -I]` with `jg = dq/dg` (`A x ng`, at fixed `x`); the
+/// tool point moves by `dx[X, Y, Z]` and turns by `E(A, B, C) dx[A, B, C]` (held
+/// coordinates stay).
+pub(crate) fn implicit_sensitivities<M: Mechanism<6, A>, const A: usize>(
+    m: &M,
+    x: &SVector<f64, 6>,
+    jg: &DMatrix<f64>,
 ) -> Result<Vec<PoseError>> {
     if m.pose_space() != PoseSpace::Spatial {
         return Err(Error::InvalidInput {
@@ -225,15 +247,13 @@ fn strut_sensitivities<M: Identifiable<6, A>, const A: usize>(
             message: "needs a spatial machine (pose X, Y, Z, A, B, C)".into(),
         });
     }
-    let ng = m.geometry().len();
+    let ng = jg.ncols();
     let n = ng + A;
-    let mut jg = DMatrix::zeros(A, ng);
-    m.inverse_with_geometry_jacobian(x, &mut jg)?;
     let j = m.jacobian(x)?;
     let driven = m.driven();
     let jd = DMatrix::from_fn(A, A, |r, c| j[(r, driven[c])]);
     let mut rhs = DMatrix::zeros(A, n);
-    rhs.view_mut((0, 0), (A, ng)).copy_from(&jg);
+    rhs.view_mut((0, 0), (A, ng)).copy_from(jg);
     for k in 0..A {
         rhs[(k, ng + k)] = -1.0;
     }

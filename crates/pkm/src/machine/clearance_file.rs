@@ -1,5 +1,6 @@
 //! `[[clearance]]` entries of a machine file, for every machine type with passive
-//! joints: which joints (by name, or the classes `base`, `platform`, `all`), their
+//! joints: which joints (by name, or the classes `base`, `platform`, `all`; the
+//! seed-002 machine's `carriage` joints instead of `base`), their
 //! type, diametral clearance, bearing length, axis and lever (mm).
 //!
 //! ```toml
@@ -39,6 +40,18 @@ struct ClearanceOnly {
     clearance: Vec<ClearanceEntry>,
 }
 
+/// The classes of `joints`: the bodies that carry them (`base`, `platform`,
+/// `carriage`), in order of first appearance.
+fn classes(joints: &[PassiveJoint]) -> Vec<&str> {
+    let mut v: Vec<&str> = Vec::new();
+    for j in joints {
+        if !v.contains(&j.body.as_str()) {
+            v.push(&j.body);
+        }
+    }
+    v
+}
+
 /// The file's `[[clearance]]` entries resolved against the machine's passive `joints`;
 /// errors name the file, line and field.
 pub(crate) fn clearances(src: &Source, joints: &[PassiveJoint]) -> Result<Vec<JointClearance>> {
@@ -64,7 +77,10 @@ pub(crate) fn clearances(src: &Source, joints: &[PassiveJoint]) -> Result<Vec<Jo
         if e.joints.is_empty() {
             return Err(src.error(
                 &at("joints"),
-                "expected joint names or a class (base, platform, all)",
+                format!(
+                    "expected joint names or a class ({}, all)",
+                    classes(joints).join(", ")
+                ),
             ));
         }
         let mut names: Vec<&str> = Vec::new();
@@ -78,7 +94,8 @@ pub(crate) fn clearances(src: &Source, joints: &[PassiveJoint]) -> Result<Vec<Jo
                 return Err(src.error(
                     &at("joints"),
                     format!(
-                        "unknown joint `{n}`, expected base, platform, all or one of {}",
+                        "unknown joint `{n}`, expected {}, all or one of {}",
+                        classes(joints).join(", "),
                         joints
                             .iter()
                             .map(|j| j.name.as_str())

@@ -84,33 +84,6 @@ fn key(k: &str) -> Seg {
     Seg::Key(k.into())
 }
 
-fn cone(
-    src: &Source,
-    axis: Option<[f64; 3]>,
-    default_axis: [f64; 3],
-    angle: Option<f64>,
-    which: &str,
-) -> Result<Option<JointCone>, Error> {
-    let Some(a) = angle else { return Ok(None) };
-    if !(a > 0.0 && a <= 180.0) {
-        return Err(src.error(
-            &[key("limits"), key(&format!("{which}_joint_max_angle"))],
-            format!("expected an angle in (0, 180] deg, found {a}"),
-        ));
-    }
-    let ax = v3(axis.unwrap_or(default_axis));
-    if ax.norm() < 1e-12 {
-        return Err(src.error(
-            &[key("limits"), key(&format!("{which}_joint_axis"))],
-            "expected a non-zero vector",
-        ));
-    }
-    Ok(Some(JointCone {
-        axis: ax.normalize(),
-        max_angle: a.to_radians(),
-    }))
-}
-
 pub(super) fn build(src: &Source, f: HexapodFile) -> Result<super::Parts, Error> {
     if f.struts.len() != 6 {
         return Err(src.error(
@@ -119,14 +92,14 @@ pub(super) fn build(src: &Source, f: HexapodFile) -> Result<super::Parts, Error>
         ));
     }
     let lim = &f.limits;
-    let base_cone = cone(
+    let base_cone = super::joint_cone(
         src,
         lim.base_joint_axis,
         [0.0, 0.0, 1.0],
         lim.base_joint_max_angle,
         "base",
     )?;
-    let plat_cone = cone(
+    let plat_cone = super::joint_cone(
         src,
         lim.platform_joint_axis,
         [0.0, 0.0, -1.0],

@@ -6,6 +6,7 @@
 
 mod clearance_file;
 mod hexapod_file;
+mod hybrid_am_file;
 mod p3rp_file;
 mod reference;
 mod registry;
@@ -73,6 +74,53 @@ pub(crate) fn positive_opt(
         }
         _ => Ok(()),
     }
+}
+
+/// A joint's cone from `[limits] {which}_joint_axis` (default `default_axis`) and
+/// `{which}_joint_max_angle` (deg): none without an angle; an axis without one is an
+/// error.
+pub(crate) fn joint_cone(
+    src: &source::Source,
+    axis: Option<[f64; 3]>,
+    default_axis: [f64; 3],
+    angle: Option<f64>,
+    which: &str,
+) -> Result<Option<crate::hexapod::JointCone>> {
+    let Some(a) = angle else {
+        if axis.is_some() {
+            return Err(src.error(
+                &[
+                    source::Seg::Key("limits".into()),
+                    source::Seg::Key(format!("{which}_joint_axis")),
+                ],
+                format!("a joint axis needs `limits.{which}_joint_max_angle`"),
+            ));
+        }
+        return Ok(None);
+    };
+    if !(a > 0.0 && a <= 180.0) {
+        return Err(src.error(
+            &[
+                source::Seg::Key("limits".into()),
+                source::Seg::Key(format!("{which}_joint_max_angle")),
+            ],
+            format!("expected an angle in (0, 180] deg, found {a}"),
+        ));
+    }
+    let ax = v3(axis.unwrap_or(default_axis));
+    if !(ax.norm() > 1e-12) {
+        return Err(src.error(
+            &[
+                source::Seg::Key("limits".into()),
+                source::Seg::Key(format!("{which}_joint_axis")),
+            ],
+            "expected a non-zero vector",
+        ));
+    }
+    Ok(Some(crate::hexapod::JointCone {
+        axis: ax.normalize(),
+        max_angle: a.to_radians(),
+    }))
 }
 
 /// One `[[struts]]` entry (tripods and hexapods).
@@ -148,8 +196,21 @@ pub(crate) fn distinct_joint_names(
     platform: &Joints,
     reserved: &[&str],
 ) -> Result<()> {
+    distinct_joint_names_in(src, ("base_joints", "base", base), platform, reserved)
+}
+
+/// [`distinct_joint_names`] with the first table named `first.0`, its joints called
+/// `first.1` joints (a machine whose joints on the fixed side are not on its base:
+/// `carriage_joints`, `carriage`).
+pub(crate) fn distinct_joint_names_in(
+    src: &source::Source,
+    first: (&str, &str, &Joints),
+    platform: &Joints,
+    reserved: &[&str],
+) -> Result<()> {
     use source::Seg;
-    for (table, names) in [("base_joints", base), ("platform_joints", platform)] {
+    let (first_table, what, base) = first;
+    for (table, names) in [(first_table, base), ("platform_joints", platform)] {
         if let Some(n) = names.keys().find(|n| reserved.contains(&n.as_str())) {
             return Err(src.error(
                 &[Seg::Key(table.into()), Seg::Key(n.clone())],
@@ -161,7 +222,7 @@ pub(crate) fn distinct_joint_names(
         return Err(src.error(
             &[Seg::Key("platform_joints".into()), Seg::Key(n.clone())],
             format!(
-                "joint name `{n}` names a base joint too: give the two joints different names \
+                "joint name `{n}` names a {what} joint too: give the two joints different names \
                  (parameters, tolerances and clearances are named after them)"
             ),
         ));

@@ -43,6 +43,11 @@ pub const FILE_TYPES: &[FileType] = &[
         load: |s| super::p3rp_file::build(s, s.deserialize()?),
     },
     FileType {
+        name: "hybrid-am",
+        summary: "seed 002's hybrid additive machine: four carriages on vertical guides, struts of fixed length, a platform tilting about Y, a rotary table",
+        load: |s| super::hybrid_am_file::build(s, s.deserialize()?),
+    },
+    FileType {
         name: "serial",
         summary: "serial chains with seed 003's primary deviations: machine tools (tool and workpiece chains), robots from DH tables",
         load: |s| super::serial_file::build(s, s.deserialize()?),
@@ -77,6 +82,8 @@ pub enum Model {
     P3rpHead(Box<crate::p3rp::P3rpHead>),
     /// `type = "p3rp"` with `[table]`: the 4-axis hybrid machine of seed 004.
     P3rpHybrid(Box<crate::p3rp::HybridMachine>),
+    /// `type = "hybrid-am"`: the hybrid additive machine of seed 002.
+    HybridAm(Box<crate::hybrid_am::HybridAm>),
     /// `type = "serial"`: tool and workpiece chains with primary deviations (seed 003).
     Serial(Box<crate::serial::SerialModel>),
 }
@@ -99,6 +106,10 @@ macro_rules! dispatch {
                 let $m = b.as_ref();
                 $body
             }
+            Model::HybridAm(b) => {
+                let $m = b.as_ref();
+                $body
+            }
             Model::Serial(s) => crate::with_serial!(&s.mechanism, $m => $body),
         }
     };
@@ -109,6 +120,7 @@ crate::impl_dyn_mechanism!(CentreLegTripod, 3, 3);
 crate::impl_dyn_mechanism!(crate::hexapod::Hexapod, 6, 6);
 crate::impl_dyn_mechanism!(crate::p3rp::P3rpHead, 2, 2);
 crate::impl_dyn_mechanism!(crate::p3rp::HybridMachine, 6, 4);
+crate::impl_dyn_mechanism!(crate::hybrid_am::HybridAm, 6, 5);
 crate::impl_dyn_mechanism!(crate::serial::mechanism::SerialMechanism<1>, 1, 1);
 crate::impl_dyn_mechanism!(crate::serial::mechanism::SerialMechanism<2>, 2, 2);
 crate::impl_dyn_mechanism!(crate::serial::mechanism::SerialMechanism<3>, 3, 3);

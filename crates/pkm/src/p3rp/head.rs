@@ -80,14 +80,7 @@ pub struct HeadGeometry {
     pub branch: Branch,
 }
 
-fn wrap(a: f64) -> f64 {
-    let a = (a + PI).rem_euclid(2.0 * PI) - PI;
-    if a <= -PI {
-        a + 2.0 * PI
-    } else {
-        a
-    }
-}
+use crate::rotation::wrap_angle as wrap;
 
 impl HeadGeometry {
     /// `s = e + l1 sin psi` (horizontal reach of the rod) and `h = sqrt(l2^2 - s^2)`

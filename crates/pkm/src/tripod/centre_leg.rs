@@ -1,5 +1,3 @@
-use std::f64::consts::PI;
-
 use nalgebra::{Matrix3, SMatrix, Vector3};
 
 use super::geometry::TripodGeometry;
@@ -52,13 +50,7 @@ pub struct CentreLegTripod {
     coordinates: [Coordinate; 3],
 }
 
-fn wrap(a: f64) -> f64 {
-    let mut a = (a + PI).rem_euclid(2.0 * PI) - PI;
-    if a <= -PI {
-        a += 2.0 * PI;
-    }
-    a
-}
+use crate::rotation::wrap_angle as wrap;
 
 impl CentreLegTripod {
     /// New centre-leg tripod.

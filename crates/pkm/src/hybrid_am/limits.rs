@@ -1,0 +1,101 @@
+//! The limits of the seed-002 machine: carriage strokes, the table's range, the held
+//! angle A, the platform tilt, the joints' cones and strut interference.
+
+use nalgebra::{SVector, Vector3, Vector6};
+
+use super::HybridAm;
+use crate::hexapod::{segment_distance, JointCone};
+use crate::limits::{LimitKind, Range, Side, Violation};
+use crate::units::Quantity;
+
+/// Pushes every violated limit at pose `x` with readings `q` onto `out`; allocates only
+/// for a violation.
+pub(super) fn check(m: &HybridAm, x: &Vector6<f64>, q: &SVector<f64, 5>, out: &mut Vec<Violation>) {
+    for (i, a) in m.actuators.iter().enumerate() {
+        let (what, quantity) = if i < 4 {
+            ("carriage", Quantity::Length)
+        } else {
+            ("table", Quantity::Angle)
+        };
+        a.range.check(
+            || format!("{what} {} position", a.name),
+            LimitKind::ActuatorPosition,
+            quantity,
+            q[i],
+            out,
+        );
+    }
+    Range { min: 0.0, max: 0.0 }.check(
+        || "nozzle angle A (the platform tilts about Y only)".into(),
+        LimitKind::Tilt,
+        Quantity::Angle,
+        x[3],
+        out,
+    );
+    let pl = m.placement(x);
+    if let Some(r) = &m.tilt {
+        r.check(
+            || "platform tilt (B minus the nozzle's tilt on the platform)".into(),
+            LimitKind::Tilt,
+            Quantity::Angle,
+            pl.beta,
+            out,
+        );
+    }
+    let s = m.struts(&pl, q);
+    let c: [Vector3<f64>; 4] = std::array::from_fn(|i| m.carriage_joint(i, q[i]));
+    for (leg, si) in m.legs.iter().zip(&s) {
+        let n = si / si.norm().max(1e-300);
+        if let Some(cn) = &m.carriage_cone {
+            cone_check(cn, n.dot(&cn.axis), out, || {
+                format!(
+                    "carriage joint {} angle (strut {})",
+                    leg.carriage_name, leg.actuator.name
+                )
+            });
+        }
+        if let Some(cn) = &m.platform_cone {
+            cone_check(cn, -n.dot(&(pl.rotation * cn.axis)), out, || {
+                format!(
+                    "platform joint {} angle (strut {})",
+                    leg.platform_name, leg.actuator.name
+                )
+            });
+        }
+    }
+    if let Some(dia) = m.strut_diameter {
+        for i in 0..4 {
+            for k in i + 1..4 {
+                let d = segment_distance(&c[i], &pl.joints[i], &c[k], &pl.joints[k]);
+                if d < dia {
+                    out.push(Violation::new(
+                        format!(
+                            "struts {} and {} distance",
+                            m.legs[i].actuator.name, m.legs[k].actuator.name
+                        ),
+                        LimitKind::StrutInterference,
+                        Side::Min,
+                        Quantity::Length,
+                        d,
+                        dia,
+                    ));
+                }
+            }
+        }
+    }
+}
+
+/// Pushes a joint-angle violation when `cos`, the cosine of the strut's angle from the
+/// cone's axis, is below the cone's.
+fn cone_check(cn: &JointCone, cos: f64, out: &mut Vec<Violation>, name: impl FnOnce() -> String) {
+    if cos < cn.max_angle.cos() {
+        out.push(Violation::new(
+            name(),
+            LimitKind::JointAngle,
+            Side::Max,
+            Quantity::Angle,
+            cos.clamp(-1.0, 1.0).acos(),
+            cn.max_angle,
+        ));
+    }
+}

@@ -1,0 +1,500 @@
+//! The hybrid additive-manufacturing machine of seed 002 (Kursk group, "parametric
+//! synthesis of additive shaping equipment with a hybrid layout"; restated in
+//! `../shared/spec/03-hybrid-am-clearance.md`, pkm's choices in `docs/seed-002.md`).
+//!
+//! Four carriages move along vertical guides (readings `q1..q4`); each carries a joint
+//! `c_i = g_i + q_i e_z` (`g_i`: the joint centre at reading 0, base frame). A strut of
+//! fixed length `L_i` joins it to a joint `rho_i` of the moving platform (platform
+//! frame), which carries the extruder: nozzle tip `t` and nozzle axis `Ry(gamma) e_z`
+//! (platform frame). The part sits on a rotary table (reading `C`).
+//!
+//! **The "vector of zero length".** The paper's constraint system is the four strut
+//! equations `|c_i(q_i) - T_p rho_i| = L_i` plus one equation with "a vector of zero
+//! length" that it does not print. pkm takes it as `R_p e_y - e_y = 0`: the platform
+//! keeps its Y axis parallel to the base's, as a delta robot's parallelogram legs keep
+//! their rungs parallel (one strut built as a parallelogram with its rungs along Y does
+//! it). That leaves the platform four freedoms, `X, Y, Z` and the tilt `beta` about Y,
+//! `R_p = Ry(beta)`, which the four readings determine, and the tilt is what lets the
+//! nozzle follow the surface normal while the table turns the part so that the normal
+//! lies in the base XZ plane.
+//!
+//! **Pose coordinates** are those of the nozzle relative to the part (the part frame
+//! turns with the table; its origin is the table centre `c_t`, its Z axis the table
+//! axis): tool tip `X, Y, Z`, and `A, B, C` with the tool frame `Rz(C) Ry(B) Rx(A)`.
+//! The machine reaches `A = 0` only (a held coordinate, checked as a limit); `B` is the
+//! nozzle's tilt from the table axis, `C` the table reading (valued as the tool's turn
+//! relative to the part, as CNC axes are: the table itself turns by `-C`). Then
+//!
+//! ```text
+//! beta = B - gamma,   p_b = c_t + Rz(-C) p,   P_i = p_b + Ry(beta) (rho_i - t),
+//! q_i = d_z + sqrt(L_i^2 - d_x^2 - d_y^2)  with d = P_i - g_i,   q5 = C
+//! ```
+//!
+//! (the carriage above its platform joint: struts hang from the carriages).
+//!
+//! **Singularities.** `dq_i = s_i . dP_i / s_iz` with `s_i = P_i - c_i`: the inverse is
+//! singular where a strut is horizontal (`s_iz = 0`). The forward problem (four
+//! unknowns `O, beta` from four readings) has the Jacobian with rows
+//! `[s_i^T, e_y . (r_i x s_i)]`, `r_i = Ry(beta) rho_i`; it is singular where those
+//! rows are dependent. A layout symmetric in X and Y (a rectangle of guides, the
+//! platform joints at the same `|x|`) is singular at `beta = 0`: the X column and the
+//! tilt column are then proportional. The example's platform joints form a trapezoid
+//! (see `docs/seed-002.md`). Both singularities make the Jacobian `dq/dx` singular,
+//! so [`Mechanism::condition`] reports them.
+
+mod accuracy;
+mod forward;
+mod limits;
+
+use nalgebra::{Matrix3, SMatrix, SVector, Vector3, Vector6};
+
+use crate::error::{Error, Result};
+use crate::hexapod::JointCone;
+use crate::limits::{Range, Violation};
+use crate::mechanism::{
+    spatial_coordinates, Actuator, ActuatorMotion, Coordinate, LinkKind, Mechanism, PointRole,
+    PoseSpace, Skeleton,
+};
+use crate::pose::{rotation_matrix, Pose};
+use crate::rotation::{angle_between, ry, rz};
+
+/// One leg: a carriage on its vertical guide, its joint, the strut, the platform joint.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Leg {
+    /// The carriage's drive (name, stroke, rate limits); its reading `q_i` (mm).
+    pub actuator: Actuator,
+    /// Name of the carriage joint (`C1`).
+    pub carriage_name: String,
+    /// Name of the platform joint (`P1`).
+    pub platform_name: String,
+    /// Carriage joint centre at reading 0 (base frame, mm); the guide is vertical.
+    pub guide: Vector3<f64>,
+    /// Platform joint centre (platform frame, mm).
+    pub platform: Vector3<f64>,
+    /// Strut length `L_i` (mm).
+    pub length: f64,
+}
+
+/// The platform and legs at one pose.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Placement {
+    /// Platform tilt `beta` about Y (rad).
+    pub beta: f64,
+    /// Platform rotation `Ry(beta)`.
+    pub rotation: Matrix3<f64>,
+    /// The table's turn `Rz(-C)` (part frame to base frame).
+    pub table: Matrix3<f64>,
+    /// Tool tip in the base frame (mm).
+    pub tip: Vector3<f64>,
+    /// Platform joint centres in the base frame (mm).
+    pub joints: [Vector3<f64>; 4],
+}
+
+/// The machine of seed 002: four carriages on vertical guides, fixed struts, a platform
+/// that keeps its Y axis, and a rotary table (see the module documentation).
+#[derive(Debug, Clone, PartialEq)]
+pub struct HybridAm {
+    /// Machine name.
+    pub name: String,
+    /// The four legs.
+    pub legs: [Leg; 4],
+    /// Nozzle tip in the platform frame (mm).
+    pub tool: Vector3<f64>,
+    /// Tilt `gamma` of the nozzle axis about the platform's Y axis (rad): the nozzle
+    /// axis is `Ry(gamma) e_z` in the platform frame.
+    pub tool_tilt: f64,
+    /// Table centre `c_t`: the part frame's origin (base frame, mm); the table axis is
+    /// vertical.
+    pub table: Vector3<f64>,
+    /// Range of the platform tilt `beta` (rad), if limited.
+    pub tilt: Option<Range>,
+    /// Cone of the carriage joints (base frame axis), if limited.
+    pub carriage_cone: Option<JointCone>,
+    /// Cone of the platform joints (platform frame axis), if limited.
+    pub platform_cone: Option<JointCone>,
+    /// Strut diameter for strut-strut interference (mm), if checked.
+    pub strut_diameter: Option<f64>,
+    /// Home pose (X, Y, Z mm; A, B, C rad).
+    pub home: Vector6<f64>,
+    actuators: [Actuator; 5],
+    coordinates: [Coordinate; 6],
+    characteristic_length: f64,
+}
+
+/// The four driven coordinates and the table: `X, Y, Z, B, C`.
+const DRIVEN: [usize; 5] = [0, 1, 2, 4, 5];
+
+impl HybridAm {
+    /// Assembles the machine; `table` is the table's drive (`C`, rad).
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        name: String,
+        legs: [Leg; 4],
+        tool: Vector3<f64>,
+        tool_tilt: f64,
+        table_centre: Vector3<f64>,
+        table: Actuator,
+        home: Vector6<f64>,
+    ) -> Self {
+        let actuators = [
+            legs[0].actuator.clone(),
+            legs[1].actuator.clone(),
+            legs[2].actuator.clone(),
+            legs[3].actuator.clone(),
+            table,
+        ];
+        let mut m = HybridAm {
+            name,
+            legs,
+            tool,
+            tool_tilt,
+            table: table_centre,
+            tilt: None,
+            carriage_cone: None,
+            platform_cone: None,
+            strut_diameter: None,
+            home,
+            actuators,
+            coordinates: spatial_coordinates(),
+            characteristic_length: 1.0,
+        };
+        m.derive();
+        m
+    }
+
+    /// What the machine derives from its geometry: the characteristic length (mean
+    /// distance of the platform joints from the nozzle tip).
+    fn derive(&mut self) {
+        self.characteristic_length = (self
+            .legs
+            .iter()
+            .map(|l| (l.platform - self.tool).norm())
+            .sum::<f64>()
+            / 4.0)
+            .max(1e-9);
+    }
+
+    /// The platform and its joints at pose `x` (module documentation).
+    #[inline]
+    pub fn placement(&self, x: &SVector<f64, 6>) -> Placement {
+        let beta = x[4] - self.tool_tilt;
+        let rotation = ry(beta);
+        let table = rz(-x[5]);
+        let tip = self.table + table * Vector3::new(x[0], x[1], x[2]);
+        let joints = std::array::from_fn(|i| tip + rotation * (self.legs[i].platform - self.tool));
+        Placement {
+            beta,
+            rotation,
+            table,
+            tip,
+            joints,
+        }
+    }
+
+    /// Carriage reading of leg `i` with its platform joint at `p` (base frame): the
+    /// carriage above the joint, `q = d_z + sqrt(L^2 - d_x^2 - d_y^2)`, `d = p - g_i`.
+    #[inline]
+    pub fn carriage(&self, i: usize, p: &Vector3<f64>) -> Result<f64> {
+        let leg = &self.legs[i];
+        let d = p - leg.guide;
+        let h2 = leg.length * leg.length - d.x * d.x - d.y * d.y;
+        if !(h2 >= 0.0) {
+            let reach = d.x.hypot(d.y);
+            return Err(Error::NotAttainable {
+                reason: format!(
+                    "strut {} (L = {:.3} mm) cannot reach platform joint {}: the joint is \
+                     {reach:.3} mm from its guide, {:.3} mm beyond the strut's length",
+                    leg.actuator.name,
+                    leg.length,
+                    leg.platform_name,
+                    reach - leg.length
+                ),
+            });
+        }
+        Ok(d.z + h2.sqrt())
+    }
+
+    /// Carriage joint centre of leg `i` at reading `q` (base frame).
+    #[inline]
+    pub fn carriage_joint(&self, i: usize, q: f64) -> Vector3<f64> {
+        self.legs[i].guide + Vector3::new(0.0, 0.0, q)
+    }
+
+    /// Strut vectors `s_i = P_i - c_i` (carriage joint to platform joint) at a
+    /// placement with readings `q`.
+    #[inline]
+    fn struts(&self, pl: &Placement, q: &SVector<f64, 5>) -> [Vector3<f64>; 4] {
+        std::array::from_fn(|i| pl.joints[i] - self.carriage_joint(i, q[i]))
+    }
+
+    /// `s_i / s_iz`, or the inverse singularity (a horizontal strut).
+    #[inline]
+    fn rate_vectors(&self, s: &[Vector3<f64>; 4]) -> Result<[Vector3<f64>; 4]> {
+        let mut k = [Vector3::zeros(); 4];
+        for i in 0..4 {
+            if s[i].z.abs() <= 1e-9 * self.legs[i].length {
+                return Err(Error::Singular {
+                    what: format!(
+                        "strut {} is horizontal (inverse singularity)",
+                        self.legs[i].actuator.name
+                    ),
+                    rcond: 0.0,
+                });
+            }
+            k[i] = s[i] / s[i].z;
+        }
+        Ok(k)
+    }
+
+    /// Pose coordinates `(B, C)` whose tool frame `Rz(C) Ry(B)` is `r`, preferring the
+    /// platform tilt nearest zero; `None` when `r` is no such rotation.
+    fn tilt_and_turn(&self, r: &Matrix3<f64>) -> Option<(f64, f64)> {
+        let s = r[(0, 2)].hypot(r[(1, 2)]);
+        let cands: [(f64, f64); 2] = if s > 1e-12 {
+            let b = s.atan2(r[(2, 2)]);
+            let c = r[(1, 2)].atan2(r[(0, 2)]);
+            [(b, c), (-b, wrap(c + std::f64::consts::PI))]
+        } else if r[(2, 2)] > 0.0 {
+            let c = r[(1, 0)].atan2(r[(0, 0)]);
+            [(0.0, c), (0.0, c)]
+        } else {
+            let c = (-r[(1, 0)]).atan2(-r[(0, 0)]);
+            [(std::f64::consts::PI, c), (-std::f64::consts::PI, c)]
+        };
+        cands
+            .into_iter()
+            .filter(|(b, c)| angle_between(&(rz(*c) * ry(*b)), r) <= 1e-6)
+            .min_by(|a, b| {
+                (a.0 - self.tool_tilt)
+                    .abs()
+                    .total_cmp(&(b.0 - self.tool_tilt).abs())
+            })
+    }
+}
+
+use crate::rotation::wrap_angle as wrap;
+
+impl Mechanism<6, 5> for HybridAm {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn kind(&self) -> &'static str {
+        "hybrid-am"
+    }
+
+    fn coordinates(&self) -> &[Coordinate; 6] {
+        &self.coordinates
+    }
+
+    fn actuators(&self) -> &[Actuator; 5] {
+        &self.actuators
+    }
+
+    fn driven(&self) -> [usize; 5] {
+        DRIVEN
+    }
+
+    fn pose_space(&self) -> PoseSpace {
+        PoseSpace::Spatial
+    }
+
+    fn home(&self) -> Vector6<f64> {
+        self.home
+    }
+
+    fn inverse(&self, x: &Vector6<f64>) -> Result<SVector<f64, 5>> {
+        let pl = self.placement(x);
+        let mut q = SVector::<f64, 5>::zeros();
+        for i in 0..4 {
+            q[i] = self.carriage(i, &pl.joints[i])?;
+        }
+        q[4] = x[5];
+        Ok(q)
+    }
+
+    /// Row `i < 4`: `k_i^T [Rz(-C), 0, e_y x Ry(beta) (rho_i - t), -e_z x Rz(-C) p]`
+    /// with `k_i = s_i / s_iz` (from `|s_i|^2 = L_i^2` with the carriage moving along
+    /// `e_z`); row 5: `dC`. `A` moves nothing (held at 0).
+    fn jacobian(&self, x: &Vector6<f64>) -> Result<SMatrix<f64, 5, 6>> {
+        let pl = self.placement(x);
+        let q = self.inverse(x)?;
+        let k = self.rate_vectors(&self.struts(&pl, &q))?;
+        let u = pl.table * Vector3::new(x[0], x[1], x[2]);
+        let dc = -Vector3::z().cross(&u);
+        let mut j = SMatrix::<f64, 5, 6>::zeros();
+        for i in 0..4 {
+            let db = Vector3::y().cross(&(pl.joints[i] - pl.tip));
+            let row = k[i].transpose() * pl.table;
+            for c in 0..3 {
+                j[(i, c)] = row[c];
+            }
+            j[(i, 4)] = k[i].dot(&db);
+            j[(i, 5)] = k[i].dot(&dc);
+        }
+        j[(4, 5)] = 1.0;
+        Ok(j)
+    }
+
+    fn forward(
+        &self,
+        q: &SVector<f64, 5>,
+        start: &Vector6<f64>,
+    ) -> Result<crate::mechanism::Forward<6>> {
+        forward::forward(self, q, start)
+    }
+
+    fn tool_pose(&self, x: &Vector6<f64>) -> Result<Pose> {
+        Ok(crate::legs::spatial_tool_pose(x))
+    }
+
+    /// `B, C` from the nozzle axis (`Rz(C) Ry(B) e_z`), the pair whose platform tilt is
+    /// nearest zero; a given orientation must be one the machine has (`A = 0`: no turn
+    /// of the nozzle about its axis other than the table's).
+    fn coords_from_pose(&self, pose: &Pose, orientation_given: bool) -> Result<Vector6<f64>> {
+        let p = pose.translation.vector;
+        let (b, c) = if orientation_given {
+            let r = rotation_matrix(pose);
+            self.tilt_and_turn(&r).ok_or_else(|| {
+                let n = r.column(2);
+                let b = n.z.clamp(-1.0, 1.0).acos();
+                let c = n.y.atan2(n.x);
+                Error::NotAttainable {
+                    reason: format!(
+                        "the machine orients the nozzle by the platform's tilt B and the \
+                         table's turn C (A = 0): this orientation is {:.4} deg from the \
+                         nearest such one (B = {:.4}, C = {:.4} deg); it turns the nozzle \
+                         about an axis the machine does not have",
+                        angle_between(&(rz(c) * ry(b)), &r).to_degrees(),
+                        b.to_degrees(),
+                        c.to_degrees()
+                    ),
+                }
+            })?
+        } else {
+            (self.home[4], self.home[5])
+        };
+        Ok(Vector6::new(p.x, p.y, p.z, 0.0, b, c))
+    }
+
+    fn check_limits(&self, x: &Vector6<f64>, q: &SVector<f64, 5>, out: &mut Vec<Violation>) {
+        limits::check(self, x, q, out)
+    }
+
+    /// In the base frame: the guides over their strokes, carriage and platform joints,
+    /// struts, the platform, the nozzle, the table centre and the part's X axis.
+    fn skeleton(&self, x: &Vector6<f64>) -> Result<Skeleton> {
+        let q = self.inverse(x)?;
+        let pl = self.placement(x);
+        let mut s = Skeleton::default();
+        let mut plat = [0usize; 4];
+        for i in 0..4 {
+            let leg = &self.legs[i];
+            let r = &leg.actuator.range;
+            let g0 = s.point(
+                &format!("guide {} bottom", leg.actuator.name),
+                PointRole::Other,
+                &self.carriage_joint(i, r.min),
+            );
+            let g1 = s.point(
+                &format!("guide {} top", leg.actuator.name),
+                PointRole::Other,
+                &self.carriage_joint(i, r.max),
+            );
+            s.link(
+                &format!("guide {}", leg.actuator.name),
+                LinkKind::Base,
+                g0,
+                g1,
+            );
+            let c = s.point(
+                &leg.carriage_name,
+                PointRole::BaseJoint,
+                &self.carriage_joint(i, q[i]),
+            );
+            plat[i] = s.point(&leg.platform_name, PointRole::PlatformJoint, &pl.joints[i]);
+            s.link(&leg.actuator.name, LinkKind::Strut, c, plat[i]);
+        }
+        for i in 0..4 {
+            s.link("", LinkKind::Platform, plat[i], plat[(i + 1) % 4]);
+        }
+        let o = pl.tip - pl.rotation * self.tool;
+        let oi = s.point("platform centre", PointRole::PlatformCentre, &o);
+        let tip = s.point("nozzle tip", PointRole::Tool, &pl.tip);
+        s.link("extruder", LinkKind::Tool, oi, tip);
+        let t = s.point("table centre", PointRole::Other, &self.table);
+        let reach = self.characteristic_length.max(50.0);
+        let px = s.point(
+            "part X axis",
+            PointRole::Other,
+            &(self.table + pl.table * Vector3::new(reach, 0.0, 0.0)),
+        );
+        s.link("table", LinkKind::Base, t, px);
+        Ok(s)
+    }
+
+    /// Condition number of the platform's part: `dq_1..4 / d(p_b, beta)` with the tip
+    /// in the base frame and the tilt column divided by the characteristic length. The
+    /// table is a serial axis with a unit ratio (`dq5 = dC`); mixing its radians with
+    /// the carriages' millimetres would only measure the units. Infinite at either
+    /// singularity (module documentation).
+    fn condition(&self, x: &Vector6<f64>) -> Result<f64> {
+        let pl = self.placement(x);
+        let q = self.inverse(x)?;
+        let k = match self.rate_vectors(&self.struts(&pl, &q)) {
+            Ok(k) => k,
+            Err(_) => return Ok(f64::INFINITY),
+        };
+        let lc = self.characteristic_length;
+        let j = SMatrix::<f64, 4, 4>::from_fn(|i, c| match c {
+            3 => k[i].dot(&Vector3::y().cross(&(pl.joints[i] - pl.tip))) / lc,
+            _ => k[i][c],
+        });
+        Ok(crate::linalg::condition_number(&j))
+    }
+
+    /// Mean distance of the platform joints from the nozzle tip.
+    fn characteristic_length(&self) -> f64 {
+        self.characteristic_length
+    }
+
+    /// `q' = k . P'`, `q'' = (s . P'' + |s'|^2) / s_z` (from `s . s = L^2` twice, with
+    /// `s' = P' - e_z q'`), where `P = c_t + Rz(-C) p + Ry(beta) a` moves with the
+    /// table's angular velocity `w = -C' e_z` and the platform's `W = B' e_y`:
+    /// `P' = Rz(-C) p' + w x u + W x v`,
+    /// `P'' = Rz(-C) p'' + 2 w x Rz(-C) p' + w' x u + w x (w x u) + W' x v + W x (W x v)`
+    /// with `u = Rz(-C) p` and `v = Ry(beta) a`.
+    fn actuator_motion(
+        &self,
+        x: &Vector6<f64>,
+        xd: &Vector6<f64>,
+        xdd: &Vector6<f64>,
+    ) -> Result<ActuatorMotion<5>> {
+        let pl = self.placement(x);
+        let q = self.inverse(x)?;
+        let s = self.struts(&pl, &q);
+        self.rate_vectors(&s)?;
+        let u = pl.table * Vector3::new(x[0], x[1], x[2]);
+        let pd = pl.table * Vector3::new(xd[0], xd[1], xd[2]);
+        let pdd = pl.table * Vector3::new(xdd[0], xdd[1], xdd[2]);
+        let w = Vector3::new(0.0, 0.0, -xd[5]);
+        let wd = Vector3::new(0.0, 0.0, -xdd[5]);
+        let ww = Vector3::new(0.0, xd[4], 0.0);
+        let wwd = Vector3::new(0.0, xdd[4], 0.0);
+        let ud = pd + w.cross(&u);
+        let udd = pdd + 2.0 * w.cross(&pd) + wd.cross(&u) + w.cross(&w.cross(&u));
+        let mut qd = SVector::<f64, 5>::zeros();
+        let mut qdd = SVector::<f64, 5>::zeros();
+        for i in 0..4 {
+            let v = pl.joints[i] - pl.tip;
+            let vd = ww.cross(&v);
+            let vdd = wwd.cross(&v) + ww.cross(&vd);
+            let (p1, p2) = (ud + vd, udd + vdd);
+            qd[i] = s[i].dot(&p1) / s[i].z;
+            let sd = p1 - Vector3::new(0.0, 0.0, qd[i]);
+            qdd[i] = (s[i].dot(&p2) + sd.norm_squared()) / s[i].z;
+        }
+        (qd[4], qdd[4]) = (xd[5], xdd[5]);
+        Ok(ActuatorMotion { q, qd, qdd })
+    }
+}
