@@ -509,6 +509,54 @@ fn accuracy(c: &mut Criterion) {
             })
         },
     );
+    // Seed 002's own machine and part: the whole hemisphere (R = 75 mm on the table) is
+    // reachable with the nozzle normal, 8 joints in the file's 0.1 mm balls.
+    let Model::HybridAm(am) = machine("hybrid-am-seed002.toml").model else {
+        panic!()
+    };
+    let joints = am.passive_joints();
+    let clearances: Vec<_> = joints
+        .iter()
+        .map(|j| pkm::accuracy::clearance::JointClearance::spherical(j.name.clone(), 0.1))
+        .collect();
+    let am_regions = pkm::accuracy::clearance::regions(&joints, &clearances).unwrap();
+    let part = pkm::accuracy::clearance::surface::Hemisphere {
+        radius: 75.0,
+        centre: [0.0; 3],
+        azimuth: 0.0,
+    };
+    c.bench_function(
+        "seed-002 machine clearance bounds over its hemisphere, 1000 heights, all reachable (rayon, 2 threads)",
+        |b| {
+            b.iter(|| {
+                pkm::accuracy::clearance::surface::hemisphere_sweep(
+                    am.as_ref(),
+                    &part,
+                    &am_regions,
+                    &Default::default(),
+                    1000,
+                )
+                .unwrap()
+                .len()
+            })
+        },
+    );
+    let am_x = Vector6::new(75.0, 0.0, 0.0, 0.0, 90f64.to_radians(), 0.0);
+    c.bench_function(
+        "seed-002 machine clearance bound at the equator, 8 joints (first order + exact)",
+        |b| {
+            b.iter(|| {
+                pkm::accuracy::clearance::bounds(
+                    am.as_ref(),
+                    black_box(&am_x),
+                    &am_regions,
+                    &Default::default(),
+                )
+                .unwrap()
+                .upper
+            })
+        },
+    );
     let mut g = c.benchmark_group("accuracy monte carlo");
     g.sample_size(10);
     g.bench_function(

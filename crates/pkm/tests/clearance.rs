@@ -6,6 +6,8 @@ use pkm::accuracy::clearance::{ClearanceMethod, ClearanceOptions, JointType};
 use pkm::analysis::clearance::{clearance, ClearanceReport, ClearanceRequest};
 use pkm::{Error, Machine};
 
+mod common;
+
 fn example(name: &str) -> String {
     format!(
         "{}/../../examples/machines/{name}",
@@ -33,39 +35,10 @@ fn run(m: &Machine, req: &ClearanceRequest) -> ClearanceReport {
     clearance(m, Some(&pose()), req).unwrap()
 }
 
-/// The tool point after moving the named joints' centres by `d` (mm) in the machine
-/// file itself and solving forward kinematics at the nominal readings: an
-/// independent path (the file's text, the loader, the plain forward solver).
+/// The tool point of seed 001's hexapod at [`pose`] after moving joints by hand
+/// ([`common::moved_by_hand`]).
 fn moved_by_hand(moves: &[(&str, [f64; 3])]) -> Vector3<f64> {
-    let text = std::fs::read_to_string(example("hexapod-seed001.toml")).unwrap();
-    let nominal = Machine::from_toml_str(&text, "nominal").unwrap();
-    let m0 = nominal.mechanism();
-    let q = m0.inverse(&pose()).unwrap();
-    let mut moved = text.clone();
-    for (joint, d) in moves {
-        let prefix = format!("{joint} = [");
-        let line = moved
-            .lines()
-            .find(|l| l.starts_with(&prefix))
-            .unwrap()
-            .to_string();
-        let v: Vec<f64> = line[prefix.len()..line.len() - 1]
-            .split(',')
-            .map(|s| s.trim().parse().unwrap())
-            .collect();
-        let new = format!(
-            "{joint} = [{:.12}, {:.12}, {:.12}]",
-            v[0] + d[0],
-            v[1] + d[1],
-            v[2] + d[2]
-        );
-        moved = moved.replace(&line, &new);
-    }
-    let m = Machine::from_toml_str(&moved, "moved").unwrap();
-    let dm = m.mechanism();
-    let f = dm.forward(&q, &pose()).unwrap();
-    let p = dm.tool_pose(&f.pose).unwrap().translation.vector;
-    p - m0.tool_pose(&pose()).unwrap().translation.vector
+    common::moved_by_hand(&example("hexapod-seed001.toml"), &pose(), moves)
 }
 
 #[test]

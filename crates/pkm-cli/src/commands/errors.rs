@@ -527,6 +527,22 @@ fn print_text(m: &dyn pkm::DynMechanism, r: &AccuracyReport) {
                 Some(mm) => println!("  tolerance      {t} mm: largest clearance{over} {mm:.5} mm"),
                 None => println!("  tolerance      {t} mm: every clearance times {s:.4}{over}"),
             }
+            for k in &c.largest_per_class {
+                let what = match (k.largest_mm, k.largest_scale) {
+                    (Some(mm), _) => format!("largest {mm:.5} mm"),
+                    (None, Some(s)) => format!("clearances times {s:.4}"),
+                    (None, None) if k.others_alone_mm >= t => format!(
+                        "none: the other joints alone give {:.5} mm",
+                        k.others_alone_mm
+                    ),
+                    (None, None) => "any: these joints move nothing along it".to_string(),
+                };
+                println!(
+                    "  class {:<9}{} joints, the others as given: {what}",
+                    k.class,
+                    k.joints.len()
+                );
+            }
         }
     }
     if let Some(em) = &r.map {

@@ -13,7 +13,7 @@ use crate::pose::Pose;
 use crate::units::Quantity;
 
 /// A machine that can be rebuilt with other values of its geometric parameters.
-/// Its [`Parametric::parameters`] are these, then one drive offset per actuator.
+/// Its [`super::Parametric::parameters`] are these, then one drive offset per actuator.
 pub trait Rebuild<const P: usize, const A: usize>:
     Mechanism<P, A> + Sized + Sync + Send + Clone
 {
@@ -31,7 +31,7 @@ pub trait Rebuild<const P: usize, const A: usize>:
         Ok(())
     }
     /// The passive joints whose centres are among the geometric parameters (see
-    /// [`Parametric::passive_joints`]): none, by default.
+    /// [`super::Parametric::passive_joints`]): none, by default.
     fn passive_joints(&self) -> Vec<super::clearance::PassiveJoint> {
         Vec::new()
     }
@@ -117,7 +117,7 @@ pub(crate) fn rebuild_evaluator<'a, M: Rebuild<P, A>, const P: usize, const A: u
     })
 }
 
-/// Implements [`Parametric`] for a [`Rebuild`] machine; `analytic` names a function
+/// Implements [`super::Parametric`] for a [`Rebuild`] machine; `analytic` names a function
 /// `fn(&M, &SVector<f64, P>) -> Result<Vec<PoseError>>` giving its sensitivities.
 macro_rules! parametric_by_rebuild {
     ($t:ty, $p:literal, $a:literal) => {

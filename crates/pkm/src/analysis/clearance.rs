@@ -6,15 +6,19 @@
 use nalgebra::SVector;
 use serde::Serialize;
 
-use super::clearance_path::{path_samples, PathPoint, PathReport, PathRequest, PathSample};
-use crate::accuracy::clearance::surface::{hemisphere_sweep, Hemisphere, SurfacePoint};
+use super::clearance_class::{per_class, ClassClearance};
+use super::clearance_path::{
+    path_points, path_samples, path_worst, PathReport, PathRequest, PathSample,
+};
+use super::clearance_surface::{hemisphere_of, surface_report, worst_of};
+pub use super::clearance_surface::{SurfaceReport, SurfaceRequest};
+use crate::accuracy::clearance::surface::{hemisphere_sweep, Hemisphere};
 use crate::accuracy::clearance::{
     self, ClearanceBounds, ClearanceMonteCarlo, ClearanceOptions, JointClearance, PassiveJoint,
     Region,
 };
 use crate::error::{Error, Result};
 use crate::machine::{Analysable, Analysis, Machine, Visitor};
-use rayon::prelude::*;
 
 /// What [`clearance()`] computes.
 #[derive(Debug, Clone, PartialEq)]
@@ -39,39 +43,6 @@ pub struct ClearanceRequest {
     pub series: Vec<f64>,
     /// Bounds along a G-code path.
     pub path: Option<PathRequest>,
-}
-
-/// A hemisphere to sweep (seed 002's Figs. 4 and 5).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SurfaceRequest {
-    /// Radius (mm).
-    pub radius: f64,
-    /// Centre (mm); `None`: `R` below the home tool point (the pole there).
-    pub centre: Option<[f64; 3]>,
-    /// Azimuth of the meridian (rad).
-    pub azimuth: f64,
-    /// Heights from the equator to the pole (2 to 100000).
-    pub heights: usize,
-}
-
-/// The bounds over a surface.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct SurfaceReport {
-    /// The surface.
-    pub hemisphere: Hemisphere,
-    /// Every height.
-    pub points: Vec<SurfacePoint>,
-    /// Heights the tool cannot reach along the normal.
-    pub unreachable: usize,
-    /// Height of the largest `max(upper, -lower)`.
-    pub worst_z: Option<f64>,
-    /// That largest value (mm).
-    pub worst: Option<f64>,
-    /// The factor on every clearance that keeps every reachable height within the
-    /// tolerance.
-    pub largest_clearance_scale: Option<f64>,
-    /// The same as a uniform diametral clearance (mm).
-    pub largest_clearance_mm: Option<f64>,
 }
 
 impl Default for ClearanceRequest {
@@ -109,6 +80,10 @@ pub struct ClearanceReport {
     pub largest_clearance_mm: Option<f64>,
     /// The largest uniform diametral clearance within the tolerance at the pose alone.
     pub largest_clearance_at_pose_mm: Option<f64>,
+    /// With a tolerance, the largest clearance of each class of joints (the bodies that
+    /// carry them) that keeps the error within it, the other classes as given: over
+    /// the surface and the path when given, else at the pose.
+    pub largest_per_class: Vec<ClassClearance>,
     /// The bounds over the surface, when asked for.
     pub surface: Option<SurfaceReport>,
     /// The bounds at the pose for each clearance of the request's series.
@@ -340,7 +315,38 @@ where
             })
             .unwrap_or((None, None))
     };
+    // Per class of joints: over the surface and the path when given, else at the pose.
+    let largest_per_class = match req.tolerance {
+        None => Vec::new(),
+        Some(t) => {
+            let hemisphere = req
+                .surface
+                .as_ref()
+                .map(|sr| Ok::<_, Error>((hemisphere_of(m, sr)?, sr.heights)))
+                .transpose()?;
+            per_class(&regions, t, |r: &[Region]| {
+                let mut w = None::<f64>;
+                if let Some((h, n)) = &hemisphere {
+                    let sweep = hemisphere_sweep(m, h, r, &req.options, *n)?;
+                    w = Some(worst_of(&sweep).map_or(0.0, |v| v.1));
+                }
+                if let Some((samples, _)) = &prepared.path {
+                    let pts = path_points(m, samples, r, &req.options)?;
+                    let p = path_worst(&pts).map_or(0.0, |v| v.1);
+                    w = Some(w.map_or(p, |w| w.max(p)));
+                }
+                match w {
+                    Some(w) => Ok(w),
+                    None => {
+                        let (_, u, l) = clearance::bounds_along(m, x, r, &req.options)?;
+                        Ok(u.max(-l))
+                    }
+                }
+            })?
+        }
+    };
     Ok(ClearanceReport {
+        largest_per_class,
         clearances: clearances.to_vec(),
         bounds,
         monte_carlo,
@@ -367,33 +373,12 @@ fn path_report<M, const P: usize, const A: usize>(
 where
     M: Analysable<P, A>,
 {
-    let at = |regions: &[Region]| -> Result<Vec<PathPoint>> {
-        samples
-            .par_iter()
-            .map(|s| {
-                let x = crate::dynamic::fixed::<P>("path sample", &s.x)?;
-                let (direction, upper, lower) =
-                    clearance::bounds_along(m, &x, regions, &req.options)?;
-                Ok(PathPoint {
-                    sample: s.clone(),
-                    direction,
-                    upper,
-                    lower,
-                })
-            })
-            .collect()
-    };
-    let worst_of = |pts: &[PathPoint]| {
-        pts.iter()
-            .enumerate()
-            .map(|(i, p)| (i, p.upper.max(-p.lower)))
-            .max_by(|a, b| a.1.total_cmp(&b.1))
-    };
+    let at = |regions: &[Region]| path_points(m, samples, regions, &req.options);
     let points = at(regions)?;
-    let worst = worst_of(&points);
+    let worst = path_worst(&points);
     let scale = match (req.tolerance, worst) {
         (Some(t), Some((_, w))) if w > 0.0 => Some(fit_scale(t, w, |s| {
-            Ok(worst_of(&at(&scaled(regions, s)?)?).map_or(0.0, |v| v.1))
+            Ok(path_worst(&at(&scaled(regions, s)?)?).map_or(0.0, |v| v.1))
         })?),
         _ => None,
     };
@@ -407,7 +392,7 @@ where
 }
 
 /// Regions with every clearance times `s`.
-fn scaled(regions: &[Region], s: f64) -> Result<Vec<Region>> {
+pub(crate) fn scaled(regions: &[Region], s: f64) -> Result<Vec<Region>> {
     regions
         .iter()
         .map(|r| {
@@ -419,68 +404,10 @@ fn scaled(regions: &[Region], s: f64) -> Result<Vec<Region>> {
         .collect()
 }
 
-/// The largest `max(upper, -lower)` over the reachable points and its height.
-fn worst_of(points: &[SurfacePoint]) -> Option<(f64, f64)> {
-    points
-        .iter()
-        .filter_map(|p| Some((p.z, p.upper?.max(-p.lower?))))
-        .max_by(|a, b| a.1.total_cmp(&b.1))
-}
-
-/// The sweep of `sr`, and with a tolerance the factor on the clearances that keeps the
-/// whole surface within it (`s <- s t / worst(s)` on exact sweeps, to 1e-9).
-fn surface_report<M, const P: usize, const A: usize>(
-    m: &M,
-    regions: &[Region],
-    req: &ClearanceRequest,
-    sr: &SurfaceRequest,
-    uniform: Option<f64>,
-) -> Result<SurfaceReport>
-where
-    M: Analysable<P, A>,
-{
-    let centre = match sr.centre {
-        Some(c) => c,
-        None => {
-            let p = m.tool_pose(&m.home())?.translation.vector;
-            [p.x, p.y, p.z - sr.radius]
-        }
-    };
-    let hemisphere = Hemisphere {
-        radius: sr.radius,
-        centre,
-        azimuth: sr.azimuth,
-    };
-    let points = hemisphere_sweep(m, &hemisphere, regions, &req.options, sr.heights)?;
-    let worst = worst_of(&points);
-    let scale = match (req.tolerance, worst) {
-        (Some(t), Some((_, w))) if w > 0.0 => Some(fit_scale(t, w, |s| {
-            let sweep = hemisphere_sweep(
-                m,
-                &hemisphere,
-                &scaled(regions, s)?,
-                &req.options,
-                sr.heights,
-            )?;
-            Ok(worst_of(&sweep).map_or(0.0, |v| v.1))
-        })?),
-        _ => None,
-    };
-    Ok(SurfaceReport {
-        hemisphere,
-        unreachable: points.iter().filter(|p| p.unreachable.is_some()).count(),
-        worst_z: worst.map(|w| w.0),
-        worst: worst.map(|w| w.1),
-        largest_clearance_scale: scale,
-        largest_clearance_mm: scale.zip(uniform).map(|(s, c)| s * c),
-        points,
-    })
-}
-
 /// The factor `s` on every clearance with `worst(s) = t`, from `worst(1) = w1 > 0`: the
 /// bounds grow about linearly with the clearance, so `s <- s t / worst(s)` from
 /// `s = t / w1`, each step on exact bounds (to `1e-9` relative, at most 8 steps).
-fn fit_scale(t: f64, w1: f64, mut worst: impl FnMut(f64) -> Result<f64>) -> Result<f64> {
+pub(crate) fn fit_scale(t: f64, w1: f64, mut worst: impl FnMut(f64) -> Result<f64>) -> Result<f64> {
     let mut s = t / w1;
     for _ in 0..8 {
         let f = worst(s)?;

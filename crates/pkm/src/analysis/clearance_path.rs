@@ -139,3 +139,40 @@ pub fn path_samples(machine: &Machine, req: &PathRequest) -> Result<(Vec<PathSam
     }
     Ok((kept, keep.seen))
 }
+
+/// The bounds along the direction of `options` (or each sample's tool axis) at every
+/// sample (rayon).
+pub(crate) fn path_points<M, const P: usize, const A: usize>(
+    m: &M,
+    samples: &[PathSample],
+    regions: &[crate::accuracy::clearance::Region],
+    options: &crate::accuracy::clearance::ClearanceOptions,
+) -> Result<Vec<PathPoint>>
+where
+    M: crate::machine::Analysable<P, A>,
+{
+    use rayon::prelude::*;
+    samples
+        .par_iter()
+        .map(|s| {
+            let x = crate::dynamic::fixed::<P>("path sample", &s.x)?;
+            let (direction, upper, lower) =
+                crate::accuracy::clearance::bounds_along(m, &x, regions, options)?;
+            Ok(PathPoint {
+                sample: s.clone(),
+                direction,
+                upper,
+                lower,
+            })
+        })
+        .collect()
+}
+
+/// The index and value of the largest `max(upper, -lower)` of `points`.
+pub(crate) fn path_worst(points: &[PathPoint]) -> Option<(usize, f64)> {
+    points
+        .iter()
+        .enumerate()
+        .map(|(i, p)| (i, p.upper.max(-p.lower)))
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+}

@@ -7,7 +7,9 @@
 
 pub mod accuracy;
 pub mod clearance;
+pub mod clearance_class;
 pub mod clearance_path;
+pub mod clearance_surface;
 pub mod identification;
 pub mod kinematics;
 pub mod motion;

@@ -52,6 +52,17 @@ pub(super) fn forward(
         .map(|l| l.length)
         .fold(f64::INFINITY, f64::min);
     let from = m.inverse(start).ok();
+    if let Some(q0) = &from {
+        // The start is the solution already (a re-solve with nothing moved).
+        let residual = (q0 - q).amax();
+        if residual <= TOLERANCE {
+            return Ok(Forward {
+                pose: *start,
+                iterations: 0,
+                residual,
+            });
+        }
+    }
     let steps = match &from {
         Some(q0) => {
             let dq = (0..4).map(|i| (q[i] - q0[i]).abs()).fold(0.0, f64::max);
