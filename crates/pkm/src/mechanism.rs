@@ -470,7 +470,8 @@ pub(crate) fn halton(mut i: usize, b: usize) -> f64 {
 /// `+-2` characteristic lengths (at least 100 mm) of home and angles anywhere; for
 /// spatial machines the orientation is a rotation vector of any direction up to 180 deg
 /// and every other start is mirrored through the base plane (Z -> -Z), where the
-/// mirror-image assembly modes of parallel machines lie.
+/// mirror-image assembly modes of parallel machines lie. Held coordinates keep their
+/// home values (forward kinematics takes them from the start).
 pub fn spread_starts<M, const P: usize, const A: usize>(m: &M, n: usize) -> Vec<SVector<f64, P>>
 where
     M: Mechanism<P, A> + ?Sized,
@@ -509,6 +510,11 @@ where
                     crate::units::Quantity::Angle => 2.0 * std::f64::consts::PI * u(k),
                 };
             }
+        }
+        // Held coordinates are the machine's, not the solver's: they stay at home.
+        let driven = m.driven();
+        for k in (0..P).filter(|k| !driven.contains(k)) {
+            x[k] = home[k];
         }
         out.push(x);
     }
