@@ -31,6 +31,7 @@ fn head(p: &Vector4<f64>) -> P3rpHead {
         rod_angle_range: None,
         min_transmission_angle: None,
         branch: Branch::Positive,
+        offsets: Default::default(),
     };
     let slider = |n: &str| Actuator {
         name: n.into(),

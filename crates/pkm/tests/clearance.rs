@@ -300,7 +300,7 @@ fn machines_without_modelled_passive_joints_say_so() {
             analysis, reason, ..
         }) => {
             assert_eq!(analysis, "joint clearances");
-            assert!(reason.contains("strut machines"), "{reason}");
+            assert!(reason.contains("serial chain"), "{reason}");
         }
         other => panic!("{other:?}"),
     }

@@ -67,6 +67,10 @@ impl<M: Rebuild<P, A>, const P: usize, const A: usize> Evaluate for RebuildEvalu
         let mut dq = SVector::<f64, A>::zeros();
         let mut geometry = false;
         for &(k, v) in deviations {
+            if v == 0.0 && k < ng + A {
+                // Nothing moves: the nominal machine, solved exactly (below).
+                continue;
+            }
             if k < ng {
                 self.g[k] += v;
                 geometry = true;
@@ -78,6 +82,12 @@ impl<M: Rebuild<P, A>, const P: usize, const A: usize> Evaluate for RebuildEvalu
                     message: format!("parameter index {k} beyond the machine's {}", ng + A),
                 });
             }
+        }
+        if !geometry && dq.iter().all(|d| *d == 0.0) {
+            return Ok(PoseError {
+                position: Vector3::zeros(),
+                orientation: Vector3::zeros(),
+            });
         }
         let actual = if geometry {
             self.m.update_geometry(&mut self.scratch, &self.g)?;
@@ -354,64 +364,4 @@ impl Rebuild<3, 3> for crate::tripod::CentreLegTripod {
 }
 parametric_by_rebuild!(crate::tripod::CentreLegTripod, 3, 3);
 
-// ---- P3RP head and the hybrid machine on it: the head's link dimensions ----
-
-fn head_parameters() -> Vec<Parameter> {
-    let l = |n: &str| Parameter::new(n, Quantity::Length, ParameterKind::LinkDimension);
-    vec![
-        l("l1"),
-        l("l2"),
-        l("e"),
-        Parameter::new("delta", Quantity::Angle, ParameterKind::LinkDimension),
-        l("tool_length"),
-    ]
-}
-
-fn head_values(g: &crate::p3rp::HeadGeometry) -> Vec<f64> {
-    vec![g.l1, g.l2, g.e, g.delta, g.tool_length]
-}
-
-fn head_with(g: &crate::p3rp::HeadGeometry, v: &[f64]) -> Result<crate::p3rp::HeadGeometry> {
-    if v.len() != 5 {
-        return Err(Error::InvalidInput {
-            what: "P3RP head geometry".into(),
-            message: format!(
-                "expected 5 values (l1, l2, e, delta, tool_length), got {}",
-                v.len()
-            ),
-        });
-    }
-    let mut g = g.clone();
-    (g.l1, g.l2, g.e, g.delta, g.tool_length) = (v[0], v[1], v[2], v[3], v[4]);
-    Ok(g)
-}
-
-impl Rebuild<2, 2> for crate::p3rp::P3rpHead {
-    fn geometry_parameters(&self) -> Vec<Parameter> {
-        head_parameters()
-    }
-    fn geometry_values(&self) -> Vec<f64> {
-        head_values(&self.geometry)
-    }
-    fn with_geometry_values(&self, v: &[f64]) -> Result<Self> {
-        let mut h = self.clone();
-        h.geometry = head_with(&self.geometry, v)?;
-        Ok(h)
-    }
-}
-parametric_by_rebuild!(crate::p3rp::P3rpHead, 2, 2);
-
-impl Rebuild<6, 4> for crate::p3rp::HybridMachine {
-    fn geometry_parameters(&self) -> Vec<Parameter> {
-        head_parameters()
-    }
-    fn geometry_values(&self) -> Vec<f64> {
-        head_values(&self.head)
-    }
-    fn with_geometry_values(&self, v: &[f64]) -> Result<Self> {
-        let mut h = self.clone();
-        h.head = head_with(&self.head, v)?;
-        Ok(h)
-    }
-}
-parametric_by_rebuild!(crate::p3rp::HybridMachine, 6, 4);
+// ---- P3RP head and the hybrid machine on it: crate::p3rp::clearance ----

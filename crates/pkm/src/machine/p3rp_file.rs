@@ -202,6 +202,7 @@ pub(super) fn build(src: &Source, f: P3rpFile) -> Result<super::Parts, Error> {
         rod_angle_range: angle_range(src, "rod_angle", lim.rod_angle)?,
         min_transmission_angle: min_mu,
         branch: h.branch.unwrap_or(Branch::Positive),
+        offsets: Default::default(),
     };
     let sliders = axes(src, "sliders", &f.sliders, ["U", "V"])?;
     let name = f.name.clone().unwrap_or_else(|| "P3RP head".into());

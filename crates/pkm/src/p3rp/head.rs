@@ -56,6 +56,21 @@ pub struct Separation {
     pub ddg: f64,
 }
 
+/// Where hinges A and C sit off their nominal places (mm, in their sliders' frames,
+/// whose axes are the base frame's): what a joint's clearance moves that `l1`, `delta`
+/// and `e` cannot express (hinge B's offset on the platform and hinge C's horizontal
+/// one fold into those exactly). Zero on a head as its file builds it.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
+pub struct HingeOffsets {
+    /// Hinge A's horizontal offset from the guide line: the platform and tool move
+    /// with it.
+    pub a_y: f64,
+    /// Hinge A's height above slider D's reading.
+    pub a_z: f64,
+    /// Hinge C's height above slider E's reading.
+    pub c_z: f64,
+}
+
 /// Geometry and limits of a P3RP head (internal units: mm, rad).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct HeadGeometry {
@@ -78,6 +93,8 @@ pub struct HeadGeometry {
     pub min_transmission_angle: Option<f64>,
     /// The assembly branch of the machine.
     pub branch: Branch,
+    /// Offsets of hinges A and C from their nominal places (joint clearances).
+    pub offsets: HingeOffsets,
 }
 
 use crate::rotation::wrap_angle as wrap;
@@ -125,10 +142,12 @@ impl HeadGeometry {
         })
     }
 
-    /// Inverse position solution: `(z1, z2) = (z, z + g(theta))`.
+    /// Inverse position solution: `(z1, z2) = (z, z + g(theta))` (less the hinges'
+    /// heights above their sliders, [`HingeOffsets`]).
     pub fn inverse(&self, z: f64, theta: f64) -> Result<Vector2<f64>> {
         let sep = self.separation(theta)?;
-        Ok(Vector2::new(z, z + sep.g))
+        let o = &self.offsets;
+        Ok(Vector2::new(z - o.a_z, z + sep.g - o.c_z))
     }
 
     /// Inverse Jacobian `J_t = d(z1, z2)/d(z, theta) = [[1, 0], [1, g'(theta)]]`
@@ -185,6 +204,7 @@ impl HeadGeometry {
     /// assembly of this head), and with [`Error::Singular`] at (and within a sine of
     /// 1e-6 of) Q.
     pub fn forward(&self, z1: f64, z2: f64, branch: Branch) -> Result<Vector2<f64>> {
+        let (z1, z2) = (z1 + self.offsets.a_z, z2 + self.offsets.c_z);
         let d = z2 - z1;
         let r = self.e.hypot(d);
         let sigma = (self.l2 * self.l2 - self.l1 * self.l1 - r * r) / (2.0 * self.l1 * r);
@@ -251,11 +271,11 @@ impl HeadGeometry {
 
     /// Hinge B and C positions and the tool tip in the base frame (X = 0 plane).
     pub fn points(&self, z: f64, theta: f64) -> Result<[Vector3<f64>; 4]> {
-        let q = self.inverse(z, theta)?;
+        let g = self.separation(theta)?.g;
         let psi = theta + self.delta;
-        let a = Vector3::new(0.0, 0.0, z);
+        let a = Vector3::new(0.0, self.offsets.a_y, z);
         let b = a + self.l1 * Vector3::new(0.0, -psi.sin(), psi.cos());
-        let c = Vector3::new(0.0, self.e, q[1]);
+        let c = Vector3::new(0.0, self.offsets.a_y + self.e, z + g);
         let tool = a + self.tool_length * Vector3::new(0.0, theta.sin(), -theta.cos());
         Ok([a, b, c, tool])
     }
@@ -366,8 +386,9 @@ pub(crate) fn head_motion(
     xdd: &Vector2<f64>,
 ) -> Result<ActuatorMotion<2>> {
     let s = g.separation(x[1])?;
+    let o = &g.offsets;
     Ok(ActuatorMotion {
-        q: Vector2::new(x[0], x[0] + s.g),
+        q: Vector2::new(x[0] - o.a_z, x[0] + s.g - o.c_z),
         qd: Vector2::new(xd[0], xd[0] + s.dg * xd[1]),
         qdd: Vector2::new(xdd[0], xdd[0] + s.dg * xdd[1] + s.ddg * xd[1] * xd[1]),
     })
@@ -478,7 +499,7 @@ impl Mechanism<2, 2> for P3rpHead {
         let off = angle_between(&rx(theta), &r);
         let l = self.geometry.tool_length;
         let p = pose.translation.vector;
-        let dy = p.y - l * theta.sin();
+        let dy = p.y - self.geometry.offsets.a_y - l * theta.sin();
         if off > 1e-6 || p.x.abs() > 1e-6 || dy.abs() > 1e-6 {
             return Err(Error::NotAttainable {
                 reason: format!(

@@ -26,6 +26,9 @@ use crate::units::Quantity;
 /// X_t = X,  Y_t = Y - L sin A,  z = Z + L cos A,  (U, V) = head IK(z, A)
 /// ```
 ///
+/// (less hinge A's horizontal offset from the guide line in `Y_t`, zero as built:
+/// [`super::HingeOffsets`]).
+///
 /// with `L` the head's tool length: the head tilts the tool tip sideways by
 /// `L sin A` and lifts it by `L (1 - cos A)`, which the table and the U slider
 /// compensate.
@@ -109,7 +112,7 @@ impl Mechanism<6, 4> for HybridMachine {
         let q = self.head.inverse(h[0], h[1])?;
         Ok(Vector4::new(
             x[0],
-            x[1] - self.head.tool_length * x[3].sin(),
+            x[1] - self.head.tool_length * x[3].sin() - self.head.offsets.a_y,
             q[0],
             q[1],
         ))
@@ -139,7 +142,8 @@ impl Mechanism<6, 4> for HybridMachine {
         let h = self.head.forward(q[2], q[3], branch)?;
         let l = self.head.tool_length;
         let (s, c) = h[1].sin_cos();
-        let pose = Vector6::new(q[0], q[1] + l * s, h[0] - l * c, h[1], start[4], start[5]);
+        let y = q[1] + l * s + self.head.offsets.a_y;
+        let pose = Vector6::new(q[0], y, h[0] - l * c, h[1], start[4], start[5]);
         let residual = (self.inverse(&pose)? - q).amax();
         Ok(Forward {
             pose,
@@ -236,7 +240,7 @@ impl Mechanism<6, 4> for HybridMachine {
         let hdd = Vector2::new(xdd[2] - l * c * a1 * a1 - l * s * a2, a2);
         let m = head_motion(&self.head, &h, &hd, &hdd)?;
         Ok(ActuatorMotion {
-            q: Vector4::new(x[0], x[1] - l * s, m.q[0], m.q[1]),
+            q: Vector4::new(x[0], x[1] - l * s - self.head.offsets.a_y, m.q[0], m.q[1]),
             qd: Vector4::new(xd[0], xd[1] - l * c * a1, m.qd[0], m.qd[1]),
             qdd: Vector4::new(
                 xdd[0],

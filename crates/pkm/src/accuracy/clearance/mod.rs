@@ -38,8 +38,9 @@ pub use sample::{clearance_monte_carlo, ClearanceMonteCarlo};
 /// Why a machine type cannot take clearances (the registry's `Unsupported` reason and
 /// the machine-file reader's message).
 pub(crate) const NO_PASSIVE_JOINTS: &str = "this machine type has no passive joints whose \
-     centres pkm models: clearances move the centres of passive joints that are parameters of \
-     the machine, which strut machines (tripods, hexapods) have";
+     centres pkm models: clearances move the centres of passive joints (the joints of strut \
+     machines, tripods and hexapods, of the seed-002 machine and of the P3RP head); a serial \
+     chain's joints are all driven";
 
 /// Kind of a passive joint, for its clearance.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
