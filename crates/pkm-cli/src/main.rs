@@ -146,7 +146,20 @@ pub fn parse_convention(s: &str) -> Result<Convention, String> {
     s.parse::<Convention>().map_err(|e| e.to_string())
 }
 
+/// A reader that stops reading (`pkm ... | head`) ends the command quietly, as it does
+/// any Unix tool: SIGPIPE back to its default action. Rust ignores it, so every
+/// `println!` after the pipe closed would panic with "Broken pipe".
+fn quiet_on_closed_pipe() {
+    #[cfg(unix)]
+    // SAFETY: called first in `main`, before any thread exists; SIG_DFL is a valid
+    // disposition for SIGPIPE.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+}
+
 fn main() -> ExitCode {
+    quiet_on_closed_pipe();
     let cli = Cli::parse();
     let res = match cli.command {
         Command::Ik(a) => commands::ik::run(&a),

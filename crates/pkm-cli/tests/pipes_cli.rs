@@ -1,0 +1,53 @@
+//! Bad input and closed pipes: pkm ends quietly, never with a panic.
+
+mod common;
+use common::path;
+
+/// A reader that has gone away (`pkm ... | head`): the command ends without a panic
+/// (by SIGPIPE, as a Unix tool does, or normally if it wrote before the pipe closed).
+#[test]
+fn a_closed_pipe_ends_the_command_quietly() {
+    use std::process::{Command, Stdio};
+    let bin = assert_cmd::cargo::cargo_bin("pkm");
+    for args in [
+        vec![
+            "check".to_string(),
+            path("examples/machines/hexapod-seed001.toml"),
+        ],
+        vec![
+            "ik".to_string(),
+            path("examples/machines/hybrid-am-seed002.toml"),
+            "--pose".into(),
+            "75,0,0,0,90,0".into(),
+            "--json".into(),
+        ],
+    ] {
+        let mut child = Command::new(&bin)
+            .args(&args)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        // Close the reading end before the command writes.
+        drop(child.stdout.take());
+        let out = child.wait_with_output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
+        assert_ne!(out.status.code(), Some(101), "{args:?}: {stderr}");
+        #[cfg(unix)]
+        {
+            use std::os::unix::process::ExitStatusExt;
+            assert!(
+                out.status.success() || out.status.signal() == Some(libc_sigpipe()),
+                "{args:?}: {:?}",
+                out.status
+            );
+        }
+    }
+}
+
+/// SIGPIPE's number on Linux and the BSDs.
+#[cfg(unix)]
+fn libc_sigpipe() -> i32 {
+    13
+}
