@@ -312,3 +312,40 @@ fn tolerances_from_a_file_by_name() {
         "{e}"
     );
 }
+
+/// A tolerance of 1e300 (issue 17: it printed a 300-digit budget, exit 0) is refused
+/// with its name; the largest sane one is accepted.
+#[test]
+fn absurd_kind_tolerances_are_refused() {
+    use pkm::analysis::KindTolerances;
+    let ok = KindTolerances {
+        joint: 1e6,
+        angle: 1e4,
+        ..Default::default()
+    };
+    assert!(ok.validate().is_ok());
+    for t in [
+        KindTolerances {
+            joint: 1e300,
+            ..Default::default()
+        },
+        KindTolerances {
+            length: 2e6,
+            ..Default::default()
+        },
+        KindTolerances {
+            angle: f64::NAN,
+            ..Default::default()
+        },
+        KindTolerances {
+            zero: -0.01,
+            ..Default::default()
+        },
+    ] {
+        let e = t.validate().unwrap_err().to_string();
+        assert!(
+            e.contains("tolerance") && e.contains("expected a value from 0"),
+            "{e}"
+        );
+    }
+}

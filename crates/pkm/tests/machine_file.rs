@@ -172,3 +172,68 @@ fn unreadable_file_names_the_file() {
         "{e}"
     );
 }
+
+/// Absurd magnitudes (issue 17: a value of 1e300 made `pkm report` run for ever) are
+/// refused at load, naming the field and its line, in every example machine file and
+/// every numeric field tried; a URDF too.
+#[test]
+fn absurd_magnitudes_are_refused_with_their_field() {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/machines");
+    let mut tried = 0;
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        let text = std::fs::read_to_string(&path).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        for (i, line) in lines.iter().enumerate() {
+            let Some((key, value)) = line.split_once(" = ") else {
+                continue;
+            };
+            let value = value.trim_start_matches('[').trim_start();
+            if key.trim_start().starts_with('#')
+                || !value.starts_with(|c: char| c.is_ascii_digit() || c == '-')
+            {
+                continue;
+            }
+            let end = value
+                .find(|c: char| !(c.is_ascii_digit() || ".-+eE_".contains(c)))
+                .unwrap_or(value.len());
+            let start = line.find(value).unwrap();
+            let mut bad_lines = lines.clone();
+            let bad_line = format!("{}1e300{}", &line[..start], &line[start + end..]);
+            bad_lines[i] = &bad_line;
+            let bad = bad_lines.join("\n");
+            let e = Machine::from_toml_str(&bad, "bad.toml").unwrap_err();
+            let (at, field, message) = parts(&e);
+            assert_eq!(at, Some(i + 1), "{}: {bad_line}: {e}", path.display());
+            assert!(message.contains("magnitude of at most 1e6"), "{e}");
+            assert!(!field.is_empty(), "{e}");
+            tried += 1;
+        }
+    }
+    assert!(tried > 100, "{tried}");
+    // Integers too; the bound itself is accepted.
+    let text = std::fs::read_to_string(format!("{dir}/hexapod-seed001.toml")).unwrap();
+    assert!(text.contains("rapid = 30000.0"));
+    let at = Machine::from_toml_str(&text.replace("rapid = 30000.0", "rapid = 1000000"), "ok");
+    assert!(at.is_ok(), "{at:?}");
+    let e = err(&text.replace("rapid = 30000.0", "rapid = 10_000_000"));
+    assert!(parts(&e).2.contains("found 10000000"), "{e}");
+    // A URDF's joint origin.
+    let urdf = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../examples/robots/ur5-like.urdf"
+    ))
+    .unwrap()
+    .replacen("xyz=\"0 0 0.089159\"", "xyz=\"0 0 1e300\"", 1);
+    let dir = tempfile_dir();
+    let p = dir.join("bad.urdf");
+    std::fs::write(&p, urdf).unwrap();
+    let e = Machine::from_path(&p).unwrap_err().to_string();
+    assert!(e.contains("1e300") && e.contains("beyond"), "{e}");
+}
+
+fn tempfile_dir() -> std::path::PathBuf {
+    let d = std::env::temp_dir().join(format!("pkm-magnitudes-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}

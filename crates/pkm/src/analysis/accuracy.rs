@@ -45,18 +45,21 @@ impl Default for KindTolerances {
 }
 
 impl KindTolerances {
-    /// Checks the values: finite and `>= 0`.
+    /// Checks the values: `>= 0` and at most 1e6 mm (lengths) or 1e4 rad (angles),
+    /// the sane magnitudes of machine files
+    /// ([`crate::machine::MAX_MAGNITUDE`]): a tolerance of 1e300 would print a
+    /// 300-digit budget that means nothing.
     pub fn validate(&self) -> Result<()> {
-        for (v, what) in [
-            (self.joint, "joint-centre tolerance"),
-            (self.length, "link tolerance"),
-            (self.zero, "zero-length / drive tolerance"),
-            (self.angle, "angle tolerance"),
+        for (v, what, max, unit) in [
+            (self.joint, "joint-centre tolerance", 1e6, "mm"),
+            (self.length, "link tolerance", 1e6, "mm"),
+            (self.zero, "zero-length / drive tolerance", 1e6, "mm"),
+            (self.angle, "angle tolerance", 1e4, "rad"),
         ] {
-            if !(v >= 0.0 && v.is_finite()) {
+            if !(v >= 0.0 && v <= max) {
                 return Err(Error::InvalidInput {
                     what: what.into(),
-                    message: format!("expected a value >= 0, found {v}"),
+                    message: format!("expected a value from 0 to {max:e} {unit}, found {v:e}"),
                 });
             }
         }

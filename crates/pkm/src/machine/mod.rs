@@ -24,7 +24,7 @@ use crate::mechanism::Mechanism;
 
 pub use reference::Reference;
 pub use registry::{Analysis, FileType, Model, StrutVisitor, FILE_TYPES};
-pub use source::line_col;
+pub use source::{line_col, MAX_MAGNITUDE};
 pub use strut_writer::{with_strut_geometry, StrutGeometry};
 pub use tolerance_file::{read_deviations, read_tolerances};
 
@@ -370,7 +370,7 @@ impl Machine {
     /// Parses and validates a machine description; `file` names it in errors.
     pub fn from_toml_str(text: &str, file: &str) -> Result<Machine> {
         let src = source::Source::parse(file, text)?;
-        src.check_finite()?;
+        src.check_numbers()?;
         let kind = src
             .root()
             .iter()

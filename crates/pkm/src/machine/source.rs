@@ -6,6 +6,12 @@ use toml::de::{DeTable, DeValue};
 
 use crate::error::Error;
 
+/// The largest magnitude of any number in a machine, tolerance or deviation file
+/// (mm, deg, mm/s, mm/s^2, mm/min, counts): 1e6. A kilometre-long link, a million
+/// degrees, a rate of a kilometre per second are typing errors; computing with them
+/// (or with 1e300) only hangs sweeps and prints numbers that mean nothing.
+pub const MAX_MAGNITUDE: f64 = 1e6;
+
 /// A parsed TOML source that can turn a field path into a line and column.
 pub struct Source<'a> {
     /// File name used in messages.
@@ -156,9 +162,10 @@ impl<'a> Source<'a> {
         }
     }
 
-    /// The first float anywhere in the file that is not finite (`nan`, `inf`).
-    pub fn check_finite(&self) -> Result<(), Error> {
-        fn walk(v: &DeValue, path: &mut Vec<Seg>, found: &mut Option<Vec<Seg>>) {
+    /// Refuses the first number anywhere in the file that is not finite (`nan`, `inf`)
+    /// or whose magnitude is beyond [`MAX_MAGNITUDE`], naming its field and line.
+    pub fn check_numbers(&self) -> Result<(), Error> {
+        fn walk(v: &DeValue, path: &mut Vec<Seg>, found: &mut Option<(Vec<Seg>, String)>) {
             if found.is_some() {
                 return;
             }
@@ -166,7 +173,22 @@ impl<'a> Source<'a> {
                 DeValue::Float(f) => {
                     let s = f.as_str().to_ascii_lowercase();
                     if s.contains("nan") || s.contains("inf") {
-                        *found = Some(path.clone());
+                        *found = Some((
+                            path.clone(),
+                            "expected a finite number, found nan or inf".into(),
+                        ));
+                    } else if let Ok(x) = s.replace('_', "").parse::<f64>() {
+                        if !(x.abs() <= MAX_MAGNITUDE) {
+                            *found = Some((path.clone(), beyond(f.as_str())));
+                        }
+                    }
+                }
+                DeValue::Integer(i) => {
+                    let x = i128::from_str_radix(&i.as_str().replace('_', ""), i.radix())
+                        .map(|x| x as f64)
+                        .unwrap_or(f64::INFINITY);
+                    if !(x.abs() <= MAX_MAGNITUDE) {
+                        *found = Some((path.clone(), beyond(i.as_str())));
                     }
                 }
                 DeValue::Table(t) => {
@@ -186,13 +208,19 @@ impl<'a> Source<'a> {
                 _ => {}
             }
         }
+        fn beyond(v: &str) -> String {
+            format!(
+                "expected a magnitude of at most 1e6 (mm, deg, mm/s, ...), found {v}: no \
+                 machine has such a value, and pkm refuses it rather than compute with it"
+            )
+        }
         let mut found = None;
         for (k, v) in self.root().iter() {
             let mut path = vec![Seg::Key(k.get_ref().to_string())];
             walk(v.get_ref(), &mut path, &mut found);
         }
         match found {
-            Some(p) => Err(self.error(&p, "expected a finite number, found nan or inf")),
+            Some((p, message)) => Err(self.error(&p, message)),
             None => Ok(()),
         }
     }

@@ -83,7 +83,7 @@ struct TolerancesOnly {
 /// file, line and field.
 pub fn read_tolerances(params: &[Parameter], text: &str, file: &str) -> Result<Vec<Tolerance>> {
     let src = Source::parse(file, text)?;
-    src.check_finite()?;
+    src.check_numbers()?;
     let f: TolerancesOnly = src.deserialize()?;
     tolerances(&src, params, &f.tolerance)
 }
@@ -93,7 +93,7 @@ pub fn read_tolerances(params: &[Parameter], text: &str, file: &str) -> Result<V
 /// units; errors name the file, line and parameter.
 pub fn read_deviations(params: &[Parameter], text: &str, file: &str) -> Result<Vec<(usize, f64)>> {
     let src = Source::parse(file, text)?;
-    src.check_finite()?;
+    src.check_numbers()?;
     let values: std::collections::BTreeMap<String, f64> = src.deserialize()?;
     values
         .iter()

@@ -118,6 +118,28 @@ pub(super) fn build(text: &str, file: &str) -> Result<super::Parts, Error> {
             return Err(err(file, format!("joint `{}`: only revolute, continuous, prismatic and fixed joints form a serial chain", j.name)));
         }
     }
+    // The same sane magnitudes as machine files (metres and radians here: 1e3 m, 1e4
+    // rad), before any of them is computed with.
+    for j in &path {
+        let values = [
+            ("origin xyz", &j.origin.xyz[..], 1e3),
+            ("origin rpy", &j.origin.rpy[..], 1e4),
+            ("axis", &j.axis.xyz[..], 1e6),
+            ("limit", &[j.limit.lower, j.limit.upper][..], 1e4),
+        ];
+        for (what, v, max) in values {
+            if let Some(x) = v.iter().find(|x| !(x.abs() <= max)) {
+                return Err(err(
+                    file,
+                    format!(
+                        "joint `{}`: {what} value {x:e} is beyond +-{max:e}, the largest \
+                         pkm takes (no robot has it)",
+                        j.name
+                    ),
+                ));
+            }
+        }
+    }
     let mut links = Vec::new();
     let mut acc = Matrix4::identity();
     let mut pending: Option<(String, Option<Joint>)> = Some((root.to_string(), None));
