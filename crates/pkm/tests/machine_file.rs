@@ -237,3 +237,54 @@ fn tempfile_dir() -> std::path::PathBuf {
     std::fs::create_dir_all(&d).unwrap();
     d
 }
+
+/// Arrays with a value too many or too few (issue 17: `F = [-100, -57.74, 0, 1]` and
+/// `length = [150, 300, 1]` passed `check`) are refused, naming the field and line, on
+/// every numeric array of every example machine file.
+#[test]
+fn arrays_with_more_or_fewer_values_are_refused() {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/machines");
+    let mut tried = 0;
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        let text = std::fs::read_to_string(&path).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        for (i, line) in lines.iter().enumerate() {
+            let Some((key, value)) = line.split_once(" = [") else {
+                continue;
+            };
+            // One-line arrays of numbers (not of strings, not nested).
+            let Some(close) = value.find(']') else {
+                continue;
+            };
+            let inner = &value[..close];
+            if key.trim_start().starts_with('#')
+                || inner.contains('[')
+                || inner.contains('"')
+                || !inner.contains(',')
+            {
+                continue;
+            }
+            for bad_inner in [
+                format!("{inner}, 1.0"),
+                inner[..inner.rfind(',').unwrap()].to_string(),
+            ] {
+                let bad_line = format!("{key} = [{bad_inner}{}", &value[close..]);
+                let mut bad_lines = lines.clone();
+                bad_lines[i] = &bad_line;
+                let bad = bad_lines.join("\n");
+                let e = Machine::from_toml_str(&bad, "bad.toml").unwrap_err();
+                let (at, _, message) = parts(&e);
+                assert_eq!(at, Some(i + 1), "{}: {bad_line}: {e}", path.display());
+                assert!(
+                    message.contains("invalid length")
+                        || message.contains("values, found")
+                        || message.contains("values (mm, deg), found"),
+                    "{bad_line}: {e}"
+                );
+                tried += 1;
+            }
+        }
+    }
+    assert!(tried > 100, "{tried}");
+}

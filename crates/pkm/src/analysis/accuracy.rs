@@ -59,7 +59,14 @@ impl KindTolerances {
             if !(v >= 0.0 && v <= max) {
                 return Err(Error::InvalidInput {
                     what: what.into(),
-                    message: format!("expected a value from 0 to {max:e} {unit}, found {v:e}"),
+                    message: format!(
+                        "expected a value from 0 to {max:e} {unit}, found {}",
+                        if v.abs() > max {
+                            format!("{v:e}")
+                        } else {
+                            format!("{v}")
+                        }
+                    ),
                 });
             }
         }

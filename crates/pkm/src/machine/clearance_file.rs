@@ -15,7 +15,7 @@
 
 use serde::Deserialize;
 
-use super::source::{Seg, Source};
+use super::source::{Exact, Seg, Source};
 use crate::accuracy::clearance::{JointClearance, JointType, PassiveJoint};
 use crate::error::Result;
 
@@ -29,7 +29,7 @@ struct ClearanceEntry {
     #[serde(default)]
     bearing_length: Option<f64>,
     #[serde(default)]
-    axis: Option<[f64; 3]>,
+    axis: Option<Exact<3>>,
     #[serde(default)]
     lever: Option<f64>,
 }

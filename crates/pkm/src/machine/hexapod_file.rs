@@ -6,7 +6,7 @@ use nalgebra::Vector6;
 use serde::Deserialize;
 
 use super::reference::Reference;
-use super::source::{Seg, Source};
+use super::source::{Exact, Seg, Source};
 use super::{v3, Model};
 use crate::error::Error;
 use crate::hexapod::{HexStrut, Hexapod, JointCone};
@@ -24,8 +24,8 @@ pub(super) struct HexapodFile {
     name: Option<String>,
     #[serde(default)]
     description: Option<String>,
-    base_joints: BTreeMap<String, [f64; 3]>,
-    platform_joints: BTreeMap<String, [f64; 3]>,
+    base_joints: BTreeMap<String, Exact<3>>,
+    platform_joints: BTreeMap<String, Exact<3>>,
     struts: Vec<super::StrutFile>,
     tool: ToolFile,
     #[serde(default)]
@@ -42,24 +42,24 @@ pub(super) struct HexapodFile {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct ToolFile {
-    tip: [f64; 3],
+    tip: Exact<3>,
 }
 
 #[derive(Debug, Deserialize, Default)]
 #[serde(deny_unknown_fields)]
 struct LimitsFile {
     #[serde(default)]
-    base_joint_axis: Option<[f64; 3]>,
+    base_joint_axis: Option<Exact<3>>,
     #[serde(default)]
     base_joint_max_angle: Option<f64>,
     #[serde(default)]
-    platform_joint_axis: Option<[f64; 3]>,
+    platform_joint_axis: Option<Exact<3>>,
     #[serde(default)]
     platform_joint_max_angle: Option<f64>,
     #[serde(default)]
-    base_joint_axes: BTreeMap<String, [f64; 3]>,
+    base_joint_axes: BTreeMap<String, Exact<3>>,
     #[serde(default)]
-    platform_joint_axes: BTreeMap<String, [f64; 3]>,
+    platform_joint_axes: BTreeMap<String, Exact<3>>,
     #[serde(default)]
     strut_diameter: Option<f64>,
 }
@@ -75,9 +75,9 @@ struct CalibrationFile {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct HomeFile {
-    position: [f64; 3],
+    position: Exact<3>,
     #[serde(default)]
-    angles: Option<[f64; 3]>,
+    angles: Option<Exact<3>>,
 }
 
 fn key(k: &str) -> Seg {
@@ -117,8 +117,8 @@ pub(super) fn build(src: &Source, f: HexapodFile) -> Result<super::Parts, Error>
     // Per-joint axes (a universal joint is mounted along its own axis on a real
     // machine) override the common one; they need the angle and a known joint.
     let per_joint = |which: &str,
-                     axes: &BTreeMap<String, [f64; 3]>,
-                     joints: &BTreeMap<String, [f64; 3]>,
+                     axes: &BTreeMap<String, Exact<3>>,
+                     joints: &BTreeMap<String, Exact<3>>,
                      common: Option<JointCone>|
      -> Result<BTreeMap<String, JointCone>, Error> {
         let field = format!("{which}_joint_axes");
@@ -186,7 +186,7 @@ pub(super) fn build(src: &Source, f: HexapodFile) -> Result<super::Parts, Error>
         });
     }
     let struts: [HexStrut; 6] = struts.try_into().expect("six struts checked above");
-    let a = f.home.angles.unwrap_or([0.0; 3]).map(f64::to_radians);
+    let a = f.home.angles.unwrap_or_default().0.map(f64::to_radians);
     let a = Convention::Rpy.from_matrix(&Convention::Rpy.to_matrix(a));
     let hp = f.home.position;
     let mut h = Hexapod::new(

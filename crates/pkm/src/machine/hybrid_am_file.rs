@@ -8,7 +8,7 @@ use nalgebra::Vector6;
 use serde::Deserialize;
 
 use super::reference::Reference;
-use super::source::{Seg, Source};
+use super::source::{Exact, Seg, Source};
 use super::{v3, Model};
 use crate::error::Error;
 use crate::hybrid_am::{HybridAm, Leg};
@@ -28,8 +28,8 @@ pub(super) struct HybridAmFile {
     name: Option<String>,
     #[serde(default)]
     description: Option<String>,
-    carriage_joints: BTreeMap<String, [f64; 3]>,
-    platform_joints: BTreeMap<String, [f64; 3]>,
+    carriage_joints: BTreeMap<String, Exact<3>>,
+    platform_joints: BTreeMap<String, Exact<3>>,
     struts: Vec<StrutFile>,
     tool: ToolFile,
     #[serde(default)]
@@ -50,7 +50,7 @@ struct StrutFile {
     carriage: String,
     platform: String,
     length: f64,
-    stroke: [f64; 2],
+    stroke: Exact<2>,
     #[serde(default)]
     max_velocity: Option<f64>,
     #[serde(default)]
@@ -60,7 +60,7 @@ struct StrutFile {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct ToolFile {
-    tip: [f64; 3],
+    tip: Exact<3>,
     #[serde(default)]
     tilt: f64,
 }
@@ -71,9 +71,9 @@ struct TableFile {
     #[serde(default = "table_name")]
     name: String,
     #[serde(default)]
-    centre: [f64; 3],
+    centre: Exact<3>,
     #[serde(default = "table_range")]
-    range: [f64; 2],
+    range: Exact<2>,
     #[serde(default)]
     max_velocity: Option<f64>,
     #[serde(default)]
@@ -84,15 +84,15 @@ fn table_name() -> String {
     "C".into()
 }
 
-fn table_range() -> [f64; 2] {
-    [-360.0, 360.0]
+fn table_range() -> Exact<2> {
+    Exact([-360.0, 360.0])
 }
 
 impl Default for TableFile {
     fn default() -> Self {
         TableFile {
             name: table_name(),
-            centre: [0.0; 3],
+            centre: Exact([0.0; 3]),
             range: table_range(),
             max_velocity: None,
             max_acceleration: None,
@@ -104,13 +104,13 @@ impl Default for TableFile {
 #[serde(deny_unknown_fields)]
 struct LimitsFile {
     #[serde(default)]
-    tilt: Option<[f64; 2]>,
+    tilt: Option<Exact<2>>,
     #[serde(default)]
-    carriage_joint_axis: Option<[f64; 3]>,
+    carriage_joint_axis: Option<Exact<3>>,
     #[serde(default)]
     carriage_joint_max_angle: Option<f64>,
     #[serde(default)]
-    platform_joint_axis: Option<[f64; 3]>,
+    platform_joint_axis: Option<Exact<3>>,
     #[serde(default)]
     platform_joint_max_angle: Option<f64>,
     #[serde(default)]
@@ -120,16 +120,16 @@ struct LimitsFile {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct HomeFile {
-    position: [f64; 3],
+    position: Exact<3>,
     #[serde(default)]
-    angles: Option<[f64; 3]>,
+    angles: Option<Exact<3>>,
 }
 
 fn key(k: &str) -> Seg {
     Seg::Key(k.into())
 }
 
-fn ordered(src: &Source, path: &[Seg], r: [f64; 2], unit: &str) -> Result<Range, Error> {
+fn ordered(src: &Source, path: &[Seg], r: Exact<2>, unit: &str) -> Result<Range, Error> {
     if !(r[0] < r[1]) {
         return Err(src.error(
             path,
@@ -167,7 +167,7 @@ fn legs(src: &Source, f: &HybridAmFile) -> Result<[Leg; 4], Error> {
         if earlier.iter().any(|o| o.name == s.name) || s.name == f.table.name {
             return Err(src.error(&p("name"), format!("drive name `{}` is used twice", s.name)));
         }
-        let lookup = |joints: &BTreeMap<String, [f64; 3]>, name: &str, field: &str| {
+        let lookup = |joints: &BTreeMap<String, Exact<3>>, name: &str, field: &str| {
             if earlier.iter().any(|o| match field {
                 "carriage" => o.carriage == name,
                 _ => o.platform == name,
@@ -266,7 +266,7 @@ pub(super) fn build(src: &Source, f: HybridAmFile) -> Result<super::Parts, Error
             ),
         ));
     }
-    let a = f.home.angles.unwrap_or([0.0; 3]);
+    let a = f.home.angles.unwrap_or_default();
     if a[0] != 0.0 {
         return Err(src.error(
             &[key("home"), key("angles")],

@@ -21,6 +21,7 @@ use std::path::Path;
 
 use crate::error::{Error, Result};
 use crate::mechanism::Mechanism;
+use source::Exact;
 
 pub use reference::Reference;
 pub use registry::{Analysis, FileType, Model, StrutVisitor, FILE_TYPES};
@@ -28,7 +29,8 @@ pub use source::{line_col, MAX_MAGNITUDE};
 pub use strut_writer::{with_strut_geometry, StrutGeometry};
 pub use tolerance_file::{read_deviations, read_tolerances};
 
-pub(crate) fn v3(a: [f64; 3]) -> nalgebra::Vector3<f64> {
+pub(crate) fn v3(a: impl Into<[f64; 3]>) -> nalgebra::Vector3<f64> {
+    let a: [f64; 3] = a.into();
     nalgebra::Vector3::new(a[0], a[1], a[2])
 }
 
@@ -36,8 +38,9 @@ pub(crate) fn v3(a: [f64; 3]) -> nalgebra::Vector3<f64> {
 pub(crate) fn length_range(
     src: &source::Source,
     path: &[source::Seg],
-    r: [f64; 2],
+    r: impl Into<[f64; 2]>,
 ) -> Result<crate::limits::Range> {
+    let r: [f64; 2] = r.into();
     if r[0] < 0.0 || r[1] < 0.0 {
         return Err(src.error(
             path,
@@ -81,7 +84,7 @@ pub(crate) fn positive_opt(
 /// error.
 pub(crate) fn joint_cone(
     src: &source::Source,
-    axis: Option<[f64; 3]>,
+    axis: Option<Exact<3>>,
     default_axis: [f64; 3],
     angle: Option<f64>,
     which: &str,
@@ -107,7 +110,7 @@ pub(crate) fn joint_cone(
             format!("expected an angle in (0, 180] deg, found {a}"),
         ));
     }
-    let ax = v3(axis.unwrap_or(default_axis));
+    let ax = v3(axis.map_or(default_axis, |a| a.0));
     if !(ax.norm() > 1e-12) {
         return Err(src.error(
             &[
@@ -130,14 +133,14 @@ pub(crate) struct StrutFile {
     pub(crate) name: String,
     pub(crate) base: String,
     pub(crate) platform: String,
-    pub(crate) length: [f64; 2],
+    pub(crate) length: Exact<2>,
     #[serde(default)]
     pub(crate) max_velocity: Option<f64>,
     #[serde(default)]
     pub(crate) max_acceleration: Option<f64>,
 }
 
-type Joints = std::collections::BTreeMap<String, [f64; 3]>;
+type Joints = std::collections::BTreeMap<String, Exact<3>>;
 
 /// Checks strut `i` of `struts` (unique non-empty name, known joints, stroke, rate
 /// limits) and returns its actuator and its base and platform joint centres.
@@ -419,6 +422,32 @@ impl Machine {
             clearances: Vec::new(),
         };
         machine.clearances = clearance_file::clearances(&src, &machine.passive_joints())?;
+        // A reference pose has the values a pose takes on this machine, no more.
+        let m = machine.mechanism();
+        let counts: Vec<usize> = match m.pose_space() {
+            crate::mechanism::PoseSpace::Own => vec![m.coordinates().len()],
+            _ => vec![3, 6],
+        };
+        for (i, r) in machine.references.iter().enumerate() {
+            if !counts.contains(&r.pose.len()) {
+                return Err(src.error(
+                    &[
+                        source::Seg::Key("reference".into()),
+                        source::Seg::Index(i),
+                        source::Seg::Key("pose".into()),
+                    ],
+                    format!(
+                        "expected {} values, found {}",
+                        counts
+                            .iter()
+                            .map(|c| c.to_string())
+                            .collect::<Vec<_>>()
+                            .join(" or "),
+                        r.pose.len()
+                    ),
+                ));
+            }
+        }
         Ok(machine)
     }
 

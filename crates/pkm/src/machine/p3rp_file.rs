@@ -7,7 +7,7 @@ use nalgebra::{Vector2, Vector6};
 use serde::Deserialize;
 
 use super::reference::Reference;
-use super::source::{Seg, Source};
+use super::source::{Exact, Seg, Source};
 use super::Model;
 use crate::error::Error;
 use crate::limits::Range;
@@ -56,7 +56,7 @@ struct HeadFile {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct AxisFile {
-    stroke: [f64; 2],
+    stroke: Exact<2>,
     #[serde(default)]
     max_velocity: Option<f64>,
     #[serde(default)]
@@ -67,9 +67,9 @@ struct AxisFile {
 #[serde(deny_unknown_fields)]
 struct LimitsFile {
     #[serde(default)]
-    theta: Option<[f64; 2]>,
+    theta: Option<Exact<2>>,
     #[serde(default)]
-    rod_angle: Option<[f64; 2]>,
+    rod_angle: Option<Exact<2>>,
     #[serde(default)]
     min_transmission_angle: Option<f64>,
 }
@@ -149,7 +149,7 @@ fn axes<const N: usize>(
     Ok(out.try_into().expect("N axes pushed"))
 }
 
-fn angle_range(src: &Source, field: &str, r: Option<[f64; 2]>) -> Result<Option<Range>, Error> {
+fn angle_range(src: &Source, field: &str, r: Option<Exact<2>>) -> Result<Option<Range>, Error> {
     let Some(r) = r else { return Ok(None) };
     if !(r[0] < r[1]) || r[0] < -180.0 || r[1] > 180.0 {
         return Err(src.error(

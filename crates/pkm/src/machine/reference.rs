@@ -19,9 +19,17 @@ pub struct Reference {
     #[serde(default)]
     pub note: Option<String>,
     /// Expected joint positions (base frame, mm) by name.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact_points")]
     pub joints: BTreeMap<String, [f64; 3]>,
     /// Expected actuator values (mm or deg) by name.
     #[serde(default)]
     pub actuators: BTreeMap<String, f64>,
+}
+
+/// Points of exactly three coordinates (a fourth is refused, not dropped).
+fn exact_points<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> Result<BTreeMap<String, [f64; 3]>, D::Error> {
+    let m = BTreeMap::<String, super::source::Exact<3>>::deserialize(d)?;
+    Ok(m.into_iter().map(|(k, v)| (k, v.0)).collect())
 }

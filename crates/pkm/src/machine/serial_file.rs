@@ -5,7 +5,7 @@ use nalgebra::{Matrix3, Vector3};
 use serde::Deserialize;
 
 use super::reference::Reference;
-use super::source::{Seg, Source};
+use super::source::{Exact, Seg, Source};
 use super::{v3, Model};
 use crate::error::Error;
 use crate::limits::Range;
@@ -55,7 +55,7 @@ struct LinkFile {
     #[serde(default)]
     joint: Option<JointFile>,
     #[serde(default)]
-    translation: [f64; 3],
+    translation: Exact<3>,
     #[serde(default)]
     rotation: Option<[[f64; 3]; 3]>,
 }
@@ -75,7 +75,7 @@ struct DhFile {
 #[serde(deny_unknown_fields)]
 struct DhToolFile {
     #[serde(default)]
-    translation: [f64; 3],
+    translation: Exact<3>,
     #[serde(default)]
     rotation: Option<[[f64; 3]; 3]>,
 }
@@ -88,7 +88,7 @@ fn dh_links(rows: &[DhFile], tool: Option<&DhToolFile>) -> Vec<LinkFile> {
     let mut links = vec![LinkFile {
         name: "base".into(),
         joint: None,
-        translation: [0.0; 3],
+        translation: Exact([0.0; 3]),
         rotation: None,
     }];
     for (i, r) in rows.iter().enumerate() {
@@ -106,7 +106,7 @@ fn dh_links(rows: &[DhFile], tool: Option<&DhToolFile>) -> Vec<LinkFile> {
                 kind: r.joint.kind.clone(),
                 range: r.joint.range,
             }),
-            translation: [r.a * ct, r.a * st, r.d],
+            translation: Exact([r.a * ct, r.a * st, r.d]),
             rotation: Some(rot),
         });
     }
@@ -127,7 +127,7 @@ struct JointFile {
     name: String,
     #[serde(rename = "type")]
     kind: String,
-    range: [f64; 2],
+    range: Exact<2>,
 }
 
 #[derive(Debug, Deserialize)]

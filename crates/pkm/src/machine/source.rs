@@ -249,3 +249,58 @@ impl<'a> Source<'a> {
         }
     }
 }
+
+/// Exactly `N` numbers in a file (`[x, y, z]`, `[min, max]`): serde's fixed arrays take
+/// the first `N` of a longer list and drop the rest without a word, so a fourth
+/// coordinate or a third bound would pass unnoticed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Exact<const N: usize>(pub [f64; N]);
+
+impl<const N: usize> Default for Exact<N> {
+    fn default() -> Self {
+        Exact([0.0; N])
+    }
+}
+
+impl<const N: usize> std::ops::Deref for Exact<N> {
+    type Target = [f64; N];
+    fn deref(&self) -> &[f64; N] {
+        &self.0
+    }
+}
+
+impl<const N: usize> From<Exact<N>> for [f64; N] {
+    fn from(e: Exact<N>) -> [f64; N] {
+        e.0
+    }
+}
+
+impl<'de, const N: usize> serde::Deserialize<'de> for Exact<N> {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Numbers<const N: usize>;
+        impl<'de, const N: usize> serde::de::Visitor<'de> for Numbers<N> {
+            type Value = Exact<N>;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                write!(f, "an array of {N} numbers")
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                mut seq: A,
+            ) -> Result<Exact<N>, A::Error> {
+                let mut out = [0.0; N];
+                let mut n = 0;
+                while let Some(v) = seq.next_element::<f64>()? {
+                    if n < N {
+                        out[n] = v;
+                    }
+                    n += 1;
+                }
+                if n != N {
+                    return Err(serde::de::Error::invalid_length(n, &self));
+                }
+                Ok(Exact(out))
+            }
+        }
+        d.deserialize_seq(Numbers::<N>)
+    }
+}

@@ -6,7 +6,7 @@ use nalgebra::{Vector3, Vector6};
 use serde::Deserialize;
 
 use super::reference::Reference;
-use super::source::{Seg, Source};
+use super::source::{Exact, Seg, Source};
 use super::{length_range, v3, Model};
 use crate::error::Error;
 use crate::rotation::Convention;
@@ -25,8 +25,8 @@ pub(super) struct TripodFile {
     #[serde(default)]
     description: Option<String>,
     constraint: Constraint,
-    base_joints: BTreeMap<String, [f64; 3]>,
-    platform_joints: BTreeMap<String, [f64; 3]>,
+    base_joints: BTreeMap<String, Exact<3>>,
+    platform_joints: BTreeMap<String, Exact<3>>,
     struts: Vec<super::StrutFile>,
     tool: ToolFile,
     #[serde(default)]
@@ -46,7 +46,7 @@ pub(super) struct TripodFile {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct CalibrationFile {
-    zero_lengths: [f64; 3],
+    zero_lengths: Exact<3>,
 }
 
 #[derive(Debug, Deserialize, Clone, Copy, PartialEq)]
@@ -59,7 +59,7 @@ enum Constraint {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct ToolFile {
-    tip: [f64; 3],
+    tip: Exact<3>,
 }
 
 #[derive(Debug, Deserialize, Default)]
@@ -74,17 +74,17 @@ struct LimitsFile {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct HomeFile {
-    position: [f64; 3],
+    position: Exact<3>,
     #[serde(default)]
-    angles: Option<[f64; 3]>,
+    angles: Option<Exact<3>>,
 }
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct CentreLegFile {
-    base: [f64; 3],
+    base: Exact<3>,
     #[serde(default)]
-    length: Option<[f64; 2]>,
+    length: Option<Exact<2>>,
 }
 
 fn key(k: &str) -> Seg {
@@ -198,7 +198,7 @@ pub(super) fn build(src: &Source, f: TripodFile) -> Result<super::Parts, Error> 
                 "expected three positive strut lengths (mm)",
             ));
         }
-        geometry.zero_lengths = Some(nalgebra::Vector3::from(c.zero_lengths));
+        geometry.zero_lengths = Some(nalgebra::Vector3::from(c.zero_lengths.0));
     }
     let model = match f.constraint {
         Constraint::Translational => {
@@ -208,7 +208,7 @@ pub(super) fn build(src: &Source, f: TripodFile) -> Result<super::Parts, Error> 
                     "a `translational` tripod has no centre leg; set constraint = \"centre-leg\" or remove this table",
                 ));
             }
-            let a = f.home.angles.unwrap_or([0.0; 3]);
+            let a = f.home.angles.unwrap_or_default().0;
             let a = a.map(f64::to_radians);
             let p = f.home.position;
             // Home angles are in the default convention; normalise through the matrix so
