@@ -173,11 +173,13 @@ fn unreadable_file_names_the_file() {
     );
 }
 
-/// Absurd magnitudes (issue 17: a value of 1e300 made `pkm report` run for ever) are
-/// refused at load, naming the field and its line, in every example machine file and
-/// every numeric field tried; a URDF too.
-#[test]
-fn absurd_magnitudes_are_refused_with_their_field() {
+/// Every example machine file with one line replaced in turn by each line `mutate`
+/// gives for it: the file must be refused at that line, and `check` sees the bad line
+/// and the error. Returns how many were tried.
+fn each_mutated_example(
+    mutate: impl Fn(&str) -> Vec<String>,
+    check: impl Fn(&str, &Error),
+) -> usize {
     let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/machines");
     let mut tried = 0;
     for entry in std::fs::read_dir(dir).unwrap() {
@@ -185,33 +187,55 @@ fn absurd_magnitudes_are_refused_with_their_field() {
         let text = std::fs::read_to_string(&path).unwrap();
         let lines: Vec<&str> = text.lines().collect();
         for (i, line) in lines.iter().enumerate() {
+            for bad_line in mutate(line) {
+                let mut bad_lines = lines.clone();
+                bad_lines[i] = &bad_line;
+                let e = Machine::from_toml_str(&bad_lines.join("\n"), "bad.toml").unwrap_err();
+                assert_eq!(
+                    parts(&e).0,
+                    Some(i + 1),
+                    "{}: {bad_line}: {e}",
+                    path.display()
+                );
+                check(&bad_line, &e);
+                tried += 1;
+            }
+        }
+    }
+    tried
+}
+
+/// Absurd magnitudes (issue 17: a value of 1e300 made `pkm report` run for ever) are
+/// refused at load, naming the field and its line, in every example machine file and
+/// every numeric field tried; a URDF too.
+#[test]
+fn absurd_magnitudes_are_refused_with_their_field() {
+    let tried = each_mutated_example(
+        |line| {
             let Some((key, value)) = line.split_once(" = ") else {
-                continue;
+                return vec![];
             };
             let value = value.trim_start_matches('[').trim_start();
             if key.trim_start().starts_with('#')
                 || !value.starts_with(|c: char| c.is_ascii_digit() || c == '-')
             {
-                continue;
+                return vec![];
             }
             let end = value
                 .find(|c: char| !(c.is_ascii_digit() || ".-+eE_".contains(c)))
                 .unwrap_or(value.len());
             let start = line.find(value).unwrap();
-            let mut bad_lines = lines.clone();
-            let bad_line = format!("{}1e300{}", &line[..start], &line[start + end..]);
-            bad_lines[i] = &bad_line;
-            let bad = bad_lines.join("\n");
-            let e = Machine::from_toml_str(&bad, "bad.toml").unwrap_err();
-            let (at, field, message) = parts(&e);
-            assert_eq!(at, Some(i + 1), "{}: {bad_line}: {e}", path.display());
-            assert!(message.contains("magnitude of at most 1e6"), "{e}");
+            vec![format!("{}1e300{}", &line[..start], &line[start + end..])]
+        },
+        |bad, e| {
+            let (_, field, message) = parts(e);
+            assert!(message.contains("magnitude of at most 1e6"), "{bad}: {e}");
             assert!(!field.is_empty(), "{e}");
-            tried += 1;
-        }
-    }
+        },
+    );
     assert!(tried > 100, "{tried}");
     // Integers too; the bound itself is accepted.
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/machines");
     let text = std::fs::read_to_string(format!("{dir}/hexapod-seed001.toml")).unwrap();
     assert!(text.contains("rapid = 30000.0"));
     let at = Machine::from_toml_str(&text.replace("rapid = 30000.0", "rapid = 1000000"), "ok");
@@ -243,19 +267,14 @@ fn tempfile_dir() -> std::path::PathBuf {
 /// every numeric array of every example machine file.
 #[test]
 fn arrays_with_more_or_fewer_values_are_refused() {
-    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/machines");
-    let mut tried = 0;
-    for entry in std::fs::read_dir(dir).unwrap() {
-        let path = entry.unwrap().path();
-        let text = std::fs::read_to_string(&path).unwrap();
-        let lines: Vec<&str> = text.lines().collect();
-        for (i, line) in lines.iter().enumerate() {
+    let tried = each_mutated_example(
+        |line| {
             let Some((key, value)) = line.split_once(" = [") else {
-                continue;
+                return vec![];
             };
             // One-line arrays of numbers (not of strings, not nested).
             let Some(close) = value.find(']') else {
-                continue;
+                return vec![];
             };
             let inner = &value[..close];
             if key.trim_start().starts_with('#')
@@ -263,28 +282,23 @@ fn arrays_with_more_or_fewer_values_are_refused() {
                 || inner.contains('"')
                 || !inner.contains(',')
             {
-                continue;
+                return vec![];
             }
-            for bad_inner in [
-                format!("{inner}, 1.0"),
-                inner[..inner.rfind(',').unwrap()].to_string(),
-            ] {
-                let bad_line = format!("{key} = [{bad_inner}{}", &value[close..]);
-                let mut bad_lines = lines.clone();
-                bad_lines[i] = &bad_line;
-                let bad = bad_lines.join("\n");
-                let e = Machine::from_toml_str(&bad, "bad.toml").unwrap_err();
-                let (at, _, message) = parts(&e);
-                assert_eq!(at, Some(i + 1), "{}: {bad_line}: {e}", path.display());
-                assert!(
-                    message.contains("invalid length")
-                        || message.contains("values, found")
-                        || message.contains("values (mm, deg), found"),
-                    "{bad_line}: {e}"
-                );
-                tried += 1;
-            }
-        }
-    }
+            let fewer = &inner[..inner.rfind(',').unwrap()];
+            [format!("{inner}, 1.0"), fewer.to_string()]
+                .into_iter()
+                .map(|b| format!("{key} = [{b}{}", &value[close..]))
+                .collect()
+        },
+        |bad, e| {
+            let message = parts(e).2;
+            assert!(
+                message.contains("invalid length")
+                    || message.contains("values, found")
+                    || message.contains("values (mm, deg), found"),
+                "{bad}: {e}"
+            );
+        },
+    );
     assert!(tried > 100, "{tried}");
 }
