@@ -302,3 +302,29 @@ fn arrays_with_more_or_fewer_values_are_refused() {
     );
     assert!(tried > 100, "{tried}");
 }
+
+/// Three exactly coincident joints (issue 17: the relative area test's bound underflowed
+/// to zero and passed them) are refused on both tripods, for base and platform.
+#[test]
+fn coincident_tripod_joints_are_refused() {
+    let centre_leg = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../examples/machines/tripod-centre-leg.toml"
+    ))
+    .unwrap();
+    for text in [GOOD.to_string(), centre_leg] {
+        for table in ["[base_joints]", "[platform_joints]"] {
+            let start = text.find(table).unwrap();
+            let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+            let first = text[..start].lines().count() + 1;
+            for l in lines.iter_mut().skip(first).take(3) {
+                let (k, _) = l.split_once(" = ").unwrap();
+                *l = format!("{k} = [5.0, 5.0, 5.0]");
+            }
+            let e = err(&lines.join("\n"));
+            let (_, field, msg) = parts(&e);
+            assert_eq!(format!("[{field}]"), table, "{e}");
+            assert!(msg.contains("coincide"), "{msg}");
+        }
+    }
+}

@@ -101,8 +101,10 @@ fn check_triangle(
     let scale = (pts[1] - pts[0])
         .norm()
         .max((pts[2] - pts[0]).norm())
-        .max(1e-300);
-    if area2 < 1e-9 * scale * scale {
+        .max((pts[2] - pts[1]).norm());
+    // Three joints within a micrometre of each other coincide (the relative test alone
+    // would pass them: its bound underflows to zero).
+    if !(scale > 1e-3 && area2 >= 1e-9 * scale * scale) {
         return Err(src.error(
             path,
             format!("the three {what} joints are collinear or coincide; they must span a triangle"),
