@@ -1,4 +1,5 @@
-//! Bad input and closed pipes: pkm ends quietly, never with a panic.
+//! Bad input, awkward machines and closed pipes: pkm answers or ends quietly, never
+//! with a panic.
 
 mod common;
 use common::path;
@@ -50,4 +51,28 @@ fn a_closed_pipe_ends_the_command_quietly() {
 #[cfg(unix)]
 fn libc_sigpipe() -> i32 {
     13
+}
+
+/// A robot whose zero pose is singular (issue 17: `pkm check` failed on the UR5 with
+/// "singular configuration") is a valid file with a warning.
+#[test]
+fn a_singular_robot_home_is_a_warning() {
+    let o = common::pkm()
+        .args(["check", &path("examples/robots/ur5-like.urdf")])
+        .output()
+        .unwrap();
+    common::ok(&o);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("valid serial machine"), "{out}");
+    assert!(
+        out.contains("warning     the home pose is singular"),
+        "{out}"
+    );
+    let o = common::pkm()
+        .args(["check", &path("examples/robots/ur5-like.urdf"), "--json"])
+        .output()
+        .unwrap();
+    common::ok(&o);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["home"]["singular"], serde_json::Value::Bool(true));
 }

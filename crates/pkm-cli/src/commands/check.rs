@@ -72,6 +72,7 @@ pub fn run(a: &CheckArgs) -> Result<u8> {
                 "actuators": actuators_json(m, &q),
                 "violations": violations,
                 "jacobian_condition": cond,
+                "singular": !cond.is_finite(),
                 "characteristic_length_mm": lc,
             },
             "references": references,
@@ -121,6 +122,13 @@ pub fn run(a: &CheckArgs) -> Result<u8> {
             String::new()
         };
         println!("jacobian    condition number {cond:.3} at home (driven columns, 2-norm{scale})");
+        if !cond.is_finite() {
+            println!(
+                "warning     the home pose is singular: the Jacobian loses rank there (a robot's \
+                 stretched zero pose often is); the file is valid, but poses near home need \
+                 fast joint motion"
+            );
+        }
         if violations.is_empty() {
             println!("home limits all satisfied");
         } else {

@@ -455,13 +455,23 @@ impl Mechanism<6, 6> for SerialArm {
         self.coords_jacobian(x, &j)
     }
 
-    /// The scaled condition number from the joints already solved (no second inverse).
+    /// The scaled condition number from the joints already solved (no second inverse);
+    /// infinite at a singular configuration (a robot's stretched zero pose often is).
     fn condition_at(&self, x: &Vector6<f64>, q: &Vector6<f64>) -> Result<f64> {
         let (_, j) = self.pose_and_jacobian(q);
-        let jx = self.coords_jacobian(x, &j)?;
-        Ok(crate::linalg::condition_number(
-            &crate::mechanism::scale_driven_columns(self, &jx),
-        ))
+        match self.coords_jacobian(x, &j) {
+            Ok(jx) => Ok(crate::linalg::condition_number(
+                &crate::mechanism::scale_driven_columns(self, &jx),
+            )),
+            Err(Error::Singular { .. }) => Ok(f64::INFINITY),
+            Err(e) => Err(e),
+        }
+    }
+
+    /// [`Mechanism::condition_at`] at the joints of `x`'s inverse solution.
+    fn condition(&self, x: &Vector6<f64>) -> Result<f64> {
+        let q = self.inverse(x)?;
+        self.condition_at(x, &q)
     }
 
     /// Closed form: the chain's pose at `q` (`start` is not needed).
