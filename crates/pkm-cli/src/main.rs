@@ -28,8 +28,10 @@ pub const EXIT_UNREACHABLE: u8 = 3;
     about = "Kinematics and accuracy of parallel, hybrid and serial machine tools and robots",
     long_about = "Kinematics and accuracy of parallel, hybrid and serial machine tools and robots.\n\n\
         Units: millimetres and degrees in files, on the command line and in outputs.\n\
-        Exit codes: 0 success, 1 bad input or error, 2 bad command line, 3 a pose that is\n\
-        unreachable (a limit is violated) or forward kinematics that found no pose.",
+        Exit codes: 0 success, 1 bad input or error, 2 bad command line (a malformed\n\
+        option, or a pose or actuator list of the wrong length or magnitude), 3 a pose that\n\
+        is unreachable (a limit is violated) or forward kinematics that found no pose.\n\
+        Output to a pipe that closes (pkm ... | head) ends pkm quietly.",
     after_help = "Examples:\n  \
         pkm report                                    # HTML report of the bundled seed-000 tripod\n  \
         pkm check examples/machines/tripod-seed000.toml\n  \
@@ -186,7 +188,20 @@ fn main() -> ExitCode {
                         | pkm::Error::Singular { .. }
                 )
             );
-            ExitCode::from(if unreachable { EXIT_UNREACHABLE } else { 1 })
+            // A malformed value on the command line, or a pose with the wrong number of
+            // values for this machine: a bad command line.
+            let bad_argument = e.downcast_ref::<poses::BadArgument>().is_some()
+                || matches!(
+                    e.downcast_ref::<pkm::Error>(),
+                    Some(pkm::Error::InvalidInput { what, .. }) if what == "pose"
+                );
+            ExitCode::from(if unreachable {
+                EXIT_UNREACHABLE
+            } else if bad_argument {
+                2
+            } else {
+                1
+            })
         }
     }
 }

@@ -1,26 +1,42 @@
 //! Reading and writing poses and actuator values at the user boundary (mm, deg).
 
-use anyhow::{bail, Result};
+use anyhow::Result;
 use pkm::pose::rotation_matrix;
 use pkm::{Convention, DynMechanism};
 
 pub use pkm::dynamic::{pose_from_user, pose_names};
 use serde_json::{json, Map, Value};
 
-/// Parses `v1,v2,...` into finite numbers.
+/// A malformed command-line value: pkm exits with 2, as for any bad command line.
+#[derive(Debug)]
+pub struct BadArgument(pub String);
+
+impl std::fmt::Display for BadArgument {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for BadArgument {}
+
+/// Parses `v1,v2,...` (a command-line list) into finite numbers of a sane magnitude
+/// (at most [`pkm::machine::MAX_MAGNITUDE`], as in machine files).
 pub fn parse_list(text: &str, what: &str) -> Result<Vec<f64>> {
     let mut out = Vec::new();
     for (i, part) in text.split(',').enumerate() {
         let part = part.trim();
+        let bad = |m: String| Err(BadArgument(format!("{what}: value {} {m}", i + 1)).into());
         let v: f64 = match part.parse() {
             Ok(v) => v,
-            Err(_) => bail!("{what}: value {} `{part}` is not a number", i + 1),
+            Err(_) => return bad(format!("`{part}` is not a number")),
         };
         if !v.is_finite() {
-            bail!(
-                "{what}: value {} is {part}, expected a finite number",
-                i + 1
-            );
+            return bad(format!("is {part}, expected a finite number"));
+        }
+        if v.abs() > pkm::machine::MAX_MAGNITUDE {
+            return bad(format!(
+                "is {part}, beyond the largest magnitude pkm takes (1e6 mm or deg)"
+            ));
         }
         out.push(v);
     }
@@ -31,7 +47,7 @@ pub fn parse_list(text: &str, what: &str) -> Result<Vec<f64>> {
 pub fn actuators_from_user(m: &dyn DynMechanism, vals: &[f64]) -> Result<Vec<f64>> {
     let a = m.actuators();
     if vals.len() != a.len() {
-        bail!(
+        return Err(BadArgument(format!(
             "actuators: expected {} values ({}), got {}",
             a.len(),
             a.iter()
@@ -39,7 +55,8 @@ pub fn actuators_from_user(m: &dyn DynMechanism, vals: &[f64]) -> Result<Vec<f64
                 .collect::<Vec<_>>()
                 .join(","),
             vals.len()
-        );
+        ))
+        .into());
     }
     Ok(vals
         .iter()

@@ -225,17 +225,29 @@ fn bad_files_give_located_errors() {
     }
 }
 
+/// A malformed value on the command line exits with 2, the documented code for a bad
+/// command line (issue 17: these exited with 1), and names the value; a pose the
+/// machine cannot take exits with 3.
 #[test]
 fn bad_command_line_values() {
     let m = seed000();
     let (err, code) = stderr_of(&["ik", &m, "--pose", "1,2"]);
-    assert_eq!(code, 1);
+    assert_eq!(code, 2);
     assert!(err.contains("expected 3 or 6 values"), "{err}");
     let (err, code) = stderr_of(&["ik", &m, "--pose", "1,2,nan"]);
-    assert_eq!(code, 1);
+    assert_eq!(code, 2);
     assert!(err.contains("finite"), "{err}");
+    let (err, code) = stderr_of(&["ik", &m, "--pose=1e308,0,0"]);
+    assert_eq!(code, 2);
+    assert!(
+        err.contains("value 1 is 1e308, beyond the largest magnitude"),
+        "{err}"
+    );
+    let (err, code) = stderr_of(&["ik", &m, "--pose", "1,x,3"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("value 2 `x` is not a number"), "{err}");
     let (err, code) = stderr_of(&["fk", &m, "--actuators", "200,200"]);
-    assert_eq!(code, 1);
+    assert_eq!(code, 2);
     assert!(err.contains("expected 3 values (e,f,g)"), "{err}");
     let (err, code) = stderr_of(&["fk", &m, "--actuators", "10,10,400"]);
     assert_eq!(code, 3);
