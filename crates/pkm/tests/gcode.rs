@@ -120,3 +120,24 @@ fn malformed_programs_name_the_line() {
         assert!(e.contains(want), "{text:?}: {e}");
     }
 }
+
+/// Issue 17: `F1e300` said "unsupported word E300" (a word the user never wrote) and a
+/// UTF-8 byte-order mark said "Unknown content"; now the exponent is explained and the
+/// mark is not content.
+#[test]
+fn exponents_are_explained_and_a_byte_order_mark_is_ignored() {
+    let mut g = pkm::motion::gcode::Interpreter::new([0.0; 6]);
+    let e = g.line("G1 X10 F1e300", 1).unwrap_err().to_string();
+    assert!(
+        e.contains("unsupported word E300") && e.contains("no exponent"),
+        "{e}"
+    );
+    // A real E word (an extruder axis) keeps the plain message.
+    let e = g.line("G1 X10 E5 F100", 2).unwrap_err().to_string();
+    assert!(
+        e.contains("unsupported word E5") && !e.contains("exponent"),
+        "{e}"
+    );
+    let mv = g.line("\u{feff}G1 X10 F100", 3).unwrap().unwrap();
+    assert_eq!(mv.end[0], 10.0);
+}

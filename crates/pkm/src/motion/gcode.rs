@@ -104,6 +104,24 @@ fn err(line: u64, message: String) -> Error {
 
 const TWO_PI: f64 = std::f64::consts::TAU;
 
+/// When a word `E` follows a digit directly (`F1e300`), the writer meant an exponent,
+/// which G-code numbers do not have: the hint to add to the "unsupported word" error.
+fn exponent_hint(text: &str) -> &'static str {
+    let b = text.as_bytes();
+    let glued = (1..b.len()).any(|i| {
+        b[i].eq_ignore_ascii_case(&b'e') && b[i - 1].is_ascii_digit() && {
+            let next = b.get(i + 1).copied().unwrap_or(b' ');
+            next.is_ascii_digit() || next == b'-' || next == b'+'
+        }
+    });
+    if glued {
+        " (G-code numbers have no exponent: `1e300` reads as 1 and a word E300; write the \
+         number out)"
+    } else {
+        ""
+    }
+}
+
 impl Interpreter {
     /// A program starting at `position` (mm, rad), G17 G21 G90 G91.1, no feed.
     pub fn new(position: [f64; 6]) -> Self {
@@ -121,6 +139,8 @@ impl Interpreter {
 
     /// Interprets one source line (1-based number `line`); returns its move, if any.
     pub fn line(&mut self, text: &str, line: u64) -> Result<Option<GMove>> {
+        // A UTF-8 byte-order mark (editors on Windows write one) is not content.
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         if text.trim().is_empty() || text.trim() == "%" {
             return Ok(None);
         }
@@ -169,7 +189,18 @@ impl Interpreter {
                 words.push((l, value(w.span, w.letter)?));
             }
         }
-        self.apply(codes, words, line)
+        let glued_exponent = words.iter().any(|w| w.0 == 'E') && !exponent_hint(text).is_empty();
+        self.apply(codes, words, line).map_err(|e| match e {
+            Error::InvalidInput { what, message }
+                if glued_exponent && message.starts_with("unsupported word E") =>
+            {
+                Error::InvalidInput {
+                    what,
+                    message: format!("{message}{}", exponent_hint(text)),
+                }
+            }
+            e => e,
+        })
     }
 
     fn apply(
