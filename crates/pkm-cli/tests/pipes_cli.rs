@@ -76,3 +76,29 @@ fn a_singular_robot_home_is_a_warning() {
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v["home"]["singular"], serde_json::Value::Bool(true));
 }
+
+/// Grid steps of zero, negative, NaN or absurdly fine (issue 17: `--step 0` overflowed
+/// into a panic) are refused with what was expected.
+#[test]
+fn bad_grid_steps_are_refused() {
+    let tripod = path("examples/machines/tripod-seed000.toml");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().display().to_string();
+    for (flag, want) in [
+        ("--step=0", "expected a step > 0"),
+        ("--step=-1", "expected a step > 0"),
+        ("--step=nan", "expected a step > 0, found NaN"),
+        ("--step=1e-9", "points; give a larger --step"),
+        ("--forward-step=0", "expected a step > 0"),
+    ] {
+        let mut args = vec!["workspace", tripod.as_str(), flag, "--out", out.as_str()];
+        if flag.starts_with("--forward") {
+            args.push("--forward");
+        }
+        let o = common::pkm().args(&args).output().unwrap();
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{flag}");
+        assert!(!stderr.contains("panicked"), "{flag}: {stderr}");
+        assert!(stderr.contains(want), "{flag}: {stderr}");
+    }
+}

@@ -33,8 +33,15 @@ pub struct GridAxis {
 
 impl GridAxis {
     /// Number of grid values.
+    /// Saturates at `usize::MAX` for a step that is not positive or too fine, so a size
+    /// check refuses it instead of arithmetic overflowing.
     pub fn count(&self) -> usize {
-        ((self.max - self.min) / self.step + 1e-9).floor() as usize + 1
+        let n = ((self.max - self.min) / self.step + 1e-9).floor();
+        if (0.0..1e15).contains(&n) {
+            n as usize + 1
+        } else {
+            usize::MAX
+        }
     }
 
     /// The `i`-th value.
@@ -186,16 +193,37 @@ pub(crate) fn grid_point<const N: usize>(
 
 /// Checks grid axes against `n` coordinates.
 pub(crate) fn check_axes(axes: &[GridAxis], n: usize) -> Result<()> {
-    for a in axes {
-        if a.coordinate >= n || !(a.step > 0.0) || !(a.max >= a.min) {
+    for (i, a) in axes.iter().enumerate() {
+        if a.coordinate >= n || !(a.step > 0.0) || !(a.max >= a.min) || !a.min.is_finite() {
             return Err(Error::InvalidInput {
                 what: "workspace grid".into(),
-                message: format!("bad axis {a:?}"),
+                message: format!(
+                    "axis {} (coordinate {}): expected a step > 0 and finite bounds with max >= \
+                     min, found step {}, bounds [{}, {}]",
+                    i + 1,
+                    a.coordinate,
+                    a.step,
+                    a.min,
+                    a.max
+                ),
             });
         }
     }
+    let total = axes.iter().map(|a| a.count() as f64).product::<f64>();
+    if total > MAX_GRID_POINTS as f64 {
+        return Err(Error::InvalidInput {
+            what: "workspace grid".into(),
+            message: format!(
+                "the grid has {total:.3e} points, more than {MAX_GRID_POINTS:.0e}: give a \
+                 larger step or smaller bounds"
+            ),
+        });
+    }
     Ok(())
 }
+
+/// The largest number of points a grid may have (5e7: seconds to a minute of work).
+pub const MAX_GRID_POINTS: usize = 50_000_000;
 
 /// Maps a grid of poses: for each point the base pose with the axis coordinates set,
 /// then, for spatial machines, each orientation of `orientations` (A, B, C in rad,
@@ -440,9 +468,21 @@ pub fn default_grid(
             step: step.map(|s| q(k).from_user(s)).unwrap_or((hi - lo) / 40.0),
         })
         .collect::<Vec<_>>();
+    if let Some(s) = step.filter(|s| !(*s > 0.0 && s.is_finite())) {
+        return Err(crate::Error::InvalidInput {
+            what: "grid".into(),
+            message: format!("--step: expected a step > 0, found {s}"),
+        });
+    }
     let total: f64 = axes.iter().map(|a| a.count() as f64).product();
-    if total > 5e7 {
-        return Err(crate::Error::InvalidInput { what: "grid".into(), message: format!("the grid has {total:.0} points; give a larger --step or smaller --bounds (at most 5e7)") });
+    if total > MAX_GRID_POINTS as f64 {
+        return Err(crate::Error::InvalidInput {
+            what: "grid".into(),
+            message: format!(
+                "the grid has {total:.3e} points; give a larger --step or smaller --bounds \
+                 (at most 5e7)"
+            ),
+        });
     }
     Ok(axes)
 }
