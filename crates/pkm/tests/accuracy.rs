@@ -349,3 +349,25 @@ fn absurd_kind_tolerances_are_refused() {
         );
     }
 }
+
+/// Issue 17: `--monte-carlo 10^14` grew past 600 MB before anything said no. A count
+/// beyond the limit is refused before any sample, with the memory it would need.
+#[test]
+fn monte_carlo_counts_beyond_the_limit_are_refused_up_front() {
+    let Model::Hexapod(h) = machine("hexapod-seed001.toml") else {
+        panic!()
+    };
+    let x = h.home();
+    let tol = [pkm::accuracy::Tolerance {
+        parameter: 0,
+        value: 0.01,
+        distribution: pkm::accuracy::Distribution::Uniform,
+    }];
+    let max = pkm::accuracy::monte_carlo::MAX_MONTE_CARLO;
+    for n in [0, max + 1, usize::MAX / 2] {
+        let e = monte_carlo(h.as_ref(), &x, &tol, n, 1)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("expected 1 to 3e7 samples"), "{e}");
+    }
+}

@@ -301,3 +301,60 @@ fn limits_and_feed_override_along_the_path() {
         "{e}"
     );
 }
+
+/// Issue 17: a dwell of 30 years, a feed of a micrometre per minute, 1e8 full turns
+/// and 1e11 points per move ran for hours. Each move's samples are now counted before
+/// it is sampled and a run beyond the work limit is refused at once, naming the line;
+/// the limit is the caller's to raise.
+#[test]
+fn motion_work_is_bounded_before_it_is_done() {
+    use pkm::analysis::motion::{run_motion, MotionSource, NoSink};
+    let m = load("tripod-seed000.toml");
+    let run = |program: &str, sampling: Sampling, max: u64| {
+        let t = std::time::Instant::now();
+        let r = run_motion(
+            &m,
+            MotionSource::Gcode {
+                reader: Box::new(std::io::Cursor::new(program.to_string())),
+                from: Some(vec![32.0, -32.0, -290.0, 0.0, 0.0, 0.0]),
+            },
+            &FeedOptions {
+                max_samples: max,
+                ..Default::default()
+            },
+            sampling,
+            &mut NoSink,
+        );
+        // Refused before any work: well under a second even in a debug build.
+        assert!(t.elapsed().as_secs_f64() < 5.0);
+        r
+    };
+    let default = pkm::motion::run::DEFAULT_MAX_SAMPLES;
+    for (program, sampling, line) in [
+        ("G4 P1000000000\n", Sampling::Rate(1000.0), 1),
+        ("G1 X33 F0.000001\n", Sampling::Rate(1000.0), 1),
+        (
+            "G17 G90 G91.1\nG3 X32 Y-32 I-64 J0 P100000000 F1000\n",
+            Sampling::Rate(1000.0),
+            2,
+        ),
+        ("G1 X33 F1000\n", Sampling::Points(100_000_000_000), 1),
+    ] {
+        let e = run(program, sampling, default).unwrap_err().to_string();
+        assert!(
+            e.contains(&format!("line {line}:")) && e.contains("beyond the limit"),
+            "{program}: {e}"
+        );
+    }
+    // The limit counts the whole run: a short program passes, and fails under a limit
+    // lower than its samples, at its second move.
+    let ok = run("G1 X33 F600\nG1 X34\n", Sampling::Rate(1000.0), default).unwrap();
+    let n = ok.summary.samples;
+    assert!(n > 100, "{n}");
+    let e = run("G1 X33 F600\nG1 X34\n", Sampling::Rate(1000.0), n - 10)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("line 2:"), "{e}");
+    // The estimate rounds each move up by at most two samples.
+    assert!(run("G1 X33 F600\nG1 X34\n", Sampling::Rate(1000.0), n + 4).is_ok());
+}

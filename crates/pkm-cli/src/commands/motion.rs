@@ -67,6 +67,10 @@ pub struct MotionArgs {
     /// Points per move instead of a rate (seed 000: 101).
     #[arg(long)]
     pub points: Option<usize>,
+    /// Work limit: the most samples the run may make; a move that would cross it is
+    /// refused before it is sampled (a dwell of years, a feed of 1e-6 mm/min).
+    #[arg(long, default_value_t = pkm::motion::run::DEFAULT_MAX_SAMPLES)]
+    pub max_samples: u64,
     /// Convention of angles in --from/--to.
     #[arg(long, default_value = "rpy", value_parser = parse_convention)]
     pub rotation: Convention,
@@ -285,6 +289,7 @@ pub fn run(a: &MotionArgs) -> Result<u8> {
             .or(machine.rapid)
             .unwrap_or(10_000.0 / 60.0),
         feed: a.feed.map(|f| f / 60.0),
+        max_samples: a.max_samples,
     };
     let sampling = match (a.rate, a.points) {
         (_, Some(n)) => Sampling::Points(n),

@@ -40,9 +40,13 @@ pub struct MonteCarlo {
 /// Machines per seeded chunk.
 const CHUNK: usize = 4096;
 
+/// The most samples a Monte Carlo of geometric deviations takes (3e7: each sample's
+/// error is kept for the quantiles, about 1 GB at this count).
+pub const MAX_MONTE_CARLO: usize = 30_000_000;
+
 /// Monte Carlo of `n` machines at pose `x` with the parameters of `tol` drawn from
 /// their distributions, the others nominal: the statistics of the exact tool-point
-/// error against the nominal tool point.
+/// error against the nominal tool point. At most [`MAX_MONTE_CARLO`] samples.
 pub fn monte_carlo<M, const P: usize, const A: usize>(
     m: &M,
     x: &SVector<f64, P>,
@@ -63,10 +67,14 @@ where
             ),
         });
     }
-    if n == 0 {
+    if n == 0 || n > MAX_MONTE_CARLO {
         return Err(Error::InvalidInput {
             what: "Monte Carlo".into(),
-            message: "expected a number of samples > 0".into(),
+            message: format!(
+                "expected 1 to {MAX_MONTE_CARLO:.0e} samples, got {n} (every sample's error is \
+                 kept for the quantiles: {:.1} GB)",
+                n as f64 * std::mem::size_of::<Option<Vector3<f64>>>() as f64 / 1e9
+            ),
         });
     }
     // Prepared once (a failure here is the nominal machine's, reported as such).

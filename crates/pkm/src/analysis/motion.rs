@@ -171,6 +171,7 @@ impl Visitor for Simulate<'_, '_> {
         m: &M,
     ) -> Result<MotionRun> {
         let mut runner = Runner::new(m, self.sampling)?;
+        runner.set_max_samples(self.feed.max_samples);
         let serial_idx: Vec<usize> = match m.pose_space() {
             PoseSpace::Own => (0..P).collect(),
             _ => (0..3).collect(),

@@ -35,6 +35,10 @@ pub struct FeedOptions {
     pub rapid: f64,
     /// Replaces every programmed F (mm/s) when given.
     pub feed: Option<f64>,
+    /// The run's work limit: at most this many samples
+    /// ([`crate::motion::run::DEFAULT_MAX_SAMPLES`] by default). A move that would
+    /// cross it is refused before any of its samples is computed.
+    pub max_samples: u64,
 }
 
 impl Default for FeedOptions {
@@ -45,6 +49,7 @@ impl Default for FeedOptions {
             jerk: 20_000.0,
             rapid: 10_000.0 / 60.0,
             feed: None,
+            max_samples: crate::motion::run::DEFAULT_MAX_SAMPLES,
         }
     }
 }

@@ -114,7 +114,13 @@ pub struct Runner<'m, M, const P: usize, const A: usize> {
     /// Largest |q'| / limit and |q''| / limit seen.
     v_ratio: f64,
     a_ratio: f64,
+    /// The work limit (samples).
+    max_samples: u64,
 }
+
+/// The default work limit of a run: 2e7 samples (about 10 s on one core for a hexapod;
+/// a 100 000-line program at 1 kHz takes about 2e6).
+pub const DEFAULT_MAX_SAMPLES: u64 = 20_000_000;
 
 impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A> {
     /// A runner for mechanism `m`.
@@ -154,6 +160,7 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
             buf: Vec::new(),
             v_ratio: 0.0,
             a_ratio: 0.0,
+            max_samples: DEFAULT_MAX_SAMPLES,
         })
     }
 
@@ -165,12 +172,42 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
             .collect()
     }
 
+    /// Sets the work limit: at most `n` samples over the run.
+    pub fn set_max_samples(&mut self, n: u64) {
+        self.max_samples = n;
+    }
+
+    /// Refuses move `mv` when its samples would take the run beyond the work limit,
+    /// before any is computed: a dwell of years, a feed of a micrometre per minute, a
+    /// hundred million full turns or a billion points per move end here with the cost.
+    fn check_work(&self, mv: &Move<P>) -> Result<()> {
+        let dur = mv.profile.duration;
+        let estimate = match self.sampling {
+            Sampling::Rate(rate) => (dur * rate).ceil() + 1.0,
+            Sampling::Points(n) => n as f64,
+        };
+        let total = self.samples as f64 + estimate;
+        if !(total <= self.max_samples as f64) {
+            return Err(Error::InvalidInput {
+                what: "motion".into(),
+                message: format!(
+                    "{}the move takes {dur:.6e} s and would make {total:.3e} samples, beyond \
+                     the limit of {:.3e} (raise it with --max-samples, or sample less densely)",
+                    mv.line.map(|l| format!("line {l}: ")).unwrap_or_default(),
+                    self.max_samples as f64
+                ),
+            });
+        }
+        Ok(())
+    }
+
     /// Samples one move and passes every sample to `sink`. `last` marks the program's
     /// final move (its end instant is sampled).
     pub fn run_move<F>(&mut self, mv: &Move<P>, last: bool, sink: &mut F) -> Result<()>
     where
         F: FnMut(&Sample<P, A>) -> Result<()>,
     {
+        self.check_work(mv)?;
         let driven = self.m.driven();
         for k in 0..P {
             if !driven.contains(&k) && (mv.segment.end[k] - mv.segment.start[k]).abs() > 1e-12 {
