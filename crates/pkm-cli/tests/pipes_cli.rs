@@ -102,3 +102,49 @@ fn bad_grid_steps_are_refused() {
         assert!(stderr.contains(want), "{flag}: {stderr}");
     }
 }
+
+/// Every command takes `--json` (issue 17: `report` and `simulate-measurements` did
+/// not).
+#[test]
+fn report_and_simulate_measurements_take_json() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = common::pkm()
+        .args([
+            "report",
+            &path("examples/machines/hybrid-am-seed002.toml"),
+            "--json",
+            "--out",
+        ])
+        .arg(dir.path().join("r"))
+        .output()
+        .unwrap();
+    common::ok(&o);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let sections: Vec<&str> = v["sections"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s.as_str().unwrap())
+        .collect();
+    let html = std::fs::read_to_string(dir.path().join("r/index.html")).unwrap();
+    for s in &sections {
+        assert!(html.contains(&format!("<h2 id=\"{s}\"")), "{s}");
+    }
+    assert!(sections.contains(&"clearance"), "{sections:?}");
+    let o = common::pkm()
+        .args([
+            "simulate-measurements",
+            &path("examples/machines/hexapod-seed001.toml"),
+            "--states",
+            "20",
+            "--json",
+            "--out",
+        ])
+        .arg(dir.path().join("s"))
+        .output()
+        .unwrap();
+    common::ok(&o);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["states"], 20);
+    assert_eq!(v["true_parameters"].as_object().unwrap().len(), 42);
+}

@@ -62,6 +62,9 @@ pub struct SimulateArgs {
     /// Output directory.
     #[arg(long)]
     pub out: PathBuf,
+    /// Print truth.json (the true parameters and poses) and the files written to stdout.
+    #[arg(long)]
+    pub json: bool,
 }
 
 #[derive(Args)]
@@ -165,14 +168,20 @@ pub fn simulate_run(a: &SimulateArgs) -> Result<u8> {
         serde_json::to_string_pretty(&summary)?.as_bytes(),
         &inputs,
     )?;
-    println!(
-        "{}: {} states (+{} held out) on a true machine {} mm off nominal; wrote {}",
-        machine.mechanism().name(),
-        a.states,
-        a.holdout,
-        a.deviation,
-        a.out.display()
-    );
+    if a.json {
+        let mut v = summary;
+        v["out"] = json!(a.out.display().to_string());
+        println!("{}", serde_json::to_string_pretty(&v)?);
+    } else {
+        println!(
+            "{}: {} states (+{} held out) on a true machine {} mm off nominal; wrote {}",
+            machine.mechanism().name(),
+            a.states,
+            a.holdout,
+            a.deviation,
+            a.out.display()
+        );
+    }
     Ok(0)
 }
 

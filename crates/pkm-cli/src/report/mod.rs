@@ -26,6 +26,9 @@ pub struct ReportArgs {
     /// Output directory.
     #[arg(long, default_value = "pkm-report")]
     pub out: PathBuf,
+    /// Print where the report went and its sections as JSON.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// The bundled default machine: seed 000's tripod.
@@ -48,6 +51,16 @@ pub fn run(a: &ReportArgs) -> Result<u8> {
     let inputs: Vec<&std::path::Path> = a.machine.iter().map(|p| p.as_path()).collect();
     write_atomic(&path, html.as_bytes(), &inputs)
         .with_context(|| format!("writing the report to {}", path.display()))?;
+    if a.json {
+        let sections = section_ids(&machine);
+        let v = serde_json::json!({
+            "machine": machine.source,
+            "report": path.display().to_string(),
+            "bytes": html.len(),
+            "sections": sections,
+        });
+        println!("{}", serde_json::to_string_pretty(&v)?);
+    }
     eprintln!("wrote {}", path.display());
     Ok(0)
 }
@@ -103,6 +116,17 @@ const SECTIONS: &[Section] = &[
         render: calibration::section,
     },
 ];
+
+/// The anchors of the report's sections for `machine`, in order: the fixed ones, the
+/// analyses it has, the references when its file gives some.
+pub fn section_ids(machine: &Machine) -> Vec<&'static str> {
+    let mut v = vec!["machine", "drawing", "checks"];
+    v.extend(SECTIONS.iter().filter(|s| (s.shown)(machine)).map(|s| s.id));
+    if !machine.references.is_empty() {
+        v.push("references");
+    }
+    v
+}
 
 /// The whole report as one HTML document.
 pub fn build(machine: &Machine) -> Result<String> {
