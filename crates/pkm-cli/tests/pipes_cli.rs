@@ -148,3 +148,40 @@ fn report_and_simulate_measurements_take_json() {
     assert_eq!(v["states"], 20);
     assert_eq!(v["true_parameters"].as_object().unwrap().len(), 42);
 }
+
+/// A reading of 1e300 in a measurement file (issue 17: it surfaced as an
+/// identifiability failure naming no row) is refused at its row and column.
+#[test]
+fn an_absurd_measurement_names_its_row() {
+    let dir = tempfile::tempdir().unwrap();
+    let hex = path("examples/machines/hexapod-seed001.toml");
+    let o = common::pkm()
+        .args(["simulate-measurements", &hex, "--states", "12", "--out"])
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    common::ok(&o);
+    let file = dir.path().join("measurements.csv");
+    let text = std::fs::read_to_string(&file).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    let row = lines.iter().position(|l| l.starts_with("5,")).unwrap();
+    let mut cells: Vec<String> = lines[row].split(',').map(str::to_string).collect();
+    cells[3] = "1e300".into();
+    let bad_row = cells.join(",");
+    let mut bad: Vec<&str> = lines.clone();
+    bad[row] = &bad_row;
+    std::fs::write(&file, bad.join("\n")).unwrap();
+    let o = common::pkm()
+        .args(["calibrate", &hex, "--measurements"])
+        .arg(&file)
+        .arg("--out")
+        .arg(dir.path().join("cal"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        stderr.contains(&format!(":{}:4", row + 1)) && stderr.contains("magnitude"),
+        "{stderr}"
+    );
+}

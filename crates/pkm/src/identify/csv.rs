@@ -156,6 +156,17 @@ pub fn parse(text: &str, file: &str, actuators: &[Actuator]) -> Result<Measureme
                                     format!("expected a number, found `{c}`"),
                                 )
                             })?;
+                    // The sane magnitudes of machine files: a reading of 1e300 is a
+                    // typing error, refused at its row rather than fitted.
+                    if x.abs() > crate::machine::MAX_MAGNITUDE {
+                        return Err(error(
+                            file,
+                            line,
+                            Some(k + 1),
+                            &names[k],
+                            format!("expected a magnitude of at most 1e6 (mm, deg), found `{c}`"),
+                        ));
+                    }
                     v.push(x);
                 }
                 let na = actuators.len();
