@@ -10,7 +10,7 @@ use super::clearance_class::{per_class, ClassClearance};
 use super::clearance_path::{
     path_points, path_samples, path_worst, PathReport, PathRequest, PathSample,
 };
-use super::clearance_surface::{hemisphere_of, surface_report, worst_of};
+use super::clearance_surface::{surface_report, worst_of};
 pub use super::clearance_surface::{SurfaceReport, SurfaceRequest};
 use crate::accuracy::clearance::surface::{hemisphere_sweep, Hemisphere};
 use crate::accuracy::clearance::{
@@ -319,16 +319,28 @@ where
     let largest_per_class = match req.tolerance {
         None => Vec::new(),
         Some(t) => {
-            let hemisphere = req
-                .surface
+            // The worst error with the clearances as given is known already: over the
+            // surface and the path when given, else at the pose.
+            let sweep = surface
                 .as_ref()
-                .map(|sr| Ok::<_, Error>((hemisphere_of(m, sr)?, sr.heights)))
-                .transpose()?;
-            per_class(&regions, t, |r: &[Region]| {
+                .zip(req.surface.as_ref())
+                .map(|(s, sr)| (s.hemisphere, sr.heights));
+            let along_path = path
+                .as_ref()
+                .and_then(|p| p.worst.map(|i| p.points[i].upper.max(-p.points[i].lower)));
+            let given = match (&sweep, &prepared.path) {
+                (None, None) => bounds.upper.max(-bounds.lower),
+                _ => surface
+                    .as_ref()
+                    .and_then(|s| s.worst)
+                    .unwrap_or(0.0)
+                    .max(along_path.unwrap_or(0.0)),
+            };
+            per_class(&regions, t, given, |r: &[Region]| {
                 let mut w = None::<f64>;
-                if let Some((h, n)) = &hemisphere {
-                    let sweep = hemisphere_sweep(m, h, r, &req.options, *n)?;
-                    w = Some(worst_of(&sweep).map_or(0.0, |v| v.1));
+                if let Some((h, n)) = &sweep {
+                    let points = hemisphere_sweep(m, h, r, &req.options, *n)?;
+                    w = Some(worst_of(&points).map_or(0.0, |v| v.1));
                 }
                 if let Some((samples, _)) = &prepared.path {
                     let pts = path_points(m, samples, r, &req.options)?;

@@ -29,13 +29,15 @@ pub struct ClassClearance {
 }
 
 /// Each class's largest clearance for tolerance `t`, `worst` giving the largest
-/// `max(upper, -lower)` (mm) of a set of regions. The worst error grows about linearly
+/// `max(upper, -lower)` (mm) of a set of regions and `worst_as_given` its value for `regions`
+/// as they are (computed by the caller already). The worst error grows about linearly
 /// with a class's clearance, `w(s) = w(0) + s (w(1) - w(0))`; the secant method from
 /// `s = 0` and `s = 1` finds `w(s) = t` on exact bounds (to 1e-9 relative, at most 12
 /// steps).
 pub(crate) fn per_class(
     regions: &[Region],
     t: f64,
+    worst_as_given: f64,
     worst: impl Fn(&[Region]) -> Result<f64>,
 ) -> Result<Vec<ClassClearance>> {
     let mut classes: Vec<&str> = Vec::new();
@@ -66,7 +68,7 @@ pub(crate) fn per_class(
             .all(|r| r.clearance.diametral == given)
             .then_some(given);
         let w0 = worst(&with(class, 0.0)?)?;
-        let w1 = worst(&with(class, 1.0)?)?;
+        let w1 = worst_as_given;
         let scale = if w0 >= t || !(w1 > w0) {
             None
         } else {

@@ -91,7 +91,7 @@ where
 }
 
 /// The hemisphere of `sr` on `m`: its centre `R` below the home tool point unless given.
-pub(crate) fn hemisphere_of<M, const P: usize, const A: usize>(
+fn hemisphere_of<M, const P: usize, const A: usize>(
     m: &M,
     sr: &SurfaceRequest,
 ) -> Result<Hemisphere>

@@ -9,7 +9,6 @@ use crate::accuracy::clearance::PassiveJoint;
 use crate::accuracy::rebuild::{implicit_sensitivities, parametric_by_rebuild};
 use crate::accuracy::{Parameter, ParameterKind, Rebuild};
 use crate::error::{Error, Result};
-use crate::mechanism::Mechanism;
 use crate::units::Quantity;
 
 /// Number of geometric parameters: 12 carriage-joint and 12 platform-joint coordinates,
@@ -48,9 +47,7 @@ impl HybridAm {
     /// `s . s = L^2`, `dq_i = (s . (dP_i - dg_i) - L dL) / s_z`, where
     /// `dP_i = Ry(beta) (drho_i - dt) - dgamma e_y x Ry(beta) (rho_i - t) + dc_t`.
     pub fn inverse_geometry_jacobian(&self, x: &SVector<f64, 6>) -> Result<DMatrix<f64>> {
-        let pl = self.placement(x);
-        let q = self.inverse(x)?;
-        let s = self.struts(&pl, &q);
+        let (pl, _, s) = self.solve(x)?;
         let k = self.rate_vectors(&s)?;
         let mut j = DMatrix::zeros(5, GEOMETRY);
         for i in 0..4 {

@@ -227,6 +227,32 @@ impl HybridAm {
         std::array::from_fn(|i| pl.joints[i] - self.carriage_joint(i, q[i]))
     }
 
+    /// The placement at `x`, its readings and strut vectors: the inverse solution with
+    /// what the derivatives need, the placement computed once.
+    #[inline]
+    fn solve(&self, x: &Vector6<f64>) -> Result<(Placement, SVector<f64, 5>, [Vector3<f64>; 4])> {
+        let pl = self.placement(x);
+        let mut q = SVector::<f64, 5>::zeros();
+        for i in 0..4 {
+            q[i] = self.carriage(i, &pl.joints[i])?;
+        }
+        q[4] = x[5];
+        let s = self.struts(&pl, &q);
+        Ok((pl, q, s))
+    }
+
+    /// `d(q1..q4) / d(p_b, beta)` at a placement with rate vectors `k`: rows
+    /// `[k_i^T, k_i . (e_y x (P_i - p_b))]`, the tip `p_b` in the base frame. The
+    /// platform's part of the Jacobian; [`Mechanism::jacobian`] turns it to the part
+    /// frame and [`Mechanism::condition`] measures it.
+    #[inline]
+    fn platform_jacobian(pl: &Placement, k: &[Vector3<f64>; 4]) -> SMatrix<f64, 4, 4> {
+        SMatrix::<f64, 4, 4>::from_fn(|i, c| match c {
+            3 => k[i].dot(&Vector3::y().cross(&(pl.joints[i] - pl.tip))),
+            _ => k[i][c],
+        })
+    }
+
     /// `s_i / s_iz`, or the inverse singularity (a horizontal strut).
     #[inline]
     fn rate_vectors(&self, s: &[Vector3<f64>; 4]) -> Result<[Vector3<f64>; 4]> {
@@ -304,34 +330,23 @@ impl Mechanism<6, 5> for HybridAm {
     }
 
     fn inverse(&self, x: &Vector6<f64>) -> Result<SVector<f64, 5>> {
-        let pl = self.placement(x);
-        let mut q = SVector::<f64, 5>::zeros();
-        for i in 0..4 {
-            q[i] = self.carriage(i, &pl.joints[i])?;
-        }
-        q[4] = x[5];
-        Ok(q)
+        Ok(self.solve(x)?.1)
     }
 
     /// Row `i < 4`: `k_i^T [Rz(-C), 0, e_y x Ry(beta) (rho_i - t), -e_z x Rz(-C) p]`
     /// with `k_i = s_i / s_iz` (from `|s_i|^2 = L_i^2` with the carriage moving along
-    /// `e_z`); row 5: `dC`. `A` moves nothing (held at 0).
+    /// `e_z`): the platform Jacobian with its tip columns turned by the table; row 5:
+    /// `dC`. `A` moves nothing (held at 0).
     fn jacobian(&self, x: &Vector6<f64>) -> Result<SMatrix<f64, 5, 6>> {
-        let pl = self.placement(x);
-        let q = self.inverse(x)?;
-        let k = self.rate_vectors(&self.struts(&pl, &q))?;
-        let u = pl.table * Vector3::new(x[0], x[1], x[2]);
-        let dc = -Vector3::z().cross(&u);
+        let (pl, _, s) = self.solve(x)?;
+        let jp = Self::platform_jacobian(&pl, &self.rate_vectors(&s)?);
+        let tip = jp.fixed_view::<4, 3>(0, 0);
+        let xyz = tip * pl.table;
+        let dc = tip * (-Vector3::z().cross(&(pl.table * Vector3::new(x[0], x[1], x[2]))));
         let mut j = SMatrix::<f64, 5, 6>::zeros();
-        for i in 0..4 {
-            let db = Vector3::y().cross(&(pl.joints[i] - pl.tip));
-            let row = k[i].transpose() * pl.table;
-            for c in 0..3 {
-                j[(i, c)] = row[c];
-            }
-            j[(i, 4)] = k[i].dot(&db);
-            j[(i, 5)] = k[i].dot(&dc);
-        }
+        j.fixed_view_mut::<4, 3>(0, 0).copy_from(&xyz);
+        j.fixed_view_mut::<4, 1>(0, 4).copy_from(&jp.column(3));
+        j.fixed_view_mut::<4, 1>(0, 5).copy_from(&dc);
         j[(4, 5)] = 1.0;
         Ok(j)
     }
@@ -384,8 +399,7 @@ impl Mechanism<6, 5> for HybridAm {
     /// In the base frame: the guides over their strokes, carriage and platform joints,
     /// struts, the platform, the nozzle, the table centre and the part's X axis.
     fn skeleton(&self, x: &Vector6<f64>) -> Result<Skeleton> {
-        let q = self.inverse(x)?;
-        let pl = self.placement(x);
+        let (pl, q, _) = self.solve(x)?;
         let mut s = Skeleton::default();
         let mut plat = [0usize; 4];
         for i in 0..4 {
@@ -439,17 +453,12 @@ impl Mechanism<6, 5> for HybridAm {
     /// the carriages' millimetres would only measure the units. Infinite at either
     /// singularity (module documentation).
     fn condition(&self, x: &Vector6<f64>) -> Result<f64> {
-        let pl = self.placement(x);
-        let q = self.inverse(x)?;
-        let k = match self.rate_vectors(&self.struts(&pl, &q)) {
-            Ok(k) => k,
-            Err(_) => return Ok(f64::INFINITY),
+        let (pl, _, s) = self.solve(x)?;
+        let Ok(k) = self.rate_vectors(&s) else {
+            return Ok(f64::INFINITY);
         };
-        let lc = self.characteristic_length;
-        let j = SMatrix::<f64, 4, 4>::from_fn(|i, c| match c {
-            3 => k[i].dot(&Vector3::y().cross(&(pl.joints[i] - pl.tip))) / lc,
-            _ => k[i][c],
-        });
+        let mut j = Self::platform_jacobian(&pl, &k);
+        j.column_mut(3).scale_mut(1.0 / self.characteristic_length);
         Ok(crate::linalg::condition_number(&j))
     }
 
@@ -470,9 +479,7 @@ impl Mechanism<6, 5> for HybridAm {
         xd: &Vector6<f64>,
         xdd: &Vector6<f64>,
     ) -> Result<ActuatorMotion<5>> {
-        let pl = self.placement(x);
-        let q = self.inverse(x)?;
-        let s = self.struts(&pl, &q);
+        let (pl, q, s) = self.solve(x)?;
         self.rate_vectors(&s)?;
         let u = pl.table * Vector3::new(x[0], x[1], x[2]);
         let pd = pl.table * Vector3::new(xd[0], xd[1], xd[2]);
