@@ -146,7 +146,14 @@ fn newton(
     let mut f = residual(&p);
     let mut res = f.amax();
     let mut iterations = 0;
-    while res > tolerance && iterations < MAX_ITERATIONS {
+    // At the final tolerance, one more full step once it is met: quadratic convergence
+    // takes the residual to rounding, which near a forward singularity (condition in
+    // the thousands) is what keeps the pose itself within 1e-9 mm.
+    let mut polish = tolerance <= TOLERANCE;
+    while (res > tolerance || polish) && iterations < MAX_ITERATIONS {
+        if res <= tolerance {
+            polish = false;
+        }
         iterations += 1;
         let r = ry(p.beta);
         let mut j = SMatrix::<f64, 4, 4>::zeros();
@@ -171,13 +178,14 @@ fn newton(
         };
         let mut t = 1.0;
         let mut accepted = false;
-        for _ in 0..30 {
+        let polishing = res <= tolerance;
+        for _ in 0..if polishing { 1 } else { 30 } {
             let next = Platform {
                 origin: p.origin - t * Vector3::new(step[0], step[1], step[2]),
                 beta: p.beta - t * step[3],
             };
             let fnew = residual(&next);
-            if fnew.amax() < res {
+            if fnew.amax() < res || (polishing && fnew.amax() <= res) {
                 (p, f, res) = (next, fnew, fnew.amax());
                 accepted = true;
                 break;

@@ -1,0 +1,188 @@
+//! The fuzz targets' bodies: one function per parser pkm reads a user's file with.
+//!
+//! Each takes arbitrary bytes, parses them as the CLI would and, when the parse
+//! succeeds, runs the first analysis a user would run on the result, so a value the
+//! parser let through that the model cannot take is found as well. Errors are the
+//! expected outcome of most inputs; a panic, a hang or an out-of-memory is the finding.
+//! Besides not crashing, every target checks one invariant of what it returns
+//! (round trips within tolerance, finite numbers), so a silent wrong answer is a
+//! finding too.
+//!
+//! Built by `cargo fuzz` (nightly, `fuzz/fuzz_targets/`); the same functions replay
+//! `fuzz/corpus/` and `fuzz/artifacts/` in the stable test
+//! `crates/pkm/tests/fuzz_corpus.rs`.
+
+use std::sync::OnceLock;
+
+use pkm::analysis::accuracy::{accuracy, AccuracyOptions, Tolerances};
+use pkm::analysis::identification::{calibrate, parse_measurements, CalibrateOptions};
+use pkm::analysis::motion::{run_motion, MotionSource, NoSink};
+use pkm::motion::program::FeedOptions;
+use pkm::motion::Sampling;
+use pkm::Machine;
+
+/// Samples a fuzzed program may compute (a program over it gets the work-limit error).
+const MAX_SAMPLES: u64 = 5_000;
+/// Measured states above which a fuzzed measurement file is parsed but not calibrated.
+const MAX_CALIBRATED_STATES: usize = 40;
+
+fn example(name: &str, text: &'static str) -> Machine {
+    Machine::from_toml_str(text, name).expect("example machine loads")
+}
+
+fn tripod() -> &'static Machine {
+    static M: OnceLock<Machine> = OnceLock::new();
+    M.get_or_init(|| {
+        example(
+            "tripod-seed000.toml",
+            include_str!("../../examples/machines/tripod-seed000.toml"),
+        )
+    })
+}
+
+fn hexapod() -> &'static Machine {
+    static M: OnceLock<Machine> = OnceLock::new();
+    M.get_or_init(|| {
+        example(
+            "hexapod-seed001.toml",
+            include_str!("../../examples/machines/hexapod-seed001.toml"),
+        )
+    })
+}
+
+fn mc300() -> &'static Machine {
+    static M: OnceLock<Machine> = OnceLock::new();
+    M.get_or_init(|| {
+        example(
+            "mc300.toml",
+            include_str!("../../examples/machines/mc300.toml"),
+        )
+    })
+}
+
+/// Runs a loaded machine through its home pose: inverse, limits, Jacobian,
+/// condition, skeleton, forward from home. A forward solution must reproduce its
+/// actuator values.
+fn exercise(machine: &Machine) {
+    let m = machine.mechanism();
+    let home = m.home();
+    assert!(
+        home.iter().all(|v| v.is_finite()),
+        "a loaded machine's home is finite: {home:?}"
+    );
+    let _ = m.jacobian(&home);
+    let _ = m.condition(&home);
+    let _ = m.skeleton(&home);
+    let _ = m.tool_pose(&home);
+    let Ok(q) = m.inverse(&home) else { return };
+    let _ = m.check_limits(&home, &q);
+    if let Ok(f) = m.forward(&q, &home) {
+        if let Ok(q2) = m.inverse(&f.pose) {
+            let scale = q.iter().fold(1.0f64, |s, v| s.max(v.abs()));
+            let off = q
+                .iter()
+                .zip(&q2)
+                .fold(0.0f64, |s, (a, b)| s.max((a - b).abs()));
+            assert!(
+                off <= 1e-6 * scale,
+                "forward solution does not reproduce its actuators: off by {off:e} \
+                 (q = {q:?}, pose = {:?})",
+                f.pose
+            );
+        }
+    }
+    let _ = machine.parameters();
+}
+
+/// A machine file (TOML, every machine type).
+pub fn machine_toml(data: &[u8]) {
+    let Ok(text) = std::str::from_utf8(data) else {
+        return;
+    };
+    if let Ok(machine) = Machine::from_toml_str(text, "fuzz.toml") {
+        exercise(&machine);
+    }
+}
+
+/// A URDF robot description.
+pub fn urdf(data: &[u8]) {
+    let Ok(text) = std::str::from_utf8(data) else {
+        return;
+    };
+    if let Ok(machine) = Machine::from_urdf_str(text, "fuzz.urdf") {
+        exercise(&machine);
+    }
+}
+
+/// A G-code program, run through the tripod (X, Y, Z) and the hexapod (X..C) with a
+/// small work limit.
+pub fn gcode(data: &[u8]) {
+    for machine in [tripod(), hexapod()] {
+        let feed = FeedOptions {
+            max_samples: MAX_SAMPLES,
+            ..FeedOptions::default()
+        };
+        let source = MotionSource::Gcode {
+            reader: Box::new(data),
+            from: None,
+        };
+        if let Ok(run) = run_motion(machine, source, &feed, Sampling::Rate(1000.0), &mut NoSink) {
+            assert!(
+                run.summary.duration_s.is_finite() && run.summary.duration_s >= 0.0,
+                "a run's duration is a finite time: {}",
+                run.summary.duration_s
+            );
+        }
+    }
+}
+
+/// A measurement CSV for the hexapod, calibrated when it parses and is small.
+pub fn measurement_csv(data: &[u8]) {
+    let Ok(text) = std::str::from_utf8(data) else {
+        return;
+    };
+    let machine = hexapod();
+    let Ok(meas) = parse_measurements(machine, text, "fuzz.csv") else {
+        return;
+    };
+    for s in &meas.states {
+        assert!(
+            s.readings.iter().all(|v| v.is_finite()),
+            "parsed readings are finite: {:?}",
+            s.readings
+        );
+    }
+    if meas.states.len() <= MAX_CALIBRATED_STATES {
+        let _ = calibrate(machine, &meas, None, &CalibrateOptions::default());
+    }
+}
+
+/// A tolerances file and a deviations file for the hexapod and MC-300; what parses
+/// goes through the accuracy analysis at home.
+pub fn tolerance_file(data: &[u8]) {
+    let Ok(text) = std::str::from_utf8(data) else {
+        return;
+    };
+    for machine in [hexapod(), mc300()] {
+        let params = machine.parameters();
+        if let Ok(t) = pkm::machine::read_tolerances(&params, text, "fuzz.toml") {
+            let opt = AccuracyOptions {
+                tolerances: Tolerances::Given(t),
+                ..AccuracyOptions::default()
+            };
+            if let Ok(r) = accuracy(machine, &opt) {
+                assert!(
+                    r.budget.worst_case.is_finite(),
+                    "a budget of refused-if-absurd tolerances is finite"
+                );
+            }
+        }
+        if let Ok(d) = pkm::machine::read_deviations(&params, text, "fuzz.toml") {
+            let opt = AccuracyOptions {
+                deviations: d,
+                ..AccuracyOptions::default()
+            };
+            let _ = accuracy(machine, &opt);
+        }
+    }
+}
