@@ -3,6 +3,7 @@
 mod commands;
 mod io;
 mod poses;
+mod progress;
 mod report;
 
 use std::process::ExitCode;

@@ -368,6 +368,117 @@ fn monte_carlo_counts_beyond_the_limit_are_refused_up_front() {
         let e = monte_carlo(h.as_ref(), &x, &tol, n, 1)
             .unwrap_err()
             .to_string();
-        assert!(e.contains("expected 1 to 3e7 samples"), "{e}");
+        assert!(e.contains("expected 1 to 1e9 samples"), "{e}");
     }
+}
+
+/// Issue 17, item 4: the Monte Carlo streams its statistics (constant memory). The
+/// streamed moments equal the stored sample's to rounding, the streamed percentiles
+/// are within the sketch's relative 1e-4 of the exact order statistics, the
+/// histogram counts every sample.
+#[test]
+fn streamed_statistics_equal_the_stored_samples() {
+    use pkm::accuracy::streamed::{finish, Moments, Sketch, QUANTILE_RESOLUTION};
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand::rngs::StdRng::seed_from_u64(5);
+    // Errors over four decades, some exactly zero, in two halves merged.
+    let errors: Vec<Vector3<f64>> = (0..50_000)
+        .map(|i| {
+            if i % 1000 == 0 {
+                return Vector3::zeros();
+            }
+            let s = 10f64.powf(rng.random_range(-4.0..0.0));
+            Vector3::new(
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+            ) * s
+        })
+        .collect();
+    let exact = pkm::accuracy::statistics(&errors);
+    let (mut a, mut b) = (Moments::default(), Moments::default());
+    let mut sketch = Sketch::default();
+    for (i, e) in errors.iter().enumerate() {
+        if i < 20_000 {
+            a.push(e)
+        } else {
+            b.push(e)
+        }
+        sketch.add(sketch.bucket(e.norm()));
+    }
+    a.merge(&b);
+    let s = finish(&a, &sketch, 3);
+    assert_eq!(s.samples, exact.samples);
+    assert_eq!(s.failed, 3);
+    let close = |x: f64, y: f64, rel: f64| (x - y).abs() <= rel * y.abs() + 1e-300;
+    assert!(
+        close(s.mean, exact.mean, 1e-12),
+        "{} {}",
+        s.mean,
+        exact.mean
+    );
+    assert!(close(s.std, exact.std, 1e-10), "{} {}", s.std, exact.std);
+    assert_eq!(s.max, exact.max);
+    for c in 0..3 {
+        assert!((s.mean_vector[c] - exact.mean_vector[c]).abs() < 1e-15);
+        assert!(close(s.std_vector[c], exact.std_vector[c], 1e-10));
+    }
+    assert!(
+        close(s.p95, exact.p95, QUANTILE_RESOLUTION),
+        "{} {}",
+        s.p95,
+        exact.p95
+    );
+    assert!(
+        close(s.p99, exact.p99, QUANTILE_RESOLUTION),
+        "{} {}",
+        s.p99,
+        exact.p99
+    );
+    assert_eq!(s.histogram.iter().map(|h| h.1).sum::<usize>(), errors.len());
+    // Bin by bin, only norms within 1e-4 of a bin edge can fall on the other side.
+    for (x, y) in s.histogram.iter().zip(&exact.histogram) {
+        assert!(x.1.abs_diff(y.1) <= 20, "{x:?} {y:?}");
+    }
+}
+
+/// The Monte Carlo's result does not depend on the number of threads, and progress
+/// is told of every machine.
+#[test]
+fn monte_carlo_is_the_same_on_one_and_two_threads_and_reports_progress() {
+    let Model::Hexapod(h) = machine("hexapod-seed001.toml") else {
+        panic!()
+    };
+    let x = h.home();
+    let tol: Vec<Tolerance> = (0..12)
+        .map(|p| Tolerance {
+            parameter: p,
+            value: 0.01,
+            distribution: if p % 2 == 0 {
+                Distribution::Uniform
+            } else {
+                Distribution::Normal
+            },
+        })
+        .collect();
+    let n = 300_000;
+    let run = |threads: usize| {
+        let done = std::sync::atomic::AtomicU64::new(0);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let mc = pool.install(|| {
+            pkm::accuracy::monte_carlo_with_progress(h.as_ref(), &x, &tol, n, 9, &|k| {
+                done.fetch_add(k, std::sync::atomic::Ordering::Relaxed);
+            })
+            .unwrap()
+        });
+        (mc, done.into_inner())
+    };
+    let (one, done1) = run(1);
+    let (two, done2) = run(2);
+    assert_eq!(one, two);
+    assert_eq!((done1, done2), (n as u64, n as u64));
+    assert_eq!(one.samples + one.failed, n);
 }

@@ -6,7 +6,7 @@ use crate::parse_convention;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use pkm::analysis::{
-    accuracy, AccuracyOptions, AccuracyReport, KindTolerances, MapRequest, Tolerances,
+    accuracy_with_progress, AccuracyOptions, AccuracyReport, KindTolerances, MapRequest, Tolerances,
 };
 use pkm::Convention;
 use serde_json::json;
@@ -207,7 +207,12 @@ pub fn run(a: &ErrorsArgs) -> Result<u8> {
         }
     };
     let clearance = clearance_request(a, &machine)?;
-    let r = accuracy(
+    let bar = crate::progress::bar(
+        a.monte_carlo.unwrap_or(0) as u64,
+        1_000_000,
+        "{bar:40} {pos}/{len} machines {eta}",
+    );
+    let r = accuracy_with_progress(
         &machine,
         &AccuracyOptions {
             pose,
@@ -218,7 +223,15 @@ pub fn run(a: &ErrorsArgs) -> Result<u8> {
             map,
             clearance,
         },
+        &|n| {
+            if let Some(b) = &bar {
+                b.inc(n)
+            }
+        },
     )?;
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
     std::fs::create_dir_all(&a.out)
         .with_context(|| format!("cannot create {}", a.out.display()))?;
     let inputs: Vec<&std::path::Path> = std::iter::once(a.machine.as_path())

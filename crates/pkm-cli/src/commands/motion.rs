@@ -12,7 +12,7 @@ use std::io::{BufReader, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::ProgressBar;
 use pkm::analysis::motion::{
     run_motion, sample_columns, MotionRun, MotionSource, SampleRow, SampleSink,
 };
@@ -128,14 +128,7 @@ impl<'a> CsvSink<'a> {
         if let Some(w) = out.as_deref_mut() {
             writeln!(w, "{}", sample_columns(machine).join(","))?;
         }
-        let bar = (bytes > 1_000_000).then(|| {
-            let b = ProgressBar::new(bytes);
-            b.set_style(
-                ProgressStyle::with_template("{bar:40} {bytes}/{total_bytes} {eta}")
-                    .unwrap_or_else(|_| ProgressStyle::default_bar()),
-            );
-            b
-        });
+        let bar = crate::progress::bar(bytes, 1_000_000, "{bar:40} {bytes}/{total_bytes} {eta}");
         let m = machine.mechanism();
         Ok(CsvSink {
             out,

@@ -3,7 +3,6 @@
 use crate::parse_convention;
 use anyhow::{bail, Context, Result};
 use clap::Args;
-use indicatif::{ProgressBar, ProgressStyle};
 use pkm::workspace::{flat_index, GridAxis, WorkspaceMap, WorkspaceSummary};
 use pkm::Convention;
 use pkm::{DynMechanism, Machine, PoseSpace};
@@ -73,14 +72,11 @@ pub fn run_grid(
     progress: bool,
 ) -> Result<WorkspaceMap> {
     let total: usize = axes.iter().map(|a| a.count()).product();
-    let bar = (progress && total > 200_000).then(|| {
-        let b = ProgressBar::new(total as u64);
-        b.set_style(
-            ProgressStyle::with_template("{bar:40} {pos}/{len} points {eta}")
-                .unwrap_or_else(|_| ProgressStyle::default_bar()),
-        );
-        b
-    });
+    let bar = crate::progress::bar(
+        total as u64,
+        if progress { 200_000 } else { u64::MAX },
+        "{bar:40} {pos}/{len} points {eta}",
+    );
     let tick = |n: u64| {
         if let Some(b) = &bar {
             b.inc(n);

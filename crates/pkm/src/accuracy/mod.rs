@@ -29,6 +29,7 @@ pub mod map;
 pub mod monte_carlo;
 pub(crate) mod rebuild;
 mod serial;
+pub mod streamed;
 pub use budget::tolerances_of_kind;
 
 use nalgebra::{SVector, Vector3};
@@ -41,7 +42,7 @@ use crate::units::Quantity;
 
 pub use budget::{budget, Budget, BudgetItem, Distribution, Tolerance};
 pub use map::{error_map, ErrorMap};
-pub use monte_carlo::{monte_carlo, statistics, MonteCarlo};
+pub use monte_carlo::{monte_carlo, monte_carlo_with_progress, statistics, MonteCarlo};
 pub use rebuild::Rebuild;
 pub use serial::{serial_completions, serial_parameters, serial_tolerable, LinkCompletion};
 

@@ -8,6 +8,7 @@ use rand_distr::{Distribution as _, Normal};
 use rayon::prelude::*;
 use serde::Serialize;
 
+use super::streamed::{finish, Moments, Sketch};
 use super::{Distribution, Evaluate, Parametric, Tolerance};
 use crate::error::{Error, Result};
 
@@ -39,20 +40,42 @@ pub struct MonteCarlo {
 
 /// Machines per seeded chunk.
 const CHUNK: usize = 4096;
+/// Chunks computed (in parallel) between two merges and progress reports.
+const BATCH: usize = 64;
 
-/// The most samples a Monte Carlo of geometric deviations takes (3e7: each sample's
-/// error is kept for the quantiles, about 1 GB at this count).
-pub const MAX_MONTE_CARLO: usize = 30_000_000;
+/// The most samples a Monte Carlo of geometric deviations takes (1e9, minutes on two
+/// cores: the statistics are streamed in constant memory, the work is what grows).
+pub const MAX_MONTE_CARLO: usize = 1_000_000_000;
 
 /// Monte Carlo of `n` machines at pose `x` with the parameters of `tol` drawn from
 /// their distributions, the others nominal: the statistics of the exact tool-point
 /// error against the nominal tool point. At most [`MAX_MONTE_CARLO`] samples.
+///
+/// Uniform tolerances draw from `[-t, t]`; normal ones from `N(0, (t/3)^2)`. Memory is
+/// constant in `n`: moments are streamed and the percentiles and histogram come from a
+/// logarithmic sketch, within a relative [`super::streamed::QUANTILE_RESOLUTION`] of
+/// the exact order statistics ([`statistics`] computes those from a stored sample).
 pub fn monte_carlo<M, const P: usize, const A: usize>(
     m: &M,
     x: &SVector<f64, P>,
     tol: &[Tolerance],
     n: usize,
     seed: u64,
+) -> Result<MonteCarlo>
+where
+    M: Parametric<P, A>,
+{
+    monte_carlo_with_progress(m, x, tol, n, seed, &|_| {})
+}
+
+/// [`monte_carlo`], telling `progress` of the machines done (every 262 144).
+pub fn monte_carlo_with_progress<M, const P: usize, const A: usize>(
+    m: &M,
+    x: &SVector<f64, P>,
+    tol: &[Tolerance],
+    n: usize,
+    seed: u64,
+    progress: &(dyn Fn(u64) + Sync),
 ) -> Result<MonteCarlo>
 where
     M: Parametric<P, A>,
@@ -70,47 +93,66 @@ where
     if n == 0 || n > MAX_MONTE_CARLO {
         return Err(Error::InvalidInput {
             what: "Monte Carlo".into(),
-            message: format!(
-                "expected 1 to {MAX_MONTE_CARLO:.0e} samples, got {n} (every sample's error is \
-                 kept for the quantiles: {:.1} GB)",
-                n as f64 * std::mem::size_of::<Option<Vector3<f64>>>() as f64 / 1e9
-            ),
+            message: format!("expected 1 to {MAX_MONTE_CARLO:.0e} samples, got {n}"),
         });
     }
     // Prepared once (a failure here is the nominal machine's, reported as such).
     let mut base = m.evaluator(x)?;
     base.pose_error(&[])?;
-    let results: Vec<Option<Vector3<f64>>> = (0..n.div_ceil(CHUNK))
-        .into_par_iter()
-        .flat_map_iter(|c| {
-            let mut rng = rand::rngs::StdRng::seed_from_u64(
-                seed ^ (c as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15),
-            );
-            let normal = Normal::new(0.0, 1.0).expect("unit normal");
-            let count = CHUNK.min(n - c * CHUNK);
-            let mut ev = base.clone();
-            let mut d: Vec<(usize, f64)> = tol.iter().map(|t| (t.parameter, 0.0)).collect();
-            let mut out = Vec::with_capacity(count);
-            for _ in 0..count {
-                for (slot, t) in d.iter_mut().zip(tol) {
-                    slot.1 = match t.distribution {
-                        Distribution::Uniform => rng.random_range(-1.0..=1.0) * t.value,
-                        Distribution::Normal => normal.sample(&mut rng) * t.value / 3.0,
-                    };
+    let mut moments = Moments::default();
+    let mut sketch = Sketch::default();
+    let mut failed = 0;
+    let chunks = n.div_ceil(CHUNK);
+    for first in (0..chunks).step_by(BATCH) {
+        let last = (first + BATCH).min(chunks);
+        let parts: Vec<(Moments, Vec<u32>, usize)> = (first..last)
+            .into_par_iter()
+            .map(|c| {
+                let mut rng = rand::rngs::StdRng::seed_from_u64(
+                    seed ^ (c as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15),
+                );
+                let normal = Normal::new(0.0, 1.0).expect("unit normal");
+                let count = CHUNK.min(n - c * CHUNK);
+                let mut ev = base.clone();
+                let mut d: Vec<(usize, f64)> = tol.iter().map(|t| (t.parameter, 0.0)).collect();
+                let mut mo = Moments::default();
+                let mut buckets = Vec::with_capacity(count);
+                let mut bad = 0;
+                for _ in 0..count {
+                    for (slot, t) in d.iter_mut().zip(tol) {
+                        slot.1 = match t.distribution {
+                            Distribution::Uniform => rng.random_range(-1.0..=1.0) * t.value,
+                            Distribution::Normal => normal.sample(&mut rng) * t.value / 3.0,
+                        };
+                    }
+                    match ev.pose_error(&d) {
+                        Ok(e) => {
+                            mo.push(&e.position);
+                            buckets.push(sketch.bucket(e.position.norm()) as u32);
+                        }
+                        Err(_) => bad += 1,
+                    }
                 }
-                out.push(ev.pose_error(&d).ok().map(|e| e.position));
+                (mo, buckets, bad)
+            })
+            .collect();
+        let mut done = 0;
+        for (mo, buckets, bad) in parts {
+            moments.merge(&mo);
+            done += buckets.len() + bad;
+            for k in buckets {
+                sketch.add(k as usize);
             }
-            out
-        })
-        .collect();
-    let ok: Vec<Vector3<f64>> = results.iter().flatten().copied().collect();
-    let mut s = statistics(&ok);
-    s.failed = n - ok.len();
-    Ok(s)
+            failed += bad;
+        }
+        progress(done as u64);
+    }
+    Ok(finish(&moments, &sketch, failed))
 }
 
-/// Statistics of a sample of tool-point error vectors (mm): mean, standard deviation,
-/// percentiles and histogram of their norms, mean and spread of the components.
+/// Statistics of a stored sample of tool-point error vectors (mm): mean, standard
+/// deviation, exact percentiles (order statistics) and histogram of their norms, mean
+/// and spread of the components. [`monte_carlo`] streams the same statistics.
 pub fn statistics(errors: &[Vector3<f64>]) -> MonteCarlo {
     let mut norms: Vec<f64> = errors.iter().map(|e| e.norm()).collect();
     let k = norms.len().max(1) as f64;

@@ -210,6 +210,16 @@ pub struct AccuracyReport {
 /// sensitivities, budget, and optionally Monte Carlo and an error map. Every machine
 /// type supports it.
 pub fn accuracy(machine: &Machine, opt: &AccuracyOptions) -> Result<AccuracyReport> {
+    accuracy_with_progress(machine, opt, &|_| {})
+}
+
+/// [`accuracy()`], telling `progress` of the Monte Carlo machines done (from one
+/// thread, every 262 144 machines).
+pub fn accuracy_with_progress(
+    machine: &Machine,
+    opt: &AccuracyOptions,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<AccuracyReport> {
     let dm = machine.mechanism();
     let pose = match &opt.pose {
         Some(p) => p.clone(),
@@ -258,6 +268,7 @@ pub fn accuracy(machine: &Machine, opt: &AccuracyOptions) -> Result<AccuracyRepo
         file: machine.tolerances(),
         map_axes,
         clearance: clearance.as_ref().map(|(r, p)| (*r, p)),
+        progress,
     })
 }
 
@@ -270,6 +281,7 @@ struct AccuracyJob<'a> {
         &'a super::clearance::ClearanceRequest,
         &'a super::clearance::Prepared,
     )>,
+    progress: &'a (dyn Fn(u64) + Sync),
 }
 
 impl Visitor for AccuracyJob<'_> {
@@ -316,7 +328,14 @@ impl Visitor for AccuracyJob<'_> {
         };
         let budget = Budget::from_sensitivities(&params, &sensitivities, &tolerances)?;
         let monte_carlo = match self.opt.monte_carlo {
-            Some(n) => Some(accuracy::monte_carlo(m, &x, &tolerances, n, self.opt.seed)?),
+            Some(n) => Some(accuracy::monte_carlo_with_progress(
+                m,
+                &x,
+                &tolerances,
+                n,
+                self.opt.seed,
+                self.progress,
+            )?),
             None => None,
         };
         let map = match self.map_axes {

@@ -17,6 +17,6 @@ pub mod seed004;
 pub mod workspace;
 
 pub use accuracy::{
-    accuracy, AccuracyOptions, AccuracyReport, KindTolerances, MapRequest, ToleranceSource,
-    Tolerances,
+    accuracy, accuracy_with_progress, AccuracyOptions, AccuracyReport, KindTolerances, MapRequest,
+    ToleranceSource, Tolerances,
 };
