@@ -149,6 +149,137 @@ impl Sketch {
     }
 }
 
+/// A sketch of signed values (a [`Sketch`] of the magnitudes on each side of 0), for
+/// errors along a direction.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct SignedSketch {
+    negative: Sketch,
+    positive: Sketch,
+}
+
+impl SignedSketch {
+    /// The (side, bucket) of a value: side 0 below zero, 1 from zero up.
+    pub fn bucket(&self, v: f64) -> (u8, u32) {
+        if v < 0.0 {
+            (0, self.negative.bucket(-v) as u32)
+        } else {
+            (1, self.positive.bucket(v) as u32)
+        }
+    }
+
+    /// Counts a value by its [`SignedSketch::bucket`].
+    pub fn add(&mut self, (side, k): (u8, u32)) {
+        if side == 0 {
+            self.negative.add(k as usize)
+        } else {
+            self.positive.add(k as usize)
+        }
+    }
+
+    /// The value of rank `r` (0-based, ascending), clamped to `[min, max]`: within a
+    /// relative [`QUANTILE_RESOLUTION`] of the exact one.
+    pub fn rank(&self, r: u64, min: f64, max: f64) -> f64 {
+        let mut seen = 0;
+        for (k, &c) in self.negative.counts.iter().enumerate().rev() {
+            seen += c;
+            if seen > r {
+                return (-self.negative.value(k)).clamp(min, max);
+            }
+        }
+        let below: u64 = self.negative.counts.iter().sum();
+        self.positive.rank(r - below.min(r), min, max)
+    }
+
+    /// Counts over `bins` equal bins from `min` to `max`: `(lower edge, count)`.
+    pub fn histogram(&self, bins: usize, min: f64, max: f64) -> Vec<(f64, usize)> {
+        let width = if max > min {
+            (max - min) / bins as f64
+        } else {
+            1.0
+        };
+        let mut hist = vec![0usize; bins];
+        let mut put = |v: f64, c: u64| {
+            let v = v.clamp(min, max);
+            hist[(((v - min) / width) as usize).min(bins - 1)] += c as usize;
+        };
+        for (k, &c) in self.negative.counts.iter().enumerate() {
+            if c > 0 {
+                put(-self.negative.value(k), c);
+            }
+        }
+        for (k, &c) in self.positive.counts.iter().enumerate() {
+            if c > 0 {
+                put(self.positive.value(k), c);
+            }
+        }
+        hist.into_iter()
+            .enumerate()
+            .map(|(i, c)| (min + i as f64 * width, c))
+            .collect()
+    }
+}
+
+/// Mean, variance, extremes of a stream of scalars (Welford), mergeable in order.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ScalarMoments {
+    /// Count.
+    pub n: u64,
+    /// Mean.
+    pub mean: f64,
+    m2: f64,
+    /// Smallest.
+    pub min: f64,
+    /// Largest.
+    pub max: f64,
+}
+
+impl Default for ScalarMoments {
+    fn default() -> Self {
+        ScalarMoments {
+            n: 0,
+            mean: 0.0,
+            m2: 0.0,
+            min: f64::INFINITY,
+            max: f64::NEG_INFINITY,
+        }
+    }
+}
+
+impl ScalarMoments {
+    /// Adds a value.
+    pub fn push(&mut self, x: f64) {
+        self.n += 1;
+        let d = x - self.mean;
+        self.mean += d / self.n as f64;
+        self.m2 += d * (x - self.mean);
+        self.min = self.min.min(x);
+        self.max = self.max.max(x);
+    }
+
+    /// Merges another stream's moments (Chan, Golub, LeVeque 1979).
+    pub fn merge(&mut self, o: &ScalarMoments) {
+        if o.n == 0 {
+            return;
+        }
+        if self.n == 0 {
+            *self = *o;
+            return;
+        }
+        let (na, nb) = (self.n as f64, o.n as f64);
+        let d = o.mean - self.mean;
+        self.mean += d * nb / (na + nb);
+        self.m2 += o.m2 + d * d * na * nb / (na + nb);
+        self.n += o.n;
+        self.min = self.min.min(o.min);
+        self.max = self.max.max(o.max);
+    }
+
+    /// Sample standard deviation (0 for fewer than two values).
+    pub fn std(&self) -> f64 {
+        (self.m2 / (self.n as f64 - 1.0).max(1.0)).max(0.0).sqrt()
+    }
+}
+
 /// The Monte Carlo statistics of the moments and sketch of `failed + moments.n` draws.
 pub fn finish(m: &Moments, sketch: &Sketch, failed: usize) -> MonteCarlo {
     let n = m.n;

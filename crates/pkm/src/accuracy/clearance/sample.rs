@@ -8,6 +8,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::{deviations_of, JointState, Region};
+use crate::accuracy::streamed::{ScalarMoments, SignedSketch};
 use crate::accuracy::{Evaluate, Parametric};
 use crate::error::{Error, Result};
 
@@ -39,9 +40,17 @@ pub struct ClearanceMonteCarlo {
 }
 
 const CHUNK: usize = 1024;
+/// Chunks computed (in parallel) between two merges.
+const BATCH: usize = 256;
+
+/// The most joint states a clearance Monte Carlo takes (a bound on work: each state
+/// re-solves the mechanism; the statistics are streamed in constant memory).
+pub const MAX_CLEARANCE_SAMPLES: usize = 100_000_000;
 
 /// Monte Carlo of `n` random joint states at pose `x` of `m` (errors along unit
-/// `direction`).
+/// `direction`). Moments are streamed; the percentiles and the histogram come from a
+/// logarithmic sketch, within a relative [`crate::accuracy::streamed::QUANTILE_RESOLUTION`]
+/// of the order statistics; memory does not grow with `n`.
 pub fn clearance_monte_carlo<M, const P: usize, const A: usize>(
     m: &M,
     x: &SVector<f64, P>,
@@ -53,77 +62,79 @@ pub fn clearance_monte_carlo<M, const P: usize, const A: usize>(
 where
     M: Parametric<P, A>,
 {
-    if n == 0 {
+    if n == 0 || n > MAX_CLEARANCE_SAMPLES {
         return Err(Error::InvalidInput {
             what: "clearance Monte Carlo".into(),
-            message: "expected a number of samples > 0".into(),
+            message: format!("expected 1 to {MAX_CLEARANCE_SAMPLES:.0e} samples, got {n}"),
         });
     }
     let dir = direction.normalize();
     let mut base = m.evaluator(x)?;
     base.pose_error(&[])?;
-    let results: Vec<Option<(f64, f64)>> = (0..n.div_ceil(CHUNK))
-        .into_par_iter()
-        .flat_map_iter(|c| {
-            let mut rng = rand::rngs::StdRng::seed_from_u64(
-                seed ^ (c as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15),
-            );
-            let count = CHUNK.min(n - c * CHUNK);
-            let mut ev = base.clone();
-            let mut states: Vec<JointState> = Vec::with_capacity(regions.len());
-            let mut buf = Vec::new();
-            let mut out = Vec::with_capacity(count);
-            for _ in 0..count {
-                states.clear();
-                states.extend(regions.iter().map(|r| r.sample(&mut rng)));
-                deviations_of(regions, &states, &mut buf);
-                out.push(
-                    ev.pose_error(&buf)
-                        .ok()
-                        .map(|e| (dir.dot(&e.position), e.position.norm())),
+    let mut along = ScalarMoments::default();
+    let mut max_norm = 0.0f64;
+    let mut sketch = SignedSketch::default();
+    let chunks = n.div_ceil(CHUNK);
+    for first in (0..chunks).step_by(BATCH) {
+        let last = (first + BATCH).min(chunks);
+        let parts: Vec<(ScalarMoments, f64, Vec<(u8, u32)>)> = (first..last)
+            .into_par_iter()
+            .map(|c| {
+                let mut rng = rand::rngs::StdRng::seed_from_u64(
+                    seed ^ (c as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15),
                 );
+                let count = CHUNK.min(n - c * CHUNK);
+                let mut ev = base.clone();
+                let mut states: Vec<JointState> = Vec::with_capacity(regions.len());
+                let mut buf = Vec::new();
+                let mut mo = ScalarMoments::default();
+                let mut norm = 0.0f64;
+                let mut buckets = Vec::with_capacity(count);
+                for _ in 0..count {
+                    states.clear();
+                    states.extend(regions.iter().map(|r| r.sample(&mut rng)));
+                    deviations_of(regions, &states, &mut buf);
+                    if let Ok(e) = ev.pose_error(&buf) {
+                        let v = dir.dot(&e.position);
+                        mo.push(v);
+                        norm = norm.max(e.position.norm());
+                        buckets.push(sketch.bucket(v));
+                    }
+                }
+                (mo, norm, buckets)
+            })
+            .collect();
+        for (mo, norm, buckets) in parts {
+            along.merge(&mo);
+            max_norm = max_norm.max(norm);
+            for b in buckets {
+                sketch.add(b);
             }
-            out
-        })
-        .collect();
-    let ok: Vec<(f64, f64)> = results.iter().flatten().copied().collect();
-    let k = ok.len().max(1) as f64;
-    let mut along: Vec<f64> = ok.iter().map(|v| v.0).collect();
-    along.sort_by(|a, b| a.total_cmp(b));
-    let mean = along.iter().sum::<f64>() / k;
-    let std = (along.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (k - 1.0).max(1.0)).sqrt();
-    let pick = |f: f64| {
-        along
-            .get(((along.len() as f64 - 1.0) * f).round() as usize)
-            .copied()
-            .unwrap_or(0.0)
-    };
-    let (min, max) = (pick(0.0), pick(1.0));
-    let bins = 40;
-    let width = if max > min {
-        (max - min) / bins as f64
-    } else {
-        1.0
-    };
-    let mut hist = vec![0usize; bins];
-    for v in &along {
-        hist[(((v - min) / width) as usize).min(bins - 1)] += 1;
+        }
     }
+    let ok = along.n;
+    let (min, max) = if ok == 0 {
+        (0.0, 0.0)
+    } else {
+        (along.min, along.max)
+    };
+    let pick = |f: f64| {
+        if ok == 0 {
+            return 0.0;
+        }
+        sketch.rank(((ok as f64 - 1.0) * f).round() as u64, min, max)
+    };
     Ok(ClearanceMonteCarlo {
-        samples: ok.len(),
-        failed: n - ok.len(),
+        samples: ok as usize,
+        failed: n - ok as usize,
         direction: dir.into(),
         min,
         max,
-        mean,
-        std,
+        mean: along.mean,
+        std: along.std(),
         p01: pick(0.01),
         p99: pick(0.99),
-        max_norm: ok.iter().map(|v| v.1).fold(0.0, f64::max),
-        histogram: hist
-            .into_iter()
-            .enumerate()
-            .map(|(i, c)| (min + i as f64 * width, c))
-            .collect(),
+        max_norm,
+        histogram: sketch.histogram(40, min, max),
     })
 }
