@@ -28,6 +28,6 @@ for t in "${targets[@]}"; do
     -max_total_time="$secs" -timeout=10 -rss_limit_mb=2048 -max_len=16384 \
     -print_final_stats=1 "${extra[@]}" 2>&1 | tail -25 || echo "== $t: stopped (see artifacts/$t)"
   # Keep only the inputs that add coverage to the kept corpus.
-  cargo +nightly fuzz run -O "$t" "corpus/$t" "corpus-work/$t" -- -merge=1 2>&1 | tail -2
+  cargo +nightly fuzz run -O "$t" "corpus/$t" "corpus-work/$t" -- -merge=1 2>&1 | grep "MERGE-OUTER: .* new files" || echo "== $t: merge failed"
 done
 ls -l artifacts/*/ 2>/dev/null || echo "no crashes kept"

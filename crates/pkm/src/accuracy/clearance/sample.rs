@@ -40,6 +40,8 @@ pub struct ClearanceMonteCarlo {
 }
 
 const CHUNK: usize = 1024;
+/// One chunk's moments along the direction, largest |e| and sketch buckets.
+type ChunkResult = (ScalarMoments, f64, Vec<(u8, u32)>);
 /// Chunks computed (in parallel) between two merges.
 const BATCH: usize = 256;
 
@@ -77,7 +79,7 @@ where
     let chunks = n.div_ceil(CHUNK);
     for first in (0..chunks).step_by(BATCH) {
         let last = (first + BATCH).min(chunks);
-        let parts: Vec<(ScalarMoments, f64, Vec<(u8, u32)>)> = (first..last)
+        let parts: Vec<ChunkResult> = (first..last)
             .into_par_iter()
             .map(|c| {
                 let mut rng = rand::rngs::StdRng::seed_from_u64(
