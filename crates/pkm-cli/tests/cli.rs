@@ -406,3 +406,21 @@ fn help_has_examples() {
         );
     }
 }
+
+/// Issue 17, item 10: a closed-form forward solution says so instead of "0 iterations";
+/// an iterative one gives its count.
+#[test]
+fn fk_names_its_solver() {
+    let kr30 = root().join("examples/machines/kr30-dh.toml").display().to_string();
+    let out = pkm()
+        .args(["fk", &kr30, "--actuators", "0,0,0,0,90,0"])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("solver     closed form, residual"), "{text}");
+    let (v, _) = json(&["fk", &kr30, "--actuators", "0,0,0,0,90,0", "--json"]);
+    assert_eq!(v["solver"], "closed-form");
+    let (v, _) = json(&["fk", &centre_leg(), "--actuators", "300,300,300", "--json"]);
+    assert_eq!(v["solver"], "iterative", "{v}");
+    assert!(v["iterations"].as_u64().unwrap() > 0, "{v}");
+}

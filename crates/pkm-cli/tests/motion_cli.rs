@@ -44,8 +44,14 @@ fn seed000_arc_through_the_cli() {
     ] {
         assert!(v["actuators"]["e"][k].is_number(), "{k}");
     }
-    for k in ["travel", "velocity", "acceleration"] {
-        assert!(v["ratios"][k].as_f64().unwrap() > 1.0);
+    for k in [
+        "travel",
+        "velocity",
+        "acceleration",
+        "velocity_of_mean_peaks",
+        "acceleration_of_mean_peaks",
+    ] {
+        assert!(v["ratios"][k].as_f64().unwrap() > 1.0, "{k}");
     }
     assert!(v["feed_override_max"].as_f64().unwrap() > 1.0);
     assert!(v["violations"].as_array().unwrap().is_empty());

@@ -45,6 +45,8 @@ pub trait DynMechanism: Send + Sync {
     fn jacobian(&self, x: &[f64]) -> Result<DMatrix<f64>>;
     /// See [`crate::Mechanism::forward`].
     fn forward(&self, q: &[f64], start: &[f64]) -> Result<DynForward>;
+    /// See [`crate::Mechanism::forward_closed_form`].
+    fn forward_closed_form(&self) -> bool;
     /// See [`crate::Mechanism::tool_pose`].
     fn tool_pose(&self, x: &[f64]) -> Result<Pose>;
     /// See [`crate::Mechanism::coords_from_pose`].
@@ -126,6 +128,9 @@ macro_rules! impl_dyn_mechanism {
                     iterations: f.iterations,
                     residual: f.residual,
                 })
+            }
+            fn forward_closed_form(&self) -> bool {
+                $crate::Mechanism::<$p, $a>::forward_closed_form(self)
             }
             fn tool_pose(&self, x: &[f64]) -> $crate::Result<$crate::Pose> {
                 let x = $crate::dynamic::fixed::<$p>("pose", x)?;

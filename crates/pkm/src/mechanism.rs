@@ -232,6 +232,12 @@ pub trait Mechanism<const P: usize, const A: usize>: Send + Sync {
         newton_forward(self, q, start, &NewtonOptions::default())
     }
 
+    /// Whether [`Mechanism::forward`] is a closed-form solution: then its
+    /// [`Forward::iterations`] is 0 by construction, not a count of iterations.
+    fn forward_closed_form(&self) -> bool {
+        false
+    }
+
     /// The full tool pose (tool tip position and tool frame) at `x`.
     fn tool_pose(&self, x: &SVector<f64, P>) -> Result<Pose>;
 

@@ -270,10 +270,71 @@ fn seed000_arc_study_scaling_with_feed() {
                     < 1e-8 * k * k * a.peak_acceleration.max(1.0)
             );
         }
-        assert!((s.ratios.travel - base.ratios.travel).abs() < 1e-9);
+        let (r, rb) = (s.ratios.unwrap(), base.ratios.unwrap());
+        assert!((r.travel - rb.travel).abs() < 1e-9);
     }
     // The struts travel less than the serial axes (seed 000's point).
-    assert!(base.ratios.travel > 1.0 && base.ratios.velocity > 1.0);
+    let r = base.ratios.unwrap();
+    assert!(r.travel > 1.0 && r.velocity > 1.0);
+}
+
+/// Issue 17, item 10: the ratios are seed 000's. Its "3.4x" and "3.3x" are the serial
+/// peak over the largest strut peak (166.7 / 49, 434 / 131), its "3.6x" travel the mean
+/// serial travel over the struts' mean travel; recomputed here from the axes'
+/// statistics by hand.
+#[test]
+fn seed000_ratios_are_the_papers_definitions() {
+    let s = run_arc(10_000.0);
+    let r = s.ratios.unwrap();
+    let acts: Vec<_> = s.actuators.iter().map(|(_, a)| *a).collect();
+    let moving: Vec<_> = s
+        .serial
+        .iter()
+        .map(|(_, a)| *a)
+        .filter(|a| a.travel > 1e-9)
+        .collect();
+    assert_eq!(moving.len(), 2);
+    let max = |v: &[pkm::motion::AxisStats], f: fn(&pkm::motion::AxisStats) -> f64| {
+        v.iter().map(f).fold(0.0, f64::max)
+    };
+    let mean = |v: &[pkm::motion::AxisStats], f: fn(&pkm::motion::AxisStats) -> f64| {
+        v.iter().map(f).sum::<f64>() / v.len() as f64
+    };
+    let vel = max(&moving, |a| a.peak_velocity) / max(&acts, |a| a.peak_velocity);
+    let acc = max(&moving, |a| a.peak_acceleration) / max(&acts, |a| a.peak_acceleration);
+    let travel = mean(&moving, |a| a.travel) / mean(&acts, |a| a.travel);
+    assert!((r.velocity - vel).abs() < 1e-12 && (r.acceleration - acc).abs() < 1e-12);
+    assert!((r.travel - travel).abs() < 1e-12);
+    // The bundled tripod (docs/motion.md): 166.667 / 67.51 and 434.03 / 204.27.
+    assert!((r.velocity - 2.469).abs() < 0.002, "{}", r.velocity);
+    assert!((r.acceleration - 2.125).abs() < 0.002, "{}", r.acceleration);
+    assert!((r.travel - 3.77).abs() < 0.005, "{}", r.travel);
+    // The means of peaks, labelled as such.
+    assert!((r.velocity_of_mean_peaks - 3.50).abs() < 0.005);
+    assert!((r.acceleration_of_mean_peaks - 3.12).abs() < 0.005);
+}
+
+/// A robot's joints turn: a ratio of the tool's mm to the joints' deg is not given.
+#[test]
+fn ratios_are_not_given_for_turning_drives() {
+    let m = pkm::Machine::from_path(format!(
+        "{}/../../examples/machines/kr30-dh.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let program = "G91 G1 X10 Y5 F600\n";
+    let run = pkm::analysis::motion::run_motion(
+        &m,
+        pkm::analysis::motion::MotionSource::Gcode {
+            reader: Box::new(program.as_bytes()),
+            from: None,
+        },
+        &pkm::motion::program::FeedOptions::default(),
+        Sampling::Rate(100.0),
+        &mut pkm::analysis::motion::NoSink,
+    )
+    .unwrap();
+    assert!(run.summary.ratios.is_none());
 }
 
 #[test]

@@ -82,6 +82,14 @@ pub fn run(a: &FkArgs) -> Result<u8> {
         o.insert("type".into(), json!(m.kind()));
         o.insert("pose".into(), coords_json(m, &f.pose));
         o.insert("actuators".into(), actuators_json(m, &q));
+        o.insert(
+            "solver".into(),
+            json!(if m.forward_closed_form() {
+                "closed-form"
+            } else {
+                "iterative"
+            }),
+        );
         o.insert("iterations".into(), json!(f.iterations));
         o.insert("residual".into(), json!(f.residual));
         o.insert("violations".into(), json!(violations));
@@ -118,10 +126,14 @@ pub fn run(a: &FkArgs) -> Result<u8> {
             "angles     {}={:.4} {}={:.4} {}={:.4} deg ({conv})",
             names[0], ang[0], names[1], ang[1], names[2], ang[2]
         );
-        println!(
-            "solver     {} iterations, residual {:.3e}",
-            f.iterations, f.residual
-        );
+        if m.forward_closed_form() {
+            println!("solver     closed form, residual {:.3e}", f.residual);
+        } else {
+            println!(
+                "solver     {} iterations, residual {:.3e}",
+                f.iterations, f.residual
+            );
+        }
         if violations.is_empty() {
             println!("limits     all satisfied");
         }

@@ -400,10 +400,21 @@ pub fn run(a: &MotionArgs) -> Result<u8> {
                 );
             }
         }
-        println!(
-            "ratios serial/PKM: travel {:.3}, peak velocity {:.3}, peak acceleration {:.3}",
-            s.ratios.travel, s.ratios.velocity, s.ratios.acceleration
-        );
+        match &s.ratios {
+            Some(r) => println!(
+                "ratios serial/PKM (seed 000's): travel {:.3} (mean over mean), peak velocity \
+                 {:.3}, peak acceleration {:.3} (largest over largest); of mean peaks: \
+                 velocity {:.3}, acceleration {:.3}",
+                r.travel,
+                r.velocity,
+                r.acceleration,
+                r.velocity_of_mean_peaks,
+                r.acceleration_of_mean_peaks
+            ),
+            None => println!(
+                "ratios serial/PKM: none (an actuator or axis turns: mm over deg means nothing)"
+            ),
+        }
         match s.feed_override_max {
             Some(k) => println!(
                 "largest feed override within the actuator rate limits: {:.4}",

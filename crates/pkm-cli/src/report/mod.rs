@@ -423,8 +423,9 @@ fn motion_section(h: &mut Html, machine: &Machine) -> Result<()> {
          constant feed (seed 000, fig. 5-6); 101 points, 0.9° apart. Actuator velocity and \
          acceleration come from the Jacobian and its derivative (exact), not from \
          differences of the points. The same path on a serial (Cartesian) machine is the \
-         tool tip's X, Y, Z. Ratios are serial over PKM: mean travel, mean peak |velocity|, \
-         mean peak |acceleration| of the moving axes.",
+         tool tip's X, Y, Z. Ratios are serial over PKM as seed 000 defines them: mean \
+         travel over mean travel, largest peak |velocity| over largest, largest peak \
+         |acceleration| over largest.",
         home[2],
         home[0] + 32.0,
         home[1] - 32.0,
@@ -488,13 +489,12 @@ fn motion_section(h: &mut Html, machine: &Machine) -> Result<()> {
             sig(peak(&s.serial, |x| x.peak_velocity)),
             sig(peak(&s.actuators, |x| x.peak_acceleration)),
             sig(peak(&s.serial, |x| x.peak_acceleration)),
-            if linear {
-                format!(
+            match &s.ratios {
+                Some(r) => format!(
                     "{:.3} / {:.3} / {:.3}",
-                    s.ratios.travel, s.ratios.velocity, s.ratios.acceleration
-                )
-            } else {
-                "n/a (revolute drives)".into()
+                    r.travel, r.velocity, r.acceleration
+                ),
+                None => "n/a (revolute drives)".into(),
             },
             if s.violations.is_empty() {
                 "<span class=\"ok\">none</span>".into()

@@ -77,8 +77,9 @@ pub struct MotionSummary {
     pub actuators: Vec<(String, AxisStats)>,
     /// Per serial (Cartesian) axis, the same path on a serial machine.
     pub serial: Vec<(String, AxisStats)>,
-    /// Serial over PKM ratios.
-    pub ratios: Ratios,
+    /// Serial over PKM ratios (seed 000's definitions); `None` when an actuator or a
+    /// serial axis is an angle (a ratio of mm to deg means nothing).
+    pub ratios: Option<Ratios>,
     /// Violated limits along the path (the first 10 000 stretches).
     pub violations: Vec<ViolationRun>,
     /// Stretches beyond the first 10 000, not listed.
@@ -365,7 +366,14 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
             s.finalize();
         }
         let act: Vec<AxisStats> = self.act.to_vec();
-        let ratios = ratios(&self.serial, &act);
+        let coords = self.m.coordinates();
+        let serial_q: Vec<Quantity> = self
+            .serial_idx
+            .iter()
+            .map(|&k| coords[k].quantity)
+            .collect();
+        let act_q: Vec<Quantity> = self.m.actuators().iter().map(|a| a.quantity).collect();
+        let ratios = ratios(&self.serial, &serial_q, &act, &act_q);
         MotionSummary {
             actuators: self
                 .m

@@ -463,6 +463,10 @@ impl Mechanism<2, 2> for P3rpHead {
         self.geometry.jacobian(x[1])
     }
 
+    fn forward_closed_form(&self) -> bool {
+        true
+    }
+
     /// Closed form ([`HeadGeometry::forward`]) on the branch of `start`.
     fn forward(
         &self,

@@ -478,6 +478,10 @@ impl Mechanism<6, 6> for SerialArm {
     }
 
     /// Closed form: the chain's pose at `q` (`start` is not needed).
+    fn forward_closed_form(&self) -> bool {
+        true
+    }
+
     fn forward(&self, q: &Vector6<f64>, _start: &Vector6<f64>) -> Result<Forward<6>> {
         Ok(Forward {
             pose: self.coords_of_joints(q),

@@ -124,6 +124,10 @@ impl<const N: usize> Mechanism<N, N> for SerialMechanism<N> {
         Ok(SMatrix::<f64, N, N>::identity())
     }
 
+    fn forward_closed_form(&self) -> bool {
+        true
+    }
+
     fn forward(
         &self,
         q: &SVector<f64, N>,

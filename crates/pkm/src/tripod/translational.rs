@@ -140,6 +140,10 @@ impl Mechanism<6, 3> for TranslationalTripod {
         Ok(self.geometry.strut_set().coords_jacobian(x))
     }
 
+    fn forward_closed_form(&self) -> bool {
+        true
+    }
+
     fn forward(&self, q: &Vector3<f64>, start: &Vector6<f64>) -> Result<Forward<6>> {
         let (p0, r) = Self::split(start);
         let p = self.forward_closed_form(q, &r, &p0)?;
