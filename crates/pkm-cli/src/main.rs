@@ -85,7 +85,7 @@ enum Command {
         pkm workspace examples/machines/hexapod-linuxcnc.toml --orientation 0,10,0 --bounds=-400,400,-400,400,300,800 --step 10 --out ws\n  \
         pkm workspace examples/machines/hexapod-linuxcnc.toml --tilt 15 --step 25 --out total   # reachable at every tilt <= 15 deg\n  \
         pkm workspace examples/machines/hexapod-linuxcnc.toml --at 0,0,550 --out tilt          # orientation workspace at a point\n\n\
-        Writes DIR/summary.json (volume_mm3, bounding_box, reachable_fraction, condition\n\
+        Writes DIR/summary.json (measure and measure_unit, volume_mm3 over X, Y, Z, bounding_box, reachable_fraction, condition\n\
         statistics, points per binding limit), DIR/points.csv, DIR/points.ply and slice heat maps.")]
     Workspace(WorkspaceArgs),
     /// Accuracy of any machine (seed 003's model): the tool-pose error of given

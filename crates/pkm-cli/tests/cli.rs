@@ -411,7 +411,10 @@ fn help_has_examples() {
 /// an iterative one gives its count.
 #[test]
 fn fk_names_its_solver() {
-    let kr30 = root().join("examples/machines/kr30-dh.toml").display().to_string();
+    let kr30 = root()
+        .join("examples/machines/kr30-dh.toml")
+        .display()
+        .to_string();
     let out = pkm()
         .args(["fk", &kr30, "--actuators", "0,0,0,0,90,0"])
         .output()

@@ -23,9 +23,11 @@ fn workspace_outputs() {
         .unwrap();
     ok(&o);
     let v: Value = serde_json::from_slice(&o.stdout).unwrap();
-    for k in ["volume_mm3", "reachable_fraction"] {
+    for k in ["volume_mm3", "measure", "reachable_fraction"] {
         assert!(v[k].as_f64().unwrap() > 0.0, "{k}");
     }
+    assert_eq!(v["measure_unit"], "mm^3");
+    assert_eq!(v["volume_mm3"], v["measure"]);
     assert_eq!(v["bounding_box"].as_array().unwrap().len(), 3);
     assert!(v["condition"]["median"].as_f64().unwrap() >= 1.0);
     let binding: u64 = v["binding"]

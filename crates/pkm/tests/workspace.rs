@@ -65,14 +65,44 @@ fn grid_points_agree_with_direct_evaluation() {
             }
         }
     }
-    let s = wm.summary(&|_, v| v, 20.0 * 25.0 * 35.0);
+    let s = wm.summary_of(&[pkm::Quantity::Length; 3]);
     assert_eq!(s.reachable, reachable);
     assert!(reachable > 0 && reachable < wm.points.len());
     assert_eq!(
         s.binding.iter().map(|b| b.1).sum::<usize>() + s.reachable,
         s.points
     );
-    assert!((s.volume_mm3 - reachable as f64 * 17500.0).abs() < 1e-6);
+    assert!((s.volume_mm3.unwrap() - reachable as f64 * 17500.0).abs() < 1e-6);
+    assert_eq!(
+        (s.measure_unit.as_str(), s.measure_name.as_str()),
+        ("mm^3", "volume")
+    );
+}
+
+/// Issue 17, item 10: a grid over a length and an angle (the P3RP head's z, theta)
+/// has a measure in mm·deg, not a volume in mm^3.
+#[test]
+fn a_grid_over_a_length_and_an_angle_has_no_volume() {
+    let m = pkm::Machine::from_path(format!(
+        "{}/../../examples/machines/p3rp-seed004.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let dm = m.mechanism();
+    let home = dm.home();
+    let axes = pkm::workspace::default_grid(dm, &home, None, None).unwrap();
+    let wm = pkm::analysis::workspace::grid(&m, &home, &axes, &[], &|_| {}).unwrap();
+    let q: Vec<pkm::Quantity> = axes
+        .iter()
+        .map(|a| dm.coordinates()[a.coordinate].quantity)
+        .collect();
+    let s = wm.summary_of(&q);
+    assert_eq!(s.measure_unit, "mm·deg");
+    assert_eq!(s.measure_name, "measure");
+    assert!(s.volume_mm3.is_none());
+    // Cell = step_z (mm) times step_theta (deg).
+    let cell = axes[0].step * axes[1].step.to_degrees();
+    assert!((s.measure - s.reachable as f64 * cell).abs() < 1e-9 * s.measure.max(1.0));
 }
 
 #[test]

@@ -101,11 +101,12 @@ pub fn default_axes(
 
 /// Summary with user units.
 pub fn summarise(m: &dyn DynMechanism, wm: &WorkspaceMap) -> WorkspaceSummary {
-    let q = |i: usize| m.coordinates()[wm.axes[i].coordinate].quantity;
-    let cell: f64 = (0..wm.axes.len())
-        .map(|i| q(i).to_user(wm.axes[i].step))
-        .product();
-    wm.summary(&|i, v| q(i).to_user(v), cell)
+    let q: Vec<pkm::Quantity> = wm
+        .axes
+        .iter()
+        .map(|a| m.coordinates()[a.coordinate].quantity)
+        .collect();
+    wm.summary_of(&q)
 }
 
 /// The (horizontal, vertical) axis pairs of the standard slices: the first two axes,
@@ -362,6 +363,9 @@ pub fn run(a: &WorkspaceArgs) -> Result<u8> {
         "reachable": s.reachable,
         "reachable_fraction": s.reachable_fraction,
         "volume_mm3": s.volume_mm3,
+        "measure": s.measure,
+        "measure_unit": s.measure_unit,
+        "measure_name": s.measure_name,
         "bounding_box": s.bounding_box,
         "condition": s.condition,
         "binding": binding,
@@ -435,10 +439,12 @@ pub fn run(a: &WorkspaceArgs) -> Result<u8> {
             secs
         );
         println!(
-            "reachable  {} ({:.1} %), volume {:.4e} mm^3",
+            "reachable  {} ({:.1} %), {} {:.4e} {}",
             s.reachable,
             100.0 * s.reachable_fraction,
-            s.volume_mm3
+            s.measure_name,
+            s.measure,
+            s.measure_unit
         );
         for (i, b) in s.bounding_box.iter().enumerate() {
             let c = &m.coordinates()[axes[i].coordinate];

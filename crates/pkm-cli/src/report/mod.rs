@@ -377,13 +377,13 @@ fn workspace_section(h: &mut Html, machine: &Machine) -> Result<()> {
     h.table(
         &[
             "reachable",
-            "volume",
+            "measure",
             "reachable range",
             "condition min / median / p95 / max",
         ],
         &[vec![
             format!("{} ({:.1} %)", s.reachable, 100.0 * s.reachable_fraction),
-            format!("{:.4e} mm³", s.volume_mm3),
+            format!("{} {:.4e} {}", s.measure_name, s.measure, s.measure_unit),
             bbox.join("<br>"),
             format!(
                 "{:.3} / {:.3} / {:.3} / {:.3}",

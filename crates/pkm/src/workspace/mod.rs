@@ -16,6 +16,7 @@ use crate::error::{Error, Result};
 use crate::limits::Violation;
 use crate::mechanism::{Mechanism, PoseSpace};
 use crate::rotation::Convention;
+use crate::units::Quantity;
 
 /// One axis of a grid: a pose coordinate swept from `min` to `max` by `step`
 /// (internal units).
@@ -99,8 +100,19 @@ pub struct WorkspaceSummary {
     pub reachable: usize,
     /// Reachable fraction.
     pub reachable_fraction: f64,
-    /// Reachable volume (mm^3; area mm^2 for two length axes), cell count times cell size.
-    pub volume_mm3: f64,
+    /// Reachable measure of the grid's space: cell count times cell size, in
+    /// [`WorkspaceSummary::measure_unit`] (mm^3 over X, Y, Z; mm·deg over a planar
+    /// head's z, theta; mm^3·deg^3 over six axes).
+    pub measure: f64,
+    /// The unit of [`WorkspaceSummary::measure`]: `mm^k·deg^j` for k length and j
+    /// angle axes (`mm^3`, `mm^2`, `mm·deg`, `deg^2`).
+    pub measure_unit: String,
+    /// What the measure is: `volume` (three length axes), `area` (two), `length`
+    /// (one), else `measure` (a product with angles, not a volume).
+    pub measure_name: String,
+    /// The reachable volume (mm^3) when the grid is over three length axes, else
+    /// `None` (an area in mm·deg is not a volume).
+    pub volume_mm3: Option<f64>,
     /// Bounding box of the reachable points per axis: `[min, max]` in user units.
     pub bounding_box: Vec<[f64; 2]>,
     /// Condition number statistics.
@@ -312,9 +324,46 @@ impl WorkspaceMap {
         x
     }
 
+    /// Summary statistics in user units (mm, deg) for the grid's axes of quantities
+    /// `quantities` (one per axis).
+    pub fn summary_of(&self, quantities: &[Quantity]) -> WorkspaceSummary {
+        let q = |i: usize| quantities.get(i).copied().unwrap_or(Quantity::Length);
+        let cell: f64 = (0..self.axes.len())
+            .map(|i| q(i).to_user(self.axes[i].step))
+            .product();
+        let lengths = (0..self.axes.len())
+            .filter(|&i| q(i) == Quantity::Length)
+            .count();
+        let angles = self.axes.len() - lengths;
+        let power = |u: &str, k: usize| match k {
+            0 => None,
+            1 => Some(u.to_string()),
+            k => Some(format!("{u}^{k}")),
+        };
+        let unit = [power("mm", lengths), power("deg", angles)]
+            .into_iter()
+            .flatten()
+            .collect::<Vec<_>>()
+            .join("·");
+        let name = match (lengths, angles) {
+            (3, 0) => "volume",
+            (2, 0) => "area",
+            (1, 0) => "length",
+            _ => "measure",
+        };
+        self.summary(&|i, v| q(i).to_user(v), cell, &unit, name)
+    }
+
     /// Summary statistics; `to_user` converts a coordinate value of axis `i` to user
-    /// units; `cell` is the volume of one cell in user units.
-    pub fn summary(&self, to_user: &dyn Fn(usize, f64) -> f64, cell: f64) -> WorkspaceSummary {
+    /// units; `cell` is the measure of one cell in user units, `unit` its unit and
+    /// `name` what it is (see [`WorkspaceSummary`]).
+    pub fn summary(
+        &self,
+        to_user: &dyn Fn(usize, f64) -> f64,
+        cell: f64,
+        unit: &str,
+        name: &str,
+    ) -> WorkspaceSummary {
         let mut conds: Vec<f64> = Vec::new();
         let mut bbox = vec![[f64::INFINITY, f64::NEG_INFINITY]; self.axes.len()];
         let mut binding: std::collections::HashMap<String, usize> = Default::default();
@@ -350,7 +399,10 @@ impl WorkspaceMap {
             points: self.points.len(),
             reachable: conds.len(),
             reachable_fraction: conds.len() as f64 / self.points.len().max(1) as f64,
-            volume_mm3: conds.len() as f64 * cell,
+            measure: conds.len() as f64 * cell,
+            measure_unit: unit.to_string(),
+            measure_name: name.to_string(),
+            volume_mm3: (unit == "mm^3").then_some(conds.len() as f64 * cell),
             bounding_box: bbox,
             condition,
             binding,
