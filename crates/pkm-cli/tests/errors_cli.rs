@@ -38,7 +38,7 @@ fn errors_json_contract_and_plots() {
         (e[0] - 0.01).abs() < 1e-12 && e[1].abs() < 1e-12 && (e[2] - 0.02).abs() < 1e-12,
         "{e:?}"
     );
-    assert_eq!(v["orientation_error"].as_array().unwrap().len(), 3);
+    assert_eq!(v["orientation_error_deg"].as_array().unwrap().len(), 3);
     let budget = v["budget"].as_object().unwrap();
     // Seed 003's deviation set as pkm carries it: 39 rows, each with an effect (the
     // installation angles, which cannot move the tool relative to the part, and the
@@ -48,7 +48,7 @@ fn errors_json_contract_and_plots() {
     for item in v["budget_items"].as_array().unwrap() {
         assert!(
             item["position_mm"].as_f64().unwrap() > 0.0
-                || item["orientation_rad"].as_f64().unwrap() > 0.0,
+                || item["orientation_deg"].as_f64().unwrap() > 0.0,
             "{item}"
         );
     }
@@ -796,4 +796,58 @@ fn report_has_a_clearance_section_when_the_file_gives_clearances() {
         .unwrap());
     let html = std::fs::read_to_string(plain.join("index.html")).unwrap();
     assert!(!html.contains("id=\"clearance\""));
+}
+
+/// Issue 17, item 10: orientation errors in deg, like every other angle pkm prints:
+/// the JSON and text equal the library's radians converted.
+#[test]
+fn orientation_errors_are_in_degrees() {
+    let dir = tempfile::tempdir().unwrap();
+    let devs = dir.path().join("devs.toml");
+    std::fs::write(&devs, "\"A1.x\" = 0.05\n\"B4.y\" = -0.03\n").unwrap();
+    let file = path("examples/machines/hexapod-seed001.toml");
+    let o = pkm()
+        .args(["errors", &file, "--deviations"])
+        .arg(&devs)
+        .args(["--json", "--out"])
+        .arg(dir.path().join("e"))
+        .output()
+        .unwrap();
+    ok(&o);
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let machine = pkm::Machine::from_path(&file).unwrap();
+    let params = machine.parameters();
+    let d = pkm::machine::read_deviations(
+        &params,
+        &std::fs::read_to_string(&devs).unwrap(),
+        "devs.toml",
+    )
+    .unwrap();
+    let r = pkm::analysis::accuracy(
+        &machine,
+        &pkm::analysis::AccuracyOptions {
+            deviations: d,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let w = r.pose_error.orientation;
+    assert!(w.norm() > 1e-6);
+    for k in 0..3 {
+        let got = v["orientation_error_deg"][k].as_f64().unwrap();
+        assert!((got - w[k].to_degrees()).abs() < 1e-15, "{got} {}", w[k]);
+    }
+    let item = &v["budget_items"][0];
+    let b = &r.budget.items[0];
+    assert!((item["orientation_deg"].as_f64().unwrap() - b.orientation.to_degrees()).abs() < 1e-15);
+    let o = pkm()
+        .args(["errors", &file, "--deviations"])
+        .arg(&devs)
+        .args(["--out"])
+        .arg(dir.path().join("t"))
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&o.stdout);
+    let line = text.lines().find(|l| l.starts_with("orientation")).unwrap();
+    assert!(line.ends_with(" deg"), "{line}");
 }

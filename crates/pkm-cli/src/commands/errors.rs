@@ -384,11 +384,11 @@ fn report_json(m: &dyn pkm::DynMechanism, r: &AccuracyReport) -> serde_json::Val
         .zip(&r.sensitivities)
         .map(|(p, s)| {
             let k = per_user(p);
-            let (d, w) = (s.position * k, s.orientation * k);
+            let (d, w) = (s.position * k, (s.orientation * k).map(f64::to_degrees));
             json!({
                 "parameter": p.name, "deviation": p.name, "kind": p.kind, "unit": unit(p),
                 "position_mm_per_unit": [d.x, d.y, d.z],
-                "orientation_rad_per_unit": [w.x, w.y, w.z],
+                "orientation_deg_per_unit": [w.x, w.y, w.z],
             })
         })
         .collect();
@@ -404,7 +404,10 @@ fn report_json(m: &dyn pkm::DynMechanism, r: &AccuracyReport) -> serde_json::Val
     for i in &r.budget.items {
         budget.insert(i.name.clone(), json!(i.position));
     }
-    let (dp, dw) = (r.pose_error.position, r.pose_error.orientation);
+    let (dp, dw) = (
+        r.pose_error.position,
+        r.pose_error.orientation.map(f64::to_degrees),
+    );
     json!({
         "machine": r.machine,
         "type": r.kind,
@@ -414,13 +417,13 @@ fn report_json(m: &dyn pkm::DynMechanism, r: &AccuracyReport) -> serde_json::Val
         "deviations_given": r.deviations.len(),
         "position_error": [dp.x, dp.y, dp.z],
         "position_error_norm": dp.norm(),
-        "orientation_error": [dw.x, dw.y, dw.z],
+        "orientation_error_deg": [dw.x, dw.y, dw.z],
         "sensitivities": sens,
         "analytic_sensitivities": r.analytic,
         "tolerance_source": r.tolerance_source,
         "tolerances": tol,
         "budget": budget,
-        "budget_items": r.budget.items.iter().map(|i| json!({"parameter": i.name, "kind": i.kind, "position_mm": i.position, "orientation_rad": i.orientation})).collect::<Vec<_>>(),
+        "budget_items": r.budget.items.iter().map(|i| json!({"parameter": i.name, "kind": i.kind, "position_mm": i.position, "orientation_deg": i.orientation.to_degrees()})).collect::<Vec<_>>(),
         "budget_worst_case": r.budget.worst_case,
         "budget_rss": r.budget.rss,
     })
@@ -432,14 +435,17 @@ fn print_text(m: &dyn pkm::DynMechanism, r: &AccuracyReport) {
     for v in &r.violations {
         println!("limit            VIOLATED at this pose: {v}");
     }
-    let (dp, dw) = (r.pose_error.position, r.pose_error.orientation);
+    let (dp, dw) = (
+        r.pose_error.position,
+        r.pose_error.orientation.map(f64::to_degrees),
+    );
     if !r.deviations.is_empty() {
         println!(
             "position error   dx={:+.6} dy={:+.6} dz={:+.6} mm (|e| = {:.6} mm, {} deviations given)",
             dp.x, dp.y, dp.z, dp.norm(), r.deviations.len()
         );
         println!(
-            "orientation      rx={:+.3e} ry={:+.3e} rz={:+.3e} rad",
+            "orientation      rx={:+.3e} ry={:+.3e} rz={:+.3e} deg",
             dw.x, dw.y, dw.z
         );
     }

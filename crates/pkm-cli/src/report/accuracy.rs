@@ -63,7 +63,7 @@ pub fn section(h: &mut Html, machine: &Machine) -> Result<()> {
                 i.kind.as_str().into(),
                 format!("{t:.4} {unit}"),
                 format!("{:.3}", 1e3 * i.position),
-                format!("{:.2e}", i.orientation),
+                format!("{:.2e}", i.orientation.to_degrees()),
             ]
         })
         .collect();
@@ -75,7 +75,7 @@ pub fn section(h: &mut Html, machine: &Machine) -> Result<()> {
                 "kind",
                 "tolerance",
                 "tool-point error [µm]",
-                "tool rotation [rad]",
+                "tool rotation [deg]",
             ],
             &rows,
         ),
