@@ -427,3 +427,57 @@ fn fk_names_its_solver() {
     assert_eq!(v["solver"], "iterative", "{v}");
     assert!(v["iterations"].as_u64().unwrap() > 0, "{v}");
 }
+
+/// Issue 17, item 10: a reference whose expected value is the project's correction of
+/// its source is printed as a discrepancy with the paper's and pkm's values, never as
+/// reproduced; references quoting the same source are told apart by their pose.
+#[test]
+fn a_corrected_reference_is_a_discrepancy_not_reproduced() {
+    let p3rp = root()
+        .join("examples/machines/p3rp-seed004.toml")
+        .display()
+        .to_string();
+    let out = pkm().args(["check", &p3rp]).output().unwrap();
+    assert_eq!(out.status.code(), Some(0));
+    let text = String::from_utf8_lossy(&out.stdout);
+    let lines: Vec<&str> = text
+        .lines()
+        .filter(|l| l.starts_with("reference"))
+        .collect();
+    assert_eq!(lines.len(), 4);
+    let mut unique = lines.clone();
+    unique.sort();
+    unique.dedup();
+    assert_eq!(unique.len(), 4, "{lines:?}");
+    let d: Vec<&&str> = lines.iter().filter(|l| l.contains("DISCREPANCY")).collect();
+    assert_eq!(d.len(), 1, "{lines:?}");
+    assert!(
+        d[0].contains("the source prints 600 mm, pkm's value 660 mm"),
+        "{}",
+        d[0]
+    );
+    assert!(!d[0].contains("reproduced ("), "{}", d[0]);
+    let (v, _) = json(&["check", &p3rp, "--json"]);
+    let refs = v["references"].as_array().unwrap();
+    assert_eq!(refs.iter().filter(|r| r["discrepancy"] == true).count(), 1);
+}
+
+/// A published value needs the project's value beside it and a note.
+#[test]
+fn a_published_value_without_its_correction_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(root().join("examples/machines/p3rp-seed004.toml"))
+        .unwrap()
+        .replace(
+            "published_actuators = { V = 600.0 }",
+            "published_actuators = { W = 600.0 }",
+        );
+    let f = dir.path().join("p.toml");
+    std::fs::write(&f, text).unwrap();
+    let (e, code) = stderr_of(&["check", f.to_str().unwrap()]);
+    assert_eq!(code, 1, "{e}");
+    assert!(
+        e.contains("published_actuators") && e.contains("`W`"),
+        "{e}"
+    );
+}

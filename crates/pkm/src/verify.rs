@@ -251,6 +251,9 @@ pub struct ReferenceItem {
     pub unit: &'static str,
     /// Within the reference's tolerance.
     pub pass: bool,
+    /// What the source prints when the project's expected value differs from it
+    /// (`published_actuators` of the file); `expected` is then the project's value.
+    pub published: Option<Vec<f64>>,
 }
 
 /// A reference pose checked against pkm's kinematics.
@@ -270,6 +273,9 @@ pub struct ReferenceCheck {
     pub error: Option<String>,
     /// Every item within tolerance and no error.
     pub pass: bool,
+    /// Some expected value is the project's correction of what the source prints: the
+    /// source is not reproduced there, whatever `pass` says of the corrected value.
+    pub discrepancy: bool,
 }
 
 /// Evaluates every `[[reference]]` of a machine: inverse kinematics at its pose, then
@@ -288,6 +294,7 @@ pub fn check_references(machine: &crate::Machine) -> Vec<ReferenceCheck> {
                 items: Vec::new(),
                 error: None,
                 pass: false,
+                discrepancy: !r.published_actuators.is_empty(),
             };
             let solved = crate::dynamic::pose_from_user(m, &r.pose, crate::Convention::Rpy)
                 .and_then(|x| {
@@ -317,6 +324,7 @@ pub fn check_references(machine: &crate::Machine) -> Vec<ReferenceCheck> {
                     deviation: dev,
                     unit: "mm",
                     pass: dev.is_some_and(|d| d <= r.tolerance),
+                    published: None,
                 });
             }
             for (name, e) in &r.actuators {
@@ -331,6 +339,7 @@ pub fn check_references(machine: &crate::Machine) -> Vec<ReferenceCheck> {
                     deviation: dev,
                     unit: idx.map(|i| m.actuators()[i].quantity.unit()).unwrap_or(""),
                     pass: dev.is_some_and(|d| d <= r.tolerance),
+                    published: r.published_actuators.get(name).map(|v| vec![*v]),
                 });
             }
             out.pass = out.items.iter().all(|i| i.pass);

@@ -138,22 +138,55 @@ pub fn run(a: &CheckArgs) -> Result<u8> {
         }
     }
     for r in &references {
-        let status = if r.pass {
-            "reproduced"
-        } else {
-            "NOT REPRODUCED"
-        };
         let worst = r
             .items
             .iter()
             .filter_map(|i| i.deviation)
             .fold(0.0, f64::max);
-        if !a.json {
-            println!(
-                "reference   {}: {status} (largest deviation {worst:.4}, tolerance {})",
-                r.source, r.tolerance
-            );
+        if a.json {
+            continue;
         }
+        // The pose tells apart references quoting the same source.
+        let at = m
+            .coordinates()
+            .iter()
+            .zip(&r.pose)
+            .map(|(c, v)| format!("{}={v}", c.name))
+            .collect::<Vec<_>>()
+            .join(" ");
+        let status = match (r.pass, r.discrepancy) {
+            (true, false) => format!(
+                "reproduced (largest deviation {worst:.4}, tolerance {})",
+                r.tolerance
+            ),
+            (false, _) => format!(
+                "NOT REPRODUCED (largest deviation {worst:.4}, tolerance {})",
+                r.tolerance
+            ),
+            (true, true) => {
+                let items = r
+                    .items
+                    .iter()
+                    .filter_map(|i| {
+                        let p = i.published.as_ref()?;
+                        let got = i.computed.as_ref().map(|c| c[0]).unwrap_or(f64::NAN);
+                        Some(format!(
+                            "{} the source prints {} {u}, pkm's value {} {u} (computed {got:.3} {u})",
+                            i.name,
+                            p[0],
+                            i.expected[0],
+                            u = i.unit
+                        ))
+                    })
+                    .collect::<Vec<_>>()
+                    .join("; ");
+                format!(
+                    "DISCREPANCY with the source, not reproduced: {items}; {}",
+                    r.note.as_deref().unwrap_or("")
+                )
+            }
+        };
+        println!("reference   {} [{at}]: {status}", r.source);
     }
     if let Some(r) = references.iter().find(|r| !r.pass) {
         let detail = r.error.clone().unwrap_or_else(|| {

@@ -580,7 +580,12 @@ fn motion_section(h: &mut Html, machine: &Machine) -> Result<()> {
 
 fn references_html(h: &mut Html, machine: &Machine, r: &ReferenceCheck) -> Result<()> {
     let m = machine.mechanism();
-    h.raw(&format!("<h3>{} {}</h3>", mark(r.pass), esc(&r.source)));
+    let mark_of = if r.discrepancy {
+        "<span class=\"bad\">discrepancy with the source</span>"
+    } else {
+        mark(r.pass)
+    };
+    h.raw(&format!("<h3>{} {}</h3>", mark_of, esc(&r.source)));
     h.p(&format!(
         "Pose <code>{}</code> (mm, deg), tolerance {} per component.",
         r.pose
@@ -608,7 +613,10 @@ fn references_html(h: &mut Html, machine: &Machine, r: &ReferenceCheck) -> Resul
         .map(|i| {
             vec![
                 format!("{} {}", i.what, esc(&i.name)),
-                fmt(&i.expected),
+                match &i.published {
+                    Some(p) => format!("{} (pkm's correction: {})", fmt(p), fmt(&i.expected)),
+                    None => fmt(&i.expected),
+                },
                 i.computed.as_deref().map(fmt).unwrap_or("-".into()),
                 i.deviation
                     .map(|d| format!("{d:.4} {}", i.unit))

@@ -289,6 +289,25 @@ pub(crate) fn check_references(src: &source::Source, refs: &[Reference]) -> Resu
                 "a reference needs expected `joints` or `actuators`",
             ));
         }
+        if let Some(name) = r
+            .published_actuators
+            .keys()
+            .find(|k| !r.actuators.contains_key(*k))
+        {
+            return Err(src.error(
+                &at("published_actuators"),
+                format!(
+                    "`{name}`: a published value corrects an expected one; give the \
+                     project's value for `{name}` in `actuators` too"
+                ),
+            ));
+        }
+        if !r.published_actuators.is_empty() && r.note.is_none() {
+            return Err(src.error(
+                &at("published_actuators"),
+                "a value that differs from its source needs the reason in `note`",
+            ));
+        }
     }
     Ok(())
 }

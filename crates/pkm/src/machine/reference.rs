@@ -24,6 +24,12 @@ pub struct Reference {
     /// Expected actuator values (mm or deg) by name.
     #[serde(default)]
     pub actuators: BTreeMap<String, f64>,
+    /// What the source prints, by actuator name, where the project's expected value
+    /// (`actuators`) differs from it (a printing or reading error of the source, the
+    /// reason in `note`): such a reference is reported as a discrepancy with its
+    /// source, never as reproduced.
+    #[serde(default)]
+    pub published_actuators: BTreeMap<String, f64>,
 }
 
 /// Points of exactly three coordinates (a fourth is refused, not dropped).
