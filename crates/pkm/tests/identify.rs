@@ -368,3 +368,67 @@ fn translational_tripod_identified_with_its_platform_joints_held() {
     assert!(before.position_max > 0.3, "{before:?}");
     assert!(after.position_max < 1e-6, "{after:?}");
 }
+
+/// Issue 17, item 10: a weak combination is explained by what it holds (a held zero
+/// reading is not blamed) and by what the machine can do (a translational tripod's
+/// platform never turns); held parameters make the standard errors conditional, and
+/// the identification says so.
+#[test]
+fn explanations_name_only_free_parameters_and_what_the_machine_does() {
+    use nalgebra::{Matrix3, Vector3};
+    let names = pkm::identify::parameter_names(&{
+        let MachineModel::TranslationalTripod(t) = model("tripod-seed000.toml") else {
+            panic!()
+        };
+        t
+    });
+    let dirs = [Vector3::z(), Vector3::z(), Vector3::z()];
+    // Base joint A1 moved across its strut with its platform joint: no zero reading.
+    let terms = [(0, 1.0), (10, 0.3)];
+    let tripod =
+        pkm::identify::struts::explain(&terms, &names, &dirs, &Matrix3::identity(), false).unwrap();
+    assert!(
+        !tripod.contains("zero") && !tripod.contains("orientation"),
+        "{tripod}"
+    );
+    assert!(tripod.contains("never turns"), "{tripod}");
+    let turning =
+        pkm::identify::struts::explain(&terms, &names, &dirs, &Matrix3::identity(), true).unwrap();
+    assert!(
+        turning.contains("orientation") && !turning.contains("zero"),
+        "{turning}"
+    );
+    // Held parameters: the note names them.
+    let MachineModel::TranslationalTripod(t) = model("tripod-seed000.toml") else {
+        panic!()
+    };
+    let zero = t.zero_readings().unwrap();
+    let mut e = experiment(20, Design::Random, 4);
+    e.translation = 30.0;
+    e.fixture = triangle(40.0, 0.0);
+    let s = simulate(&t, &zero, &e).unwrap();
+    let o = Options {
+        fixed: (9..18).collect(),
+        ..Default::default()
+    };
+    let id = identify(&t, &zero, &s.measurements, &o).unwrap();
+    let note = id.standard_errors_note.unwrap();
+    assert!(
+        note.contains("conditional") && note.contains(&names[9]) && note.contains("9 in all"),
+        "{note}"
+    );
+    let free = identify(
+        &hexapod(),
+        &hexapod().zero_readings().unwrap(),
+        &simulate(
+            &hexapod(),
+            &hexapod().zero_readings().unwrap(),
+            &experiment(30, Design::Random, 3),
+        )
+        .unwrap()
+        .measurements,
+        &Options::default(),
+    )
+    .unwrap();
+    assert!(free.standard_errors_note.is_none());
+}

@@ -284,6 +284,7 @@ fn report_json(
         "state_rms_after": id.state_rms_after,
         "singular_values": id.singular_values,
         "condition_number": id.condition,
+        "standard_errors_note": id.standard_errors_note,
         "unidentifiable": id.weak.iter().map(|w| json!({
             "relative_singular_value": w.relative_singular_value,
             "combination": w.terms.iter().map(|(n, c)| json!([n, c])).collect::<Vec<_>>(),
@@ -401,6 +402,9 @@ fn print_text(
             id.values[i] - id.start[i],
             id.standard_errors[i]
         );
+    }
+    if let Some(note) = &id.standard_errors_note {
+        println!("note             {note}");
     }
     for w in &id.weak {
         println!("weak             {}", w.description);

@@ -220,6 +220,10 @@ pub struct Identification {
     pub evaluations: usize,
     /// Number of equations.
     pub equations: usize,
+    /// When parameters are held: what the standard errors assume (that the held values
+    /// are exact; an error in one moves the identified parameters without showing in
+    /// their standard errors).
+    pub standard_errors_note: Option<String>,
 }
 
 /// Names of all parameters of `m`: its geometry, then `zero(<actuator>)`.

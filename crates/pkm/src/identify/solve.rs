@@ -142,7 +142,24 @@ pub fn identify<M: Identifiable<P, A>, const P: usize, const A: usize>(
             relative_singular_value: rel,
         });
     }
+    let held: Vec<&str> = (0..n)
+        .filter(|i| !free.contains(i))
+        .map(|i| names[i].as_str())
+        .collect();
+    let standard_errors_note = (!held.is_empty()).then(|| {
+        let list = if held.len() <= 6 {
+            held.join(", ")
+        } else {
+            format!("{}, ... ({} in all)", held[..6].join(", "), held.len())
+        };
+        format!(
+            "the standard errors are conditional on the held parameters ({list}) being \
+             exactly their nominal values: an error in a held value moves the identified \
+             parameters without showing in their standard errors"
+        )
+    });
     Ok(Identification {
+        standard_errors_note,
         free: (0..n).map(|i| free.contains(&i)).collect(),
         names,
         start: theta,

@@ -45,6 +45,13 @@ pub trait StrutMachine<const A: usize>: Mechanism<6, A> + Sized + Sync {
         *self = self.with_struts(&s);
     }
 
+    /// Whether the platform turns over a campaign's states (a hexapod's does; a
+    /// translational tripod's never does, which decides what a weak combination of
+    /// its parameters means).
+    fn platform_turns(&self) -> bool {
+        true
+    }
+
     /// The joint centres as arrays.
     fn joints(&self) -> Joints<A> {
         let s = self.struts();
@@ -110,7 +117,13 @@ impl<M: StrutMachine<A>, const A: usize> Identifiable<6, A> for M {
         let t = self.tool();
         let dirs: [Vector3<f64>; A] =
             std::array::from_fn(|j| (p + r * (platform[j] - t) - base[j]).normalize());
-        explain(terms, &super::parameter_names(self), &dirs, &r)
+        explain(
+            terms,
+            &super::parameter_names(self),
+            &dirs,
+            &r,
+            self.platform_turns(),
+        )
     }
 
     /// The file's `[calibration] zero_lengths`, else the strut lengths at home.
@@ -252,6 +265,7 @@ pub fn explain<const N: usize>(
     names: &[String],
     dir_at_home: &[Vector3<f64>; N],
     rot_at_home: &Matrix3<f64>,
+    platform_turns: bool,
 ) -> Option<String> {
     let strut_of = |i: usize| -> usize {
         if i < 3 * N {
@@ -305,15 +319,37 @@ pub fn explain<const N: usize>(
         ));
     }
     if dz.abs() < 0.05 && da.norm() > 0.0 && (da - dbw).norm() < 0.2 * da.norm() {
+        let why = if platform_turns {
+            "the platform hardly turns over the measured states"
+        } else {
+            "the platform never turns, so no measurement tells them apart"
+        };
         return Some(format!(
             "base joint {} and platform joint {} of strut {strut} moved alike (a translation of \
-             the strut) change no length: the platform hardly turns over the measured states",
+             the strut) change no length: {why}",
             joint(3 * j),
             joint(3 * N + 3 * j)
         ));
     }
+    // Name only what the combination holds (a held parameter is not in it).
+    let mut parts = Vec::new();
+    if da.norm() > 0.0 {
+        parts.push(format!("base joint {}", joint(3 * j)));
+    }
+    if db.norm() > 0.0 {
+        parts.push(format!("platform joint {}", joint(3 * N + 3 * j)));
+    }
+    if dz != 0.0 {
+        parts.push(format!("the zero reading zero({strut})"));
+    }
+    let why = if platform_turns {
+        "its direction and the platform's orientation vary too little over the measured states"
+    } else {
+        "its direction varies too little over the measured states (the platform never turns)"
+    };
     Some(format!(
-        "the joints and zero reading of strut {strut} are poorly separated: its direction \
-         and the platform's orientation vary too little over the measured states"
+        "{} of strut {strut} {} poorly separated: {why}",
+        parts.join(" and "),
+        if parts.len() > 1 { "are" } else { "is" }
     ))
 }

@@ -50,6 +50,10 @@ impl StrutMachine<3> for TranslationalTripod {
         self.geometry.zero_lengths
     }
 
+    fn platform_turns(&self) -> bool {
+        false
+    }
+
     /// The platform never turns, so each platform joint trades against its strut's
     /// base joint: the platform joints (9..18) are held.
     fn must_hold(&self) -> Vec<usize> {
