@@ -481,3 +481,41 @@ fn a_published_value_without_its_correction_is_refused() {
         "{e}"
     );
 }
+
+/// Issue 17, item 10: near the P3RP head's singular configuration Q the forward
+/// solution is returned with its conditioning, flagged; at home it is not flagged.
+#[test]
+fn fk_reports_the_conditioning_of_its_solution() {
+    let p3rp = root()
+        .join("examples/machines/p3rp-seed004.toml")
+        .display()
+        .to_string();
+    let (v, _) = json(&[
+        "fk",
+        &p3rp,
+        "--actuators",
+        "300,785.0783",
+        "--from",
+        "300,125",
+        "--json",
+    ]);
+    let c = v["condition"].as_f64().unwrap();
+    assert!(c > 1e3, "{v}");
+    assert_eq!(v["near_singular"], true);
+    let out = pkm()
+        .args([
+            "fk",
+            &p3rp,
+            "--actuators",
+            "300,785.0783",
+            "--from",
+            "300,125",
+        ])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("NEAR A SINGULAR CONFIGURATION"), "{text}");
+    let (v, _) = json(&["fk", &p3rp, "--actuators", "200,506.545", "--json"]);
+    assert_eq!(v["near_singular"], false, "{v}");
+    assert!(v["condition"].as_f64().unwrap() < 10.0);
+}

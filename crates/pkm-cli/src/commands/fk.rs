@@ -48,6 +48,10 @@ pub struct FkArgs {
     pub opts: PoseOptions,
 }
 
+/// Condition number above which a forward solution is reported as near a singular
+/// configuration.
+const NEAR_SINGULAR: f64 = 1e3;
+
 fn start_pose(m: &dyn DynMechanism, a: &FkArgs) -> Result<Vec<f64>> {
     match &a.from {
         Some(s) => Ok(pose_from_user(
@@ -71,6 +75,9 @@ pub fn run(a: &FkArgs) -> Result<u8> {
     let q = actuators_from_user(m, &vals)?;
     let f = m.forward(&q, &start)?;
     let violations = m.check_limits(&f.pose, &q)?;
+    // The conditioning of the solution: near a forward singularity the pose is found
+    // but moves a lot for small actuator errors (the P3RP head near Q).
+    let condition = m.condition(&f.pose).ok().filter(|c| c.is_finite());
     let modes = match a.assembly_modes {
         Some(n) => Some(pkm::analysis::workspace::assembly_modes(&machine, &q, n)?),
         None => None,
@@ -92,6 +99,11 @@ pub fn run(a: &FkArgs) -> Result<u8> {
         );
         o.insert("iterations".into(), json!(f.iterations));
         o.insert("residual".into(), json!(f.residual));
+        o.insert("condition".into(), json!(condition));
+        o.insert(
+            "near_singular".into(),
+            json!(condition.is_none_or(|c| c > NEAR_SINGULAR)),
+        );
         o.insert("violations".into(), json!(violations));
         o.insert("reachable".into(), json!(violations.is_empty()));
         if let Some(modes) = &modes {
@@ -133,6 +145,18 @@ pub fn run(a: &FkArgs) -> Result<u8> {
                 "solver     {} iterations, residual {:.3e}",
                 f.iterations, f.residual
             );
+        }
+        match condition {
+            Some(c) if c <= NEAR_SINGULAR => {
+                println!("condition  {c:.3} (driven columns, 2-norm)")
+            }
+            Some(c) => println!(
+                "condition  {c:.4e}: NEAR A SINGULAR CONFIGURATION, the pose is poorly \
+                 determined by the actuators (their errors are magnified up to this factor)"
+            ),
+            None => {
+                println!("condition  none: the pose is singular, the actuators do not determine it")
+            }
         }
         if violations.is_empty() {
             println!("limits     all satisfied");
