@@ -122,6 +122,41 @@ fn exponent_hint(text: &str) -> &'static str {
     }
 }
 
+/// The first G, M or T code whose number has more than six digits before its point
+/// (leading zeros aside), outside comments. The `gcode` crate multiplies the number by
+/// ten in a `u32`: `G2147483649` wraps to `G1` in a release build (a silent move) and
+/// panics in a checked one, so such a word is refused before it gets there.
+fn oversized_code(text: &str) -> Option<String> {
+    let b = text.as_bytes();
+    let mut i = 0;
+    let mut depth = 0usize;
+    while i < b.len() {
+        match b[i] {
+            b';' if depth == 0 => return None,
+            b'(' => depth += 1,
+            b')' => depth = depth.saturating_sub(1),
+            c if depth == 0 && matches!(c.to_ascii_uppercase(), b'G' | b'M' | b'T') => {
+                let start = i;
+                let mut j = i + 1;
+                while j < b.len() && (b[j] == b' ' || b[j] == b'\t' || b[j] == b'+') {
+                    j += 1;
+                }
+                while j < b.len() && b[j] == b'0' {
+                    j += 1;
+                }
+                let digits = b[j..].iter().take_while(|c| c.is_ascii_digit()).count();
+                if digits > 6 {
+                    let end = j + digits;
+                    return Some(text[start..end].to_string());
+                }
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+    None
+}
+
 impl Interpreter {
     /// A program starting at `position` (mm, rad), G17 G21 G90 G91.1, no feed.
     pub fn new(position: [f64; 6]) -> Self {
@@ -143,6 +178,12 @@ impl Interpreter {
         let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         if text.trim().is_empty() || text.trim() == "%" {
             return Ok(None);
+        }
+        if let Some(word) = oversized_code(text) {
+            return Err(err(
+                line,
+                format!("`{word}`: a G, M or T code number has at most 6 digits"),
+            ));
         }
         let program = gcode::parse(text).map_err(|d| {
             let first = d

@@ -1,0 +1,272 @@
+//! `pkm simulate-measurements` and `pkm calibrate` end to end (issue 5).
+
+use serde_json::Value;
+
+use crate::common::{ok, path, pkm};
+
+#[test]
+fn simulate_then_calibrate_gives_a_machine_file_and_a_report() {
+    let dir = tempfile::tempdir().unwrap();
+    let sim = dir.path().join("sim");
+    let hex = path("examples/machines/hexapod-seed001.toml");
+    let o = pkm()
+        .args([
+            "simulate-measurements",
+            &hex,
+            "--deviation",
+            "1",
+            "--point-noise",
+            "0.005",
+        ])
+        .args([
+            "--length-noise",
+            "0.001",
+            "--states",
+            "50",
+            "--holdout",
+            "20",
+            "--seed",
+            "7",
+        ])
+        .arg("--out")
+        .arg(&sim)
+        .output()
+        .unwrap();
+    ok(&o);
+    for f in [
+        "measurements.csv",
+        "validation.csv",
+        "true.toml",
+        "truth.json",
+    ] {
+        assert!(sim.join(f).exists(), "{f}");
+    }
+    let cal = dir.path().join("cal");
+    let o = pkm()
+        .args(["calibrate", &hex, "--measurements"])
+        .arg(sim.join("measurements.csv"))
+        .arg("--validation")
+        .arg(sim.join("validation.csv"))
+        .arg("--json")
+        .arg("--out")
+        .arg(&cal)
+        .output()
+        .unwrap();
+    ok(&o);
+    let r: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(r["parameters"].as_array().unwrap().len(), 42);
+    assert!(r["residual_rms_before"].as_f64().unwrap() > 0.3);
+    assert!(r["residual_rms_after"].as_f64().unwrap() < 0.01);
+    assert!(r["condition_number"].as_f64().unwrap() > 1.0);
+    assert_eq!(r["singular_values"].as_array().unwrap().len(), 42);
+    // Held-out states: millimetres with the nominal model, the noise level after.
+    let v = &r["validation"];
+    assert!(v["nominal"]["rms"].as_f64().unwrap() > 0.5, "{v}");
+    assert!(v["identified"]["rms"].as_f64().unwrap() < 0.02, "{v}");
+    // The tool pose against the measured (best-fit) pose: position and orientation.
+    assert!(
+        v["nominal"]["pose"]["position_rms"].as_f64().unwrap() > 0.5,
+        "{v}"
+    );
+    assert!(
+        v["identified"]["pose"]["position_rms"].as_f64().unwrap() < 0.02,
+        "{v}"
+    );
+    assert!(
+        v["identified"]["pose"]["orientation_max"].as_f64().unwrap() < 2e-4,
+        "{v}"
+    );
+    // The identified parameters are near the truth (within 4 standard errors).
+    let truth: Value =
+        serde_json::from_slice(&std::fs::read(sim.join("truth.json")).unwrap()).unwrap();
+    for p in r["parameters"].as_array().unwrap() {
+        let name = p["name"].as_str().unwrap();
+        let t = truth["true_parameters"][name].as_f64().unwrap();
+        let (v, se) = (
+            p["identified"].as_f64().unwrap(),
+            p["standard_error"].as_f64().unwrap(),
+        );
+        assert!(
+            (v - t).abs() < 4.0 * se + 1e-9,
+            "{name}: {v} vs {t} (se {se})"
+        );
+    }
+    for f in [
+        "identified.toml",
+        "report.json",
+        "residuals.svg",
+        "singular-values.svg",
+    ] {
+        assert!(cal.join(f).exists(), "{f}");
+    }
+    // identified.toml is a machine file every command takes.
+    let o = pkm()
+        .arg("check")
+        .arg(cal.join("identified.toml"))
+        .output()
+        .unwrap();
+    ok(&o);
+    // Re-calibrating from the identified machine changes nothing (it is the optimum).
+    let o = pkm()
+        .arg("calibrate")
+        .arg(cal.join("identified.toml"))
+        .arg("--measurements")
+        .arg(sim.join("measurements.csv"))
+        .args(["--json", "--out"])
+        .arg(dir.path().join("again"))
+        .output()
+        .unwrap();
+    ok(&o);
+    let r2: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let (a, b) = (
+        r["residual_rms_after"].as_f64().unwrap(),
+        r2["residual_rms_before"].as_f64().unwrap(),
+    );
+    assert!((a - b).abs() < 1e-9, "{a} {b}");
+}
+
+#[test]
+fn bad_measurements_and_unidentifiable_designs_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let hex = path("examples/machines/hexapod-seed001.toml");
+    let bad = dir.path().join("bad.csv");
+    std::fs::write(
+        &bad,
+        "# fixture P1 = 0, 200, 0\n# fixture P2 = -173.2, -100, 0\n# fixture P3 = 173.2, -100, 0\n\
+         state,dL1,dL2,dL3,dL4,dL5,dL6,P1_x,P1_y,P1_z,P2_x,P2_y,P2_z,P3_x,P3_y,P3_z\n\
+         1,0,0,0,0,0,0,0,200,700,-173.2,-100,700,173.2,-100,7o0\n",
+    )
+    .unwrap();
+    let o = pkm()
+        .args(["calibrate", &hex, "--measurements"])
+        .arg(&bad)
+        .arg("--out")
+        .arg(dir.path().join("c"))
+        .output()
+        .unwrap();
+    assert_ne!(o.status.code(), Some(0));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("bad.csv:5:16") && err.contains("P3_z") && err.contains("`7o0`"),
+        "{err}"
+    );
+    // Pure translations cannot separate a base joint from its platform joint.
+    let sim = dir.path().join("tr");
+    ok(&pkm()
+        .args([
+            "simulate-measurements",
+            &hex,
+            "--rotation",
+            "0",
+            "--states",
+            "30",
+            "--out",
+        ])
+        .arg(&sim)
+        .output()
+        .unwrap());
+    let o = pkm()
+        .args(["calibrate", &hex, "--measurements"])
+        .arg(sim.join("measurements.csv"))
+        .arg("--out")
+        .arg(dir.path().join("c2"))
+        .output()
+        .unwrap();
+    assert_ne!(o.status.code(), Some(0));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("not identifiable")
+            && err.contains("moved alike (a translation of the strut)"),
+        "{err}"
+    );
+}
+
+#[test]
+fn hexapod_report_has_a_calibration_section() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("rep");
+    ok(&pkm()
+        .args([
+            "report",
+            &path("examples/machines/hexapod-seed001.toml"),
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap());
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    assert!(html.contains("id=\"calibration\""));
+    assert!(html.contains("id=\"accuracy\""));
+    assert!(html.contains("Accuracy from geometric tolerances"));
+    assert!(html.contains("one-strut design"));
+    assert!(html.contains("singular values of the scaled identification Jacobian"));
+}
+
+#[test]
+fn tripod_calibrates_with_its_platform_joints_held() {
+    let dir = tempfile::tempdir().unwrap();
+    let tri = path("examples/machines/tripod-seed000.toml");
+    let sim = dir.path().join("sim");
+    ok(&pkm()
+        .args([
+            "simulate-measurements",
+            &tri,
+            "--translation",
+            "30",
+            "--fixture-radius",
+            "40",
+        ])
+        .args(["--states", "30", "--holdout", "10", "--out"])
+        .arg(&sim)
+        .output()
+        .unwrap());
+    // Without holding anything: a base joint trades against its platform joint.
+    let o = pkm()
+        .args(["calibrate", &tri, "--measurements"])
+        .arg(sim.join("measurements.csv"))
+        .arg("--out")
+        .arg(dir.path().join("c0"))
+        .output()
+        .unwrap();
+    assert_ne!(o.status.code(), Some(0));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("not identifiable"));
+    let cal = dir.path().join("cal");
+    let o = pkm()
+        .args([
+            "calibrate",
+            &tri,
+            "--fix",
+            "C.*,D.*,E.*",
+            "--json",
+            "--measurements",
+        ])
+        .arg(sim.join("measurements.csv"))
+        .arg("--validation")
+        .arg(sim.join("validation.csv"))
+        .arg("--out")
+        .arg(&cal)
+        .output()
+        .unwrap();
+    ok(&o);
+    let r: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let params = r["parameters"].as_array().unwrap();
+    assert_eq!(params.len(), 21);
+    assert_eq!(params.iter().filter(|p| p["free"] == false).count(), 9);
+    let v = &r["validation"];
+    assert!(v["nominal"]["rms"].as_f64().unwrap() > 1.0, "{v}");
+    assert!(v["identified"]["rms"].as_f64().unwrap() < 0.03, "{v}");
+    ok(&pkm()
+        .arg("check")
+        .arg(cal.join("identified.toml"))
+        .output()
+        .unwrap());
+    // An unknown --fix pattern lists the parameters.
+    let o = pkm()
+        .args(["calibrate", &tri, "--fix", "Q.*", "--measurements"])
+        .arg(sim.join("measurements.csv"))
+        .arg("--out")
+        .arg(dir.path().join("c1"))
+        .output()
+        .unwrap();
+    assert!(String::from_utf8_lossy(&o.stderr).contains("no parameter matches `Q.*`"));
+}

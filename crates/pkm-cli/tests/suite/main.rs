@@ -1,0 +1,12 @@
+//! The `pkm` command end to end, one binary (each file a module: compiled and linked once).
+//! Run one file's tests with `cargo test -p pkm-cli --test suite FILE::`.
+
+mod common;
+
+mod calibrate_cli;
+mod cli;
+mod errors_cli;
+mod motion_cli;
+mod pipes_cli;
+mod seed002_cli;
+mod workspace_cli;

@@ -1,0 +1,305 @@
+//! `pkm motion` end to end.
+
+use serde_json::Value;
+
+use crate::common::{ok, path, pkm};
+
+#[test]
+fn seed000_arc_through_the_cli() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("arc");
+    let o = pkm()
+        .args([
+            "motion",
+            &path("examples/machines/tripod-seed000.toml"),
+            "--gcode",
+            &path("examples/paths/seed000-arc.ngc"),
+            "--from",
+            "32,-32,-290",
+            "--points",
+            "101",
+            "--json",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    ok(&o);
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let file: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(v, file);
+    assert_eq!(v["samples"], 101);
+    let x = &v["serial"]["X"];
+    assert!((x["travel"].as_f64().unwrap() - 64.0).abs() < 0.32);
+    assert!((x["peak_velocity"].as_f64().unwrap() - 166.667).abs() < 0.01);
+    assert!((x["peak_acceleration"].as_f64().unwrap() - 434.03).abs() < 0.01);
+    for k in [
+        "travel",
+        "peak_velocity",
+        "mean_abs_velocity",
+        "peak_acceleration",
+        "mean_abs_acceleration",
+    ] {
+        assert!(v["actuators"]["e"][k].is_number(), "{k}");
+    }
+    for k in [
+        "travel",
+        "velocity",
+        "acceleration",
+        "velocity_of_mean_peaks",
+        "acceleration_of_mean_peaks",
+    ] {
+        assert!(v["ratios"][k].as_f64().unwrap() > 1.0, "{k}");
+    }
+    assert!(v["feed_override_max"].as_f64().unwrap() > 1.0);
+    assert!(v["violations"].as_array().unwrap().is_empty());
+    assert!(v["duration_s"].as_f64().unwrap() > 0.6);
+    let csv = std::fs::read_to_string(out.join("actuators.csv")).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "t_s,line,X_mm,Y_mm,Z_mm,A_deg,B_deg,C_deg,e_mm,e_mm_per_s,e_mm_per_s2,f_mm,f_mm_per_s,f_mm_per_s2,g_mm,g_mm_per_s,g_mm_per_s2"
+    );
+    assert_eq!(lines.count(), 101);
+    for f in ["actuators.svg", "serial.svg"] {
+        assert!(std::fs::read_to_string(out.join(f))
+            .unwrap()
+            .contains("<svg"));
+    }
+}
+
+#[test]
+fn coverage_program_runs_on_the_tripod() {
+    let dir = tempfile::tempdir().unwrap();
+    for profile in ["constant", "trapezoid", "scurve"] {
+        let out = dir.path().join(profile);
+        let o = pkm()
+            .args([
+                "motion",
+                &path("examples/machines/tripod-seed000.toml"),
+                "--gcode",
+                &path("examples/paths/gcode-coverage.ngc"),
+                "--profile",
+                profile,
+                "--rate",
+                "500",
+                "--out",
+            ])
+            .arg(&out)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            o.status.code() == Some(0) || o.status.code() == Some(3),
+            "{profile}: {err}"
+        );
+        let v: Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
+                .unwrap();
+        assert!(v["samples"].as_u64().unwrap() > 100);
+    }
+}
+
+#[test]
+fn violations_name_time_line_and_value() {
+    let dir = tempfile::tempdir().unwrap();
+    let g = dir.path().join("fast.ngc");
+    std::fs::write(&g, "G17 G90\nG1 X10 F600\nG1 X40 F60000\n").unwrap();
+    let out = dir.path().join("o");
+    let o = pkm()
+        .args([
+            "motion",
+            &path("examples/machines/tripod-seed000.toml"),
+            "--gcode",
+        ])
+        .arg(&g)
+        .args(["--profile", "constant", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(3));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("G-code line 3") && err.contains("velocity") && err.contains("mm/s"),
+        "{err}"
+    );
+    let v: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let first = &v["violations"][0];
+    assert_eq!(first["line"], 3);
+    assert!(first["worst"].as_f64().unwrap() > first["bound"].as_f64().unwrap());
+    assert!(v["feed_override_max"].as_f64().unwrap() < 1.0);
+}
+
+#[test]
+fn bad_programs_and_moves() {
+    let dir = tempfile::tempdir().unwrap();
+    let g = dir.path().join("bad.ngc");
+    std::fs::write(&g, "G1 X10 F600\nG1 X20\nG66 X1\n").unwrap();
+    let o = pkm()
+        .args([
+            "motion",
+            &path("examples/machines/tripod-seed000.toml"),
+            "--gcode",
+        ])
+        .arg(&g)
+        .arg("--out")
+        .arg(dir.path().join("o"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("G-code line 3") && err.contains("G66"),
+        "{err}"
+    );
+    assert!(
+        !dir.path().join("o/actuators.csv").exists(),
+        "nothing half-written"
+    );
+    // Point to point with a timed trapezoid.
+    let out = dir.path().join("p2p");
+    pkm()
+        .args([
+            "motion",
+            &path("examples/machines/tripod-centre-leg.toml"),
+            "--from",
+            "0,0,-290",
+            "--to",
+            "30,20,-310",
+            "--duration",
+            "1",
+            "--profile",
+            "trapezoid",
+            "--accel-time",
+            "0.1",
+            "--rate",
+            "1000",
+            "--out",
+        ])
+        .arg(&out)
+        .assert()
+        .success();
+    let v: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert!((v["duration_s"].as_f64().unwrap() - 1.0).abs() < 1e-9);
+    assert_eq!(v["samples"], 1001);
+}
+
+#[test]
+fn rapid_rate_comes_from_the_machine_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let g = dir.path().join("rapid.ngc");
+    std::fs::write(&g, "G0 X10\n").unwrap();
+    let run = |extra: &[&str]| -> f64 {
+        let out = dir.path().join("o");
+        pkm()
+            .args([
+                "motion",
+                &path("examples/machines/tripod-seed000.toml"),
+                "--gcode",
+            ])
+            .arg(&g)
+            .args(extra)
+            .arg("--out")
+            .arg(&out)
+            .assert()
+            .success();
+        let v: Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
+                .unwrap();
+        v["duration_s"].as_f64().unwrap()
+    };
+    // [motion] rapid = 6000 mm/min: 10 mm in 0.1 s; --rapid overrides it.
+    assert!((run(&[]) - 0.1).abs() < 1e-12);
+    assert!((run(&["--rapid", "1200"]) - 0.5).abs() < 1e-12);
+}
+
+#[test]
+fn seed004_move_and_report() {
+    // The command: the head's fig. 7 move.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("p3");
+    let o = pkm()
+        .args([
+            "motion",
+            &path("examples/machines/p3rp-seed004.toml"),
+            "--from",
+            "200,0",
+            "--to",
+            "335,51.566",
+            "--duration",
+            "1",
+            "--profile",
+            "trapezoid",
+            "--accel-time",
+            "0.1",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    ok(&o);
+    let s: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let v = &s["actuators"]["V"];
+    let pv = v["peak_velocity"].as_f64().unwrap();
+    let pa = v["peak_acceleration"].as_f64().unwrap();
+    assert!((pv / 260.0 - 1.0).abs() < 0.03, "{pv}");
+    assert!((pa / 2600.0 - 1.0).abs() < 0.03, "{pa}");
+    assert_eq!(s["duration_s"], 1.0);
+    assert_eq!(s["profile"]["duration_s"], 1.0);
+    assert_eq!(s["profile"]["accel_time_s"], 0.1);
+    assert!(s["profile"].get("jerk").is_none());
+    for f in ["actuators.csv", "actuators.svg", "serial.svg"] {
+        assert!(out.join(f).exists(), "{f}");
+    }
+    // The hybrid machine runs G-code with an A word (table and head together).
+    let prog = dir.path().join("a.ngc");
+    std::fs::write(&prog, "G90 G1 X20 Y10 Z180 A30 F3000\nG1 X-20 A0\n").unwrap();
+    let o = pkm()
+        .args([
+            "motion",
+            &path("examples/machines/p3rp-hybrid-seed004.toml"),
+            "--gcode",
+        ])
+        .arg(&prog)
+        .arg("--out")
+        .arg(dir.path().join("hy"))
+        .arg("--json")
+        .output()
+        .unwrap();
+    ok(&o);
+    let s: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(s["type"], "p3rp/hybrid");
+    assert!(
+        s["violations"].as_array().unwrap().is_empty(),
+        "{}",
+        s["violations"]
+    );
+    // Table Y takes back the tool's sideways swing L sin A = 150 sin 30 = 75 mm.
+    let y = &s["actuators"]["Y"];
+    assert!(
+        (y["min"].as_f64().unwrap() - (10.0 - 75.0)).abs() < 1e-6,
+        "{y}"
+    );
+    // The report carries the seed-004 section for both files.
+    for file in ["p3rp-seed004.toml", "p3rp-hybrid-seed004.toml"] {
+        let rep = dir.path().join(format!("rep-{file}"));
+        let o = pkm()
+            .args([
+                "report",
+                &path(&format!("examples/machines/{file}")),
+                "--out",
+            ])
+            .arg(&rep)
+            .output()
+            .unwrap();
+        ok(&o);
+        let html = std::fs::read_to_string(rep.join("index.html")).unwrap();
+        assert!(html.contains("seed 004 reproduced"));
+        assert!(html.contains("slider V peak velocity in the fig. 7 move"));
+        assert!(html.contains("Forward workspace (fig. 5)"));
+    }
+}

@@ -1,0 +1,330 @@
+//! Bad machine files: each gives an error naming file, line, field and what was expected.
+
+use pkm::{Error, Machine};
+
+const GOOD: &str = include_str!("../../../../examples/machines/tripod-seed000.toml");
+
+fn err(text: &str) -> Error {
+    Machine::from_toml_str(text, "bad.toml").unwrap_err()
+}
+
+/// (line, field, message) of a machine-file error.
+fn parts(e: &Error) -> (Option<usize>, String, String) {
+    match e {
+        Error::MachineFile {
+            file,
+            line,
+            field,
+            message,
+            ..
+        } => {
+            assert_eq!(file, "bad.toml");
+            (*line, field.clone(), message.clone())
+        }
+        other => panic!("expected a machine-file error, got {other:?}"),
+    }
+}
+
+fn line_of(text: &str, needle: &str) -> usize {
+    text.lines().position(|l| l.contains(needle)).unwrap() + 1
+}
+
+#[test]
+fn good_files_load() {
+    for f in ["tripod-seed000.toml", "tripod-centre-leg.toml"] {
+        Machine::from_path(format!(
+            "{}/../../examples/machines/{f}",
+            env!("CARGO_MANIFEST_DIR")
+        ))
+        .unwrap();
+    }
+}
+
+#[test]
+fn malformed_toml() {
+    let text = GOOD.replace("max_tilt = 30.0", "max_tilt = = 30.0");
+    let e = err(&text);
+    let (line, field, msg) = parts(&e);
+    assert_eq!(line, Some(line_of(&text, "max_tilt = =")));
+    assert!(field.is_empty());
+    assert!(msg.contains("invalid TOML"), "{msg}");
+    assert!(
+        e.to_string()
+            .starts_with(&format!("bad.toml:{}:", line.unwrap())),
+        "{e}"
+    );
+}
+
+#[test]
+fn missing_field() {
+    let text = GOOD.replace("tip = [0.0, 0.0, -90.0]", "");
+    let (line, field, msg) = parts(&err(&text));
+    assert_eq!(field, "tool");
+    assert!(msg.contains("missing field `tip`"), "{msg}");
+    assert_eq!(line, Some(line_of(&text, "[tool]")));
+}
+
+#[test]
+fn wrong_type() {
+    let text = GOOD.replacen("length = [150.0, 300.0]", "length = \"long\"", 1);
+    let (line, field, msg) = parts(&err(&text));
+    assert_eq!(field, "struts[0].length");
+    assert!(msg.contains("expected"), "{msg}");
+    assert_eq!(line, Some(line_of(&text, "length = \"long\"")));
+}
+
+#[test]
+fn unknown_key() {
+    let text = GOOD.replace("max_tilt = 30.0", "max_tilt = 30.0\nmax_tilte = 3.0");
+    let (line, field, msg) = parts(&err(&text));
+    assert!(msg.contains("unknown field `max_tilte`"), "{msg}");
+    assert!(msg.contains("max_tilt"), "names what is expected: {msg}");
+    assert!(field.starts_with("limits"), "{field}");
+    assert_eq!(line, Some(line_of(&text, "max_tilte")));
+}
+
+#[test]
+fn nan_and_inf() {
+    for bad in ["nan", "inf", "-inf"] {
+        let text = GOOD.replace("max_tilt = 30.0", &format!("max_tilt = {bad}"));
+        let (line, field, msg) = parts(&err(&text));
+        assert_eq!(field, "limits.max_tilt");
+        assert!(msg.contains("finite"), "{msg}");
+        assert_eq!(line, Some(line_of(&text, &format!("max_tilt = {bad}"))));
+    }
+    let text = GOOD.replace("G = [0.0, 115.4701, 0.0]", "G = [0.0, nan, 0.0]");
+    let (_, field, _) = parts(&err(&text));
+    assert_eq!(field, "base_joints.G[1]");
+}
+
+#[test]
+fn negative_and_unordered_lengths() {
+    let text = GOOD.replacen("length = [150.0, 300.0]", "length = [-150.0, 300.0]", 1);
+    let (line, field, msg) = parts(&err(&text));
+    assert_eq!(field, "struts[0].length");
+    assert!(msg.contains(">= 0"), "{msg}");
+    assert_eq!(line, Some(line_of(&text, "[-150.0, 300.0]")));
+    let text = GOOD.replacen("length = [150.0, 300.0]", "length = [300.0, 150.0]", 1);
+    let (_, field, msg) = parts(&err(&text));
+    assert_eq!(field, "struts[0].length");
+    assert!(msg.contains("min < max"), "{msg}");
+}
+
+#[test]
+fn semantic_errors() {
+    let text = GOOD.replacen("base = \"F\"", "base = \"Q\"", 1);
+    let (line, field, msg) = parts(&err(&text));
+    assert_eq!(field, "struts[0].base");
+    assert!(
+        msg.contains("unknown base joint `Q`") && msg.contains("F, G, H"),
+        "{msg}"
+    );
+    assert_eq!(line, Some(line_of(&text, "base = \"Q\"")));
+
+    let text = GOOD.replacen("base = \"G\"", "base = \"F\"", 1);
+    let (_, field, msg) = parts(&err(&text));
+    assert_eq!(field, "struts[1].base");
+    assert!(msg.contains("already used"), "{msg}");
+
+    let text = GOOD.replace("type = \"tripod\"", "type = \"pentapod\"");
+    let (_, field, msg) = parts(&err(&text));
+    assert_eq!(field, "type");
+    assert!(msg.contains("unknown machine type `pentapod`"), "{msg}");
+
+    let text = GOOD.replace("type = \"tripod\"", "");
+    let (_, field, _) = parts(&err(&text));
+    assert_eq!(field, "type");
+
+    let text = GOOD.replace("constraint = \"translational\"", "constraint = \"rigid\"");
+    let (_, field, msg) = parts(&err(&text));
+    assert_eq!(field, "constraint");
+    assert!(
+        msg.contains("translational") && msg.contains("centre-leg"),
+        "{msg}"
+    );
+
+    let text = GOOD.replace("max_tilt = 30.0", "max_tilt = -5.0");
+    let (_, field, _) = parts(&err(&text));
+    assert_eq!(field, "limits.max_tilt");
+
+    let text = GOOD
+        .replace("H = [100.0, -57.74, 0.0]", "H = [0.0, 0.0, 0.0]")
+        .replace("G = [0.0, 115.4701, 0.0]", "G = [100.0, 57.74, 0.0]");
+    let (_, field, msg) = parts(&err(&text));
+    assert_eq!(field, "base_joints");
+    assert!(msg.contains("collinear"), "{msg}");
+
+    let text = GOOD.replace(
+        "constraint = \"translational\"",
+        "constraint = \"centre-leg\"",
+    );
+    let (_, field, msg) = parts(&err(&text));
+    assert_eq!(field, "constraint");
+    assert!(msg.contains("[centre_leg]"), "{msg}");
+}
+
+#[test]
+fn unreadable_file_names_the_file() {
+    let e = Machine::from_path("/nonexistent/machine.toml").unwrap_err();
+    assert!(
+        e.to_string()
+            .starts_with("/nonexistent/machine.toml: cannot read"),
+        "{e}"
+    );
+}
+
+/// Every example machine file with one line replaced in turn by each line `mutate`
+/// gives for it: the file must be refused at that line, and `check` sees the bad line
+/// and the error. Returns how many were tried.
+fn each_mutated_example(
+    mutate: impl Fn(&str) -> Vec<String>,
+    check: impl Fn(&str, &Error),
+) -> usize {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/machines");
+    let mut tried = 0;
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        let text = std::fs::read_to_string(&path).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        for (i, line) in lines.iter().enumerate() {
+            for bad_line in mutate(line) {
+                let mut bad_lines = lines.clone();
+                bad_lines[i] = &bad_line;
+                let e = Machine::from_toml_str(&bad_lines.join("\n"), "bad.toml").unwrap_err();
+                assert_eq!(
+                    parts(&e).0,
+                    Some(i + 1),
+                    "{}: {bad_line}: {e}",
+                    path.display()
+                );
+                check(&bad_line, &e);
+                tried += 1;
+            }
+        }
+    }
+    tried
+}
+
+/// Absurd magnitudes (issue 17: a value of 1e300 made `pkm report` run for ever) are
+/// refused at load, naming the field and its line, in every example machine file and
+/// every numeric field tried; a URDF too.
+#[test]
+fn absurd_magnitudes_are_refused_with_their_field() {
+    let tried = each_mutated_example(
+        |line| {
+            let Some((key, value)) = line.split_once(" = ") else {
+                return vec![];
+            };
+            let value = value.trim_start_matches('[').trim_start();
+            if key.trim_start().starts_with('#')
+                || !value.starts_with(|c: char| c.is_ascii_digit() || c == '-')
+            {
+                return vec![];
+            }
+            let end = value
+                .find(|c: char| !(c.is_ascii_digit() || ".-+eE_".contains(c)))
+                .unwrap_or(value.len());
+            let start = line.find(value).unwrap();
+            vec![format!("{}1e300{}", &line[..start], &line[start + end..])]
+        },
+        |bad, e| {
+            let (_, field, message) = parts(e);
+            assert!(message.contains("magnitude of at most 1e6"), "{bad}: {e}");
+            assert!(!field.is_empty(), "{e}");
+        },
+    );
+    assert!(tried > 100, "{tried}");
+    // Integers too; the bound itself is accepted.
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/machines");
+    let text = std::fs::read_to_string(format!("{dir}/hexapod-seed001.toml")).unwrap();
+    assert!(text.contains("rapid = 30000.0"));
+    let at = Machine::from_toml_str(&text.replace("rapid = 30000.0", "rapid = 1000000"), "ok");
+    assert!(at.is_ok(), "{at:?}");
+    let e = err(&text.replace("rapid = 30000.0", "rapid = 10_000_000"));
+    assert!(parts(&e).2.contains("found 10000000"), "{e}");
+    // A URDF's joint origin.
+    let urdf = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../examples/robots/ur5-like.urdf"
+    ))
+    .unwrap()
+    .replacen("xyz=\"0 0 0.089159\"", "xyz=\"0 0 1e300\"", 1);
+    let dir = tempfile_dir();
+    let p = dir.join("bad.urdf");
+    std::fs::write(&p, urdf).unwrap();
+    let e = Machine::from_path(&p).unwrap_err().to_string();
+    assert!(e.contains("1e300") && e.contains("beyond"), "{e}");
+}
+
+fn tempfile_dir() -> std::path::PathBuf {
+    let d = std::env::temp_dir().join(format!("pkm-magnitudes-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Arrays with a value too many or too few (issue 17: `F = [-100, -57.74, 0, 1]` and
+/// `length = [150, 300, 1]` passed `check`) are refused, naming the field and line, on
+/// every numeric array of every example machine file.
+#[test]
+fn arrays_with_more_or_fewer_values_are_refused() {
+    let tried = each_mutated_example(
+        |line| {
+            let Some((key, value)) = line.split_once(" = [") else {
+                return vec![];
+            };
+            // One-line arrays of numbers (not of strings, not nested).
+            let Some(close) = value.find(']') else {
+                return vec![];
+            };
+            let inner = &value[..close];
+            if key.trim_start().starts_with('#')
+                || inner.contains('[')
+                || inner.contains('"')
+                || !inner.contains(',')
+            {
+                return vec![];
+            }
+            let fewer = &inner[..inner.rfind(',').unwrap()];
+            [format!("{inner}, 1.0"), fewer.to_string()]
+                .into_iter()
+                .map(|b| format!("{key} = [{b}{}", &value[close..]))
+                .collect()
+        },
+        |bad, e| {
+            let message = parts(e).2;
+            assert!(
+                message.contains("invalid length")
+                    || message.contains("values, found")
+                    || message.contains("values (mm, deg), found"),
+                "{bad}: {e}"
+            );
+        },
+    );
+    assert!(tried > 100, "{tried}");
+}
+
+/// Three exactly coincident joints (issue 17: the relative area test's bound underflowed
+/// to zero and passed them) are refused on both tripods, for base and platform.
+#[test]
+fn coincident_tripod_joints_are_refused() {
+    let centre_leg = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../examples/machines/tripod-centre-leg.toml"
+    ))
+    .unwrap();
+    for text in [GOOD.to_string(), centre_leg] {
+        for table in ["[base_joints]", "[platform_joints]"] {
+            let start = text.find(table).unwrap();
+            let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+            let first = text[..start].lines().count() + 1;
+            for l in lines.iter_mut().skip(first).take(3) {
+                let (k, _) = l.split_once(" = ").unwrap();
+                *l = format!("{k} = [5.0, 5.0, 5.0]");
+            }
+            let e = err(&lines.join("\n"));
+            let (_, field, msg) = parts(&e);
+            assert_eq!(format!("[{field}]"), table, "{e}");
+            assert!(msg.contains("coincide"), "{msg}");
+        }
+    }
+}

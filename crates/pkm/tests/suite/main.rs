@@ -1,0 +1,26 @@
+//! The library's integration tests, one binary (each file a module: compiled and linked once).
+//! Run one file's tests with `cargo test -p pkm --test suite FILE::`.
+
+mod common;
+
+mod accuracy;
+mod clearance;
+mod clearance_p3rp;
+mod clearance_seed002;
+mod completion;
+mod contract;
+mod fuzz_corpus;
+mod gcode;
+mod hexapod;
+mod hybrid_am;
+mod identify;
+mod machine_file;
+mod motion;
+mod p3rp;
+mod pose;
+mod rotation;
+mod seed000;
+mod serial;
+mod serial_arm;
+mod tripod;
+mod workspace;
