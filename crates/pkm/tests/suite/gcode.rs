@@ -150,7 +150,10 @@ fn exponents_are_explained_and_a_byte_order_mark_is_ignored() {
 fn code_numbers_that_overflow_are_refused() {
     for (text, word) in [
         ("G0 X0 Y0\nG2147483649 X10\n", "G2147483649"),
-        ("G0000000000000000001971042465\n", "G0000000000000000001971042465"),
+        (
+            "G0000000000000000001971042465\n",
+            "G0000000000000000001971042465",
+        ),
         ("G0 X0\nM 12345678\n", "M 12345678"),
     ] {
         let e = run(text).unwrap_err().to_string();
