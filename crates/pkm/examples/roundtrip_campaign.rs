@@ -61,6 +61,8 @@ struct Tally {
     worst_actuator_error: f64,
     worst_pose_error: f64,
     examples: Vec<String>,
+    /// Named failures of IK on poses FK produced (not wrong, but reachable).
+    failures: Vec<String>,
 }
 
 impl Tally {
@@ -90,6 +92,8 @@ impl Tally {
         self.worst_pose_error = self.worst_pose_error.max(o.worst_pose_error);
         self.examples.extend(o.examples);
         self.examples.truncate(5);
+        self.failures.extend(o.failures);
+        self.failures.truncate(5);
         self
     }
 
@@ -318,7 +322,12 @@ fn fk_ik<M: Analysable<P, A>, const P: usize, const A: usize>(
                 Err(e) => t.wrong(format!("FK->IK: IK {q2:?} has no forward pose ({e})")),
             }
         }
-        Err(e) => *t.ik_after_fk_errors.entry(kind(&e)).or_default() += 1,
+        Err(e) => {
+            *t.ik_after_fk_errors.entry(kind(&e)).or_default() += 1;
+            if t.failures.len() < 5 {
+                t.failures.push(format!("FK->IK: q {q:?}: {e}"));
+            }
+        }
     }
 }
 
@@ -413,6 +422,9 @@ fn main() {
         );
         for e in &t.examples {
             println!("  e.g. {e}");
+        }
+        for e in &t.failures {
+            println!("  failed: {e}");
         }
         total = total.merge(t);
     }
