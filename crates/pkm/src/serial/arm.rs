@@ -191,15 +191,29 @@ impl SerialArm {
         }
         let target_r = crate::rotation::rpy_matrix(x[3], x[4], x[5]);
         let mut best = f64::INFINITY;
+        let mut best_q = *start;
         let mut iterations = 0;
         for k in 0..=RESTARTS {
             let q0 = if k == 0 { *start } else { self.spread_start(k) };
             match self.newton(&target_p, &target_r, q0) {
                 Ok(q) => return Ok(self.wrap(q, start)),
-                Err((residual, it)) => {
-                    best = best.min(residual);
+                Err((residual, it, q)) => {
+                    if residual < best {
+                        (best, best_q) = (residual, q);
+                    }
                     iterations += it;
                 }
+            }
+        }
+        // Every start stalled: the solution may be a singular configuration (a wrist
+        // centre on the first axis), where damped steps cannot remove the error along
+        // the lost direction. Gauss-Newton with a truncated pseudo-inverse from the
+        // closest point found.
+        match self.singular_newton(&target_p, &target_r, best_q) {
+            Ok(q) => return Ok(self.wrap(q, start)),
+            Err((residual, it, _)) => {
+                best = best.min(residual);
+                iterations += it;
             }
         }
         Err(Error::NotConverged {
@@ -297,7 +311,7 @@ impl SerialArm {
         p: &Vector3<f64>,
         r: &Matrix3<f64>,
         mut q: Vector6<f64>,
-    ) -> std::result::Result<Vector6<f64>, (f64, usize)> {
+    ) -> std::result::Result<Vector6<f64>, (f64, usize, Vector6<f64>)> {
         let (mut e, mut j, mut norm) = self.pose_error(p, r, &q);
         // Progress check: an iteration that has not cut the error in ten
         // iterations is stuck (less than 0.1 %: a local minimum of the error, typically an unreachable
@@ -306,7 +320,7 @@ impl SerialArm {
         for it in 0..MAX_ITERATIONS {
             if it > 0 && it % 10 == 0 {
                 if norm > 0.999 * norm_before {
-                    return Err((norm, it));
+                    return Err((norm, it, q));
                 }
                 norm_before = norm;
             }
@@ -333,10 +347,59 @@ impl SerialArm {
                 dq *= 0.5;
             }
             if !improved {
-                return Err((norm, it + 1));
+                return Err((norm, it + 1, q));
             }
         }
-        Err((norm, MAX_ITERATIONS))
+        Err((norm, MAX_ITERATIONS, q))
+    }
+
+    /// Gauss-Newton with the pseudo-inverse of the scaled Jacobian, singular values
+    /// below 1e-10 of the largest dropped, steps halved until the error decreases, no
+    /// stall test: converges (linearly at worst) onto a singular solution.
+    fn singular_newton(
+        &self,
+        p: &Vector3<f64>,
+        r: &Matrix3<f64>,
+        mut q: Vector6<f64>,
+    ) -> std::result::Result<Vector6<f64>, (f64, usize, Vector6<f64>)> {
+        let lc = self.characteristic_length;
+        let (mut e, mut j, mut norm) = self.pose_error(p, r, &q);
+        for it in 0..4 * MAX_ITERATIONS {
+            if e.fixed_rows::<3>(0).norm() <= POSITION_TOLERANCE
+                && e.fixed_rows::<3>(3).norm() <= ORIENTATION_TOLERANCE
+            {
+                return Ok(q);
+            }
+            let mut js = j;
+            let mut es = e;
+            for k in 3..6 {
+                js.row_mut(k).scale_mut(lc);
+                es[k] *= lc;
+            }
+            let svd = js.svd(true, true);
+            let Ok(mut dq) = svd.solve(&es, 1e-10 * svd.singular_values.max()) else {
+                return Err((norm, it, q));
+            };
+            let big = dq.amax();
+            if big > MAX_STEP {
+                dq *= MAX_STEP / big;
+            }
+            let mut improved = false;
+            for _ in 0..20 {
+                let qn = q + dq;
+                let (en, jn, nn) = self.pose_error(p, r, &qn);
+                if nn < norm {
+                    (q, e, j, norm) = (qn, en, jn, nn);
+                    improved = true;
+                    break;
+                }
+                dq *= 0.5;
+            }
+            if !improved {
+                return Err((norm, it + 1, q));
+            }
+        }
+        Err((norm, 4 * MAX_ITERATIONS, q))
     }
 
     /// The Newton step: `J^-1 e` when `J` is well conditioned, else damped least squares
