@@ -3,12 +3,11 @@
 //! same seed gives the same result on any number of threads; rayon).
 
 use nalgebra::{SVector, Vector3};
-use rand::{Rng, SeedableRng};
+use rand::Rng;
 use rand_distr::{Distribution as _, Normal};
-use rayon::prelude::*;
 use serde::Serialize;
 
-use super::streamed::{finish, Moments, Sketch};
+use super::streamed::{chunk_rng, finish, in_chunks, Moments, Sketch};
 use super::{Distribution, Evaluate, Parametric, Tolerance};
 use crate::error::{Error, Result};
 
@@ -40,7 +39,7 @@ pub struct MonteCarlo {
 
 /// Machines per seeded chunk.
 const CHUNK: usize = 4096;
-/// Chunks computed (in parallel) between two merges and progress reports.
+/// Chunks computed (in parallel) between two merges.
 const BATCH: usize = 64;
 
 /// The most samples a Monte Carlo of geometric deviations takes (1e9, minutes on two
@@ -68,7 +67,7 @@ where
     monte_carlo_with_progress(m, x, tol, n, seed, &|_| {})
 }
 
-/// [`monte_carlo`], telling `progress` of the machines done (every 262 144).
+/// [`monte_carlo`], telling `progress` of the machines done (every 4 096).
 pub fn monte_carlo_with_progress<M, const P: usize, const A: usize>(
     m: &M,
     x: &SVector<f64, P>,
@@ -102,51 +101,41 @@ where
     let mut moments = Moments::default();
     let mut sketch = Sketch::default();
     let mut failed = 0;
-    let chunks = n.div_ceil(CHUNK);
-    for first in (0..chunks).step_by(BATCH) {
-        let last = (first + BATCH).min(chunks);
-        let parts: Vec<(Moments, Vec<u32>, usize)> = (first..last)
-            .into_par_iter()
-            .map(|c| {
-                let mut rng = rand::rngs::StdRng::seed_from_u64(
-                    seed ^ (c as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15),
-                );
-                let normal = Normal::new(0.0, 1.0).expect("unit normal");
-                let count = CHUNK.min(n - c * CHUNK);
-                let mut ev = base.clone();
-                let mut d: Vec<(usize, f64)> = tol.iter().map(|t| (t.parameter, 0.0)).collect();
-                let mut mo = Moments::default();
-                let mut buckets = Vec::with_capacity(count);
-                let mut bad = 0;
-                for _ in 0..count {
-                    for (slot, t) in d.iter_mut().zip(tol) {
-                        slot.1 = match t.distribution {
-                            Distribution::Uniform => rng.random_range(-1.0..=1.0) * t.value,
-                            Distribution::Normal => normal.sample(&mut rng) * t.value / 3.0,
-                        };
-                    }
-                    match ev.pose_error(&d) {
-                        Ok(e) => {
-                            mo.push(&e.position);
-                            buckets.push(sketch.bucket(e.position.norm()) as u32);
-                        }
-                        Err(_) => bad += 1,
-                    }
+    let normal = Normal::new(0.0, 1.0).expect("unit normal");
+    let layout = sketch.buckets();
+    in_chunks(
+        n,
+        CHUNK,
+        BATCH,
+        |c, count| {
+            let mut rng = chunk_rng(seed, c);
+            let mut ev = base.clone();
+            let mut d: Vec<(usize, f64)> = tol.iter().map(|t| (t.parameter, 0.0)).collect();
+            let mut mo = Moments::default();
+            let mut buckets = Vec::with_capacity(count);
+            for _ in 0..count {
+                for (slot, t) in d.iter_mut().zip(tol) {
+                    slot.1 = match t.distribution {
+                        Distribution::Uniform => rng.random_range(-1.0..=1.0) * t.value,
+                        Distribution::Normal => normal.sample(&mut rng) * t.value / 3.0,
+                    };
                 }
-                (mo, buckets, bad)
-            })
-            .collect();
-        let mut done = 0;
-        for (mo, buckets, bad) in parts {
+                if let Ok(e) = ev.pose_error(&d) {
+                    mo.push(&e.position);
+                    buckets.push(layout.of(e.position.norm()) as u32);
+                }
+            }
+            (mo, buckets, count)
+        },
+        |(mo, buckets, count)| {
             moments.merge(&mo);
-            done += buckets.len() + bad;
+            failed += count - buckets.len();
             for k in buckets {
                 sketch.add(k as usize);
             }
-            failed += bad;
-        }
-        progress(done as u64);
-    }
+            progress(count as u64);
+        },
+    );
     Ok(finish(&moments, &sketch, failed))
 }
 

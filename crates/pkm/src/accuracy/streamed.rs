@@ -9,6 +9,9 @@
 //! the result does not depend on the number of threads.
 
 use nalgebra::Vector3;
+use rand::rngs::StdRng;
+use rand::SeedableRng;
+use rayon::prelude::*;
 
 use super::monte_carlo::MonteCarlo;
 
@@ -27,97 +30,96 @@ fn log_gamma() -> f64 {
     ((1.0 + QUANTILE_RESOLUTION) / (1.0 - QUANTILE_RESOLUTION)).ln()
 }
 
-/// Moments of the norms and of the components, by Welford's update.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// Moments of error vectors: of their norms and of each component.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Moments {
-    n: u64,
-    mean: f64,
-    m2: f64,
-    vmean: Vector3<f64>,
-    vm2: Vector3<f64>,
-    min: f64,
-    max: f64,
-}
-
-impl Default for Moments {
-    fn default() -> Self {
-        Moments {
-            n: 0,
-            mean: 0.0,
-            m2: 0.0,
-            vmean: Vector3::zeros(),
-            vm2: Vector3::zeros(),
-            min: f64::INFINITY,
-            max: 0.0,
-        }
-    }
+    norm: ScalarMoments,
+    component: [ScalarMoments; 3],
 }
 
 impl Moments {
     /// Adds one error vector (mm).
     pub fn push(&mut self, e: &Vector3<f64>) {
-        let x = e.norm();
-        self.n += 1;
-        let k = self.n as f64;
-        let d = x - self.mean;
-        self.mean += d / k;
-        self.m2 += d * (x - self.mean);
-        let dv = e - self.vmean;
-        self.vmean += dv / k;
-        self.vm2 += dv.component_mul(&(e - self.vmean));
-        self.min = self.min.min(x);
-        self.max = self.max.max(x);
+        self.norm.push(e.norm());
+        for (m, v) in self.component.iter_mut().zip(e.iter()) {
+            m.push(*v);
+        }
     }
 
-    /// Merges the moments of another sample (Chan, Golub, LeVeque 1979).
+    /// Merges the moments of another sample.
     pub fn merge(&mut self, o: &Moments) {
-        if o.n == 0 {
-            return;
+        self.norm.merge(&o.norm);
+        for (m, v) in self.component.iter_mut().zip(&o.component) {
+            m.merge(v);
         }
-        if self.n == 0 {
-            *self = *o;
-            return;
-        }
-        let (na, nb) = (self.n as f64, o.n as f64);
-        let n = na + nb;
-        let d = o.mean - self.mean;
-        self.mean += d * nb / n;
-        self.m2 += o.m2 + d * d * na * nb / n;
-        let dv = o.vmean - self.vmean;
-        self.vmean += dv * (nb / n);
-        self.vm2 += o.vm2 + dv.component_mul(&dv) * (na * nb / n);
-        self.n += o.n;
-        self.min = self.min.min(o.min);
-        self.max = self.max.max(o.max);
     }
 }
 
-/// A logarithmic sketch of the norms: counts per bucket `[LOW g^(k-1), LOW g^k)`.
+/// The bucket layout of a [`Sketch`]: bucket 0 below `LOW`, bucket `k >= 1` for
+/// `[LOW g^(k-1), LOW g^k)`. Small and `Copy`, so the workers of a run find buckets
+/// while the run's sketch is being counted into.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LogBuckets {
+    log_gamma: f64,
+    len: usize,
+}
+
+impl Default for LogBuckets {
+    fn default() -> Self {
+        let log_gamma = log_gamma();
+        LogBuckets {
+            log_gamma,
+            len: ((HIGH / LOW).ln() / log_gamma).ceil() as usize + 2,
+        }
+    }
+}
+
+impl LogBuckets {
+    /// The bucket of a magnitude.
+    pub fn of(&self, x: f64) -> usize {
+        if !(x >= LOW) {
+            return 0;
+        }
+        let k = 1 + ((x / LOW).ln() / self.log_gamma) as usize;
+        k.min(self.len - 1)
+    }
+
+    /// The (side, bucket) of a signed value: side 0 below zero, 1 from zero up.
+    pub fn signed(&self, v: f64) -> (u8, u32) {
+        if v < 0.0 {
+            (0, self.of(-v) as u32)
+        } else {
+            (1, self.of(v) as u32)
+        }
+    }
+}
+
+/// A logarithmic sketch of magnitudes: counts per bucket of [`LogBuckets`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct Sketch {
     counts: Vec<u64>,
-    log_gamma: f64,
+    buckets: LogBuckets,
 }
 
 impl Default for Sketch {
     fn default() -> Self {
-        let log_gamma = log_gamma();
-        let buckets = ((HIGH / LOW).ln() / log_gamma).ceil() as usize + 2;
+        let buckets = LogBuckets::default();
         Sketch {
-            counts: vec![0; buckets],
-            log_gamma,
+            counts: vec![0; buckets.len],
+            buckets,
         }
     }
 }
 
 impl Sketch {
-    /// The bucket of a norm.
+    /// Its bucket layout.
+    pub fn buckets(&self) -> LogBuckets {
+        self.buckets
+    }
+
+    /// The bucket of a magnitude.
     pub fn bucket(&self, x: f64) -> usize {
-        if !(x >= LOW) {
-            return 0;
-        }
-        let k = 1 + ((x / LOW).ln() / self.log_gamma) as usize;
-        k.min(self.counts.len() - 1)
+        self.buckets.of(x)
     }
 
     /// Counts a norm in bucket `k` (from [`Sketch::bucket`]).
@@ -131,9 +133,18 @@ impl Sketch {
         if k == 0 {
             return 0.0;
         }
-        let lower = LOW * ((k - 1) as f64 * self.log_gamma).exp();
-        let gamma = self.log_gamma.exp();
+        let lower = LOW * ((k - 1) as f64 * self.buckets.log_gamma).exp();
+        let gamma = self.buckets.log_gamma.exp();
         2.0 * lower * gamma / (1.0 + gamma)
+    }
+
+    /// The value of every non-empty bucket and its count.
+    fn values(&self) -> impl Iterator<Item = (f64, u64)> + '_ {
+        self.counts
+            .iter()
+            .enumerate()
+            .filter(|(_, &c)| c > 0)
+            .map(|(k, &c)| (self.value(k), c))
     }
 
     /// The norm of rank `r` (0-based, ascending), clamped to `[min, max]`.
@@ -158,13 +169,14 @@ pub struct SignedSketch {
 }
 
 impl SignedSketch {
+    /// Its bucket layout ([`LogBuckets::signed`] gives a value's bucket).
+    pub fn buckets(&self) -> LogBuckets {
+        self.positive.buckets
+    }
+
     /// The (side, bucket) of a value: side 0 below zero, 1 from zero up.
     pub fn bucket(&self, v: f64) -> (u8, u32) {
-        if v < 0.0 {
-            (0, self.negative.bucket(-v) as u32)
-        } else {
-            (1, self.positive.bucket(v) as u32)
-        }
+        self.positive.buckets.signed(v)
     }
 
     /// Counts a value by its [`SignedSketch::bucket`].
@@ -192,31 +204,33 @@ impl SignedSketch {
 
     /// Counts over `bins` equal bins from `min` to `max`: `(lower edge, count)`.
     pub fn histogram(&self, bins: usize, min: f64, max: f64) -> Vec<(f64, usize)> {
-        let width = if max > min {
-            (max - min) / bins as f64
-        } else {
-            1.0
-        };
-        let mut hist = vec![0usize; bins];
-        let mut put = |v: f64, c: u64| {
-            let v = v.clamp(min, max);
-            hist[(((v - min) / width) as usize).min(bins - 1)] += c as usize;
-        };
-        for (k, &c) in self.negative.counts.iter().enumerate() {
-            if c > 0 {
-                put(-self.negative.value(k), c);
-            }
-        }
-        for (k, &c) in self.positive.counts.iter().enumerate() {
-            if c > 0 {
-                put(self.positive.value(k), c);
-            }
-        }
-        hist.into_iter()
-            .enumerate()
-            .map(|(i, c)| (min + i as f64 * width, c))
-            .collect()
+        let negative = self.negative.values().map(|(v, c)| (-v, c));
+        histogram(negative.chain(self.positive.values()), bins, min, max)
     }
+}
+
+/// Counts of `(value, count)` pairs over `bins` equal bins from `lo` to `hi` (values
+/// clamped into it): `(lower edge, count)`.
+fn histogram(
+    values: impl Iterator<Item = (f64, u64)>,
+    bins: usize,
+    lo: f64,
+    hi: f64,
+) -> Vec<(f64, usize)> {
+    let width = if hi > lo {
+        (hi - lo) / bins as f64
+    } else {
+        1.0
+    };
+    let mut hist = vec![0usize; bins];
+    for (v, c) in values {
+        let k = ((v.clamp(lo, hi) - lo) / width) as usize;
+        hist[k.min(bins - 1)] += c as usize;
+    }
+    hist.into_iter()
+        .enumerate()
+        .map(|(i, c)| (lo + i as f64 * width, c))
+        .collect()
 }
 
 /// Mean, variance, extremes of a stream of scalars (Welford), mergeable in order.
@@ -282,46 +296,54 @@ impl ScalarMoments {
 
 /// The Monte Carlo statistics of the moments and sketch of `failed + moments.n` draws.
 pub fn finish(m: &Moments, sketch: &Sketch, failed: usize) -> MonteCarlo {
-    let n = m.n;
-    let k1 = (n as f64 - 1.0).max(1.0);
-    let (min, max) = if n == 0 { (0.0, 0.0) } else { (m.min, m.max) };
+    let n = m.norm.n;
+    let (min, max) = if n == 0 {
+        (0.0, 0.0)
+    } else {
+        (m.norm.min, m.norm.max)
+    };
     let quantile = |f: f64| {
         if n == 0 {
             return 0.0;
         }
-        let r = ((n as f64 - 1.0) * f).round() as u64;
-        sketch.rank(r, min, max)
+        sketch.rank(((n as f64 - 1.0) * f).round() as u64, min, max)
     };
-    let width = if max > 0.0 {
-        max / HISTOGRAM_BINS as f64
-    } else {
-        1.0
-    };
-    let mut hist = vec![0usize; HISTOGRAM_BINS];
-    for (k, &c) in sketch.counts.iter().enumerate() {
-        if c > 0 {
-            let v = sketch.value(k).clamp(min, max);
-            hist[((v / width) as usize).min(HISTOGRAM_BINS - 1)] += c as usize;
-        }
-    }
     MonteCarlo {
         samples: n as usize,
         failed,
-        mean: m.mean,
-        std: (m.m2 / k1).max(0.0).sqrt(),
+        mean: m.norm.mean,
+        std: m.norm.std(),
         p95: quantile(0.95),
         p99: quantile(0.99),
         max,
-        mean_vector: [m.vmean.x, m.vmean.y, m.vmean.z],
-        std_vector: [
-            (m.vm2.x / k1).max(0.0).sqrt(),
-            (m.vm2.y / k1).max(0.0).sqrt(),
-            (m.vm2.z / k1).max(0.0).sqrt(),
-        ],
-        histogram: hist
-            .into_iter()
-            .enumerate()
-            .map(|(i, c)| (i as f64 * width, c))
-            .collect(),
+        mean_vector: m.component.map(|c| c.mean),
+        std_vector: m.component.map(|c| c.std()),
+        histogram: histogram(sketch.values(), HISTOGRAM_BINS, 0.0, max),
     }
+}
+
+/// Runs `work(chunk, count)` over the chunks of `n` items, `chunk` items each, `batch`
+/// chunks at a time in parallel (rayon), and hands every result to `merge` in chunk
+/// order: the outcome does not depend on the thread count and memory holds one batch.
+pub(crate) fn in_chunks<T: Send>(
+    n: usize,
+    chunk: usize,
+    batch: usize,
+    work: impl Fn(usize, usize) -> T + Sync,
+    mut merge: impl FnMut(T),
+) {
+    let chunks = n.div_ceil(chunk);
+    for first in (0..chunks).step_by(batch) {
+        let last = (first + batch).min(chunks);
+        let parts: Vec<T> = (first..last)
+            .into_par_iter()
+            .map(|c| work(c, chunk.min(n - c * chunk)))
+            .collect();
+        parts.into_iter().for_each(&mut merge);
+    }
+}
+
+/// The random generator of chunk `c` of a seeded run.
+pub(crate) fn chunk_rng(seed: u64, c: usize) -> StdRng {
+    StdRng::seed_from_u64(seed ^ (c as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15))
 }

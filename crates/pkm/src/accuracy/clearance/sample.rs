@@ -3,12 +3,10 @@
 //! (seeded per chunk: the same seed gives the same result on any number of threads).
 
 use nalgebra::{SVector, Vector3};
-use rand::SeedableRng;
-use rayon::prelude::*;
 use serde::Serialize;
 
 use super::{deviations_of, JointState, Region};
-use crate::accuracy::streamed::{ScalarMoments, SignedSketch};
+use crate::accuracy::streamed::{chunk_rng, in_chunks, ScalarMoments, SignedSketch};
 use crate::accuracy::{Evaluate, Parametric};
 use crate::error::{Error, Result};
 
@@ -40,8 +38,6 @@ pub struct ClearanceMonteCarlo {
 }
 
 const CHUNK: usize = 1024;
-/// One chunk's moments along the direction, largest |e| and sketch buckets.
-type ChunkResult = (ScalarMoments, f64, Vec<(u8, u32)>);
 /// Chunks computed (in parallel) between two merges.
 const BATCH: usize = 256;
 
@@ -76,44 +72,40 @@ where
     let mut along = ScalarMoments::default();
     let mut max_norm = 0.0f64;
     let mut sketch = SignedSketch::default();
-    let chunks = n.div_ceil(CHUNK);
-    for first in (0..chunks).step_by(BATCH) {
-        let last = (first + BATCH).min(chunks);
-        let parts: Vec<ChunkResult> = (first..last)
-            .into_par_iter()
-            .map(|c| {
-                let mut rng = rand::rngs::StdRng::seed_from_u64(
-                    seed ^ (c as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15),
-                );
-                let count = CHUNK.min(n - c * CHUNK);
-                let mut ev = base.clone();
-                let mut states: Vec<JointState> = Vec::with_capacity(regions.len());
-                let mut buf = Vec::new();
-                let mut mo = ScalarMoments::default();
-                let mut norm = 0.0f64;
-                let mut buckets = Vec::with_capacity(count);
-                for _ in 0..count {
-                    states.clear();
-                    states.extend(regions.iter().map(|r| r.sample(&mut rng)));
-                    deviations_of(regions, &states, &mut buf);
-                    if let Ok(e) = ev.pose_error(&buf) {
-                        let v = dir.dot(&e.position);
-                        mo.push(v);
-                        norm = norm.max(e.position.norm());
-                        buckets.push(sketch.bucket(v));
-                    }
+    let layout = sketch.buckets();
+    in_chunks(
+        n,
+        CHUNK,
+        BATCH,
+        |c, count| {
+            let mut rng = chunk_rng(seed, c);
+            let mut ev = base.clone();
+            let mut states: Vec<JointState> = Vec::with_capacity(regions.len());
+            let mut buf = Vec::new();
+            let mut mo = ScalarMoments::default();
+            let mut norm = 0.0f64;
+            let mut buckets = Vec::with_capacity(count);
+            for _ in 0..count {
+                states.clear();
+                states.extend(regions.iter().map(|r| r.sample(&mut rng)));
+                deviations_of(regions, &states, &mut buf);
+                if let Ok(e) = ev.pose_error(&buf) {
+                    let v = dir.dot(&e.position);
+                    mo.push(v);
+                    norm = norm.max(e.position.norm());
+                    buckets.push(layout.signed(v));
                 }
-                (mo, norm, buckets)
-            })
-            .collect();
-        for (mo, norm, buckets) in parts {
+            }
+            (mo, norm, buckets)
+        },
+        |(mo, norm, buckets)| {
             along.merge(&mo);
             max_norm = max_norm.max(norm);
             for b in buckets {
                 sketch.add(b);
             }
-        }
-    }
+        },
+    );
     let ok = along.n;
     let (min, max) = if ok == 0 {
         (0.0, 0.0)
