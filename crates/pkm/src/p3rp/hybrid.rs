@@ -135,12 +135,12 @@ impl Mechanism<6, 4> for HybridMachine {
         Ok(j)
     }
 
-    /// Closed form: the head's forward solution on the branch of `start`, then the
-    /// table; B and C are taken from `start` (held).
     fn forward_closed_form(&self) -> bool {
         true
     }
 
+    /// Closed form: the head's forward solution on the branch of `start`, then the
+    /// table; B and C are taken from `start` (held).
     fn forward(&self, q: &Vector4<f64>, start: &Vector6<f64>) -> Result<Forward<6>> {
         let branch = self.head.branch_of(start[3]).unwrap_or(self.head.branch);
         let h = self.head.forward(q[2], q[3], branch)?;

@@ -42,6 +42,15 @@ const MAX_STEP: f64 = 0.3;
 /// up within ten iterations, so an unreachable pose costs about 33 x 10 of them.
 const RESTARTS: usize = 32;
 
+/// Which iteration [`SerialArm::descend`] runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Descent {
+    /// Newton, damped least squares near singular configurations, stall test.
+    Damped,
+    /// Truncated pseudo-inverse, no stall test (onto singular solutions).
+    PseudoInverse,
+}
+
 /// A six-joint serial robot with tool-pose coordinates.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SerialArm {
@@ -305,20 +314,52 @@ impl SerialArm {
         (e, j, dp.norm().max(dw.norm() * self.characteristic_length))
     }
 
-    /// Newton from `q`; on failure the residual and the iterations spent.
+    /// Newton from `q`; on failure the residual, the iterations spent and the joints
+    /// reached.
     fn newton(
         &self,
         p: &Vector3<f64>,
         r: &Matrix3<f64>,
-        mut q: Vector6<f64>,
+        q: Vector6<f64>,
     ) -> std::result::Result<Vector6<f64>, (f64, usize, Vector6<f64>)> {
+        self.descend(p, r, q, Descent::Damped)
+    }
+
+    /// Gauss-Newton with the pseudo-inverse of the scaled Jacobian (singular values
+    /// below 1e-10 of the largest dropped) and no stall test: converges, linearly at
+    /// worst, onto a singular solution, where damped steps cannot remove the error along
+    /// the lost direction.
+    fn singular_newton(
+        &self,
+        p: &Vector3<f64>,
+        r: &Matrix3<f64>,
+        q: Vector6<f64>,
+    ) -> std::result::Result<Vector6<f64>, (f64, usize, Vector6<f64>)> {
+        self.descend(p, r, q, Descent::PseudoInverse)
+    }
+
+    /// The iteration of [`SerialArm::newton`] and [`SerialArm::singular_newton`]: steps
+    /// limited to [`MAX_STEP`], halved until the error decreases.
+    fn descend(
+        &self,
+        p: &Vector3<f64>,
+        r: &Matrix3<f64>,
+        mut q: Vector6<f64>,
+        how: Descent,
+    ) -> std::result::Result<Vector6<f64>, (f64, usize, Vector6<f64>)> {
+        let damped = how == Descent::Damped;
+        let (max_iterations, halvings) = if damped {
+            (MAX_ITERATIONS, 12)
+        } else {
+            (4 * MAX_ITERATIONS, 20)
+        };
         let (mut e, mut j, mut norm) = self.pose_error(p, r, &q);
-        // Progress check: an iteration that has not cut the error in ten
-        // iterations is stuck (less than 0.1 %: a local minimum of the error, typically an unreachable
-        // target); give up and let the caller restart elsewhere.
+        // Progress check of the damped steps: an iteration that has not cut the error
+        // by 0.1 % in ten iterations is stuck (a local minimum of the error, typically
+        // an unreachable target); give up and let the caller restart elsewhere.
         let mut norm_before = norm;
-        for it in 0..MAX_ITERATIONS {
-            if it > 0 && it % 10 == 0 {
+        for it in 0..max_iterations {
+            if damped && it > 0 && it % 10 == 0 {
                 if norm > 0.999 * norm_before {
                     return Err((norm, it, q));
                 }
@@ -326,66 +367,26 @@ impl SerialArm {
             }
             let converged = e.fixed_rows::<3>(0).norm() <= POSITION_TOLERANCE
                 && e.fixed_rows::<3>(3).norm() <= ORIENTATION_TOLERANCE;
-            let mut dq = self.step(&j, &e);
-            if converged {
-                // One polishing step: quadratic convergence takes the error to rounding.
-                return Ok(q + dq);
-            }
-            let big = dq.amax();
-            if big > MAX_STEP {
-                dq *= MAX_STEP / big;
-            }
-            let mut improved = false;
-            for _ in 0..12 {
-                let qn = q + dq;
-                let (en, jn, nn) = self.pose_error(p, r, &qn);
-                if nn < norm {
-                    (q, e, j, norm) = (qn, en, jn, nn);
-                    improved = true;
-                    break;
-                }
-                dq *= 0.5;
-            }
-            if !improved {
-                return Err((norm, it + 1, q));
-            }
-        }
-        Err((norm, MAX_ITERATIONS, q))
-    }
-
-    /// Gauss-Newton with the pseudo-inverse of the scaled Jacobian, singular values
-    /// below 1e-10 of the largest dropped, steps halved until the error decreases, no
-    /// stall test: converges (linearly at worst) onto a singular solution.
-    fn singular_newton(
-        &self,
-        p: &Vector3<f64>,
-        r: &Matrix3<f64>,
-        mut q: Vector6<f64>,
-    ) -> std::result::Result<Vector6<f64>, (f64, usize, Vector6<f64>)> {
-        let lc = self.characteristic_length;
-        let (mut e, mut j, mut norm) = self.pose_error(p, r, &q);
-        for it in 0..4 * MAX_ITERATIONS {
-            if e.fixed_rows::<3>(0).norm() <= POSITION_TOLERANCE
-                && e.fixed_rows::<3>(3).norm() <= ORIENTATION_TOLERANCE
-            {
-                return Ok(q);
-            }
-            let mut js = j;
-            let mut es = e;
-            for k in 3..6 {
-                js.row_mut(k).scale_mut(lc);
-                es[k] *= lc;
-            }
-            let svd = js.svd(true, true);
-            let Ok(mut dq) = svd.solve(&es, 1e-10 * svd.singular_values.max()) else {
+            let step = if damped {
+                Some(self.step(&j, &e))
+            } else {
+                self.pseudo_inverse_step(&j, &e)
+            };
+            let Some(mut dq) = step else {
                 return Err((norm, it, q));
             };
+            if converged {
+                // Damped: one polishing step, quadratic convergence takes the error to
+                // rounding. At a singular solution the pseudo-inverse step is not
+                // quadratic: the point reached is returned.
+                return Ok(if damped { q + dq } else { q });
+            }
             let big = dq.amax();
             if big > MAX_STEP {
                 dq *= MAX_STEP / big;
             }
             let mut improved = false;
-            for _ in 0..20 {
+            for _ in 0..halvings {
                 let qn = q + dq;
                 let (en, jn, nn) = self.pose_error(p, r, &qn);
                 if nn < norm {
@@ -399,7 +400,21 @@ impl SerialArm {
                 return Err((norm, it + 1, q));
             }
         }
-        Err((norm, 4 * MAX_ITERATIONS, q))
+        Err((norm, max_iterations, q))
+    }
+
+    /// The truncated pseudo-inverse step `J+ e` in the scaled space (angular rows
+    /// times the characteristic length).
+    fn pseudo_inverse_step(&self, j: &Matrix6<f64>, e: &Vector6<f64>) -> Option<Vector6<f64>> {
+        let lc = self.characteristic_length;
+        let mut js = *j;
+        let mut es = *e;
+        for k in 3..6 {
+            js.row_mut(k).scale_mut(lc);
+            es[k] *= lc;
+        }
+        let svd = js.svd(true, true);
+        svd.solve(&es, 1e-10 * svd.singular_values.max()).ok()
     }
 
     /// The Newton step: `J^-1 e` when `J` is well conditioned, else damped least squares
@@ -540,11 +555,11 @@ impl Mechanism<6, 6> for SerialArm {
         self.condition_at(x, &q)
     }
 
-    /// Closed form: the chain's pose at `q` (`start` is not needed).
     fn forward_closed_form(&self) -> bool {
         true
     }
 
+    /// Closed form: the chain's pose at `q` (`start` is not needed).
     fn forward(&self, q: &Vector6<f64>, _start: &Vector6<f64>) -> Result<Forward<6>> {
         Ok(Forward {
             pose: self.coords_of_joints(q),
