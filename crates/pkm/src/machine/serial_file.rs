@@ -48,6 +48,9 @@ pub(super) struct SerialFile {
     motion: Option<super::MotionFile>,
 }
 
+/// Three rows of three direction cosines, exactly.
+type Rotation = Exact<3, Exact<3>>;
+
 #[derive(Debug, Deserialize, Clone)]
 #[serde(deny_unknown_fields)]
 struct LinkFile {
@@ -57,7 +60,7 @@ struct LinkFile {
     #[serde(default)]
     translation: Exact<3>,
     #[serde(default)]
-    rotation: Option<[[f64; 3]; 3]>,
+    rotation: Option<Rotation>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -77,7 +80,7 @@ struct DhToolFile {
     #[serde(default)]
     translation: Exact<3>,
     #[serde(default)]
-    rotation: Option<[[f64; 3]; 3]>,
+    rotation: Option<Rotation>,
 }
 
 /// Standard Denavit-Hartenberg rows as seed-003 links: joint `i` turns about (or slides
@@ -107,7 +110,7 @@ fn dh_links(rows: &[DhFile], tool: Option<&DhToolFile>) -> Vec<LinkFile> {
                 range: r.joint.range,
             }),
             translation: Exact([r.a * ct, r.a * st, r.d]),
-            rotation: Some(rot),
+            rotation: Some(Exact(rot.map(Exact))),
         });
     }
     if let Some(t) = tool {

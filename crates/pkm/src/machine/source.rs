@@ -250,46 +250,50 @@ impl<'a> Source<'a> {
     }
 }
 
-/// Exactly `N` numbers in a file (`[x, y, z]`, `[min, max]`): serde's fixed arrays take
-/// the first `N` of a longer list and drop the rest without a word, so a fourth
-/// coordinate or a third bound would pass unnoticed.
+/// Exactly `N` values in a file (`[x, y, z]`, `[min, max]`, the three rows of a
+/// rotation): serde's fixed arrays take the first `N` of a longer list and drop the
+/// rest without a word, so a fourth coordinate or a third bound would pass unnoticed.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct Exact<const N: usize>(pub [f64; N]);
+pub(crate) struct Exact<const N: usize, T = f64>(pub [T; N]);
 
-impl<const N: usize> Default for Exact<N> {
+impl<const N: usize, T: Default> Default for Exact<N, T> {
     fn default() -> Self {
-        Exact([0.0; N])
+        Exact(std::array::from_fn(|_| T::default()))
     }
 }
 
-impl<const N: usize> std::ops::Deref for Exact<N> {
-    type Target = [f64; N];
-    fn deref(&self) -> &[f64; N] {
+impl<const N: usize, T> std::ops::Deref for Exact<N, T> {
+    type Target = [T; N];
+    fn deref(&self) -> &[T; N] {
         &self.0
     }
 }
 
-impl<const N: usize> From<Exact<N>> for [f64; N] {
-    fn from(e: Exact<N>) -> [f64; N] {
+impl<const N: usize, T> From<Exact<N, T>> for [T; N] {
+    fn from(e: Exact<N, T>) -> [T; N] {
         e.0
     }
 }
 
-impl<'de, const N: usize> serde::Deserialize<'de> for Exact<N> {
+impl<'de, const N: usize, T: serde::Deserialize<'de> + Default> serde::Deserialize<'de>
+    for Exact<N, T>
+{
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        struct Numbers<const N: usize>;
-        impl<'de, const N: usize> serde::de::Visitor<'de> for Numbers<N> {
-            type Value = Exact<N>;
+        struct Values<const N: usize, T>(std::marker::PhantomData<T>);
+        impl<'de, const N: usize, T: serde::Deserialize<'de> + Default> serde::de::Visitor<'de>
+            for Values<N, T>
+        {
+            type Value = Exact<N, T>;
             fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-                write!(f, "an array of {N} numbers")
+                write!(f, "an array of {N} values")
             }
             fn visit_seq<A: serde::de::SeqAccess<'de>>(
                 self,
                 mut seq: A,
-            ) -> Result<Exact<N>, A::Error> {
-                let mut out = [0.0; N];
+            ) -> Result<Exact<N, T>, A::Error> {
+                let mut out: [T; N] = std::array::from_fn(|_| T::default());
                 let mut n = 0;
-                while let Some(v) = seq.next_element::<f64>()? {
+                while let Some(v) = seq.next_element::<T>()? {
                     if n < N {
                         out[n] = v;
                     }
@@ -301,6 +305,6 @@ impl<'de, const N: usize> serde::Deserialize<'de> for Exact<N> {
                 Ok(Exact(out))
             }
         }
-        d.deserialize_seq(Numbers::<N>)
+        d.deserialize_seq(Values::<N, T>(std::marker::PhantomData))
     }
 }

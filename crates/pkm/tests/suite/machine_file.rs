@@ -328,3 +328,26 @@ fn coincident_tripod_joints_are_refused() {
         }
     }
 }
+
+/// The serial file's rotation blocks are nested arrays (the one-line mutation above
+/// leaves them alone): a fourth row or a fourth column is refused too, not dropped.
+#[test]
+fn rotation_blocks_with_a_row_or_column_too_many_are_refused() {
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../examples/machines/mc300.toml"
+    ))
+    .unwrap();
+    let good = "rotation = [[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]";
+    assert!(text.contains(good));
+    for bad in [
+        "rotation = [[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 0.0]]",
+        "rotation = [[0.0, 0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]",
+        "rotation = [[0.0, 0.0, 1.0], [1.0, 0.0, 0.0]]",
+    ] {
+        let e = pkm::Machine::from_toml_str(&text.replacen(good, bad, 1), "bad.toml").unwrap_err();
+        let message = parts(&e).2;
+        assert!(message.contains("invalid length"), "{bad}: {e}");
+        assert!(e.to_string().contains("rotation"), "{bad}: {e}");
+    }
+}
