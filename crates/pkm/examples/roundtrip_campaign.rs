@@ -268,7 +268,7 @@ fn ik_fk<M: Analysable<P, A>, const P: usize, const A: usize>(
                 // of 1e-13 times a condition number above 1e3 is already 1e-10, and
                 // another assembly mode lies close by).
                 let cond = m.condition(&x).unwrap_or(f64::INFINITY);
-                if cond > 1e3 {
+                if cond > pkm::analysis::kinematics::NEAR_SINGULAR_CONDITION {
                     t.fk_near_ill_conditioned += 1;
                     t.worst_condition_off = t.worst_condition_off.max(cond);
                 } else {

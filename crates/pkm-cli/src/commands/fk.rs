@@ -48,10 +48,6 @@ pub struct FkArgs {
     pub opts: PoseOptions,
 }
 
-/// Condition number above which a forward solution is reported as near a singular
-/// configuration.
-const NEAR_SINGULAR: f64 = 1e3;
-
 fn start_pose(m: &dyn DynMechanism, a: &FkArgs) -> Result<Vec<f64>> {
     match &a.from {
         Some(s) => Ok(pose_from_user(
@@ -73,11 +69,8 @@ pub fn run(a: &FkArgs) -> Result<u8> {
     }
     let vals = parse_list(a.actuators.as_deref().unwrap_or_default(), "--actuators")?;
     let q = actuators_from_user(m, &vals)?;
-    let f = m.forward(&q, &start)?;
-    let violations = m.check_limits(&f.pose, &q)?;
-    // The conditioning of the solution: near a forward singularity the pose is found
-    // but moves a lot for small actuator errors (the P3RP head near Q).
-    let condition = m.condition(&f.pose).ok().filter(|c| c.is_finite());
+    let f = pkm::analysis::kinematics::forward(&machine, &q, &start)?;
+    let violations = f.violations.clone();
     let modes = match a.assembly_modes {
         Some(n) => Some(pkm::analysis::workspace::assembly_modes(&machine, &q, n)?),
         None => None,
@@ -91,7 +84,7 @@ pub fn run(a: &FkArgs) -> Result<u8> {
         o.insert("actuators".into(), actuators_json(m, &q));
         o.insert(
             "solver".into(),
-            json!(if m.forward_closed_form() {
+            json!(if f.closed_form {
                 "closed-form"
             } else {
                 "iterative"
@@ -99,11 +92,8 @@ pub fn run(a: &FkArgs) -> Result<u8> {
         );
         o.insert("iterations".into(), json!(f.iterations));
         o.insert("residual".into(), json!(f.residual));
-        o.insert("condition".into(), json!(condition));
-        o.insert(
-            "near_singular".into(),
-            json!(condition.is_none_or(|c| c > NEAR_SINGULAR)),
-        );
+        o.insert("condition".into(), json!(f.condition));
+        o.insert("near_singular".into(), json!(f.near_singular));
         o.insert("violations".into(), json!(violations));
         o.insert("reachable".into(), json!(violations.is_empty()));
         if let Some(modes) = &modes {
@@ -138,7 +128,7 @@ pub fn run(a: &FkArgs) -> Result<u8> {
             "angles     {}={:.4} {}={:.4} {}={:.4} deg ({conv})",
             names[0], ang[0], names[1], ang[1], names[2], ang[2]
         );
-        if m.forward_closed_form() {
+        if f.closed_form {
             println!("solver     closed form, residual {:.3e}", f.residual);
         } else {
             println!(
@@ -146,8 +136,8 @@ pub fn run(a: &FkArgs) -> Result<u8> {
                 f.iterations, f.residual
             );
         }
-        match condition {
-            Some(c) if c <= NEAR_SINGULAR => {
+        match f.condition {
+            Some(c) if !f.near_singular => {
                 println!("condition  {c:.3} (driven columns, 2-norm)")
             }
             Some(c) => println!(

@@ -32,6 +32,54 @@ pub fn inverse(machine: &Machine, x: &[f64]) -> Result<InverseSolution> {
     })
 }
 
+/// Condition number above which a pose is reported as near a singular configuration:
+/// the actuators' errors are magnified more than a thousandfold in the pose, and
+/// another assembly mode or posture may lie close by.
+pub const NEAR_SINGULAR_CONDITION: f64 = 1e3;
+
+/// A forward solution with its limit check and how well the actuators determine it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ForwardSolution {
+    /// Pose coordinates (internal units).
+    pub pose: Vec<f64>,
+    /// Actuator values solved for (internal units).
+    pub actuators: Vec<f64>,
+    /// Whether the solver is closed-form ([`crate::Mechanism::forward_closed_form`]).
+    pub closed_form: bool,
+    /// Iterations of an iterative solver (0 for a closed form).
+    pub iterations: usize,
+    /// Largest actuator residual `|IK(pose) - q|` (mm or rad).
+    pub residual: f64,
+    /// Condition number at the pose ([`crate::Mechanism::condition`]); `None` where it
+    /// is infinite or cannot be computed (a singular pose).
+    pub condition: Option<f64>,
+    /// The condition is above [`NEAR_SINGULAR_CONDITION`], or there is none.
+    pub near_singular: bool,
+    /// Violated limits (empty: reachable).
+    pub violations: Vec<Violation>,
+}
+
+/// Forward kinematics of actuators `q` from pose `start` (internal units), with every
+/// limit checked and the conditioning of the solution: near a forward singularity (the
+/// P3RP head near its configuration Q) a pose is found but small actuator errors move
+/// it a lot, which [`ForwardSolution::near_singular`] says.
+pub fn forward(machine: &Machine, q: &[f64], start: &[f64]) -> Result<ForwardSolution> {
+    let m = machine.mechanism();
+    let f = m.forward(q, start)?;
+    let violations = m.check_limits(&f.pose, q)?;
+    let condition = m.condition(&f.pose).ok().filter(|c| c.is_finite());
+    Ok(ForwardSolution {
+        closed_form: m.forward_closed_form(),
+        iterations: f.iterations,
+        residual: f.residual,
+        near_singular: condition.is_none_or(|c| c > NEAR_SINGULAR_CONDITION),
+        condition,
+        violations,
+        actuators: q.to_vec(),
+        pose: f.pose,
+    })
+}
+
 /// Every inverse solution found for pose `x` ([`crate::machine::Analysis::InverseSolutions`]: six-axis
 /// robots, Newton from home and `starts - 1` spread starts, deduplicated, nearest home
 /// first), each with its limit status.
