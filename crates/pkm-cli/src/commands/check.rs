@@ -171,7 +171,7 @@ pub fn run(a: &CheckArgs) -> Result<u8> {
                         let p = i.published.as_ref()?;
                         let got = i.computed.as_ref().map(|c| c[0]).unwrap_or(f64::NAN);
                         Some(format!(
-                            "{} the source prints {} {u}, pkm's value {} {u} (computed {got:.3} {u})",
+                            "{}: the source prints {} {u}, pkm's value is {} {u} (computed {got:.3} {u})",
                             i.name,
                             p[0],
                             i.expected[0],
@@ -180,10 +180,12 @@ pub fn run(a: &CheckArgs) -> Result<u8> {
                     })
                     .collect::<Vec<_>>()
                     .join("; ");
-                format!(
-                    "DISCREPANCY with the source, not reproduced: {items}; {}",
-                    r.note.as_deref().unwrap_or("")
-                )
+                let note = r
+                    .note
+                    .as_deref()
+                    .map(|n| format!(". Note: {n}"))
+                    .unwrap_or_default();
+                format!("DISCREPANCY with the source, not reproduced: {items}{note}")
             }
         };
         println!("reference   {} [{at}]: {status}", r.source);

@@ -452,7 +452,7 @@ fn a_corrected_reference_is_a_discrepancy_not_reproduced() {
     let d: Vec<&&str> = lines.iter().filter(|l| l.contains("DISCREPANCY")).collect();
     assert_eq!(d.len(), 1, "{lines:?}");
     assert!(
-        d[0].contains("the source prints 600 mm, pkm's value 660 mm"),
+        d[0].contains("V: the source prints 600 mm, pkm's value is 660 mm"),
         "{}",
         d[0]
     );
