@@ -14,3 +14,17 @@ pub fn bar(total: u64, threshold: u64, template: &str) -> Option<ProgressBar> {
         b
     })
 }
+
+/// A spinner counting units of work whose total is not known in advance, when `show`,
+/// with `template` (`{spinner} {pos} points {elapsed}`); ticks ten times a second.
+pub fn spinner(show: bool, template: &str) -> Option<ProgressBar> {
+    show.then(|| {
+        let b = ProgressBar::new_spinner();
+        b.set_style(
+            ProgressStyle::with_template(template)
+                .unwrap_or_else(|_| ProgressStyle::default_spinner()),
+        );
+        b.enable_steady_tick(std::time::Duration::from_millis(100));
+        b
+    })
+}

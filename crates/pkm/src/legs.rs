@@ -37,6 +37,25 @@ impl<const N: usize> StrutSet<N> {
         std::array::from_fn(|i| p + r * self.arms[i])
     }
 
+    /// A box of tool tips (`[min, max]` per axis, base frame) holding every tip with
+    /// platform rotation `r` whose struts are at most `max_length` long: strut `i`
+    /// keeps the tip within `max_length[i]` of `a_i - R (b_i - t)`, so the tip lies in
+    /// the intersection of those spheres and of their bounding boxes. `None` when the
+    /// boxes do not meet (no tip with this rotation).
+    pub fn tip_bound(&self, r: &Matrix3<f64>, max_length: &[f64; N]) -> Option<[[f64; 2]; 3]> {
+        let mut b = [[f64::NEG_INFINITY, f64::INFINITY]; 3];
+        for i in 0..N {
+            let c = self.base[i] - r * self.arms[i];
+            for k in 0..3 {
+                b[k][0] = b[k][0].max(c[k] - max_length[i]);
+                b[k][1] = b[k][1].min(c[k] + max_length[i]);
+            }
+        }
+        b.iter()
+            .all(|x| x[0] <= x[1] && x[0].is_finite() && x[1].is_finite())
+            .then_some(b)
+    }
+
     /// Strut lengths for any platform pose. Allocation-free.
     #[inline]
     pub fn lengths(&self, p: &Vector3<f64>, r: &Matrix3<f64>) -> SVector<f64, N> {

@@ -222,6 +222,27 @@ pub trait Mechanism<const P: usize, const A: usize>: Send + Sync {
     /// [`Mechanism::check_limits`].
     fn inverse(&self, x: &SVector<f64, P>) -> Result<SVector<f64, A>>;
 
+    /// [`Mechanism::inverse`] started from actuator values `q_start` (a neighbouring
+    /// point's solution): numeric solvers (a serial robot's) try it first and return
+    /// the solution nearest it; closed-form solvers ignore it (the default).
+    fn inverse_near(
+        &self,
+        x: &SVector<f64, P>,
+        _q_start: &SVector<f64, A>,
+    ) -> Result<SVector<f64, A>> {
+        self.inverse(x)
+    }
+
+    /// A box of tool positions X, Y, Z (mm, base frame; `[min, max]` per axis) that
+    /// holds every tool position the machine reaches with the orientation of `x`, when
+    /// the type bounds it without searching (a serial arm: the sphere of its links'
+    /// reach; struts: the intersection of the spheres their longest strokes allow);
+    /// `None` otherwise (then a workspace search grows its box until the reachable
+    /// region is inside).
+    fn position_bound(&self, _x: &SVector<f64, P>) -> Option<[[f64; 2]; 3]> {
+        None
+    }
+
     /// Inverse Jacobian `dq/dx` at `x` (`A x P`).
     fn jacobian(&self, x: &SVector<f64, P>) -> Result<SMatrix<f64, A, P>>;
 

@@ -63,50 +63,45 @@ pub struct WorkspaceArgs {
     pub json: bool,
 }
 
-/// The grid map (`pkm::analysis::workspace::grid`) with a progress bar on large grids.
-pub fn run_grid(
+/// The map over `bounds` (user units, min,max per axis; [`pkm::workspace::default_grid`])
+/// or, without bounds, over the machine's whole reach
+/// ([`pkm::analysis::workspace::reach_map`], 40 cells per axis), with a progress bar
+/// when `progress`; and how its grid was found.
+pub fn run_map(
     machine: &Machine,
     base: &[f64],
-    axes: &[GridAxis],
+    bounds: Option<&[f64]>,
+    step: Option<f64>,
     orientations: &[[f64; 3]],
     progress: bool,
-) -> Result<WorkspaceMap> {
-    let total: usize = axes.iter().map(|a| a.count()).product();
-    let bar = crate::progress::bar(
-        total as u64,
-        if progress { 200_000 } else { u64::MAX },
-        "{bar:40} {pos}/{len} points {eta}",
-    );
+) -> Result<(WorkspaceMap, String)> {
+    let bar = crate::progress::spinner(progress, "{spinner} {pos} points mapped {elapsed}");
     let tick = |n: u64| {
         if let Some(b) = &bar {
             b.inc(n);
         }
     };
-    let r = pkm::analysis::workspace::grid(machine, base, axes, orientations, &tick)?;
+    let r = match bounds {
+        Some(_) => {
+            let axes = pkm::workspace::default_grid(machine.mechanism(), base, bounds, step)?;
+            let wm = pkm::analysis::workspace::grid(machine, base, &axes, orientations, &tick)?;
+            (wm, "the given bounds".to_string())
+        }
+        None => {
+            let (wm, how) =
+                pkm::analysis::workspace::reach_map(machine, base, 40, step, orientations, &tick)?;
+            (wm, format!("the machine's reach: {how}"))
+        }
+    };
     if let Some(b) = bar {
         b.finish_and_clear();
     }
     Ok(r)
 }
 
-/// Default grid of the machine (see [`pkm::workspace::default_grid`]).
-pub fn default_axes(
-    m: &dyn DynMechanism,
-    base: &[f64],
-    bounds: Option<&[f64]>,
-    step: Option<f64>,
-) -> Result<Vec<GridAxis>> {
-    Ok(pkm::workspace::default_grid(m, base, bounds, step)?)
-}
-
 /// Summary with user units.
 pub fn summarise(m: &dyn DynMechanism, wm: &WorkspaceMap) -> WorkspaceSummary {
-    let q: Vec<pkm::Quantity> = wm
-        .axes
-        .iter()
-        .map(|a| m.coordinates()[a.coordinate].quantity)
-        .collect();
-    wm.summary_of(&q)
+    wm.summary_of(m.coordinates())
 }
 
 /// The (horizontal, vertical) axis pairs of the standard slices: the first two axes,
@@ -277,7 +272,7 @@ pub fn run(a: &WorkspaceArgs) -> Result<u8> {
         Some(b) => Some(parse_list(b, "--bounds")?),
         None => None,
     };
-    let axes = default_axes(m, &base, bounds.as_deref(), a.step)?;
+
     let orientations: Vec<[f64; 3]> = match a.tilt {
         Some(t) => {
             let t = t.to_radians();
@@ -294,12 +289,31 @@ pub fn run(a: &WorkspaceArgs) -> Result<u8> {
         None => Vec::new(),
     };
     let start = std::time::Instant::now();
-    let wm = run_grid(&machine, &base, &axes, &orientations, true)?;
+    let (wm, grid_bounds) = run_map(
+        &machine,
+        &base,
+        bounds.as_deref(),
+        a.step,
+        &orientations,
+        true,
+    )?;
+    let axes = wm.axes.clone();
     let secs = start.elapsed().as_secs_f64();
     let s = summarise(m, &wm);
-    let mut binding = serde_json::Map::new();
-    for (k, n) in &s.binding {
-        binding.insert(k.clone(), json!(n));
+    let counts = |v: &[(String, usize)]| {
+        let mut o = serde_json::Map::new();
+        for (k, n) in v {
+            o.insert(k.clone(), json!(n));
+        }
+        o
+    };
+    let (binding, violated) = (counts(&s.binding), counts(&s.violated));
+    let mut outcomes = serde_json::Map::new();
+    for (k, n) in &s.outcomes {
+        outcomes.insert(
+            serde_json::to_value(k)?.as_str().unwrap_or("").into(),
+            json!(n),
+        );
     }
     let axes_json: Vec<_> = axes
         .iter()
@@ -368,7 +382,11 @@ pub fn run(a: &WorkspaceArgs) -> Result<u8> {
         "measure_name": s.measure_name,
         "bounding_box": s.bounding_box,
         "condition": s.condition,
+        "grid_bounds": grid_bounds,
+        "outcomes": outcomes,
         "binding": binding,
+        "violated": violated,
+        "cut": s.cut,
         "seconds": secs,
     });
     if let Some(o) = summary.as_object_mut() {
@@ -387,7 +405,7 @@ pub fn run(a: &WorkspaceArgs) -> Result<u8> {
             format!("{}_{}", c.name, c.quantity.unit())
         })
         .collect();
-    let mut csv = format!("{},reachable,condition,binding\n", names.join(","));
+    let mut csv = format!("{},reachable,status,condition,binding\n", names.join(","));
     let mut ply_body = String::new();
     let mut nply = 0usize;
     for (k, p) in wm.points.iter().enumerate() {
@@ -402,9 +420,10 @@ pub fn run(a: &WorkspaceArgs) -> Result<u8> {
             .collect();
         let v: Vec<String> = vals.iter().map(|v| format!("{v:.6}")).collect();
         csv.push_str(&format!(
-            "{},{},{},{}\n",
+            "{},{},{},{},{}\n",
             v.join(","),
             p.reachable,
+            serde_json::to_value(p.status)?.as_str().unwrap_or(""),
             if p.reachable {
                 format!("{:.6}", p.condition)
             } else {
@@ -460,8 +479,34 @@ pub fn run(a: &WorkspaceArgs) -> Result<u8> {
             "condition  min {:.3}, median {:.3}, p95 {:.3}, max {:.3}",
             s.condition.min, s.condition.median, s.condition.p95, s.condition.max
         );
+        println!("grid       over {grid_bounds}");
+        let outcome = |st: pkm::workspace::PointStatus| {
+            s.outcomes
+                .iter()
+                .find(|(k, _)| *k == st)
+                .map(|x| x.1)
+                .unwrap_or(0)
+        };
+        use pkm::workspace::PointStatus as St;
+        println!(
+            "outcomes   {} reachable, {} beyond a limit, {} without solution, {} solver failures, {} singular",
+            outcome(St::Reachable),
+            outcome(St::Limits),
+            outcome(St::NoSolution),
+            outcome(St::SolverFailed),
+            outcome(St::Singular)
+        );
         for (k, n) in s.binding.iter().take(8) {
-            println!("binding    {n:>8} x {k}");
+            println!("first      {n:>8} x {k}");
+        }
+        for (k, n) in s.violated.iter().take(8) {
+            println!("violated   {n:>8} x {k}");
+        }
+        if !s.cut.is_empty() {
+            println!(
+                "warning    reachable points lie on the grid's faces ({}): the reachable region may go on beyond the grid; widen --bounds",
+                s.cut.join(", ")
+            );
         }
         println!("wrote {}", a.out.display());
     }

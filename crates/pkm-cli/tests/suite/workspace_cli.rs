@@ -44,7 +44,23 @@ fn workspace_outputs() {
         csv.lines().count() as u64,
         v["points"].as_u64().unwrap() + 1
     );
-    assert!(csv.starts_with("X_mm,Y_mm,Z_mm,reachable,condition,binding"));
+    assert!(csv.starts_with("X_mm,Y_mm,Z_mm,reachable,status,condition,binding"));
+    // Every point in one outcome; every violated limit counted at least as often as
+    // it binds first; the default grid holds the whole reach.
+    let outcomes: u64 = v["outcomes"]
+        .as_object()
+        .unwrap()
+        .values()
+        .map(|x| x.as_u64().unwrap())
+        .sum();
+    assert_eq!(outcomes, v["points"].as_u64().unwrap());
+    for (k, n) in v["binding"].as_object().unwrap() {
+        if let Some(all) = v["violated"][k].as_u64() {
+            assert!(all >= n.as_u64().unwrap(), "{k}");
+        }
+    }
+    assert_eq!(v["cut"].as_array().unwrap().len(), 0, "{}", v["cut"]);
+    assert!(v["grid_bounds"].as_str().unwrap().contains("reach"));
     let ply = std::fs::read_to_string(out.join("points.ply")).unwrap();
     assert!(ply.contains(&format!("element vertex {}", v["reachable"])));
     for f in ["slice-xy.svg", "slice-xz.svg"] {

@@ -9,7 +9,7 @@ use crate::dynamic::DynForward;
 use crate::error::Result;
 use crate::machine::{Analysable, Analysis, Machine, Visitor};
 use crate::workspace::atlas::Capacity;
-use crate::workspace::{GridAxis, WorkspaceMap};
+use crate::workspace::{GridAxis, ReachGrid, WorkspaceMap};
 
 /// The pose grid `axes` around `base` (internal units), reachable at every orientation
 /// of `orientations` (A, B, C rad; empty: the base orientation), with the binding limit
@@ -37,6 +37,66 @@ pub fn grid(
     machine.visit(Job {
         base,
         axes,
+        orientations,
+        progress,
+    })
+}
+
+/// A grid over the machine's whole reach at `base`'s orientation, `steps` cells per
+/// axis or `step` (user units) ([`crate::workspace::reach_grid`]).
+pub fn reach_grid(
+    machine: &Machine,
+    base: &[f64],
+    steps: usize,
+    step: Option<f64>,
+) -> Result<ReachGrid> {
+    struct Job<'a>(&'a [f64], usize, Option<f64>);
+    impl Visitor for Job<'_> {
+        type Output = Result<ReachGrid>;
+        fn visit<M: Analysable<P, A>, const P: usize, const A: usize>(self, m: &M) -> Self::Output {
+            let base = crate::dynamic::fixed::<P>("base pose", self.0)?;
+            crate::workspace::reach_grid(m, &base, self.1, self.2)
+        }
+    }
+    machine.visit(Job(base, steps, step))
+}
+
+/// The map over the machine's whole reach at `base`'s orientation, `steps` cells per
+/// axis or `step` (user units), widened where it reached its edge
+/// ([`crate::workspace::map_reach`]); with how its grid was found.
+pub fn reach_map(
+    machine: &Machine,
+    base: &[f64],
+    steps: usize,
+    step: Option<f64>,
+    orientations: &[[f64; 3]],
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<(WorkspaceMap, String)> {
+    struct Job<'a> {
+        base: &'a [f64],
+        steps: usize,
+        step: Option<f64>,
+        orientations: &'a [[f64; 3]],
+        progress: &'a (dyn Fn(u64) + Sync),
+    }
+    impl Visitor for Job<'_> {
+        type Output = Result<(WorkspaceMap, String)>;
+        fn visit<M: Analysable<P, A>, const P: usize, const A: usize>(self, m: &M) -> Self::Output {
+            let base = crate::dynamic::fixed::<P>("base pose", self.base)?;
+            crate::workspace::map_reach(
+                m,
+                &base,
+                self.steps,
+                self.step,
+                self.orientations,
+                self.progress,
+            )
+        }
+    }
+    machine.visit(Job {
+        base,
+        steps,
+        step,
         orientations,
         progress,
     })

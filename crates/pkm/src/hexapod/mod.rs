@@ -288,6 +288,13 @@ impl Mechanism<6, 6> for Hexapod {
         Ok(self.set.coords_jacobian(x))
     }
 
+    /// [`crate::legs::StrutSet::tip_bound`] with the struts' longest strokes.
+    fn position_bound(&self, x: &Vector6<f64>) -> Option<[[f64; 2]; 3]> {
+        let (_, r) = split_pose(x);
+        let max = std::array::from_fn(|i| self.struts[i].actuator.range.max);
+        self.set.tip_bound(&r, &max)
+    }
+
     /// Newton on SE(3) from `start` (see [`forward::solve`]).
     fn forward(&self, q: &Vector6<f64>, start: &Vector6<f64>) -> Result<Forward<6>> {
         let (p0, r0) = split_pose(start);

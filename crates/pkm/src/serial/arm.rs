@@ -530,6 +530,20 @@ impl Mechanism<6, 6> for SerialArm {
         self.inverse_from(x, &self.home_joints)
     }
 
+    /// [`SerialArm::inverse_from`] `q_start`.
+    fn inverse_near(&self, x: &Vector6<f64>, q_start: &Vector6<f64>) -> Result<Vector6<f64>> {
+        self.inverse_from(x, q_start)
+    }
+
+    /// The cube around the base origin whose half side is the links' reach (sum of the
+    /// link translations and prismatic travels): the tool point cannot leave that
+    /// sphere, whatever the orientation.
+    fn position_bound(&self, _x: &Vector6<f64>) -> Option<[[f64; 2]; 3]> {
+        let (o, r) = (self.base_origin, self.reach);
+        r.is_finite()
+            .then(|| std::array::from_fn(|i| [o[i] - r, o[i] + r]))
+    }
+
     fn jacobian(&self, x: &Vector6<f64>) -> Result<SMatrix<f64, 6, 6>> {
         let q = self.inverse(x)?;
         let (_, j) = self.pose_and_jacobian(&q);

@@ -140,6 +140,13 @@ impl Mechanism<6, 3> for TranslationalTripod {
         Ok(self.geometry.strut_set().coords_jacobian(x))
     }
 
+    /// [`crate::legs::StrutSet::tip_bound`] with the struts' longest strokes.
+    fn position_bound(&self, x: &Vector6<f64>) -> Option<[[f64; 2]; 3]> {
+        let (_, r) = Self::split(x);
+        let max = std::array::from_fn(|i| self.actuators()[i].range.max);
+        self.geometry.strut_set().tip_bound(&r, &max)
+    }
+
     fn forward_closed_form(&self) -> bool {
         true
     }

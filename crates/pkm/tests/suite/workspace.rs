@@ -41,6 +41,7 @@ fn grid_points_agree_with_direct_evaluation() {
     let wm = map(&t, &t.home(), &axes, &[], &|_| {}).unwrap();
     assert_eq!(wm.points.len(), 11 * 9 * 5);
     let mut reachable = 0;
+    let mut every: std::collections::BTreeMap<String, usize> = Default::default();
     for i in 0..11 {
         for j in 0..9 {
             for k in 0..5 {
@@ -57,6 +58,13 @@ fn grid_points_agree_with_direct_evaluation() {
                 assert_eq!(p.reachable, direct.is_ok(), "{x}");
                 if let Err(pkm::Error::Unreachable { violations }) = direct {
                     assert_eq!(p.binding.as_deref(), Some(violations[0].limit.as_str()));
+                    assert_eq!(p.status, pkm::workspace::PointStatus::Limits);
+                    let mut names: Vec<&str> =
+                        violations.iter().map(|v| v.limit.as_str()).collect();
+                    names.dedup();
+                    for n in names {
+                        *every.entry(n.to_string()).or_default() += 1;
+                    }
                 } else {
                     reachable += 1;
                     assert!((p.condition - t.condition(&x).unwrap()).abs() < 1e-12);
@@ -65,8 +73,17 @@ fn grid_points_agree_with_direct_evaluation() {
             }
         }
     }
-    let s = wm.summary_of(&[pkm::Quantity::Length; 3]);
+    let s = wm.summary_of(pkm::Mechanism::coordinates(&t));
     assert_eq!(s.reachable, reachable);
+    // Every violated limit counted, not only the first: the tally equals a direct
+    // count, and a point beyond several limits counts for each.
+    let tally: std::collections::BTreeMap<String, usize> = s.violated.iter().cloned().collect();
+    assert_eq!(tally, every);
+    assert!(
+        s.violated.iter().map(|b| b.1).sum::<usize>() > s.binding.iter().map(|b| b.1).sum(),
+        "some points violate more than one limit: {:?}",
+        s.violated
+    );
     assert!(reachable > 0 && reachable < wm.points.len());
     assert_eq!(
         s.binding.iter().map(|b| b.1).sum::<usize>() + s.reachable,
@@ -92,11 +109,7 @@ fn a_grid_over_a_length_and_an_angle_has_no_volume() {
     let home = dm.home();
     let axes = pkm::workspace::default_grid(dm, &home, None, None).unwrap();
     let wm = pkm::analysis::workspace::grid(&m, &home, &axes, &[], &|_| {}).unwrap();
-    let q: Vec<pkm::Quantity> = axes
-        .iter()
-        .map(|a| dm.coordinates()[a.coordinate].quantity)
-        .collect();
-    let s = wm.summary_of(&q);
+    let s = wm.summary_of(dm.coordinates());
     assert_eq!(s.measure_unit, "mm·deg");
     assert_eq!(s.measure_name, "measure");
     assert!(s.volume_mm3.is_none());
@@ -277,5 +290,137 @@ fn forward_map_poses_close_the_loop() {
         );
         let x = p.pose.unwrap();
         assert!((t.inverse(&x).unwrap() - q).amax() < 1e-9, "{q:?}");
+    }
+}
+
+/// The own Gough-Stewart platform of issue 16 (base radius 500 mm, platform radius
+/// 200 mm, a -150 mm tool, home Z 600 mm), written as a user would.
+fn own_hexapod() -> pkm::Machine {
+    let mut t = String::from("type = \"hexapod\"\nname = \"own\"\n[base_joints]\n");
+    let (rb, rp) = (500.0f64, 200.0f64);
+    let at = |r: f64, deg: f64| (r * deg.to_radians().cos(), r * deg.to_radians().sin());
+    for (i, deg) in [-10.0, 10.0, 110.0, 130.0, 230.0, 250.0].iter().enumerate() {
+        let (x, y) = at(rb, *deg);
+        t.push_str(&format!("A{} = [{x}, {y}, 0.0]\n", i + 1));
+    }
+    t.push_str("[platform_joints]\n");
+    for (i, deg) in [110.0, 10.0, 230.0, 130.0, -10.0, 250.0].iter().enumerate() {
+        let (x, y) = at(rp, *deg);
+        t.push_str(&format!("B{} = [{x}, {y}, 0.0]\n", i + 1));
+    }
+    for (i, p) in [6, 1, 2, 3, 4, 5].iter().enumerate() {
+        t.push_str(&format!(
+            "[[struts]]\nname = \"L{}\"\nbase = \"A{}\"\nplatform = \"B{p}\"\nlength = [550.0, 1050.0]\n",
+            i + 1,
+            i + 1
+        ));
+    }
+    t.push_str("[tool]\ntip = [0.0, 0.0, -150.0]\n[home]\nposition = [0.0, 0.0, 600.0]\nangles = [0.0, 0.0, 0.0]\n");
+    pkm::Machine::from_toml_str(&t, "own-hexapod.toml").unwrap()
+}
+
+/// Issue 16, item 4: the default map covers the whole reach of every example machine
+/// and of a user's own hexapod: no reachable point on a face of the grid that is not a
+/// bound of the reach, and every outcome counted once.
+#[test]
+fn default_maps_hold_the_whole_reach() {
+    let dir = format!("{}/../../examples/machines", env!("CARGO_MANIFEST_DIR"));
+    let mut machines: Vec<pkm::Machine> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        // The robots' maps take seconds each (numeric IK on every unreachable point):
+        // their bound is tested below.
+        .filter(|p| !p.to_string_lossy().contains("kr30"))
+        .map(|p| pkm::Machine::from_path(p).unwrap())
+        .collect();
+    machines.push(own_hexapod());
+    for m in &machines {
+        let home = m.mechanism().home();
+        let (wm, how) =
+            pkm::analysis::workspace::reach_map(m, &home, 20, None, &[], &|_| {}).unwrap();
+        let s = wm.summary_of(m.mechanism().coordinates());
+        assert!(s.reachable > 0, "{}: nothing reachable ({how})", m.source);
+        assert!(s.cut.is_empty(), "{}: cut at {:?} ({how})", m.source, s.cut);
+        assert_eq!(
+            s.outcomes.iter().map(|o| o.1).sum::<usize>(),
+            s.points,
+            "{}",
+            m.source
+        );
+        // A reachable region that fills less than a tenth of its grid wastes the map.
+        assert!(
+            s.reachable_fraction > 0.1,
+            "{}: {:.3} of the grid reachable ({how})",
+            m.source,
+            s.reachable_fraction
+        );
+    }
+}
+
+/// The old default box (home +- 0.6 of the longest stroke) cut the own hexapod's
+/// region at Z min: the reach map goes below it.
+#[test]
+fn the_own_hexapod_map_reaches_below_the_old_box() {
+    let m = own_hexapod();
+    let home = m.mechanism().home();
+    let (wm, _) = pkm::analysis::workspace::reach_map(&m, &home, 20, None, &[], &|_| {}).unwrap();
+    let s = wm.summary_of(m.mechanism().coordinates());
+    let old_z_min = 600.0 - 0.6 * 1050.0;
+    assert!(
+        s.bounding_box[2][0] < old_z_min - 100.0,
+        "{:?}",
+        s.bounding_box
+    );
+}
+
+/// `Mechanism::position_bound` bounds: every pose within the strokes (strut machines)
+/// or of any joint values (robots) has its tool point inside the box.
+#[test]
+fn position_bounds_hold_every_reachable_tool_point() {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand::rngs::StdRng::seed_from_u64(16);
+    let own = own_hexapod();
+    let Model::Hexapod(h) = &own.model else {
+        panic!()
+    };
+    let inside = |b: [[f64; 2]; 3], p: [f64; 3]| {
+        (0..3).all(|k| b[k][0] - 1e-9 <= p[k] && p[k] <= b[k][1] + 1e-9)
+    };
+    let mut hits = 0;
+    for _ in 0..20_000 {
+        let x = Vector6::new(
+            rng.random_range(-900.0..900.0),
+            rng.random_range(-900.0..900.0),
+            rng.random_range(-900.0..1300.0),
+            rng.random_range(-0.3..0.3),
+            rng.random_range(-0.3..0.3),
+            rng.random_range(-0.3..0.3),
+        );
+        let q = h.inverse(&x).unwrap();
+        let b = h.position_bound(&x).unwrap();
+        if q.iter().all(|l| *l <= 1050.0) {
+            hits += 1;
+            assert!(inside(b, [x[0], x[1], x[2]]), "{x} outside {b:?}");
+        }
+    }
+    assert!(hits > 100, "{hits}");
+    // A robot: any joint values.
+    let ur5 = pkm::Machine::from_path(format!(
+        "{}/../../examples/robots/ur5-like.urdf",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let Model::Serial(s) = &ur5.model else {
+        panic!()
+    };
+    let pkm::serial::mechanism::SerialAny::Arm(arm) = &s.mechanism else {
+        panic!()
+    };
+    let b = arm.position_bound(&arm.home()).unwrap();
+    for _ in 0..20_000 {
+        let q = Vector6::from_fn(|_, _| rng.random_range(-6.3..6.3));
+        let x = arm.coords_of_joints(&q);
+        assert!(inside(b, [x[0], x[1], x[2]]), "{x} outside {b:?}");
     }
 }
