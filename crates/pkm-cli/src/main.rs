@@ -31,7 +31,8 @@ pub const EXIT_UNREACHABLE: u8 = 3;
         Units: millimetres and degrees in files, on the command line and in outputs.\n\
         Exit codes: 0 success, 1 bad input or error, 2 bad command line (a malformed\n\
         option, or a pose or actuator list of the wrong length or magnitude), 3 a pose that\n\
-        is unreachable (a limit is violated) or forward kinematics that found no pose.\n\
+        is unreachable (a limit is violated) or forward kinematics that found no pose, 4 a\n\
+        report written without the sections that could not be computed.\n\
         Output to a pipe that closes (pkm ... | head) ends pkm quietly.",
     after_help = "Examples:\n  \
         pkm report                                    # HTML report of the bundled seed-000 tripod\n  \
@@ -128,9 +129,19 @@ enum Command {
     #[command(after_help = "Example:\n  pkm check examples/machines/tripod-seed000.toml --json")]
     Check(CheckArgs),
     /// Write the HTML report (machine drawing, kinematic checks, analyses) to DIR/index.html.
-    #[command(after_help = "Examples:\n  \
+    #[command(
+        long_about = "Write the HTML report of any machine file: its drawing, kinematic checks, \
+        workspace over its whole reach, a path through it, accuracy and (strut machines) \
+        calibration, to DIR/index.html (one file, opens offline).\n\n\
+        Each section is computed on its own: one that fails shows its error in its place, the \
+        others are written, and the exit code is 4. The machine file's [report] table sets \
+        defaults (docs/machine-file.md); the options below override it.",
+        after_help = "Examples:\n  \
         pkm report                       # bundled seed-000 tripod, writes pkm-report/index.html\n  \
-        pkm report examples/machines/tripod-seed000.toml --out my-report")]
+        pkm report examples/machines/tripod-seed000.toml --out my-report\n  \
+        pkm report my-hexapod.toml --gcode part.ngc --feeds 1000,5000\n  \
+        pkm report my-hexapod.toml --sections drawing,workspace --bounds=-300,300,-300,300,300,900 --step 10"
+    )]
     Report(ReportArgs),
 }
 

@@ -12,11 +12,12 @@ use crate::report::plot::{bars_svg, histogram_svg};
 /// Monte Carlo size in the report (a fraction of a second on two cores).
 const SAMPLES: usize = 20_000;
 
-pub fn section(h: &mut Html, machine: &Machine) -> Result<()> {
+pub fn section(h: &mut Html, machine: &Machine, ctx: &super::Context) -> Result<()> {
     h.h2_id("accuracy", "Accuracy from geometric tolerances");
     let r = accuracy(
         machine,
         &AccuracyOptions {
+            pose: Some(ctx.pose.clone()),
             monte_carlo: Some(SAMPLES),
             ..Default::default()
         },
@@ -32,11 +33,12 @@ pub fn section(h: &mut Html, machine: &Machine) -> Result<()> {
             .to_string(),
     };
     h.p(&format!(
-        "At home, {} of the machine's {} geometric parameters toleranced ({source}): the tool-point \
+        "At {}, {} of the machine's {} geometric parameters toleranced ({source}): the tool-point \
          error each causes with the control's nominal readings (first order, {} sensitivities), \
          their worst-case sum and root sum of squares, and a Monte Carlo of {SAMPLES} machines \
          with every parameter drawn from its distribution and the tool pose solved exactly. \
          docs/serial.md and docs/identification.md explain the model.",
+        ctx.pose_label,
         r.tolerances.len(),
         r.parameters.len(),
         if r.analytic {

@@ -11,7 +11,7 @@ use pkm::Machine;
 use super::html::{esc, Html};
 use crate::commands::calibrate::plot_svgs;
 
-pub fn section(h: &mut Html, machine: &Machine) -> Result<()> {
+pub fn section(h: &mut Html, machine: &Machine, _ctx: &super::Context) -> Result<()> {
     let e = Experiment {
         deviation: 1.0,
         point_noise: 0.005,

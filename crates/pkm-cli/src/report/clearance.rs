@@ -13,7 +13,7 @@ use crate::report::plot::{bars_svg, histogram_svg};
 /// Monte Carlo size in the report.
 const SAMPLES: usize = 10_000;
 
-pub fn section(h: &mut Html, machine: &Machine) -> Result<()> {
+pub fn section(h: &mut Html, machine: &Machine, _ctx: &super::Context) -> Result<()> {
     h.h2_id("clearance", "Joint clearances");
     let r = clearance(
         machine,

@@ -56,6 +56,43 @@ fn point_color(role: PointRole) -> RGBColor {
     }
 }
 
+/// The views a skeleton needs: the one plane it lies in when it is planar (one
+/// coordinate the same for every point), else the top, front and side views.
+pub fn views_for(sk: &Skeleton) -> Vec<View> {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for p in &sk.points {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p.position[k]);
+            hi[k] = hi[k].max(p.position[k]);
+        }
+    }
+    let ext: Vec<f64> = (0..3).map(|k| hi[k] - lo[k]).collect();
+    let big = ext.iter().copied().fold(0.0, f64::max);
+    match (0..3).find(|&k| ext[k] <= 1e-9 * big.max(1.0)) {
+        Some(flat) if sk.points.len() > 1 => {
+            let (h, v) = match flat {
+                0 => (1, 2),
+                1 => (0, 2),
+                _ => (0, 1),
+            };
+            vec![View {
+                title: PLANE_TITLES[flat],
+                h,
+                v,
+            }]
+        }
+        _ => VIEWS.to_vec(),
+    }
+}
+
+/// Titles of the view of a mechanism lying in the plane normal to X, Y or Z.
+const PLANE_TITLES: [&str; 3] = [
+    "In its plane (Y right, Z up)",
+    "In its plane (X right, Z up)",
+    "In its plane (X right, Y up)",
+];
+
 /// Draws `skeletons` (the first solid, the others as ghosts) in one view; returns SVG.
 pub fn view_svg(skeletons: &[&Skeleton], view: View, size: (u32, u32)) -> Result<String> {
     let mut lo = [f64::INFINITY; 2];
@@ -81,6 +118,7 @@ pub fn view_svg(skeletons: &[&Skeleton], view: View, size: (u32, u32)) -> Result
     let xr = (mid[0] - scale * pw / 2.0)..(mid[0] + scale * pw / 2.0);
     let yr = (mid[1] - scale * ph / 2.0)..(mid[1] + scale * ph / 2.0);
     let mut out = String::new();
+    let mut unlabelled: Vec<String> = Vec::new();
     {
         let root = SVGBackend::with_string(&mut out, size).into_drawing_area();
         root.fill(&WHITE).map_err(|e| anyhow!("{e}"))?;
@@ -96,6 +134,10 @@ pub fn view_svg(skeletons: &[&Skeleton], view: View, size: (u32, u32)) -> Result
             .x_desc(format!("{} [mm]", AXES[view.h]))
             .y_desc(format!("{} [mm]", AXES[view.v]))
             .light_line_style(RGBColor(235, 235, 235))
+            .x_labels(5)
+            .y_labels(6)
+            .x_label_formatter(&|v| format!("{v:.0}"))
+            .y_label_formatter(&|v| format!("{v:.0}"))
             .draw()
             .map_err(|e| anyhow!("{e}"))?;
         for (n, s) in skeletons.iter().enumerate().rev() {
@@ -120,17 +162,95 @@ pub fn view_svg(skeletons: &[&Skeleton], view: View, size: (u32, u32)) -> Result
             for p in &s.points {
                 let c = point_color(p.role);
                 let xy = (p.position[view.h], p.position[view.v]);
-                let marker = EmptyElement::at(xy)
-                    + Circle::new((0, 0), 4, c.filled())
-                    + Text::new(
-                        p.name.clone(),
-                        (6, -16),
-                        ("sans-serif", 14).into_font().color(&c),
-                    );
                 chart
-                    .draw_series(std::iter::once(marker))
+                    .draw_series(std::iter::once(Circle::new(xy, 4, c.filled())))
                     .map_err(|e| anyhow!("{e}"))?;
             }
+            // Labels: points that fall on one spot in this view share one label; each
+            // label takes the first place around its point that overlaps no label or
+            // point drawn before; a label with no free place goes to the legend.
+            let px: Vec<(i32, i32)> = s
+                .points
+                .iter()
+                .map(|p| chart.backend_coord(&(p.position[view.h], p.position[view.v])))
+                .collect();
+            let mut groups: Vec<(Vec<usize>, (i32, i32))> = Vec::new();
+            for (i, q) in px.iter().enumerate() {
+                match groups
+                    .iter_mut()
+                    .find(|g| (g.1 .0 - q.0).abs() <= 3 && (g.1 .1 - q.1).abs() <= 3)
+                {
+                    Some(g) => g.0.push(i),
+                    None => groups.push((vec![i], *q)),
+                }
+            }
+            let mut taken: Vec<[i32; 4]> = px
+                .iter()
+                .map(|q| [q.0 - 4, q.1 - 4, q.0 + 4, q.1 + 4])
+                .collect();
+            let plot = [
+                margin as i32 + yl as i32,
+                margin as i32 + cap as i32,
+                size.0 as i32 - margin as i32,
+                size.1 as i32 - margin as i32 - xl as i32,
+            ];
+            for (members, q) in &groups {
+                let text = members
+                    .iter()
+                    .map(|&i| s.points[i].name.as_str())
+                    .collect::<Vec<_>>()
+                    .join("/");
+                let w = (text.chars().count() as f64 * 7.2).ceil() as i32;
+                let hgt = 14;
+                let spot = [
+                    (6, -16),
+                    (6, 3),
+                    (-w - 6, -16),
+                    (-w - 6, 3),
+                    (-w / 2, -22),
+                    (-w / 2, 8),
+                    (10, -6),
+                    (-w - 10, -6),
+                ]
+                .into_iter()
+                .map(|(dx, dy)| [q.0 + dx, q.1 + dy, q.0 + dx + w, q.1 + dy + hgt])
+                .find(|b| {
+                    b[0] >= plot[0]
+                        && b[1] >= plot[1]
+                        && b[2] <= plot[2]
+                        && b[3] <= plot[3]
+                        && taken
+                            .iter()
+                            .all(|t| b[2] <= t[0] || t[2] <= b[0] || b[3] <= t[1] || t[3] <= b[1])
+                });
+                let c = point_color(s.points[members[0]].role);
+                match spot {
+                    Some(b) => {
+                        taken.push(b);
+                        root.draw(&Text::new(
+                            text,
+                            (b[0], b[1]),
+                            ("sans-serif", 13).into_font().color(&c),
+                        ))
+                        .map_err(|e| anyhow!("{e}"))?;
+                    }
+                    None => unlabelled.push(text),
+                }
+            }
+        }
+        if !unlabelled.is_empty() {
+            let mut line = format!("not labelled (crowded): {}", unlabelled.join(", "));
+            if line.chars().count() > 64 {
+                line = line.chars().take(61).collect::<String>() + "...";
+            }
+            root.draw(&Text::new(
+                line,
+                (margin as i32, size.1 as i32 - 14),
+                ("sans-serif", 11)
+                    .into_font()
+                    .color(&RGBColor(110, 110, 110)),
+            ))
+            .map_err(|e| anyhow!("{e}"))?;
         }
         root.present().map_err(|e| anyhow!("{e}"))?;
     }

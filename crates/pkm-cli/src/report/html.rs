@@ -16,7 +16,8 @@ th,td{border:1px solid #ccc;padding:.3em .6em;text-align:right;vertical-align:to
 th{background:#f3f3f3}td:first-child,th:first-child{text-align:left}\
 .views{display:flex;flex-wrap:wrap;gap:1em}.views svg{border:1px solid #eee}\
 .ok{color:#1a7f37}.bad{color:#c62828}code{background:#f5f5f5;padding:0 .2em}\
-nav{margin:1em 0}nav a{color:#0b5cad}";
+nav{margin:1em 0}nav a{color:#0b5cad}\
+blockquote.published{border-left:4px solid #0b5cad;background:#f4f8fc;margin:1em 0;padding:.5em 1em}";
 
 /// Accumulates the body of a page.
 pub struct Html {

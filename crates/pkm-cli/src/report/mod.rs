@@ -1,4 +1,6 @@
-//! `pkm report`: a self-contained HTML report (inline SVG, no network needed).
+//! `pkm report`: a self-contained HTML report (inline SVG, no network needed) of any
+//! machine file. Each section is computed on its own: one that fails shows its error
+//! in its place and the others are written.
 
 mod accuracy;
 mod calibration;
@@ -6,26 +8,58 @@ mod clearance;
 mod drawing;
 pub mod heatmap;
 mod html;
+mod machine;
+mod motion;
 mod p3rp;
 pub mod plot;
+mod references;
+mod workspace;
 
-use anyhow::{Context, Result};
+use anyhow::{bail, Context as _, Result};
 use clap::Args;
-use pkm::verify::{check_references, machine_check_table, CheckRow, ReferenceCheck};
-use pkm::Machine;
+use pkm::machine::{Comparison, REPORT_SECTIONS};
+use pkm::{Convention, Machine};
 use std::path::PathBuf;
 
 use crate::io::write_atomic;
-use crate::poses::clean;
+use crate::poses::{parse_list, pose_from_user};
 use html::{esc, Html};
 
 #[derive(Args)]
 pub struct ReportArgs {
-    /// Machine file (TOML); default: the bundled seed-000 tripod.
+    /// Machine file (TOML or URDF); default: the bundled seed-000 tripod.
     pub machine: Option<PathBuf>,
     /// Output directory.
     #[arg(long, default_value = "pkm-report")]
     pub out: PathBuf,
+    /// The motion section's G-code program (default: the machine file's `[report]
+    /// gcode`, else a circle scaled to the machine's reach).
+    #[arg(long)]
+    pub gcode: Option<PathBuf>,
+    /// Where the program starts, pose coordinates (mm, deg); default: the machine
+    /// file's `[report] from`, else home.
+    #[arg(long, allow_hyphen_values = true)]
+    pub from: Option<String>,
+    /// Feeds (mm/min, comma separated) the path is run at, each replacing the
+    /// program's F words.
+    #[arg(long)]
+    pub feeds: Option<String>,
+    /// The pose of the drawing, the workspace map's orientation, the motion circle's
+    /// centre and the accuracy analysis (mm, deg); default: the machine file's
+    /// `[report] pose`, else home.
+    #[arg(long, allow_hyphen_values = true)]
+    pub pose: Option<String>,
+    /// Workspace grid bounds, min,max per axis (default: the machine's whole reach).
+    #[arg(long, allow_hyphen_values = true)]
+    pub bounds: Option<String>,
+    /// Workspace grid step (mm or deg; default 1/40 of each range).
+    #[arg(long)]
+    pub step: Option<f64>,
+    /// Sections to write, comma separated (machine, drawing, checks, workspace, motion,
+    /// seed004, accuracy, clearance, calibration, references); default: every one the
+    /// machine has.
+    #[arg(long)]
+    pub sections: Option<String>,
     /// Print where the report went and its sections as JSON.
     #[arg(long)]
     pub json: bool,
@@ -35,61 +69,167 @@ pub struct ReportArgs {
 pub const DEFAULT_MACHINE: &str = include_str!("../../../../examples/machines/tripod-seed000.toml");
 /// Name under which the bundled machine appears in messages.
 pub const DEFAULT_MACHINE_NAME: &str = "examples/machines/tripod-seed000.toml (bundled)";
+/// The bundled machine's `[report]` program (its file names it relative to itself).
+const DEFAULT_PROGRAM: (&str, &str) = (
+    "../paths/seed000-arc.ngc",
+    include_str!("../../../../examples/paths/seed000-arc.ngc"),
+);
 
-/// Tolerances the check table is judged by.
-const ROUND_TRIP_TOL_MM: f64 = 1e-9;
-const ROUND_TRIP_TOL_RAD: f64 = 1e-9;
-const JACOBIAN_TOL: f64 = 1e-6;
+/// Exit code of a report written with sections that could not be computed.
+pub const EXIT_PARTIAL: u8 = 4;
 
-pub fn run(a: &ReportArgs) -> Result<u8> {
-    let machine = match &a.machine {
-        Some(p) => Machine::from_path(p)?,
-        None => Machine::from_toml_str(DEFAULT_MACHINE, DEFAULT_MACHINE_NAME)?,
-    };
-    let html = build(&machine)?;
-    let path = a.out.join("index.html");
-    let inputs: Vec<&std::path::Path> = a.machine.iter().map(|p| p.as_path()).collect();
-    write_atomic(&path, html.as_bytes(), &inputs)
-        .with_context(|| format!("writing the report to {}", path.display()))?;
-    if a.json {
-        let sections = section_ids(&machine);
-        let v = serde_json::json!({
-            "machine": machine.source,
-            "report": path.display().to_string(),
-            "bytes": html.len(),
-            "sections": sections,
-        });
-        println!("{}", serde_json::to_string_pretty(&v)?);
-    }
-    eprintln!("wrote {}", path.display());
-    Ok(0)
+/// A G-code program: its name for the text and its contents.
+pub struct Program {
+    pub name: String,
+    pub text: String,
 }
 
-/// One analysis section of the report.
+/// What the sections are computed with: the command line over the machine file's
+/// `[report]` table over the defaults (internal units).
+pub struct Context {
+    /// Pose of the drawing, the map's orientation, the circle's centre, the accuracy.
+    pub pose: Vec<f64>,
+    /// How the text names it (`home`, `the pose X... Y...`).
+    pub pose_label: String,
+    /// Workspace grid bounds (user units).
+    pub bounds: Option<Vec<f64>>,
+    /// Workspace grid step (user units).
+    pub step: Option<f64>,
+    /// The motion section's program.
+    pub program: Option<Program>,
+    /// Where it starts.
+    pub from: Option<Vec<f64>>,
+    /// Feeds (mm/min).
+    pub feeds: Vec<f64>,
+    /// Samples per move.
+    pub points: Option<usize>,
+    /// Published results shown beside the sections.
+    pub comparisons: Vec<Comparison>,
+}
+
+impl Context {
+    /// The settings of `a` over `machine`'s `[report]` table.
+    pub fn new(a: &ReportArgs, machine: &Machine, bundled: bool) -> Result<Context> {
+        let m = machine.mechanism();
+        let r = &machine.report;
+        let user_pose = |v: &[f64]| pose_from_user(m, v, Convention::Rpy);
+        let (pose, pose_label) = match (&a.pose, &r.pose) {
+            (Some(s), _) => {
+                let v = parse_list(s, "--pose")?;
+                (user_pose(&v)?, format!("the pose {}", v_text(&v)))
+            }
+            (None, Some(v)) => (
+                user_pose(v).context("the machine file's [report] pose")?,
+                format!("the pose {}", v_text(v)),
+            ),
+            (None, None) => (m.home(), "home".to_string()),
+        };
+        let bounds = match &a.bounds {
+            Some(b) => Some(parse_list(b, "--bounds")?),
+            None => r.bounds.clone(),
+        };
+        let from = match (&a.from, &r.from) {
+            (Some(s), _) => Some(user_pose(&parse_list(s, "--from")?)?),
+            (None, Some(v)) => Some(user_pose(v).context("the machine file's [report] from")?),
+            (None, None) => None,
+        };
+        let feeds = match &a.feeds {
+            Some(f) => {
+                let v = parse_list(f, "--feeds")?;
+                if let Some(x) = v.iter().find(|x| !(**x > 0.0 && x.is_finite())) {
+                    bail!("--feeds: expected feeds > 0 mm/min, found {x}");
+                }
+                v
+            }
+            None => r.feeds.clone(),
+        };
+        let program = match (&a.gcode, &r.gcode) {
+            (Some(p), _) => Some(Program {
+                name: p.display().to_string(),
+                text: std::fs::read_to_string(p)
+                    .with_context(|| format!("cannot read the program {}", p.display()))?,
+            }),
+            (None, Some(p)) => {
+                let path = machine.resolve(p);
+                let text = match std::fs::read_to_string(&path) {
+                    Ok(t) => t,
+                    Err(_) if bundled && p == DEFAULT_PROGRAM.0 => DEFAULT_PROGRAM.1.to_string(),
+                    Err(e) => bail!(
+                        "cannot read {} (the machine file's [report] gcode): {e}",
+                        path.display()
+                    ),
+                };
+                Some(Program {
+                    name: p.clone(),
+                    text,
+                })
+            }
+            (None, None) => None,
+        };
+        Ok(Context {
+            pose,
+            pose_label,
+            bounds,
+            step: a.step.or(r.step),
+            program,
+            from,
+            feeds,
+            points: r.points,
+            comparisons: r.comparisons.clone(),
+        })
+    }
+}
+
+fn v_text(v: &[f64]) -> String {
+    v.iter()
+        .map(|x| format!("{x}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// One section of the report.
 struct Section {
-    /// Anchor.
+    /// Anchor (one of [`REPORT_SECTIONS`]).
     id: &'static str,
     /// Title in the navigation.
     title: &'static str,
     /// Whether the machine has it.
     shown: fn(&Machine) -> bool,
     /// Writes it.
-    render: fn(&mut Html, &Machine) -> Result<()>,
+    render: fn(&mut Html, &Machine, &Context) -> Result<()>,
 }
 
-/// The report's analysis sections, in order.
+/// The report's sections, in order.
 const SECTIONS: &[Section] = &[
+    Section {
+        id: "machine",
+        title: "Machine",
+        shown: |_| true,
+        render: machine::summary,
+    },
+    Section {
+        id: "drawing",
+        title: "Drawing",
+        shown: |_| true,
+        render: machine::drawing_section,
+    },
+    Section {
+        id: "checks",
+        title: "Kinematic checks",
+        shown: |_| true,
+        render: machine::checks,
+    },
     Section {
         id: "workspace",
         title: "Workspace",
         shown: |_| true,
-        render: workspace_section,
+        render: workspace::section,
     },
     Section {
         id: "motion",
         title: "Motion",
         shown: |m| m.mechanism().pose_space() != pkm::PoseSpace::Own,
-        render: motion_section,
+        render: motion::section,
     },
     Section {
         id: "seed004",
@@ -115,22 +255,56 @@ const SECTIONS: &[Section] = &[
         shown: |m| m.supports(pkm::machine::Analysis::Identification).is_ok(),
         render: calibration::section,
     },
+    Section {
+        id: "references",
+        title: "Reproduced references",
+        shown: |m| !m.references.is_empty(),
+        render: references::section,
+    },
 ];
 
-/// The anchors of the report's sections for `machine`, in order: the fixed ones, the
-/// analyses it has, the references when its file gives some.
-pub fn section_ids(machine: &Machine) -> Vec<&'static str> {
-    let mut v = vec!["machine", "drawing", "checks"];
-    v.extend(SECTIONS.iter().filter(|s| (s.shown)(machine)).map(|s| s.id));
-    if !machine.references.is_empty() {
-        v.push("references");
+/// The sections asked for (`--sections`, else the file's `[report] sections`, else
+/// all) that `machine` has, in report order; and the ones asked for that it has not.
+fn chosen(machine: &Machine, asked: Option<&[String]>) -> (Vec<&'static Section>, Vec<String>) {
+    let mut missing = Vec::new();
+    if let Some(a) = asked {
+        for id in a {
+            if !SECTIONS.iter().any(|s| s.id == id && (s.shown)(machine)) {
+                missing.push(id.clone());
+            }
+        }
     }
-    v
+    let v = SECTIONS
+        .iter()
+        .filter(|s| (s.shown)(machine))
+        .filter(|s| asked.is_none_or(|a| a.iter().any(|x| x == s.id)))
+        .collect();
+    (v, missing)
 }
 
-/// The whole report as one HTML document.
-pub fn build(machine: &Machine) -> Result<String> {
+/// A written report: the page and the sections that could not be computed.
+pub struct Built {
+    /// The HTML document.
+    pub html: String,
+    /// The sections shown.
+    pub sections: Vec<&'static str>,
+    /// `(section, error)` of each section that failed.
+    pub failed: Vec<(&'static str, String)>,
+    /// Sections asked for that this machine has not.
+    pub missing: Vec<String>,
+}
+
+/// The whole report as one HTML document; `asked` the sections wanted (`None`: the
+/// file's, else all); `progress` is told each section's title as it starts.
+pub fn build(
+    machine: &Machine,
+    ctx: &Context,
+    asked: Option<&[String]>,
+    progress: &dyn Fn(&str),
+) -> Built {
     let m = machine.mechanism();
+    let asked = asked.or(machine.report.sections.as_deref());
+    let (shown, missing) = chosen(machine, asked);
     let mut h = Html::new(&format!("pkm report: {}", m.name()));
     h.h1(&format!("pkm report: {}", m.name()));
     h.p(&format!(
@@ -143,562 +317,136 @@ pub fn build(machine: &Machine) -> Result<String> {
     if let Some(d) = &machine.description {
         h.p(&esc(d));
     }
-    let references = check_references(machine);
-    let mut nav = String::from(
-        "<nav><a href=\"#machine\">Machine</a> · <a href=\"#drawing\">Drawing</a> · \
-         <a href=\"#checks\">Kinematic checks</a>",
-    );
-    let shown: Vec<&Section> = SECTIONS.iter().filter(|s| (s.shown)(machine)).collect();
+    let nav: Vec<String> = shown
+        .iter()
+        .map(|s| format!("<a href=\"#{}\">{}</a>", s.id, s.title))
+        .collect();
+    h.raw(&format!("<nav>{}</nav>", nav.join(" · ")));
+    if !missing.is_empty() {
+        h.p(&format!(
+            "Sections asked for that this machine has not: {}.",
+            esc(&missing.join(", "))
+        ));
+    }
+    let mut failed = Vec::new();
     for s in &shown {
-        nav.push_str(&format!(" · <a href=\"#{}\">{}</a>", s.id, s.title));
-    }
-    if !references.is_empty() {
-        nav.push_str(" · <a href=\"#references\">Reproduced references</a>");
-    }
-    nav.push_str("</nav>");
-    h.raw(&nav);
-
-    // Machine summary.
-    h.h2_id("machine", "Machine");
-    let driven = m.driven();
-    let mut rows = Vec::new();
-    let home = m.home();
-    for (i, c) in m.coordinates().iter().enumerate() {
-        rows.push(vec![
-            esc(&c.name),
-            c.quantity.unit().into(),
-            if driven.contains(&i) {
-                "driven by the actuators".into()
-            } else {
-                "held by the mechanism".into()
-            },
-            format!("{:.4}", clean(c.quantity.to_user(home[i]))),
-        ]);
-    }
-    h.table(&["pose coordinate", "unit", "role", "home"], &rows);
-    let q_home = m.inverse(&home).ok();
-    let rows: Vec<Vec<String>> = m
-        .actuators()
-        .iter()
-        .enumerate()
-        .map(|(i, x)| {
-            let u = |v: f64| x.quantity.to_user(v);
-            let unit = x.quantity.unit();
-            vec![
-                esc(&x.name),
-                unit.into(),
-                format!("{:.3}", u(x.range.min)),
-                format!("{:.3}", u(x.range.max)),
-                x.max_velocity
-                    .map(|v| format!("{:.1} {unit}/s", u(v)))
-                    .unwrap_or_else(|| "-".into()),
-                x.max_acceleration
-                    .map(|v| format!("{:.1} {unit}/s²", u(v)))
-                    .unwrap_or_else(|| "-".into()),
-                q_home
-                    .as_ref()
-                    .map(|q| format!("{:.4}", u(q[i])))
-                    .unwrap_or_else(|| "no solution".into()),
-            ]
-        })
-        .collect();
-    h.table(
-        &[
-            "actuator",
-            "unit",
-            "min",
-            "max",
-            "max velocity",
-            "max acceleration",
-            "at home",
-        ],
-        &rows,
-    );
-
-    // Drawing.
-    h.h2_id("drawing", "Drawing at the home pose");
-    let sk = m.skeleton(&home)?;
-    let mut svgs = String::new();
-    for v in drawing::VIEWS {
-        svgs.push_str(&drawing::view_svg(&[&sk], v, (400, 400))?);
-    }
-    h.raw(&format!("<div class=\"views\">{svgs}</div>"));
-    let rows: Vec<Vec<String>> = sk
-        .points
-        .iter()
-        .map(|p| {
-            vec![
-                esc(&p.name),
-                format!("{:?}", p.role),
-                format!("{:.4}", p.position[0]),
-                format!("{:.4}", p.position[1]),
-                format!("{:.4}", p.position[2]),
-            ]
-        })
-        .collect();
-    h.details(
-        "Joint coordinates at home (base frame, mm)",
-        &Html::table_string(&["point", "role", "X", "Y", "Z"], &rows),
-    );
-
-    // Kinematic checks.
-    h.h2_id("checks", "Kinematic checks");
-    h.p(&format!(
-        "Each pose: inverse kinematics, every limit, forward kinematics started from the \
-         home pose (held coordinates taken from the pose) compared with the pose (pass: \
-         ≤ {ROUND_TRIP_TOL_MM:.0e} mm and ≤ {ROUND_TRIP_TOL_RAD:.0e} rad), the analytic \
-         Jacobian against central finite differences (pass: relative ≤ {JACOBIAN_TOL:.0e}) \
-         and the condition number of the Jacobian's driven columns."
-    ));
-    let table = machine_check_table(machine, 20.0, 5f64.to_radians());
-    h.raw(&check_table_html(machine, &table));
-
-    // The analyses' sections: each asked whether the machine has it; one that fails
-    // says why in its place instead of taking the report down.
-    for s in shown {
+        progress(s.title);
         let mut part = Html::new("");
-        match (s.render)(&mut part, machine) {
+        match (s.render)(&mut part, machine, ctx) {
             Ok(()) => h.raw(&part.body()),
             Err(e) => {
+                let msg = format!("{e:#}");
                 h.h2_id(s.id, s.title);
                 h.p(&format!(
                     "<span class=\"bad\">This section could not be computed for this machine: {}</span>",
-                    esc(&format!("{e:#}"))
+                    esc(&msg)
                 ));
+                failed.push((s.id, msg));
             }
         }
-    }
-
-    if !references.is_empty() {
-        h.h2_id("references", "Reproduced references");
-        h.p(
-            "Values published elsewhere (a paper's table, a CAD model) for poses of this \
-             machine, from the <code>[[reference]]</code> entries of its file, beside \
-             pkm's values.",
-        );
-        for r in &references {
-            references_html(&mut h, machine, r)?;
+        for c in ctx.comparisons.iter().filter(|c| c.section == s.id) {
+            h.raw(&format!(
+                "<blockquote class=\"published\"><b>Published ({}):</b> {}</blockquote>",
+                esc(&c.source),
+                esc(&c.text)
+            ));
         }
     }
-    Ok(h.finish())
-}
-
-fn check_table_html(machine: &Machine, rows: &[CheckRow]) -> String {
-    let m = machine.mechanism();
-    let mut head: Vec<String> = vec!["pose".into()];
-    head.extend(
-        m.actuators()
-            .iter()
-            .map(|a| format!("{} [{}]", a.name, a.quantity.unit())),
-    );
-    head.extend(
-        [
-            "FK round trip [mm / rad]",
-            "Jacobian vs FD",
-            "condition",
-            "limits",
-        ]
-        .map(String::from),
-    );
-    let mut body = Vec::new();
-    for r in rows {
-        let mut cells = vec![esc(&r.label)];
-        match &r.actuators {
-            Some(q) => cells.extend(q.iter().map(|v| format!("{v:.4}"))),
-            None => cells.extend(m.actuators().iter().map(|_| "-".to_string())),
-        }
-        cells.push(match &r.round_trip {
-            Some(t) => {
-                let ok = t.position_error <= ROUND_TRIP_TOL_MM
-                    && t.orientation_error <= ROUND_TRIP_TOL_RAD;
-                format!(
-                    "{} {:.1e} / {:.1e}",
-                    mark(ok),
-                    t.position_error,
-                    t.orientation_error
-                )
-            }
-            None => "-".into(),
-        });
-        cells.push(match r.jacobian_error {
-            Some(e) => format!("{} {:.1e}", mark(e <= JACOBIAN_TOL), e),
-            None => "-".into(),
-        });
-        cells.push(r.condition.map(|c| format!("{c:.3}")).unwrap_or("-".into()));
-        let mut lim = if r.violations.is_empty() {
-            "<span class=\"ok\">all satisfied</span>".to_string()
-        } else {
-            r.violations
-                .iter()
-                .map(|v| format!("<span class=\"bad\">{}</span>", esc(&v.to_string())))
-                .collect::<Vec<_>>()
-                .join("<br>")
-        };
-        if let Some(e) = &r.error {
-            lim.push_str(&format!("<br><span class=\"bad\">{}</span>", esc(e)));
-        }
-        cells.push(lim);
-        body.push(cells);
-    }
-    let head_refs: Vec<&str> = head.iter().map(String::as_str).collect();
-    Html::table_string(&head_refs, &body)
-}
-
-/// Workspace at the home orientation, over the machine's whole reach: summary, slices
-/// with the condition number, the outcomes and the limits that bind.
-fn workspace_section(h: &mut Html, machine: &Machine) -> Result<()> {
-    use crate::commands::workspace::{run_map, slices, summarise};
-    use pkm::workspace::PointStatus as St;
-    let m = machine.mechanism();
-    let home = m.home();
-    let (wm, grid_bounds) = run_map(machine, &home, None, None, &[], false)?;
-    let s = summarise(m, &wm);
-    h.h2_id("workspace", "Workspace and conditioning");
-    let names: Vec<String> = wm
-        .axes
-        .iter()
-        .map(|a| m.coordinates()[a.coordinate].name.clone())
-        .collect();
-    let span: Vec<String> = wm
-        .axes
-        .iter()
-        .zip(&names)
-        .map(|(a, n)| {
-            let q = m.coordinates()[a.coordinate].quantity;
-            format!(
-                "{n} [{:.1}, {:.1}] {}",
-                q.to_user(a.min),
-                q.to_user(a.max),
-                q.unit()
-            )
-        })
-        .collect();
-    h.p(&format!(
-        "A grid of {} points over {} ({}), bounds from {}; the other coordinates at home. \
-         A point is reachable when inverse kinematics has a solution within every limit and \
-         the Jacobian is regular. The condition number is that of the Jacobian's driven \
-         columns, rotations scaled by a characteristic length of {:.1} mm (1 = isotropic).",
-        s.points,
-        names.join(", "),
-        span.join(", "),
-        esc(&grid_bounds),
-        m.characteristic_length()
-    ));
-    if !s.cut.is_empty() {
+    if !failed.is_empty() {
         h.p(&format!(
-            "<span class=\"bad\">Reachable points lie on the grid's faces ({}): the region \
-             may go on beyond the map (pkm workspace MACHINE --bounds ... maps it).</span>",
-            esc(&s.cut.join(", "))
+            "<span class=\"bad\">Sections that could not be computed: {}.</span>",
+            esc(&failed.iter().map(|f| f.0).collect::<Vec<_>>().join(", "))
         ));
     }
-    let bbox: Vec<String> = s
-        .bounding_box
-        .iter()
-        .zip(&names)
-        .map(|(b, n)| format!("{n} [{:.1}, {:.1}]", b[0], b[1]))
-        .collect();
-    let c = &s.condition;
-    h.table(
-        &[
-            "reachable",
-            "measure",
-            "reachable range",
-            "condition min / median / p95 / max",
-        ],
-        &[vec![
-            format!("{} ({:.1} %)", s.reachable, 100.0 * s.reachable_fraction),
-            format!("{} {:.4e} {}", s.measure_name, s.measure, s.measure_unit),
-            bbox.join("<br>"),
-            format!(
-                "{:.3} / {:.3} / {:.3} / {:.3}",
-                c.min, c.median, c.p95, c.max
-            ),
-        ]],
-    );
-    let svgs: String = slices(m, &wm)?.into_iter().map(|(_, s)| s).collect();
-    h.raw(&format!("<div class=\"views\">{svgs}</div>"));
-    let outcome = |st: St| {
-        s.outcomes
-            .iter()
-            .find(|(k, _)| *k == st)
-            .map(|x| x.1)
-            .unwrap_or(0)
-    };
-    h.p("Grey cells: not reachable. Every point falls in one category:");
-    h.table(
-        &["outcome", "points"],
-        &[
-            ("reachable", St::Reachable),
-            ("a solution beyond at least one limit", St::Limits),
-            ("no solution (proven: out of the mechanism's reach)", St::NoSolution),
-            (
-                "solver failed from every start and from the reachable neighbours' solutions (not proven unreachable)",
-                St::SolverFailed,
-            ),
-            ("singular", St::Singular),
-        ]
-        .map(|(k, st)| vec![k.to_string(), outcome(st).to_string()]),
-    );
-    let first: std::collections::HashMap<&str, usize> =
-        s.binding.iter().map(|(k, n)| (k.as_str(), *n)).collect();
-    let rows: Vec<Vec<String>> = s
-        .violated
-        .iter()
-        .map(|(k, n)| {
-            vec![
-                esc(k),
-                n.to_string(),
-                first.get(k.as_str()).copied().unwrap_or(0).to_string(),
-            ]
-        })
-        .collect();
-    h.p(
-        "Points per limit: every limit a point violates is counted (a point beyond two \
-         struts' strokes counts for both); the last column counts the points where it is \
-         the first violated limit in the machine's check order.",
-    );
-    h.table(&["limit", "points violating it", "first violated"], &rows);
-    Ok(())
+    Built {
+        html: h.finish(),
+        sections: shown.iter().map(|s| s.id).collect(),
+        failed,
+        missing,
+    }
 }
 
-/// Feeds of seed 000's arc study (mm/min).
-const ARC_FEEDS: [f64; 4] = [10.0, 100.0, 1000.0, 10_000.0];
-
-/// Seed 000's arc study, for any spatial machine: a quarter arc of radius 64 mm in the
-/// XY plane at the home height, from home + (32, -32) about home + (-32, -32), at
-/// constant feed, sampled at 101 points (0.9 deg apart).
-fn motion_section(h: &mut Html, machine: &Machine) -> Result<()> {
-    use crate::commands::motion::plots;
-    use pkm::analysis::motion::{run_motion, MotionSource, NoSink};
-    use pkm::motion::program::{FeedOptions, ProfileKind};
-    use pkm::motion::Sampling;
-    let m = machine.mechanism();
-    let home = m.home();
-    h.h2_id("motion", "Motion: seed 000's arc study");
-    h.p(&format!(
-        "The tool tip moves along a quarter arc of radius 64 mm (100.5 mm long) in the XY \
-         plane at Z = {:.3} mm, from X{:+.3} Y{:+.3} about the centre X{:+.3} Y{:+.3}, at \
-         constant feed (seed 000, fig. 5-6); 101 points, 0.9° apart. Actuator velocity and \
-         acceleration come from the Jacobian and its derivative (exact), not from \
-         differences of the points. The same path on a serial (Cartesian) machine is the \
-         tool tip's X, Y, Z. Ratios are serial over PKM as seed 000 defines them: mean \
-         travel over mean travel, largest peak |velocity| over largest, largest peak \
-         |acceleration| over largest.",
-        home[2],
-        home[0] + 32.0,
-        home[1] - 32.0,
-        home[0] - 32.0,
-        home[1] - 32.0
-    ));
-    // Units of the actuators (a robot's joints turn: deg; ratios to a Cartesian machine
-    // then compare unlike quantities and are not given).
-    let angular = |a: &pkm::mechanism::Actuator| a.quantity == pkm::Quantity::Angle;
-    let (linear, unit) = if m.actuators().iter().all(angular) {
-        (false, "deg")
-    } else if m.actuators().iter().any(angular) {
-        (false, "mm or deg")
-    } else {
-        (true, "mm")
+pub fn run(a: &ReportArgs) -> Result<u8> {
+    let machine = match &a.machine {
+        Some(p) => Machine::from_path(p)?,
+        None => Machine::from_toml_str(DEFAULT_MACHINE, DEFAULT_MACHINE_NAME)?,
     };
-    let mut start = [0.0; 6];
-    start[..home.len().min(6)].copy_from_slice(&home[..home.len().min(6)]);
-    start[0] += 32.0;
-    start[1] -= 32.0;
-    let mut rows = Vec::new();
-    let mut last = None;
-    for feed in ARC_FEEDS {
-        let program = format!(
-            "G17 G21 G90 G91.1\nG3 X{} Y{} I-64 J0 F{feed}\n",
-            start[0] - 64.0,
-            start[1] + 64.0
-        );
-        let out = run_motion(
-            machine,
-            MotionSource::Gcode {
-                reader: Box::new(std::io::Cursor::new(program.into_bytes())),
-                from: Some(start.to_vec()),
-            },
-            &FeedOptions {
-                profile: ProfileKind::Constant,
-                ..Default::default()
-            },
-            Sampling::Points(101),
-            &mut NoSink,
-        );
-        let out = match out {
-            Ok(o) => o,
-            Err(e) => {
-                h.p(&format!(
-                    "<span class=\"bad\">The arc is not attainable: {}</span>",
-                    esc(&e.to_string())
-                ));
-                return Ok(());
+    let asked: Option<Vec<String>> = match &a.sections {
+        Some(s) => {
+            let v: Vec<String> = s
+                .split(',')
+                .map(|x| x.trim().to_string())
+                .filter(|x| !x.is_empty())
+                .collect();
+            if let Some(x) = v.iter().find(|x| !REPORT_SECTIONS.contains(&x.as_str())) {
+                bail!(
+                    "--sections: unknown section `{x}`, expected some of: {}",
+                    REPORT_SECTIONS.join(", ")
+                );
             }
-        };
-        let s = &out.summary;
-        let peak = |v: &[(String, pkm::motion::AxisStats)],
-                    f: fn(&pkm::motion::AxisStats) -> f64| {
-            v.iter().map(|(_, x)| f(x)).fold(0.0, f64::max)
-        };
-        rows.push(vec![
-            format!("{feed}"),
-            sig(s.duration_s),
-            sig(peak(&s.actuators, |x| x.peak_velocity)),
-            sig(peak(&s.serial, |x| x.peak_velocity)),
-            sig(peak(&s.actuators, |x| x.peak_acceleration)),
-            sig(peak(&s.serial, |x| x.peak_acceleration)),
-            match &s.ratios {
-                Some(r) => format!(
-                    "{:.3} / {:.3} / {:.3}",
-                    r.travel, r.velocity, r.acceleration
-                ),
-                None => "n/a (revolute drives)".into(),
-            },
-            if s.violations.is_empty() {
-                "<span class=\"ok\">none</span>".into()
-            } else {
-                format!(
-                    "<span class=\"bad\">{} (first: {} {:.3} {} beyond {:.3})</span>",
-                    s.violations.len(),
-                    esc(&s.violations[0].limit),
-                    s.violations[0].worst,
-                    s.violations[0].unit,
-                    s.violations[0].bound
-                )
-            },
-        ]);
-        last = Some(out);
+            Some(v)
+        }
+        None => None,
+    };
+    let ctx = Context::new(a, &machine, a.machine.is_none())?;
+    let total = chosen(
+        &machine,
+        asked.as_deref().or(machine.report.sections.as_deref()),
+    )
+    .0
+    .len();
+    let bar = crate::progress::bar(total as u64, 0, "{bar:30} {pos}/{len} {msg} {elapsed}");
+    if let Some(b) = &bar {
+        b.enable_steady_tick(std::time::Duration::from_millis(100));
     }
-    let (hv, ha) = (
-        format!("peak actuator |v| [{unit}/s]"),
-        format!("peak actuator |a| [{unit}/s²]"),
-    );
-    h.table(
-        &[
-            "feed [mm/min]",
-            "duration [s]",
-            &hv,
-            "peak serial |v| [mm/s]",
-            &ha,
-            "peak serial |a| [mm/s²]",
-            "ratios travel / v / a",
-            "limit violations",
-        ],
-        &rows,
-    );
-    if let Some(out) = last {
-        let s = &out.summary;
-        let mut axes = Vec::new();
-        let units: Vec<&str> = m.actuators().iter().map(|a| a.quantity.unit()).collect();
-        for (kind, list) in [("actuator", &s.actuators), ("serial", &s.serial)] {
-            for (k, (n, st)) in list.iter().enumerate() {
-                let u = if kind == "actuator" {
-                    units.get(k).copied().unwrap_or("mm")
-                } else {
-                    "mm"
-                };
-                axes.push(vec![
-                    format!("{kind} {}", esc(n)),
-                    u.to_string(),
-                    format!("{:.3}", st.travel),
-                    format!("{:.3}", st.peak_velocity),
-                    format!("{:.3}", st.mean_abs_velocity),
-                    format!("{:.3}", st.peak_acceleration),
-                    format!("{:.3}", st.mean_abs_acceleration),
-                ]);
+    let tick = |title: &str| {
+        if let Some(b) = &bar {
+            if !b.message().is_empty() {
+                b.inc(1);
             }
+            b.set_message(title.to_string());
         }
-        h.p("Per axis at 10 000 mm/min (velocities scale with the feed, accelerations with its square; travel does not change):");
-        h.table(
-            &[
-                "axis",
-                "unit",
-                "travel",
-                "peak |v| [/s]",
-                "mean |v|",
-                "peak |a| [/s²]",
-                "mean |a|",
-            ],
-            &axes,
-        );
-        match s.feed_override_max {
-            Some(k) => h.p(&format!(
-                "Largest feed override within the actuators' velocity and acceleration limits at 10 000 mm/min: <b>{k:.3}</b>."
-            )),
-            None => h.p("The machine file gives no actuator rate limits, so no feed override is computed."),
-        }
-        let (a, b) = plots(m, &out, "10 000 mm/min")?;
-        h.raw(&format!("<div class=\"views\">{a}{b}</div>"));
-        if linear {
-            h.p("Seed 000 reports, for its larger tripod (whose dimensions it does not print): struts travel 3.6x, move 3.4x slower and accelerate 3.3x less than the serial axes; strut velocities 0-49 mm/s and accelerations within ±131 mm/s² at 10 000 mm/min, serial velocities 0-167 mm/s.");
-        }
-    }
-    Ok(())
-}
-
-fn references_html(h: &mut Html, machine: &Machine, r: &ReferenceCheck) -> Result<()> {
-    let m = machine.mechanism();
-    let mark_of = if r.discrepancy {
-        "<span class=\"bad\">discrepancy with the source</span>"
-    } else {
-        mark(r.pass)
     };
-    h.raw(&format!("<h3>{} {}</h3>", mark_of, esc(&r.source)));
-    h.p(&format!(
-        "Pose <code>{}</code> (mm, deg), tolerance {} per component.",
-        r.pose
-            .iter()
-            .map(|v| format!("{v}"))
-            .collect::<Vec<_>>()
-            .join(", "),
-        r.tolerance
-    ));
-    if let Some(n) = &r.note {
-        h.p(&format!("<em>Note:</em> {}", esc(n)));
+    let built = build(&machine, &ctx, asked.as_deref(), &tick);
+    if let Some(b) = bar {
+        b.finish_and_clear();
     }
-    if let Some(e) = &r.error {
-        h.p(&format!("<span class=\"bad\">{}</span>", esc(e)));
-    }
-    let fmt = |v: &[f64]| {
-        v.iter()
-            .map(|x| format!("{:.3}", clean(*x)))
-            .collect::<Vec<_>>()
-            .join(", ")
-    };
-    let rows: Vec<Vec<String>> = r
-        .items
+    let path = a.out.join("index.html");
+    let inputs: Vec<&std::path::Path> = a
+        .machine
         .iter()
-        .map(|i| {
-            vec![
-                format!("{} {}", i.what, esc(&i.name)),
-                match &i.published {
-                    Some(p) => format!("{} (pkm's correction: {})", fmt(p), fmt(&i.expected)),
-                    None => fmt(&i.expected),
-                },
-                i.computed.as_deref().map(fmt).unwrap_or("-".into()),
-                i.deviation
-                    .map(|d| format!("{d:.4} {}", i.unit))
-                    .unwrap_or("-".into()),
-                mark(i.pass).into(),
-            ]
-        })
+        .map(|p| p.as_path())
+        .chain(a.gcode.as_deref())
         .collect();
-    h.table(
-        &["value", "published", "pkm", "deviation", "within tolerance"],
-        &rows,
-    );
-    if r.error.is_none() {
-        let x = pkm::dynamic::pose_from_user(m, &r.pose, pkm::Convention::Rpy)?;
-        let sk = m.skeleton(&x)?;
-        let home = m.skeleton(&m.home())?;
-        let mut svgs = String::new();
-        for v in drawing::VIEWS {
-            svgs.push_str(&drawing::view_svg(&[&sk, &home], v, (400, 400))?);
-        }
-        h.p("The machine at this pose (home pose faint):");
-        h.raw(&format!("<div class=\"views\">{svgs}</div>"));
+    write_atomic(&path, built.html.as_bytes(), &inputs)
+        .with_context(|| format!("writing the report to {}", path.display()))?;
+    if a.json {
+        let v = serde_json::json!({
+            "machine": machine.source,
+            "report": path.display().to_string(),
+            "bytes": built.html.len(),
+            "sections": built.sections,
+            "failed": built.failed.iter().map(|(s, e)| serde_json::json!({"section": s, "error": e})).collect::<Vec<_>>(),
+            "missing": built.missing,
+        });
+        println!("{}", serde_json::to_string_pretty(&v)?);
     }
-    Ok(())
+    for m in &built.missing {
+        eprintln!("warning: this machine has no `{m}` section");
+    }
+    eprintln!("wrote {}", path.display());
+    if built.failed.is_empty() {
+        return Ok(0);
+    }
+    for (s, e) in &built.failed {
+        eprintln!("error: section `{s}` could not be computed: {e}");
+    }
+    eprintln!(
+        "the report was written without {} of its {} sections (exit code {EXIT_PARTIAL})",
+        built.failed.len(),
+        built.sections.len()
+    );
+    Ok(EXIT_PARTIAL)
 }
 
 /// Four significant digits, for values spanning several decades (feeds 10 to 10 000).

@@ -25,7 +25,7 @@ fn num(v: &[f64]) -> String {
 const FIG6_VELOCITY: [f64; 2] = [150.0, 1.0];
 const FIG6_ACCELERATION: [f64; 2] = [9806.65, 30.0];
 
-pub fn section(h: &mut Html, machine: &Machine) -> Result<()> {
+pub fn section(h: &mut Html, machine: &Machine, _ctx: &super::Context) -> Result<()> {
     let geometry = machine.p3rp_head()?;
     let g = &geometry.geometry;
     // The head as a machine of its own (for the hybrid machine, its head at home).

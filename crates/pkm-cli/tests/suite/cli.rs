@@ -367,7 +367,10 @@ fn report_writes_a_self_contained_page() {
          of the calibration study"
     );
     assert!(html.contains("Accuracy from geometric tolerances"));
-    assert!(html.contains("seed 000's arc study"));
+    // The paper's study and figures come from the bundled file's [report] table (its
+    // program embedded, as the working directory has no examples/).
+    assert!(html.contains("seed000-arc.ngc"));
+    assert!(html.contains("Published (seed 000, section 4"));
     assert!(html.contains("Kinematic checks"));
     assert!(html.contains("Top view") && html.contains("Front view") && html.contains("Side view"));
     assert!(

@@ -8,5 +8,6 @@ mod cli;
 mod errors_cli;
 mod motion_cli;
 mod pipes_cli;
+mod report_cli;
 mod seed002_cli;
 mod workspace_cli;

@@ -10,6 +10,7 @@ mod hybrid_am_file;
 mod p3rp_file;
 mod reference;
 mod registry;
+mod report_file;
 mod serial_file;
 mod source;
 mod strut_writer;
@@ -25,6 +26,7 @@ use source::Exact;
 
 pub use reference::Reference;
 pub use registry::{Analysis, FileType, Model, StrutVisitor, FILE_TYPES};
+pub use report_file::{Comparison, ReportSettings, REPORT_SECTIONS};
 pub use source::{line_col, MAX_MAGNITUDE};
 pub use strut_writer::{with_strut_geometry, StrutGeometry};
 pub use tolerance_file::{read_deviations, read_tolerances};
@@ -351,6 +353,8 @@ pub struct Machine {
     pub rapid: Option<f64>,
     /// Clearances of its passive joints from the file's `[[clearance]]` entries.
     pub clearances: Vec<crate::accuracy::clearance::JointClearance>,
+    /// What `pkm report` shows for it by default, from the file's `[report]` table.
+    pub report: ReportSettings,
 }
 
 impl Machine {
@@ -374,6 +378,20 @@ impl Machine {
         Machine::from_toml_str(&text, &name)
     }
 
+    /// `path` as written in this machine's file (a `[report]` program): relative
+    /// paths are taken from the machine file's directory, as a reader of the file
+    /// expects; absolute ones as they are.
+    pub fn resolve(&self, path: &str) -> std::path::PathBuf {
+        let p = Path::new(path);
+        if p.is_absolute() {
+            return p.to_path_buf();
+        }
+        match Path::new(&self.source).parent() {
+            Some(dir) => dir.join(p),
+            None => p.to_path_buf(),
+        }
+    }
+
     /// Reads a robot from URDF text: the serial chain from the root link to the
     /// deepest leaf, in millimetres (see `docs/serial.md`).
     pub fn from_urdf_str(text: &str, file: &str) -> Result<Machine> {
@@ -386,6 +404,7 @@ impl Machine {
             references: parts.references,
             rapid: parts.rapid,
             clearances: Vec::new(),
+            report: ReportSettings::default(),
         })
     }
 
@@ -439,6 +458,7 @@ impl Machine {
             references: parts.references,
             rapid: parts.rapid,
             clearances: Vec::new(),
+            report: report_file::report_settings(&src)?,
         };
         machine.clearances = clearance_file::clearances(&src, &machine.passive_joints())?;
         // A reference pose has the values a pose takes on this machine, no more.
@@ -447,6 +467,33 @@ impl Machine {
             crate::mechanism::PoseSpace::Own => vec![m.coordinates().len()],
             _ => vec![3, 6],
         };
+        let axes = match m.pose_space() {
+            crate::mechanism::PoseSpace::Own => m.coordinates().len().min(3),
+            _ => 3,
+        };
+        let r = &machine.report;
+        let report_arrays = [
+            ("pose", r.pose.as_ref().map(|v| v.len()), counts.clone()),
+            ("from", r.from.as_ref().map(|v| v.len()), counts.clone()),
+            ("bounds", r.bounds.as_ref().map(|v| v.len()), vec![2 * axes]),
+        ];
+        for (key, len, want) in report_arrays {
+            if let Some(n) = len.filter(|n| !want.contains(n)) {
+                return Err(src.error(
+                    &[
+                        source::Seg::Key("report".into()),
+                        source::Seg::Key(key.into()),
+                    ],
+                    format!(
+                        "expected {} values, found {n}",
+                        want.iter()
+                            .map(|c| c.to_string())
+                            .collect::<Vec<_>>()
+                            .join(" or ")
+                    ),
+                ));
+            }
+        }
         for (i, r) in machine.references.iter().enumerate() {
             if !counts.contains(&r.pose.len()) {
                 return Err(src.error(

@@ -298,6 +298,7 @@ impl Machine {
             references: Vec::new(),
             rapid: self.rapid,
             clearances: Vec::new(),
+            report: Default::default(),
         })
     }
 

@@ -20,6 +20,9 @@ pub(super) struct TripodFile {
     /// `[[clearance]]` entries, read for every machine type by `clearance_file`.
     #[serde(default, rename = "clearance")]
     _clearance: Option<serde::de::IgnoredAny>,
+    /// The `[report]` table, read for every machine type by `report_file`.
+    #[serde(default, rename = "report")]
+    _report: Option<serde::de::IgnoredAny>,
     #[serde(default)]
     name: Option<String>,
     #[serde(default)]

@@ -172,7 +172,7 @@ const PROBE_POINTS: usize = 16;
 /// times, until no reachable point lies on a face. Finally the box is shrunk to the
 /// reachable probe points plus one probing cell on every side, so the map's cells are
 /// spent where the machine reaches. A region thinner than a probing cell can be
-/// missed by the shrink; [`WorkspaceSummary::cut`] of the final map says when
+/// missed by the shrink; [`super::WorkspaceSummary::cut`] of the final map says when
 /// reachable points lie on its faces.
 pub fn reach_grid<M: Mechanism<P, A>, const P: usize, const A: usize>(
     m: &M,

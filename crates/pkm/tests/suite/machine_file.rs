@@ -272,12 +272,14 @@ fn arrays_with_more_or_fewer_values_are_refused() {
             let Some((key, value)) = line.split_once(" = [") else {
                 return vec![];
             };
-            // One-line arrays of numbers (not of strings, not nested).
+            // One-line arrays of numbers (not of strings, not nested), of a fixed length
+            // (a report's feeds are a list of any length).
             let Some(close) = value.find(']') else {
                 return vec![];
             };
             let inner = &value[..close];
             if key.trim_start().starts_with('#')
+                || key.trim() == "feeds"
                 || inner.contains('[')
                 || inner.contains('"')
                 || !inner.contains(',')
@@ -349,5 +351,77 @@ fn rotation_blocks_with_a_row_or_column_too_many_are_refused() {
         let message = parts(&e).2;
         assert!(message.contains("invalid length"), "{bad}: {e}");
         assert!(e.to_string().contains("rotation"), "{bad}: {e}");
+    }
+}
+
+/// Issue 16: the `[report]` table is read for every machine type and checked, with
+/// the file, line and field of a bad value.
+#[test]
+fn report_tables_are_read_and_checked() {
+    let tripod = std::fs::read_to_string(format!(
+        "{}/../../examples/machines/tripod-seed000.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let m = pkm::Machine::from_toml_str(&tripod, "t.toml").unwrap();
+    assert_eq!(m.report.feeds, vec![10.0, 100.0, 1000.0, 10000.0]);
+    assert_eq!(m.report.gcode.as_deref(), Some("../paths/seed000-arc.ngc"));
+    assert_eq!(m.report.comparisons[0].section, "motion");
+    let base = tripod.split("[report]").next().unwrap().to_string();
+    for (table, field, want) in [
+        (
+            "[report]\nfeeds = [100.0, -5.0]\n",
+            "report.feeds[1]",
+            "expected a feed > 0",
+        ),
+        (
+            "[report]\nstep = 0.0\n",
+            "report.step",
+            "expected a step > 0",
+        ),
+        (
+            "[report]\nbounds = [1.0, 0.0]\n",
+            "report.bounds",
+            "min < max",
+        ),
+        (
+            "[report]\npoints = 1\n",
+            "report.points",
+            "expected 2 to 10^7",
+        ),
+        (
+            "[report]\nsections = [\"motion\", \"x\"]\n",
+            "report.sections[1]",
+            "unknown section `x`",
+        ),
+        ("[report]\ngcod = \"a.ngc\"\n", "report", "gcod"),
+        (
+            "[[report.comparison]]\nsection = \"nowhere\"\nsource = \"s\"\ntext = \"t\"\n",
+            "report.comparison[0].section",
+            "unknown section",
+        ),
+    ] {
+        let e = pkm::Machine::from_toml_str(&format!("{base}{table}"), "t.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("t.toml") && e.contains(field) && e.contains(want),
+            "{table}: {e}"
+        );
+    }
+    // Every machine type lets the table through.
+    for f in [
+        "hexapod-seed001.toml",
+        "p3rp-seed004.toml",
+        "hybrid-am-seed002.toml",
+        "mc300.toml",
+    ] {
+        let text = std::fs::read_to_string(format!(
+            "{}/../../examples/machines/{f}",
+            env!("CARGO_MANIFEST_DIR")
+        ))
+        .unwrap();
+        let m = pkm::Machine::from_toml_str(&format!("{text}\n[report]\nstep = 2.0\n"), f).unwrap();
+        assert_eq!(m.report.step, Some(2.0), "{f}");
     }
 }

@@ -293,30 +293,13 @@ fn forward_map_poses_close_the_loop() {
     }
 }
 
-/// The own Gough-Stewart platform of issue 16 (base radius 500 mm, platform radius
-/// 200 mm, a -150 mm tool, home Z 600 mm), written as a user would.
+/// The own Gough-Stewart platform of issue 16 (`tests/fixtures/own-hexapod.toml`).
 fn own_hexapod() -> pkm::Machine {
-    let mut t = String::from("type = \"hexapod\"\nname = \"own\"\n[base_joints]\n");
-    let (rb, rp) = (500.0f64, 200.0f64);
-    let at = |r: f64, deg: f64| (r * deg.to_radians().cos(), r * deg.to_radians().sin());
-    for (i, deg) in [-10.0, 10.0, 110.0, 130.0, 230.0, 250.0].iter().enumerate() {
-        let (x, y) = at(rb, *deg);
-        t.push_str(&format!("A{} = [{x}, {y}, 0.0]\n", i + 1));
-    }
-    t.push_str("[platform_joints]\n");
-    for (i, deg) in [110.0, 10.0, 230.0, 130.0, -10.0, 250.0].iter().enumerate() {
-        let (x, y) = at(rp, *deg);
-        t.push_str(&format!("B{} = [{x}, {y}, 0.0]\n", i + 1));
-    }
-    for (i, p) in [6, 1, 2, 3, 4, 5].iter().enumerate() {
-        t.push_str(&format!(
-            "[[struts]]\nname = \"L{}\"\nbase = \"A{}\"\nplatform = \"B{p}\"\nlength = [550.0, 1050.0]\n",
-            i + 1,
-            i + 1
-        ));
-    }
-    t.push_str("[tool]\ntip = [0.0, 0.0, -150.0]\n[home]\nposition = [0.0, 0.0, 600.0]\nangles = [0.0, 0.0, 0.0]\n");
-    pkm::Machine::from_toml_str(&t, "own-hexapod.toml").unwrap()
+    pkm::Machine::from_path(format!(
+        "{}/../../tests/fixtures/own-hexapod.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap()
 }
 
 /// Issue 16, item 4: the default map covers the whole reach of every example machine

@@ -1,0 +1,243 @@
+//! The report's motion section: a path through the mechanism (the user's program, the
+//! machine file's `[report]` program, or a circle scaled to the machine's reach), at
+//! one or several feeds, compared with a serial machine.
+
+use anyhow::Result;
+use pkm::analysis::motion::{run_motion, study_circle, MotionSource, NoSink};
+use pkm::motion::program::{FeedOptions, ProfileKind};
+use pkm::motion::Sampling;
+use pkm::Machine;
+
+use super::html::{esc, Html};
+use super::{sig, Context};
+use crate::commands::motion::plots;
+use crate::poses::clean;
+
+/// Feed of the circle when no feeds are given (mm/min).
+const CIRCLE_FEED: f64 = 1000.0;
+
+/// Fraction of the largest circle within every limit that the study's circle takes.
+const CIRCLE_FRACTION: f64 = 0.8;
+
+/// Runs the report's path at each feed: a table per feed, per-axis statistics and
+/// plots of the last.
+pub fn section(h: &mut Html, machine: &Machine, ctx: &Context) -> Result<()> {
+    let m = machine.mechanism();
+    h.h2_id("motion", "Motion along a path");
+    let user = |v: &[f64]| -> String {
+        v.iter()
+            .zip(m.coordinates())
+            .map(|(x, c)| format!("{}{:.3}", c.name, clean(c.quantity.to_user(*x))))
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
+    let (program, from, what) = match &ctx.program {
+        Some(p) => {
+            let from = ctx.from.clone().unwrap_or_else(|| m.home());
+            (
+                p.text.clone(),
+                from.clone(),
+                format!(
+                    "The program <code>{}</code> from {}",
+                    esc(&p.name),
+                    esc(&user(&from))
+                ),
+            )
+        }
+        None => {
+            let c = study_circle(machine, &ctx.pose, CIRCLE_FRACTION)?;
+            // A round radius: three significant digits.
+            let digits = (2 - c.radius.log10().floor() as i32).max(0) as usize;
+            let r: f64 = format!("{:.digits$}", c.radius).parse()?;
+            let mut from = c.centre.clone();
+            from[0] += r;
+            let program = format!(
+                "G17 G21 G90 G91.1\nG3 X{} Y{} I{} J0 F{CIRCLE_FEED}\n",
+                from[0], from[1], -r
+            );
+            (
+                program,
+                from,
+                format!(
+                    "A full circle of radius {r} mm, counter-clockwise in the XY plane about \
+                     {}{} ({pct:.0} % of the largest circle about that point within every \
+                     limit, {:.1} mm; <code>pkm report --gcode FILE</code> or the machine \
+                     file's <code>[report] gcode</code> takes your own path)",
+                    esc(&user(&c.centre)),
+                    if c.moved {
+                        format!(
+                            " (no circle fits about {}: the centre is the best-conditioned \
+                             point of the reach that takes the largest one)",
+                            ctx.pose_label
+                        )
+                    } else {
+                        String::new()
+                    },
+                    c.largest,
+                    pct = 100.0 * CIRCLE_FRACTION
+                ),
+            )
+        }
+    };
+    let feeds: Vec<Option<f64>> = match (ctx.feeds.is_empty(), ctx.program.is_some()) {
+        (false, _) => ctx.feeds.iter().map(|f| Some(*f)).collect(),
+        (true, true) => vec![None],
+        (true, false) => vec![Some(CIRCLE_FEED)],
+    };
+    let sampling = match ctx.points {
+        Some(n) => Sampling::Points(n),
+        None => Sampling::Rate(1000.0),
+    };
+    h.p(&format!(
+        "{what}, at constant feed ({}), sampled {}. Actuator velocity and acceleration come \
+         from the Jacobian and its derivative (exact), not from differences of the points. \
+         The same path on a serial (Cartesian) machine is the tool tip's X, Y, Z. Ratios are \
+         serial over PKM as seed 000 defines them: mean travel over mean travel, largest \
+         peak |velocity| over largest, largest peak |acceleration| over largest.",
+        feeds
+            .iter()
+            .map(|f| match f {
+                Some(f) => format!("{f} mm/min"),
+                None => "the program's F words".into(),
+            })
+            .collect::<Vec<_>>()
+            .join(", "),
+        match sampling {
+            Sampling::Points(n) => format!("at {n} points per move"),
+            Sampling::Rate(r) => format!("at {r} Hz"),
+        }
+    ));
+    // Units of the actuators (a robot's joints turn: deg; ratios to a Cartesian machine
+    // then compare unlike quantities and are not given).
+    let angular = |a: &pkm::mechanism::Actuator| a.quantity == pkm::Quantity::Angle;
+    let unit = if m.actuators().iter().all(angular) {
+        "deg"
+    } else if m.actuators().iter().any(angular) {
+        "mm or deg"
+    } else {
+        "mm"
+    };
+    let mut rows = Vec::new();
+    let mut last = None;
+    let mut last_feed = String::new();
+    for feed in &feeds {
+        let out = run_motion(
+            machine,
+            MotionSource::Gcode {
+                reader: Box::new(std::io::Cursor::new(program.clone().into_bytes())),
+                from: Some(from.clone()),
+            },
+            &FeedOptions {
+                profile: ProfileKind::Constant,
+                feed: feed.map(|f| f / 60.0),
+                rapid: machine.rapid.unwrap_or(FeedOptions::default().rapid),
+                ..Default::default()
+            },
+            sampling,
+            &mut NoSink,
+        );
+        let out = match out {
+            Ok(o) => o,
+            Err(e) => anyhow::bail!("the path cannot be run through the machine: {e}"),
+        };
+        let s = &out.summary;
+        let peak = |v: &[(String, pkm::motion::AxisStats)],
+                    f: fn(&pkm::motion::AxisStats) -> f64| {
+            v.iter().map(|(_, x)| f(x)).fold(0.0, f64::max)
+        };
+        last_feed = match feed {
+            Some(f) => format!("{f} mm/min"),
+            None => "the program's feeds".into(),
+        };
+        rows.push(vec![
+            last_feed.clone(),
+            sig(s.duration_s),
+            sig(peak(&s.actuators, |x| x.peak_velocity)),
+            sig(peak(&s.serial, |x| x.peak_velocity)),
+            sig(peak(&s.actuators, |x| x.peak_acceleration)),
+            sig(peak(&s.serial, |x| x.peak_acceleration)),
+            match &s.ratios {
+                Some(r) => format!(
+                    "{:.3} / {:.3} / {:.3}",
+                    r.travel, r.velocity, r.acceleration
+                ),
+                None => "n/a (revolute drives)".into(),
+            },
+            if s.violations.is_empty() {
+                "<span class=\"ok\">none</span>".into()
+            } else {
+                format!(
+                    "<span class=\"bad\">{} (first: {} {:.3} {} beyond {:.3})</span>",
+                    s.violations.len(),
+                    esc(&s.violations[0].limit),
+                    s.violations[0].worst,
+                    s.violations[0].unit,
+                    s.violations[0].bound
+                )
+            },
+        ]);
+        last = Some(out);
+    }
+    let (hv, ha) = (
+        format!("peak actuator |v| [{unit}/s]"),
+        format!("peak actuator |a| [{unit}/s²]"),
+    );
+    h.table(
+        &[
+            "feed",
+            "duration [s]",
+            &hv,
+            "peak serial |v| [mm/s]",
+            &ha,
+            "peak serial |a| [mm/s²]",
+            "ratios travel / v / a",
+            "limit violations",
+        ],
+        &rows,
+    );
+    if let Some(out) = last {
+        let s = &out.summary;
+        let mut axes = Vec::new();
+        let units: Vec<&str> = m.actuators().iter().map(|a| a.quantity.unit()).collect();
+        for (kind, list) in [("actuator", &s.actuators), ("serial", &s.serial)] {
+            for (k, (n, st)) in list.iter().enumerate() {
+                let u = if kind == "actuator" {
+                    units.get(k).copied().unwrap_or("mm")
+                } else {
+                    "mm"
+                };
+                axes.push(vec![
+                    format!("{kind} {}", esc(n)),
+                    u.to_string(),
+                    format!("{:.3}", st.travel),
+                    format!("{:.3}", st.peak_velocity),
+                    format!("{:.3}", st.mean_abs_velocity),
+                    format!("{:.3}", st.peak_acceleration),
+                    format!("{:.3}", st.mean_abs_acceleration),
+                ]);
+            }
+        }
+        h.p(&format!("Per axis at {last_feed} (at constant feed, velocities scale with the feed and accelerations with its square; travel does not change):"));
+        h.table(
+            &[
+                "axis",
+                "unit",
+                "travel",
+                "peak |v| [/s]",
+                "mean |v|",
+                "peak |a| [/s²]",
+                "mean |a|",
+            ],
+            &axes,
+        );
+        match s.feed_override_max {
+            Some(k) => h.p(&format!(
+                "Largest feed override within the actuators' velocity and acceleration limits at {last_feed}: <b>{k:.3}</b>."
+            )),
+            None => h.p("The machine file gives no actuator rate limits, so no feed override is computed."),
+        }
+        let (a, b) = plots(m, &out, &last_feed)?;
+        h.raw(&format!("<div class=\"views\">{a}{b}</div>"));
+    }
+    Ok(())
+}

@@ -1,0 +1,132 @@
+//! The report's workspace section.
+
+use anyhow::Result;
+use pkm::Machine;
+
+use super::html::{esc, Html};
+use super::Context;
+
+/// Workspace at the report pose's orientation, over the machine's whole reach or the
+/// given bounds: summary, slices with the condition number, the outcomes and the
+/// limits that bind.
+pub fn section(h: &mut Html, machine: &Machine, ctx: &Context) -> Result<()> {
+    use crate::commands::workspace::{run_map, slices, summarise};
+    use pkm::workspace::PointStatus as St;
+    let m = machine.mechanism();
+    let (wm, grid_bounds) = run_map(
+        machine,
+        &ctx.pose,
+        ctx.bounds.as_deref(),
+        ctx.step,
+        &[],
+        false,
+    )?;
+    let s = summarise(m, &wm);
+    h.h2_id("workspace", "Workspace and conditioning");
+    let names: Vec<String> = wm
+        .axes
+        .iter()
+        .map(|a| m.coordinates()[a.coordinate].name.clone())
+        .collect();
+    let span: Vec<String> = wm
+        .axes
+        .iter()
+        .zip(&names)
+        .map(|(a, n)| {
+            let q = m.coordinates()[a.coordinate].quantity;
+            format!(
+                "{n} [{:.1}, {:.1}] {}",
+                q.to_user(a.min),
+                q.to_user(a.max),
+                q.unit()
+            )
+        })
+        .collect();
+    h.p(&format!(
+        "A grid of {} points over {} ({}), bounds from {}; the other coordinates at {}. \
+         A point is reachable when inverse kinematics has a solution within every limit and \
+         the Jacobian is regular. The condition number is that of the Jacobian's driven \
+         columns, rotations scaled by a characteristic length of {:.1} mm (1 = isotropic).",
+        s.points,
+        names.join(", "),
+        span.join(", "),
+        esc(&grid_bounds),
+        ctx.pose_label,
+        m.characteristic_length()
+    ));
+    if !s.cut.is_empty() {
+        h.p(&format!(
+            "<span class=\"bad\">Reachable points lie on the grid's faces ({}): the region \
+             may go on beyond the map (pkm workspace MACHINE --bounds ... maps it).</span>",
+            esc(&s.cut.join(", "))
+        ));
+    }
+    let bbox: Vec<String> = s
+        .bounding_box
+        .iter()
+        .zip(&names)
+        .map(|(b, n)| format!("{n} [{:.1}, {:.1}]", b[0], b[1]))
+        .collect();
+    let c = &s.condition;
+    h.table(
+        &[
+            "reachable",
+            "measure",
+            "reachable range",
+            "condition min / median / p95 / max",
+        ],
+        &[vec![
+            format!("{} ({:.1} %)", s.reachable, 100.0 * s.reachable_fraction),
+            format!("{} {:.4e} {}", s.measure_name, s.measure, s.measure_unit),
+            bbox.join("<br>"),
+            format!(
+                "{:.3} / {:.3} / {:.3} / {:.3}",
+                c.min, c.median, c.p95, c.max
+            ),
+        ]],
+    );
+    let svgs: String = slices(m, &wm)?.into_iter().map(|(_, s)| s).collect();
+    h.raw(&format!("<div class=\"views\">{svgs}</div>"));
+    let outcome = |st: St| {
+        s.outcomes
+            .iter()
+            .find(|(k, _)| *k == st)
+            .map(|x| x.1)
+            .unwrap_or(0)
+    };
+    h.p("Grey cells: not reachable. Every point falls in one category:");
+    h.table(
+        &["outcome", "points"],
+        &[
+            ("reachable", St::Reachable),
+            ("a solution beyond at least one limit", St::Limits),
+            ("no solution (proven: out of the mechanism's reach)", St::NoSolution),
+            (
+                "solver failed from every start and from the reachable neighbours' solutions (not proven unreachable)",
+                St::SolverFailed,
+            ),
+            ("singular", St::Singular),
+        ]
+        .map(|(k, st)| vec![k.to_string(), outcome(st).to_string()]),
+    );
+    let first: std::collections::HashMap<&str, usize> =
+        s.binding.iter().map(|(k, n)| (k.as_str(), *n)).collect();
+    let rows: Vec<Vec<String>> = s
+        .violated
+        .iter()
+        .map(|(k, n)| {
+            vec![
+                esc(k),
+                n.to_string(),
+                first.get(k.as_str()).copied().unwrap_or(0).to_string(),
+            ]
+        })
+        .collect();
+    h.p(
+        "Points per limit: every limit a point violates is counted (a point beyond two \
+         struts' strokes counts for both); the last column counts the points where it is \
+         the first violated limit in the machine's check order.",
+    );
+    h.table(&["limit", "points violating it", "first violated"], &rows);
+    Ok(())
+}
