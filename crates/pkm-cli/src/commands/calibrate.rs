@@ -225,7 +225,18 @@ pub fn calibrate_run(a: &CalibrateArgs) -> Result<u8> {
             c.identification.rms_after
         )
     };
-    let c = calibrate(&machine, &meas, validation.as_ref(), &opt)?;
+    let spin = crate::progress::spinner(
+        true,
+        &format!(
+            "{{spinner}} identifying the parameters from {} states {{elapsed}}",
+            meas.states.len()
+        ),
+    );
+    let c = calibrate(&machine, &meas, validation.as_ref(), &opt);
+    if let Some(s) = spin {
+        s.finish_and_clear();
+    }
+    let c = c?;
     let toml = identified_machine_file(&machine, &text, &c, &head(&c))?;
     std::fs::create_dir_all(&a.out)
         .with_context(|| format!("cannot create {}", a.out.display()))?;

@@ -24,7 +24,7 @@ use serde_json::json;
 use super::load;
 use crate::io::{refuse_overwrite, write_atomic};
 use crate::poses::{parse_list, pose_from_user};
-use crate::report::plot::{panels_svg, Series};
+use crate::report::plot::{panels_marked, Panel, Series};
 use crate::EXIT_UNREACHABLE;
 
 #[derive(Args)]
@@ -207,39 +207,82 @@ pub fn plots(m: &dyn DynMechanism, o: &MotionRun, title: &str) -> Result<(String
         .collect();
     let col =
         |c: usize| -> Vec<(f64, f64)> { o.traces.rows.iter().map(|r| (r[0], r[c])).collect() };
-    let panel = |names: &[(String, &str)], base: usize, title: &str| -> Result<String> {
-        let kinds = [
-            ("position", ""),
-            ("velocity", "/s"),
-            ("acceleration", "/s²"),
-        ];
-        let unit = names.first().map(|n| n.1).unwrap_or("mm");
-        let panels: Vec<(String, String, Vec<Series>)> = kinds
-            .iter()
-            .enumerate()
-            .map(|(k, (kind, suffix))| {
-                let series = names
-                    .iter()
-                    .enumerate()
-                    .map(|(i, (n, _))| Series {
-                        name: n.clone(),
-                        points: col(base + 3 * i + k),
-                    })
-                    .collect();
-                (kind.to_string(), format!("{kind} [{unit}{suffix}]"), series)
-            })
-            .collect();
-        panels_svg(title, &panels, (620, 760))
+    let marks: Vec<(f64, String)> = o
+        .traces
+        .segments
+        .iter()
+        .skip(1)
+        .map(|(t, l)| (*t, format!("N{l}")))
+        .collect();
+    // Limits per kind (position, velocity, acceleration) of the drawn axes, in user
+    // units; only the actuators have them.
+    let limits = |k: usize| -> Vec<(f64, String)> {
+        let mut v = Vec::new();
+        for x in a {
+            let u = |q: f64| x.quantity.to_user(q);
+            match k {
+                0 => {
+                    v.push((u(x.range.min), format!("{} min", x.name)));
+                    v.push((u(x.range.max), format!("{} max", x.name)));
+                }
+                1 => {
+                    if let Some(m) = x.max_velocity {
+                        v.extend([(u(m), "max".into()), (-u(m), "-max".into())]);
+                    }
+                }
+                _ => {
+                    if let Some(m) = x.max_acceleration {
+                        v.extend([(u(m), "max".into()), (-u(m), "-max".into())]);
+                    }
+                }
+            }
+        }
+        v
     };
+    let panel =
+        |names: &[(String, &str)], base: usize, title: &str, with_limits: bool| -> Result<String> {
+            let kinds = [
+                ("position", ""),
+                ("velocity", "/s"),
+                ("acceleration", "/s²"),
+            ];
+            let unit = names.first().map(|n| n.1).unwrap_or("mm");
+            let series: Vec<Vec<Series>> = (0..3)
+                .map(|k| {
+                    names
+                        .iter()
+                        .enumerate()
+                        .map(|(i, (n, _))| Series {
+                            name: n.clone(),
+                            points: col(base + 3 * i + k),
+                        })
+                        .collect()
+                })
+                .collect();
+            let ylabels: Vec<String> = kinds
+                .iter()
+                .map(|(kind, suffix)| format!("{kind} [{unit}{suffix}]"))
+                .collect();
+            let panels: Vec<Panel> = (0..3)
+                .map(|k| Panel {
+                    title: kinds[k].0,
+                    ylabel: &ylabels[k],
+                    series: &series[k],
+                    limits: if with_limits { limits(k) } else { Vec::new() },
+                })
+                .collect();
+            panels_marked(title, "t [s]", None, &panels, &marks, (700, 760))
+        };
     let anames: Vec<(String, &str)> = a
         .iter()
         .map(|x| (x.name.clone(), x.quantity.unit()))
         .collect();
-    let act = panel(&anames, 1, &format!("{title}: actuators"))?;
+    let act = panel(&anames, 1, &format!("{title}: actuators"), true)?;
     let ser = panel(
         &serial,
         1 + 3 * a.len(),
         &format!("{title}: serial machine"),
+        false,
     )?;
     Ok((act, ser))
 }

@@ -22,16 +22,7 @@ const COLORS: [RGBColor; 8] = [
     RGBColor(127, 127, 127),
 ];
 
-/// Stacked panels sharing the time axis; each panel is (title, y label, curves).
-pub fn panels_svg(
-    title: &str,
-    panels: &[(String, String, Vec<Series>)],
-    size: (u32, u32),
-) -> Result<String> {
-    panels_svg_x(title, "t [s]", panels, size)
-}
-
-/// [`panels_svg`] with another shared x axis.
+/// Stacked panels sharing the x axis `xlabel`; each panel is (title, y label, curves).
 pub fn panels_svg_x(
     title: &str,
     xlabel: &str,
@@ -51,6 +42,43 @@ pub fn panels_svg_span(
     panels: &[(String, String, Vec<Series>)],
     size: (u32, u32),
 ) -> Result<String> {
+    let panels: Vec<Panel> = panels
+        .iter()
+        .map(|(t, y, s)| Panel {
+            title: t.as_str(),
+            ylabel: y.as_str(),
+            series: s.as_slice(),
+            limits: Vec::new(),
+        })
+        .collect();
+    panels_marked(title, xlabel, span, &panels, &[], size)
+}
+
+/// One panel of [`panels_marked`]: title, y label, curves, and horizontal limit lines
+/// (value, name).
+pub struct Panel<'a> {
+    pub title: &'a str,
+    pub ylabel: &'a str,
+    pub series: &'a [Series],
+    pub limits: Vec<(f64, String)>,
+}
+
+/// Width of the legend strip right of each panel (px).
+const LEGEND_W: u32 = 120;
+
+/// Stacked panels sharing the x axis, each with its legend in a strip to its right
+/// (never over the curves), its limits as dashed red lines (drawn when within half the
+/// curves' span of them: a limit far away would flatten the curves), and `marks`
+/// (x, label) as thin vertical lines through every panel (G-code segment starts;
+/// labelled when there are at most 12).
+pub fn panels_marked(
+    title: &str,
+    xlabel: &str,
+    span: Option<(f64, f64)>,
+    panels: &[Panel],
+    marks: &[(f64, String)],
+    size: (u32, u32),
+) -> Result<String> {
     let mut out = String::new();
     {
         let root = SVGBackend::with_string(&mut out, size).into_drawing_area();
@@ -59,14 +87,16 @@ pub fn panels_svg_span(
             .titled(title, ("sans-serif", 18))
             .map_err(|e| anyhow!("{e}"))?;
         let areas = root.split_evenly((panels.len(), 1));
-        for (area, (ptitle, ylabel, series)) in areas.iter().zip(panels) {
+        for (area, p) in areas.iter().zip(panels) {
+            let (w, _) = area.dim_in_pixel();
+            let (plot_area, legend_area) = area.split_horizontally(w.saturating_sub(LEGEND_W));
             let (mut t0, mut t1, mut y0, mut y1) = (
                 f64::INFINITY,
                 f64::NEG_INFINITY,
                 f64::INFINITY,
                 f64::NEG_INFINITY,
             );
-            for s in series {
+            for s in p.series {
                 for &(t, y) in &s.points {
                     t0 = t0.min(t);
                     t1 = t1.max(t);
@@ -83,12 +113,22 @@ pub fn panels_svg_span(
             if t1 - t0 < 1e-12 {
                 t1 = t0 + 1.0;
             }
+            let reach = 0.5 * (y1 - y0).max(1e-9 * y0.abs().max(y1.abs()).max(1.0));
+            let limits: Vec<&(f64, String)> = p
+                .limits
+                .iter()
+                .filter(|(v, _)| v.is_finite() && *v >= y0 - reach && *v <= y1 + reach)
+                .collect();
+            for (v, _) in &limits {
+                y0 = y0.min(*v);
+                y1 = y1.max(*v);
+            }
             // Plotters needs a range that is not too narrow for its tick marks.
             let pad = ((y1 - y0) * 0.08).max(1e-3 * y0.abs().max(y1.abs()).max(1.0));
             let (y0, y1) = (y0 - pad, y1 + pad);
-            let mut chart = ChartBuilder::on(area)
+            let mut chart = ChartBuilder::on(&plot_area)
                 .margin(8)
-                .caption(ptitle, ("sans-serif", 14))
+                .caption(p.title, ("sans-serif", 14))
                 .x_label_area_size(30)
                 .y_label_area_size(64)
                 .build_cartesian_2d(t0..t1, y0..y1)
@@ -96,26 +136,71 @@ pub fn panels_svg_span(
             chart
                 .configure_mesh()
                 .x_desc(xlabel)
-                .y_desc(ylabel.as_str())
+                .y_desc(p.ylabel)
                 .light_line_style(RGBColor(235, 235, 235))
                 .draw()
                 .map_err(|e| anyhow!("{e}"))?;
-            for (i, s) in series.iter().enumerate() {
+            let grey = RGBColor(170, 170, 170);
+            for (x, label) in marks.iter().filter(|m| m.0 >= t0 && m.0 <= t1) {
+                chart
+                    .draw_series(std::iter::once(PathElement::new(
+                        vec![(*x, y0), (*x, y1)],
+                        grey.stroke_width(1),
+                    )))
+                    .map_err(|e| anyhow!("{e}"))?;
+                if marks.len() <= 12 {
+                    chart
+                        .draw_series(std::iter::once(Text::new(
+                            label.clone(),
+                            (*x, y1),
+                            ("sans-serif", 10).into_font().color(&grey),
+                        )))
+                        .map_err(|e| anyhow!("{e}"))?;
+                }
+            }
+            let red = RGBColor(198, 40, 40);
+            for (v, _) in &limits {
+                chart
+                    .draw_series(DashedLineSeries::new(
+                        vec![(t0, *v), (t1, *v)],
+                        6,
+                        4,
+                        red.stroke_width(1),
+                    ))
+                    .map_err(|e| anyhow!("{e}"))?;
+            }
+            for (i, s) in p.series.iter().enumerate() {
                 let c = COLORS[i % COLORS.len()];
                 chart
                     .draw_series(LineSeries::new(s.points.iter().copied(), c.stroke_width(2)))
-                    .map_err(|e| anyhow!("{e}"))?
-                    .label(s.name.clone())
-                    .legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 16, y)], c.stroke_width(2))
-                    });
+                    .map_err(|e| anyhow!("{e}"))?;
             }
-            chart
-                .configure_series_labels()
-                .background_style(WHITE.mix(0.8))
-                .border_style(RGBColor(200, 200, 200))
-                .draw()
-                .map_err(|e| anyhow!("{e}"))?;
+            // The legend, in its own strip.
+            let mut entries: Vec<(String, ShapeStyle)> = p
+                .series
+                .iter()
+                .enumerate()
+                .map(|(i, s)| (s.name.clone(), COLORS[i % COLORS.len()].stroke_width(2)))
+                .collect();
+            if !limits.is_empty() {
+                entries.push(("limit".into(), red.stroke_width(1)));
+            }
+            if !marks.is_empty() {
+                entries.push(("segment start".into(), grey.stroke_width(1)));
+            }
+            for (k, (name, style)) in entries.iter().enumerate() {
+                let y = 34 + 16 * k as i32;
+                legend_area
+                    .draw(&PathElement::new(vec![(4, y), (22, y)], *style))
+                    .map_err(|e| anyhow!("{e}"))?;
+                legend_area
+                    .draw(&Text::new(
+                        name.clone(),
+                        (27, y - 7),
+                        ("sans-serif", 12).into_font(),
+                    ))
+                    .map_err(|e| anyhow!("{e}"))?;
+            }
         }
         root.present().map_err(|e| anyhow!("{e}"))?;
     }

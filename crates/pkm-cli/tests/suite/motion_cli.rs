@@ -303,3 +303,37 @@ fn seed004_move_and_report() {
         assert!(html.contains("Forward workspace (fig. 5)"));
     }
 }
+
+/// Issue 16, item 5: the motion plots mark the G-code segment starts and the stroke
+/// limits a curve comes near, with the legends beside the panels.
+#[test]
+fn motion_plots_mark_segments_and_near_limits() {
+    let dir = tempfile::tempdir().unwrap();
+    let prog = dir.path().join("down.ngc");
+    // Down towards the struts' 300 mm stroke end and back, in three lines.
+    std::fs::write(
+        &prog,
+        "G21 G90\nG1 X0 Y0 Z-360 F3000\nG1 X20 F3000\nG1 X0 Z-290 F3000\n",
+    )
+    .unwrap();
+    let out = dir.path().join("m");
+    let o = pkm()
+        .args([
+            "motion",
+            &path("examples/machines/tripod-seed000.toml"),
+            "--gcode",
+        ])
+        .arg(&prog)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let svg = std::fs::read_to_string(out.join("actuators.svg")).unwrap();
+    assert!(svg.contains("segment start"), "segment marks");
+    assert!(svg.contains("\nlimit\n"), "the 300 mm stroke end is drawn");
+    assert!(svg.contains("N3") && svg.contains("N4"), "segment labels");
+    // The serial machine has no limits to draw.
+    let svg = std::fs::read_to_string(out.join("serial.svg")).unwrap();
+    assert!(!svg.contains("\nlimit\n"));
+}

@@ -79,6 +79,14 @@ impl SampleSink for NoSink {
 pub struct Traces {
     /// The rows.
     pub rows: Vec<Vec<f64>>,
+    /// Where each program line's motion starts: `(t, line)` at every change of the
+    /// line (G-code segment boundaries), at most [`MAX_SEGMENTS`] (beyond, the
+    /// boundaries are too dense to draw and the list is emptied).
+    pub segments: Vec<(f64, u64)>,
+    #[serde(skip)]
+    last_line: Option<u64>,
+    #[serde(skip)]
+    too_many: bool,
     #[serde(skip)]
     stride: u64,
     #[serde(skip)]
@@ -87,7 +95,24 @@ pub struct Traces {
 
 const CAP: usize = 4000;
 
+/// The most segment boundaries [`Traces::segments`] keeps.
+pub const MAX_SEGMENTS: usize = 200;
+
 impl Traces {
+    fn line(&mut self, t: f64, line: Option<u64>) {
+        let Some(l) = line else { return };
+        if self.too_many || self.last_line == Some(l) {
+            return;
+        }
+        self.last_line = Some(l);
+        if self.segments.len() >= MAX_SEGMENTS {
+            self.segments.clear();
+            self.too_many = true;
+        } else {
+            self.segments.push((t, l));
+        }
+    }
+
     fn push(&mut self, row: impl FnOnce() -> Vec<f64>) {
         if self.stride == 0 {
             self.stride = 1;
@@ -183,6 +208,7 @@ impl Visitor for Simulate<'_, '_> {
         let mut sink = |s: &Sample<P, A>| -> Result<()> {
             let act = m.actuators();
             let coords = m.coordinates();
+            traces.line(s.t, s.line);
             traces.push(|| {
                 let mut r = Vec::with_capacity(1 + 3 * A + 3 * serial_idx.len());
                 r.push(s.t);
