@@ -17,7 +17,15 @@ th{background:#f3f3f3}td:first-child,th:first-child{text-align:left}\
 .views{display:flex;flex-wrap:wrap;gap:1em}.views svg{border:1px solid #eee}\
 .ok{color:#1a7f37}.bad{color:#c62828}code{background:#f5f5f5;padding:0 .2em}\
 nav{margin:1em 0}nav a{color:#0b5cad}\
-blockquote.published{border-left:4px solid #0b5cad;background:#f4f8fc;margin:1em 0;padding:.5em 1em}";
+blockquote.published{border-left:4px solid #0b5cad;background:#f4f8fc;margin:1em 0;padding:.5em 1em}\
+#pkm-view3d{border:1px solid #ddd;min-height:520px}#pkm-view3d canvas{display:block;max-width:100%}\
+.view3d-bar{padding:.4em;font-size:.9em;background:#fafafa;border-top:1px solid #eee}\
+.view3d-readout{padding:.2em .4em;font:12px monospace;white-space:pre-wrap}";
+
+/// Collects the page's script errors and console errors in `window.pkmErrors` (run
+/// first, so an error of any later script is seen; the browser test reads it).
+const ERRORS: &str = "<script>window.pkmErrors=[];addEventListener('error',function(e){pkmErrors.push(String(e.message))});\
+(function(){var c=console.error;console.error=function(){pkmErrors.push(Array.prototype.join.call(arguments,' '));c.apply(console,arguments)}})();</script>";
 
 /// Accumulates the body of a page.
 pub struct Html {
@@ -90,7 +98,7 @@ impl Html {
         format!(
             "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\
              <meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\
-             <title>{}</title><style>{STYLE}</style></head><body>\n{}</body></html>\n",
+             <title>{}</title><style>{STYLE}</style>{ERRORS}</head><body>\n{}</body></html>\n",
             esc(&self.title),
             self.body
         )

@@ -13,6 +13,7 @@ mod motion;
 mod p3rp;
 pub mod plot;
 mod references;
+mod view3d;
 mod workspace;
 
 use anyhow::{bail, Context as _, Result};
@@ -105,6 +106,8 @@ pub struct Context {
     pub points: Option<usize>,
     /// Published results shown beside the sections.
     pub comparisons: Vec<Comparison>,
+    /// What the workspace and motion sections leave for the 3D view.
+    pub scene: std::cell::RefCell<view3d::Scene>,
 }
 
 impl Context {
@@ -176,6 +179,7 @@ impl Context {
             feeds,
             points: r.points,
             comparisons: r.comparisons.clone(),
+            scene: Default::default(),
         })
     }
 }
@@ -212,6 +216,12 @@ const SECTIONS: &[Section] = &[
         title: "Drawing",
         shown: |_| true,
         render: machine::drawing_section,
+    },
+    Section {
+        id: "view3d",
+        title: "3D view",
+        shown: |_| true,
+        render: view3d::section,
     },
     Section {
         id: "checks",
@@ -352,14 +362,27 @@ pub fn build(
             ));
         }
     }
+    let mut html = h.finish();
+    if html.contains(view3d::PLACEHOLDER) {
+        let view = view3d::html(machine, ctx).unwrap_or_else(|e| {
+            let msg = format!("{e:#}");
+            failed.push(("view3d", msg.clone()));
+            format!(
+                "<p><span class=\"bad\">This section could not be computed for this machine: {}</span></p>",
+                esc(&msg)
+            )
+        });
+        html = html.replacen(view3d::PLACEHOLDER, &view, 1);
+    }
     if !failed.is_empty() {
-        h.p(&format!(
-            "<span class=\"bad\">Sections that could not be computed: {}.</span>",
+        let note = format!(
+            "<p><span class=\"bad\">Sections that could not be computed: {}.</span></p>\n</body>",
             esc(&failed.iter().map(|f| f.0).collect::<Vec<_>>().join(", "))
-        ));
+        );
+        html = html.replacen("</body>", &note, 1);
     }
     Built {
-        html: h.finish(),
+        html,
         sections: shown.iter().map(|s| s.id).collect(),
         failed,
         missing,

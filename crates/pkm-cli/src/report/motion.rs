@@ -3,7 +3,7 @@
 //! one or several feeds, compared with a serial machine.
 
 use anyhow::Result;
-use pkm::analysis::motion::{run_motion, study_circle, MotionSource, NoSink};
+use pkm::analysis::motion::{run_motion, study_circle, MotionSource};
 use pkm::motion::program::{FeedOptions, ProfileKind};
 use pkm::motion::Sampling;
 use pkm::Machine;
@@ -121,6 +121,7 @@ pub fn section(h: &mut Html, machine: &Machine, ctx: &Context) -> Result<()> {
     let mut last = None;
     let mut last_feed = String::new();
     for feed in &feeds {
+        let mut frames = super::view3d::Frames::default();
         let out = run_motion(
             machine,
             MotionSource::Gcode {
@@ -134,7 +135,7 @@ pub fn section(h: &mut Html, machine: &Machine, ctx: &Context) -> Result<()> {
                 ..Default::default()
             },
             sampling,
-            &mut NoSink,
+            &mut frames,
         );
         let out = match out {
             Ok(o) => o,
@@ -177,6 +178,7 @@ pub fn section(h: &mut Html, machine: &Machine, ctx: &Context) -> Result<()> {
             },
         ]);
         last = Some(out);
+        ctx.scene.borrow_mut().frames = frames;
     }
     let (hv, ha) = (
         format!("peak actuator |v| [{unit}/s]"),

@@ -22,6 +22,19 @@ pub fn section(h: &mut Html, machine: &Machine, ctx: &Context) -> Result<()> {
         false,
     )?;
     let s = summarise(m, &wm);
+    // The 3D view's cloud: reachable tool positions of a map over X, Y, Z.
+    if m.pose_space() != pkm::PoseSpace::Own && wm.axes.iter().map(|a| a.coordinate).eq(0..3) {
+        ctx.scene.borrow_mut().cloud = wm
+            .points
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| p.reachable)
+            .map(|(k, p)| {
+                let x = wm.coords(k);
+                ([x[0], x[1], x[2]], p.condition)
+            })
+            .collect();
+    }
     h.h2_id("workspace", "Workspace and conditioning");
     let names: Vec<String> = wm
         .axes

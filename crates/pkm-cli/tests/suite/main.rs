@@ -3,6 +3,7 @@
 
 mod common;
 
+mod browser;
 mod calibrate_cli;
 mod cli;
 mod errors_cli;

@@ -29,6 +29,7 @@ use crate::error::Result;
 pub const REPORT_SECTIONS: &[&str] = &[
     "machine",
     "drawing",
+    "view3d",
     "checks",
     "workspace",
     "motion",
