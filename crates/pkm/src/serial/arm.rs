@@ -530,9 +530,24 @@ impl Mechanism<6, 6> for SerialArm {
         self.inverse_from(x, &self.home_joints)
     }
 
-    /// [`SerialArm::inverse_from`] `q_start`.
+    /// Newton from `q_start` alone (a neighbour's solution: one descent, no restarts,
+    /// so retrying a point from several neighbours stays cheap); fails with
+    /// [`Error::NotConverged`] when it stalls.
     fn inverse_near(&self, x: &Vector6<f64>, q_start: &Vector6<f64>) -> Result<Vector6<f64>> {
-        self.inverse_from(x, q_start)
+        let target_p = Vector3::new(x[0], x[1], x[2]);
+        let distance = (target_p - self.base_origin).norm();
+        if distance > self.reach * (1.0 + 1e-12) {
+            return self.inverse_from(x, q_start);
+        }
+        let target_r = crate::rotation::rpy_matrix(x[3], x[4], x[5]);
+        match self.newton(&target_p, &target_r, *q_start) {
+            Ok(q) => Ok(self.wrap(q, q_start)),
+            Err((residual, iterations, _)) => Err(Error::NotConverged {
+                solver: "serial robot inverse kinematics (Newton on SE(3) from a neighbour)",
+                iterations,
+                residual,
+            }),
+        }
     }
 
     /// The cube around the base origin whose half side is the links' reach (sum of the

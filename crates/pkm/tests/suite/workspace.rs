@@ -407,3 +407,33 @@ fn position_bounds_hold_every_reachable_tool_point() {
         assert!(inside(b, [x[0], x[1], x[2]]), "{x} outside {b:?}");
     }
 }
+
+/// Issue 16: the UR5 a user writes from its standard DH table was mapped up to
+/// X = 173 mm (a box around home) though it reaches ~850 mm; the default map now holds
+/// its whole reach at the home orientation (the links' sphere bounds it), nothing cut.
+#[test]
+fn a_ur5_map_holds_its_whole_reach() {
+    let m = pkm::Machine::from_path(format!(
+        "{}/../../tests/fixtures/ur5-dh.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let home = m.mechanism().home();
+    let (wm, how) = pkm::analysis::workspace::reach_map(&m, &home, 8, None, &[], &|_| {}).unwrap();
+    let s = wm.summary_of(m.mechanism().coordinates());
+    assert!(how.contains("bound"), "{how}");
+    assert!(s.cut.is_empty(), "{:?}", s.cut);
+    assert!(
+        s.bounding_box[0][1] > 700.0 && s.bounding_box[0][0] < -700.0,
+        "{:?}",
+        s.bounding_box
+    );
+    // Points beyond the links' sphere are proven out of reach, not solver failures.
+    let proven = s
+        .outcomes
+        .iter()
+        .find(|o| o.0 == pkm::workspace::PointStatus::NoSolution)
+        .unwrap()
+        .1;
+    assert!(proven > 0, "{:?}", s.outcomes);
+}
