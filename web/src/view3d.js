@@ -211,6 +211,18 @@ function start() {
   host.append(bar, readout);
   view.frame = show;
 
+  // Follow the page's width (a scrollbar appearing after load, a resized window).
+  const fit = () => {
+    const w = host.clientWidth || width;
+    if (Math.abs(w - renderer.domElement.clientWidth) > 1) {
+      renderer.setSize(w, height);
+      camera.aspect = w / height;
+      camera.updateProjectionMatrix();
+    }
+  };
+  window.addEventListener("resize", fit);
+  fit();
+
   let last = 0;
   const loop = (now) => {
     if (playing && m && m.frames.length && now - last > 40) {
