@@ -37,7 +37,17 @@ pub fn run_atlas(
     velocity: &[f64],
     acceleration: &[f64],
 ) -> Result<DynAtlas> {
-    let rows = pkm::analysis::workspace::atlas(machine, base, axes, velocity, acceleration)?;
+    let bar = crate::progress::spinner(true, "{spinner} {pos} atlas points {elapsed}");
+    let tick = |n: u64| {
+        if let Some(b) = &bar {
+            b.inc(n);
+        }
+    };
+    let rows = pkm::analysis::workspace::atlas(machine, base, axes, velocity, acceleration, &tick);
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    let rows = rows?;
     let acts = machine.mechanism().actuators();
     let user = |v: &[f64]| -> Vec<f64> {
         v.iter()
@@ -68,7 +78,17 @@ pub struct DynForwardMap {
 /// The forward map (`pkm::analysis::workspace::forward_map`), poses in user units.
 pub fn run_forward(machine: &Machine, axes: &[GridAxis], start: &[f64]) -> Result<DynForwardMap> {
     let c = machine.mechanism().coordinates();
-    let points = pkm::analysis::workspace::forward_map(machine, axes, start)?
+    let bar = crate::progress::spinner(true, "{spinner} {pos} forward solutions {elapsed}");
+    let tick = |n: u64| {
+        if let Some(b) = &bar {
+            b.inc(n);
+        }
+    };
+    let points = pkm::analysis::workspace::forward_map(machine, axes, start, &tick);
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    let points = points?
         .into_iter()
         .map(|p| {
             let pose = p.pose.map(|x| {

@@ -149,14 +149,22 @@ impl AtlasRow {
 /// and the actuator velocities and accelerations that pose rates up to `velocity` and
 /// accelerations up to `acceleration` (one per pose coordinate) need
 /// ([`crate::workspace::atlas::atlas`]).
+/// `progress` is told of points done (from several threads).
 pub fn atlas(
     machine: &Machine,
     base: &[f64],
     axes: &[GridAxis],
     velocity: &[f64],
     acceleration: &[f64],
+    progress: &(dyn Fn(u64) + Sync),
 ) -> Result<Vec<AtlasRow>> {
-    struct Job<'a>(&'a [f64], &'a [GridAxis], &'a [f64], &'a [f64]);
+    struct Job<'a>(
+        &'a [f64],
+        &'a [GridAxis],
+        &'a [f64],
+        &'a [f64],
+        &'a (dyn Fn(u64) + Sync),
+    );
     impl Visitor for Job<'_> {
         type Output = Result<Vec<AtlasRow>>;
         fn visit<M: Analysable<P, A>, const P: usize, const A: usize>(self, m: &M) -> Self::Output {
@@ -165,7 +173,7 @@ pub fn atlas(
                 velocity: crate::dynamic::fixed::<P>("velocity capacity", self.2)?,
                 acceleration: crate::dynamic::fixed::<P>("acceleration capacity", self.3)?,
             };
-            let a = crate::workspace::atlas::atlas(m, &base, self.1, &cap, &|_| {})?;
+            let a = crate::workspace::atlas::atlas(m, &base, self.1, &cap, self.4)?;
             Ok(a.points
                 .into_iter()
                 .map(|p| AtlasRow {
@@ -177,7 +185,7 @@ pub fn atlas(
                 .collect())
         }
     }
-    machine.visit(Job(base, axes, velocity, acceleration))
+    machine.visit(Job(base, axes, velocity, acceleration, progress))
 }
 
 /// One point of a forward map (internal units).
@@ -192,20 +200,22 @@ pub struct ForwardPoint {
 }
 
 /// The forward workspace ([`Analysis::ForwardWorkspace`]): forward kinematics over the
-/// grid `axes` of actuator values, every solution started from `start`.
+/// grid `axes` of actuator values, every solution started from `start`; `progress` is
+/// told of points done.
 pub fn forward_map(
     machine: &Machine,
     axes: &[GridAxis],
     start: &[f64],
+    progress: &(dyn Fn(u64) + Sync),
 ) -> Result<Vec<ForwardPoint>> {
     machine.supports(Analysis::ForwardWorkspace)?;
-    struct Job<'a>(&'a [GridAxis], &'a [f64]);
+    struct Job<'a>(&'a [GridAxis], &'a [f64], &'a (dyn Fn(u64) + Sync));
     impl Visitor for Job<'_> {
         type Output = Result<Vec<ForwardPoint>>;
         fn visit<M: Analysable<P, A>, const P: usize, const A: usize>(self, m: &M) -> Self::Output {
             let start = crate::dynamic::fixed::<P>("start pose", self.1)?;
             let base = m.inverse(&start)?;
-            let f = crate::workspace::forward::forward_map(m, &base, self.0, &start, &|_| {})?;
+            let f = crate::workspace::forward::forward_map(m, &base, self.0, &start, self.2)?;
             Ok(f.points
                 .into_iter()
                 .map(|p| ForwardPoint {
@@ -216,7 +226,7 @@ pub fn forward_map(
                 .collect())
         }
     }
-    machine.visit(Job(axes, start))
+    machine.visit(Job(axes, start, progress))
 }
 
 /// The distinct forward solutions (assembly modes) of actuator set `q` found from `n`

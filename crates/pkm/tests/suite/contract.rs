@@ -348,7 +348,7 @@ fn every_example_runs_every_analysis_it_supports() {
                             step: (a.range.max - a.range.min) / 3.0,
                         })
                         .collect();
-                    workspace::forward_map(&machine, &axes, &m.home()).map(|p| {
+                    workspace::forward_map(&machine, &axes, &m.home(), &|_| {}).map(|p| {
                         assert_eq!(p.len(), 4usize.pow(axes.len() as u32), "{name}");
                     })
                 }
