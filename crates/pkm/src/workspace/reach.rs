@@ -222,16 +222,7 @@ pub fn reach_grid<M: Mechanism<P, A>, const P: usize, const A: usize>(
     let mut closed = vec![[bound.is_some(); 2]; idx.len()];
     let mut grown = 0;
     for round in 0..9 {
-        let probe: Vec<GridAxis> = idx
-            .iter()
-            .zip(&ranges)
-            .map(|(&k, &(lo, hi))| GridAxis {
-                coordinate: k,
-                min: lo,
-                max: hi,
-                step: (hi - lo) / PROBE_POINTS as f64,
-            })
-            .collect();
+        let probe = grid_over(&idx, &ranges, &|_, lo, hi| (hi - lo) / PROBE_POINTS as f64);
         let counts: Vec<usize> = probe.iter().map(|a| a.count()).collect();
         let map = map(m, base, &probe, &[], &|_| {})?;
         let mut lo_i = vec![usize::MAX; idx.len()];
@@ -300,18 +291,10 @@ pub fn reach_grid<M: Mechanism<P, A>, const P: usize, const A: usize>(
         method.push_str(", shrunk to the reachable points of a 16-cell probing grid plus one cell");
         break;
     }
-    let axes: Vec<GridAxis> = idx
-        .iter()
-        .zip(&ranges)
-        .map(|(&k, &(lo, hi))| GridAxis {
-            coordinate: k,
-            min: lo,
-            max: hi,
-            step: step
-                .map(|s| q(k).from_user(s))
-                .unwrap_or((hi - lo) / steps.max(1) as f64),
-        })
-        .collect();
+    let axes = grid_over(&idx, &ranges, &|k, lo, hi| {
+        step.map(|s| q(k).from_user(s))
+            .unwrap_or((hi - lo) / steps.max(1) as f64)
+    });
     check_size(&axes)?;
     check_axes(&axes, P)?;
     Ok(ReachGrid {
@@ -319,6 +302,24 @@ pub fn reach_grid<M: Mechanism<P, A>, const P: usize, const A: usize>(
         method,
         closed,
     })
+}
+
+/// Grid axes over coordinates `idx` and their `ranges`, the step of each from
+/// `step_of(coordinate, min, max)`.
+fn grid_over(
+    idx: &[usize],
+    ranges: &[(f64, f64)],
+    step_of: &dyn Fn(usize, f64, f64) -> f64,
+) -> Vec<GridAxis> {
+    idx.iter()
+        .zip(ranges)
+        .map(|(&k, &(lo, hi))| GridAxis {
+            coordinate: k,
+            min: lo,
+            max: hi,
+            step: step_of(k, lo, hi),
+        })
+        .collect()
 }
 
 /// [`map`] over the machine's whole reach: the grid of [`reach_grid`], then, while
