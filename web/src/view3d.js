@@ -240,25 +240,37 @@ function start() {
     // What a browser test checks: the canvas is not blank (pixels drawn into a 2D
     // canvas), the animation moves the machine, and the objects are there.
     if (m && m.frames.length) show(Math.floor(m.frames.length / 2));
+    // The share of the canvas drawn (not white) and the colours used, sampled at
+    // 200 x 120: with everything shown, then with the machine alone.
+    const sample = () => {
+      renderer.render(scene, camera);
+      const c = document.createElement("canvas");
+      c.width = 200;
+      c.height = 120;
+      const g = c.getContext("2d");
+      g.drawImage(renderer.domElement, 0, 0, 200, 120);
+      const px = g.getImageData(0, 0, 200, 120).data;
+      let drawn = 0;
+      const colours = new Set();
+      for (let i = 0; i < px.length; i += 4) {
+        if (px[i] < 245 || px[i + 1] < 245 || px[i + 2] < 245) drawn++;
+        colours.add(((px[i] >> 3) << 10) | ((px[i + 1] >> 3) << 5) | (px[i + 2] >> 3));
+      }
+      return { drawn: drawn / (200 * 120), colours: colours.size };
+    };
+    const all = sample();
+    const layers = [cloud, path, axes].filter(Boolean);
+    layers.forEach((o) => { o.visible = false; });
+    const alone = sample();
+    layers.forEach((o) => { o.visible = true; });
     renderer.render(scene, camera);
-    const c = document.createElement("canvas");
-    c.width = 200;
-    c.height = 120;
-    const g = c.getContext("2d");
-    g.drawImage(renderer.domElement, 0, 0, 200, 120);
-    const px = g.getImageData(0, 0, 200, 120).data;
-    let drawn = 0;
-    const colours = new Set();
-    for (let i = 0; i < px.length; i += 4) {
-      if (px[i] < 245 || px[i + 1] < 245 || px[i + 2] < 245) drawn++;
-      colours.add(((px[i] >> 3) << 10) | ((px[i + 1] >> 3) << 5) | (px[i + 2] >> 3));
-    }
     selfTest({
       webgl: true,
       objects: view.objects,
       names: view.names,
-      drawn: drawn / (200 * 120),
-      colours: colours.size,
+      drawn: all.drawn,
+      colours: all.colours,
+      machine_drawn: alone.drawn,
       readout: readout.textContent,
     });
   }

@@ -357,10 +357,7 @@ fn clearance_request(
                         a.path_rate
                     );
                 }
-                let mut feed = pkm::motion::program::FeedOptions::default();
-                if let Some(r) = machine.rapid {
-                    feed.rapid = r;
-                }
+                let feed = pkm::analysis::motion::feed_options(machine);
                 Some(pkm::analysis::clearance_path::PathRequest {
                     program: std::fs::read_to_string(p)
                         .with_context(|| format!("cannot read {}", p.display()))?,

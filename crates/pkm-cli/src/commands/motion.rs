@@ -322,8 +322,7 @@ pub fn run(a: &MotionArgs) -> Result<u8> {
         rapid: a
             .rapid
             .map(|r| r / 60.0)
-            .or(machine.rapid)
-            .unwrap_or(10_000.0 / 60.0),
+            .unwrap_or(pkm::analysis::motion::feed_options(&machine).rapid),
         feed: a.feed.map(|f| f / 60.0),
         max_samples: a.max_samples,
     };

@@ -63,10 +63,7 @@ pub struct WorkspaceArgs {
     pub json: bool,
 }
 
-/// The map over `bounds` (user units, min,max per axis; [`pkm::workspace::default_grid`])
-/// or, without bounds, over the machine's whole reach
-/// ([`pkm::analysis::workspace::reach_map`], 40 cells per axis), with a progress bar
-/// when `progress`; and how its grid was found.
+/// [`pkm::analysis::workspace::map`] with a spinner when `progress`.
 pub fn run_map(
     machine: &Machine,
     base: &[f64],
@@ -81,22 +78,11 @@ pub fn run_map(
             b.inc(n);
         }
     };
-    let r = match bounds {
-        Some(_) => {
-            let axes = pkm::workspace::default_grid(machine.mechanism(), base, bounds, step)?;
-            let wm = pkm::analysis::workspace::grid(machine, base, &axes, orientations, &tick)?;
-            (wm, "the given bounds".to_string())
-        }
-        None => {
-            let (wm, how) =
-                pkm::analysis::workspace::reach_map(machine, base, 40, step, orientations, &tick)?;
-            (wm, format!("the machine's reach: {how}"))
-        }
-    };
+    let r = pkm::analysis::workspace::map(machine, base, bounds, step, orientations, &tick);
     if let Some(b) = bar {
         b.finish_and_clear();
     }
-    Ok(r)
+    Ok(r?)
 }
 
 /// Summary with user units.
@@ -480,21 +466,15 @@ pub fn run(a: &WorkspaceArgs) -> Result<u8> {
             s.condition.min, s.condition.median, s.condition.p95, s.condition.max
         );
         println!("grid       over {grid_bounds}");
-        let outcome = |st: pkm::workspace::PointStatus| {
-            s.outcomes
-                .iter()
-                .find(|(k, _)| *k == st)
-                .map(|x| x.1)
-                .unwrap_or(0)
-        };
         use pkm::workspace::PointStatus as St;
         println!(
-            "outcomes   {} reachable, {} beyond a limit, {} without solution, {} solver failures, {} singular",
-            outcome(St::Reachable),
-            outcome(St::Limits),
-            outcome(St::NoSolution),
-            outcome(St::SolverFailed),
-            outcome(St::Singular)
+            "outcomes   {} reachable, {} beyond a limit, {} without solution, {} solver failures, {} singular, {} in separate regions",
+            s.outcome(St::Reachable),
+            s.outcome(St::Limits),
+            s.outcome(St::NoSolution),
+            s.outcome(St::SolverFailed),
+            s.outcome(St::Singular),
+            s.outcome(St::Separate)
         );
         for (k, n) in s.binding.iter().take(8) {
             println!("first      {n:>8} x {k}");

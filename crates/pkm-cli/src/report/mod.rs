@@ -131,10 +131,15 @@ impl Context {
             Some(b) => Some(parse_list(b, "--bounds")?),
             None => r.bounds.clone(),
         };
+        // The file's start, feeds and sampling belong to the file's program: a program
+        // from the command line runs from home at its own feeds unless told otherwise.
+        let own_program = a.gcode.is_some();
         let from = match (&a.from, &r.from) {
             (Some(s), _) => Some(user_pose(&parse_list(s, "--from")?)?),
-            (None, Some(v)) => Some(user_pose(v).context("the machine file's [report] from")?),
-            (None, None) => None,
+            (None, Some(v)) if !own_program => {
+                Some(user_pose(v).context("the machine file's [report] from")?)
+            }
+            _ => None,
         };
         let feeds = match &a.feeds {
             Some(f) => {
@@ -144,6 +149,7 @@ impl Context {
                 }
                 v
             }
+            None if own_program => Vec::new(),
             None => r.feeds.clone(),
         };
         let program = match (&a.gcode, &r.gcode) {
@@ -177,7 +183,7 @@ impl Context {
             program,
             from,
             feeds,
-            points: r.points,
+            points: if own_program { None } else { r.points },
             comparisons: r.comparisons.clone(),
             scene: Default::default(),
         })

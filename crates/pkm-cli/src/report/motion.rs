@@ -3,7 +3,7 @@
 //! one or several feeds, compared with a serial machine.
 
 use anyhow::Result;
-use pkm::analysis::motion::{run_motion, study_circle, MotionSource};
+use pkm::analysis::motion::{feed_options, run_motion, study_circle, MotionSource};
 use pkm::motion::program::{FeedOptions, ProfileKind};
 use pkm::motion::Sampling;
 use pkm::Machine;
@@ -46,15 +46,7 @@ pub fn section(h: &mut Html, machine: &Machine, ctx: &Context) -> Result<()> {
         }
         None => {
             let c = study_circle(machine, &ctx.pose, CIRCLE_FRACTION)?;
-            // A round radius: three significant digits.
-            let digits = (2 - c.radius.log10().floor() as i32).max(0) as usize;
-            let r: f64 = format!("{:.digits$}", c.radius).parse()?;
-            let mut from = c.centre.clone();
-            from[0] += r;
-            let program = format!(
-                "G17 G21 G90 G91.1\nG3 X{} Y{} I{} J0 F{CIRCLE_FEED}\n",
-                from[0], from[1], -r
-            );
+            let (r, program, from) = (c.radius, c.program(CIRCLE_FEED), c.start());
             (
                 program,
                 from,
@@ -131,8 +123,7 @@ pub fn section(h: &mut Html, machine: &Machine, ctx: &Context) -> Result<()> {
             &FeedOptions {
                 profile: ProfileKind::Constant,
                 feed: feed.map(|f| f / 60.0),
-                rapid: machine.rapid.unwrap_or(FeedOptions::default().rapid),
-                ..Default::default()
+                ..feed_options(machine)
             },
             sampling,
             &mut frames,

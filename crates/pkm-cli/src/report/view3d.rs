@@ -7,7 +7,7 @@
 //! (`build.rs`) and inlined: the report stays one file that opens offline.
 
 use anyhow::Result;
-use pkm::analysis::motion::{SampleRow, SampleSink};
+use pkm::analysis::motion::{Decimated, SampleRow, SampleSink};
 use pkm::Machine;
 use serde_json::json;
 
@@ -35,31 +35,19 @@ pub struct Scene {
     pub frames: Frames,
 }
 
-/// A sink keeping at most [`MAX_FRAMES`] evenly spaced samples of a run (the stride
-/// doubles when full).
-#[derive(Default)]
-pub struct Frames {
-    /// `(t, pose, actuators)`.
-    pub rows: Vec<(f64, Vec<f64>, Vec<f64>)>,
-    stride: u64,
-    seen: u64,
+/// A sink keeping at most [`MAX_FRAMES`] evenly spaced samples of a run
+/// ([`Decimated`]): `(t, pose, actuators)`.
+pub struct Frames(pub Decimated<(f64, Vec<f64>, Vec<f64>)>);
+
+impl Default for Frames {
+    fn default() -> Self {
+        Frames(Decimated::new(MAX_FRAMES))
+    }
 }
 
 impl SampleSink for Frames {
     fn sample(&mut self, s: &SampleRow) -> pkm::Result<()> {
-        if self.stride == 0 {
-            self.stride = 1;
-        }
-        if self.seen.is_multiple_of(self.stride) {
-            if self.rows.len() >= MAX_FRAMES {
-                self.rows = self.rows.drain(..).step_by(2).collect();
-                self.stride *= 2;
-            }
-            if self.seen.is_multiple_of(self.stride) {
-                self.rows.push((s.t, s.x.to_vec(), s.q.to_vec()));
-            }
-        }
-        self.seen += 1;
+        self.0.push(|| (s.t, s.x.to_vec(), s.q.to_vec()));
         Ok(())
     }
 }
@@ -124,7 +112,7 @@ pub fn html(machine: &Machine, ctx: &Context) -> Result<String> {
     let data = serde_json::to_string(&data)?.replace("</", "<\\/");
     let notes = [
         (!scene.cloud.is_empty()).then_some("the workspace map's reachable points, blue where the condition number is low, red where high"),
-        (!scene.frames.rows.is_empty()).then_some("the motion section's path, animated (play, or drag the time slider)"),
+        (!scene.frames.0.is_empty()).then_some("the motion section's path, animated (play, or drag the time slider)"),
     ]
     .into_iter()
     .flatten()
@@ -144,14 +132,14 @@ pub fn html(machine: &Machine, ctx: &Context) -> Result<String> {
 /// The animation: per frame the skeleton's point positions, the tool path, the
 /// actuator values in user units.
 fn motion_json(machine: &Machine, frames: &Frames) -> Result<serde_json::Value> {
-    if frames.rows.is_empty() {
+    if frames.0.is_empty() {
         return Ok(serde_json::Value::Null);
     }
     let m = machine.mechanism();
     let r = |v: f64| (v * 100.0).round() / 100.0;
     let mut flat = Vec::new();
     let mut path = Vec::new();
-    for (_, x, _) in &frames.rows {
+    for (_, x, _) in frames.0.iter() {
         let sk = m.skeleton(x)?;
         flat.push(
             sk.points
@@ -173,11 +161,11 @@ fn motion_json(machine: &Machine, frames: &Frames) -> Result<serde_json::Value> 
         .enumerate()
         .map(|(i, a)| {
             json!({"name": a.name, "unit": a.quantity.unit(),
-                   "values": frames.rows.iter().map(|f| (a.quantity.to_user(f.2[i]) * 1e4).round() / 1e4).collect::<Vec<f64>>()})
+                   "values": frames.0.iter().map(|f| (a.quantity.to_user(f.2[i]) * 1e4).round() / 1e4).collect::<Vec<f64>>()})
         })
         .collect();
     Ok(json!({
-        "t": frames.rows.iter().map(|f| (f.0 * 1e4).round() / 1e4).collect::<Vec<f64>>(),
+        "t": frames.0.iter().map(|f| (f.0 * 1e4).round() / 1e4).collect::<Vec<f64>>(),
         "frames": flat,
         "path": path,
         "actuators": actuators,

@@ -57,8 +57,9 @@ pub fn section(h: &mut Html, machine: &Machine, ctx: &Context) -> Result<()> {
         .collect();
     h.p(&format!(
         "A grid of {} points over {} ({}), bounds from {}; the other coordinates at {}. \
-         A point is reachable when inverse kinematics has a solution within every limit and \
-         the Jacobian is regular. The condition number is that of the Jacobian's driven \
+         A point is reachable when inverse kinematics has a solution within every limit, \
+         the Jacobian is regular, and the region of the pose reaches it through such \
+         points. The condition number is that of the Jacobian's driven \
          columns, rotations scaled by a characteristic length of {:.1} mm (1 = isotropic).",
         s.points,
         names.join(", "),
@@ -100,13 +101,6 @@ pub fn section(h: &mut Html, machine: &Machine, ctx: &Context) -> Result<()> {
     );
     let svgs: String = slices(m, &wm)?.into_iter().map(|(_, s)| s).collect();
     h.raw(&format!("<div class=\"views\">{svgs}</div>"));
-    let outcome = |st: St| {
-        s.outcomes
-            .iter()
-            .find(|(k, _)| *k == st)
-            .map(|x| x.1)
-            .unwrap_or(0)
-    };
     h.p("Grey cells: not reachable. Every point falls in one category:");
     h.table(
         &["outcome", "points"],
@@ -119,8 +113,12 @@ pub fn section(h: &mut Html, machine: &Machine, ctx: &Context) -> Result<()> {
                 St::SolverFailed,
             ),
             ("singular", St::Singular),
+            (
+                "within every limit but cut off from the region of the pose by points that are not (another assembly mode, or reached only by turning the tool on the way)",
+                St::Separate,
+            ),
         ]
-        .map(|(k, st)| vec![k.to_string(), outcome(st).to_string()]),
+        .map(|(k, st)| vec![k.to_string(), s.outcome(st).to_string()]),
     );
     let first: std::collections::HashMap<&str, usize> =
         s.binding.iter().map(|(k, n)| (k.as_str(), *n)).collect();

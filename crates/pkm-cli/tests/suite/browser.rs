@@ -149,9 +149,13 @@ fn the_3d_view_works_in_a_real_browser() {
     ] {
         assert!(names.contains(&n), "{n}: {names:?}");
     }
-    // Not blank: a good part of the canvas drawn, in many colours (the cloud's ramp).
-    assert!(t["drawn"].as_f64().unwrap() > 0.02, "{t}");
+    // Not blank: the canvas is drawn, in many colours (the cloud's ramp), and the
+    // machine alone (cloud, path and axes hidden) covers part of it. Measured at this
+    // window size: 5.2 % drawn in 287 colours, the machine alone 2.1 %; a blank canvas
+    // is 0 % in one colour. The bounds are about half the measured shares.
+    assert!(t["drawn"].as_f64().unwrap() > 0.025, "{t}");
     assert!(t["colours"].as_u64().unwrap() > 20, "{t}");
+    assert!(t["machine_drawn"].as_f64().unwrap() > 0.01, "{t}");
     // The animation moved the machine to the middle of the path and shows its struts.
     assert!(t["readout"].as_str().unwrap().contains("L1 "), "{t}");
     // A screenshot of the whole page.

@@ -72,13 +72,64 @@ impl SampleSink for NoSink {
     }
 }
 
+/// At most `cap` evenly spaced items of a stream of unknown length, in flat memory:
+/// every item is kept until `cap`, then every second one is dropped and from there
+/// only every second item kept, and so on (the stride doubles each time it fills).
+#[derive(Debug, Clone)]
+pub struct Decimated<T> {
+    rows: Vec<T>,
+    cap: usize,
+    stride: u64,
+    seen: u64,
+}
+
+impl<T> Decimated<T> {
+    /// Keeps at most `cap` items (at least 2).
+    pub fn new(cap: usize) -> Self {
+        Decimated {
+            rows: Vec::new(),
+            cap: cap.max(2),
+            stride: 1,
+            seen: 0,
+        }
+    }
+
+    /// The next item of the stream; `item` is called only when it is kept.
+    pub fn push(&mut self, item: impl FnOnce() -> T) {
+        if self.seen.is_multiple_of(self.stride) {
+            if self.rows.len() >= self.cap {
+                let kept: Vec<T> = self.rows.drain(..).step_by(2).collect();
+                self.rows = kept;
+                self.stride *= 2;
+            }
+            if self.seen.is_multiple_of(self.stride) {
+                self.rows.push(item());
+            }
+        }
+        self.seen += 1;
+    }
+}
+
+impl<T> std::ops::Deref for Decimated<T> {
+    type Target = [T];
+    fn deref(&self) -> &[T] {
+        &self.rows
+    }
+}
+
+impl<T: serde::Serialize> serde::Serialize for Decimated<T> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        self.rows.serialize(s)
+    }
+}
+
 /// Decimated time series kept for plots (at most 4000 rows, flat memory): per row
 /// `t`, then per actuator `q, q', q''`, then per serial axis `x, x', x''`, in user
 /// units (mm, deg).
-#[derive(Debug, Clone, Default, serde::Serialize)]
+#[derive(Debug, Clone, serde::Serialize)]
 pub struct Traces {
     /// The rows.
-    pub rows: Vec<Vec<f64>>,
+    pub rows: Decimated<Vec<f64>>,
     /// Where each program line's motion starts: `(t, line)` at every change of the
     /// line (G-code segment boundaries), at most [`MAX_SEGMENTS`] (beyond, the
     /// boundaries are too dense to draw and the list is emptied).
@@ -87,10 +138,17 @@ pub struct Traces {
     last_line: Option<u64>,
     #[serde(skip)]
     too_many: bool,
-    #[serde(skip)]
-    stride: u64,
-    #[serde(skip)]
-    seen: u64,
+}
+
+impl Default for Traces {
+    fn default() -> Self {
+        Traces {
+            rows: Decimated::new(CAP),
+            segments: Vec::new(),
+            last_line: None,
+            too_many: false,
+        }
+    }
 }
 
 const CAP: usize = 4000;
@@ -111,23 +169,6 @@ impl Traces {
         } else {
             self.segments.push((t, l));
         }
-    }
-
-    fn push(&mut self, row: impl FnOnce() -> Vec<f64>) {
-        if self.stride == 0 {
-            self.stride = 1;
-        }
-        if self.seen.is_multiple_of(self.stride) {
-            if self.rows.len() >= CAP {
-                let kept: Vec<Vec<f64>> = self.rows.drain(..).step_by(2).collect();
-                self.rows = kept;
-                self.stride *= 2;
-            }
-            if self.seen.is_multiple_of(self.stride) {
-                self.rows.push(row());
-            }
-        }
-        self.seen += 1;
     }
 }
 
@@ -209,7 +250,7 @@ impl Visitor for Simulate<'_, '_> {
             let act = m.actuators();
             let coords = m.coordinates();
             traces.line(s.t, s.line);
-            traces.push(|| {
+            traces.rows.push(|| {
                 let mut r = Vec::with_capacity(1 + 3 * A + 3 * serial_idx.len());
                 r.push(s.t);
                 for i in 0..A {
@@ -342,13 +383,51 @@ pub struct StudyCircle {
     pub moved: bool,
 }
 
+impl StudyCircle {
+    /// Where the circle starts: the centre moved by the radius along X.
+    pub fn start(&self) -> Vec<f64> {
+        let mut x = self.centre.clone();
+        x[0] += self.radius;
+        x
+    }
+
+    /// The circle as a G-code program to run from [`StudyCircle::start`]: one full
+    /// counter-clockwise turn (G3 with incremental centre I) at `feed` mm/min.
+    pub fn program(&self, feed: f64) -> String {
+        let s = self.start();
+        format!(
+            "G17 G21 G90 G91.1\nG3 X{} Y{} I{} J0 F{feed}\n",
+            s[0], s[1], -self.radius
+        )
+    }
+}
+
+/// The feed settings of a run on `machine`: the defaults with the rapid rate of its
+/// file's `[motion]` table.
+pub fn feed_options(machine: &Machine) -> FeedOptions {
+    let d = FeedOptions::default();
+    FeedOptions {
+        rapid: machine.rapid.unwrap_or(d.rapid),
+        ..d
+    }
+}
+
+/// Three significant digits (a radius a reader can take in).
+fn round3(v: f64) -> f64 {
+    if v <= 0.0 || !v.is_finite() {
+        return v;
+    }
+    let scale = 10f64.powi(2 - v.log10().floor() as i32);
+    (v * scale).floor() / scale
+}
+
 /// Points tested on a circle by [`study_circle`].
 const CIRCLE_POINTS: usize = 72;
 
 /// The circle of a motion study scaled to the machine's reach around `centre`: the
 /// largest radius (doubling from 1 mm, then 20 bisections) for which all 72 points of
 /// the horizontal circle through `centre`, at its orientation, are within every limit,
-/// times `fraction` (a margin). When no circle of 1 mm fits around `centre` (a pose on
+/// times `fraction` (a margin), rounded down to three significant digits. When no circle of 1 mm fits around `centre` (a pose on
 /// the edge of the reach), the centre is the one of the twelve best-conditioned
 /// reachable points of a 9-point-per-axis map of the reach that takes the largest
 /// circle. Machines whose pose is X, Y, Z[, A, B, C] only; fails with
@@ -429,7 +508,7 @@ pub fn study_circle(machine: &Machine, centre: &[f64], fraction: f64) -> Result<
             };
             Ok(StudyCircle {
                 centre: c.as_slice().to_vec(),
-                radius: lo * self.1,
+                radius: round3(lo * self.1),
                 largest: lo,
                 moved: c != c0,
             })

@@ -102,6 +102,29 @@ pub fn reach_map(
     })
 }
 
+/// The workspace map a user asks for: over `bounds` (user units, min,max per axis;
+/// [`crate::workspace::default_grid`]) when given, else over the machine's whole reach
+/// ([`reach_map`], 40 cells per axis); `step` (user units) or 1/40 of each range. With
+/// how the grid's bounds were found.
+pub fn map(
+    machine: &Machine,
+    base: &[f64],
+    bounds: Option<&[f64]>,
+    step: Option<f64>,
+    orientations: &[[f64; 3]],
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<(WorkspaceMap, String)> {
+    match bounds {
+        Some(b) => {
+            let axes = crate::workspace::default_grid(machine.mechanism(), base, Some(b), step)?;
+            let wm = grid(machine, base, &axes, orientations, progress)?;
+            Ok((wm, "the given bounds".into()))
+        }
+        None => reach_map(machine, base, 40, step, orientations, progress)
+            .map(|(wm, how)| (wm, format!("the machine's reach: {how}"))),
+    }
+}
+
 /// The largest reachable tilt (rad) per azimuth of `azimuths` at pose `x`, searched up
 /// to `max_tilt` (spatial machines).
 pub fn reachable_tilt(

@@ -52,6 +52,22 @@ impl GridAxis {
     pub fn value(&self, i: usize) -> f64 {
         self.min + self.step * i as f64
     }
+
+    /// Whether the axis, over a coordinate of quantity `q`, is an angle whose values
+    /// go round a whole turn (it has no faces a region could continue beyond).
+    pub fn covers_turn(&self, q: crate::units::Quantity) -> bool {
+        q == crate::units::Quantity::Angle
+            && self.max - self.min + self.step >= std::f64::consts::TAU - 1e-9
+    }
+}
+
+/// The per-axis indices of the grid point with flat index `k` (row-major over axes of
+/// `counts` values), into `idx`.
+pub(crate) fn unflatten(counts: &[usize], mut k: usize, idx: &mut [usize]) {
+    for (i, n) in counts.iter().enumerate().rev() {
+        idx[i] = k % n;
+        k /= n;
+    }
 }
 
 /// What a grid point's inverse kinematics and limits found: the categories a map
@@ -71,6 +87,11 @@ pub enum PointStatus {
     SolverFailed,
     /// A solution at a singular configuration (the Jacobian has no inverse).
     Singular,
+    /// A solution within every limit, but cut off from the base pose's region by
+    /// points that are not: another assembly mode (a platform on the far side of its
+    /// base, which it cannot reach without crossing a singular configuration), or a
+    /// region the tool reaches only by changing its orientation on the way.
+    Separate,
 }
 
 /// What one grid point found.
@@ -405,6 +426,7 @@ where
             tally.merge(t);
         }
     }
+    keep_connected(&mut points, &counts, &nearest_index(base, axes, &counts));
     Ok(WorkspaceMap {
         axes: axes.to_vec(),
         base: base.as_slice().to_vec(),
@@ -413,6 +435,68 @@ where
         violated: tally.sorted(),
         closed: vec![[false; 2]; axes.len()],
     })
+}
+
+/// The per-axis grid indices nearest the pose `base`.
+fn nearest_index<const N: usize>(
+    base: &SVector<f64, N>,
+    axes: &[GridAxis],
+    counts: &[usize],
+) -> Vec<usize> {
+    axes.iter()
+        .zip(counts)
+        .map(|(a, &n)| {
+            let i = ((base[a.coordinate] - a.min) / a.step).round();
+            (i.max(0.0) as usize).min(n - 1)
+        })
+        .collect()
+}
+
+/// Marks [`PointStatus::Separate`] every reachable point not connected (through
+/// reachable grid neighbours, one step along one axis) to the region of the grid point
+/// `start`, or, when that point is not reachable, of the reachable point nearest it
+/// (fewest steps; none reachable: nothing to do). The map then measures the region the
+/// machine can move through at this orientation, not a mirror assembly mode beyond a
+/// singular configuration.
+fn keep_connected(points: &mut [PointResult], counts: &[usize], start: &[usize]) {
+    let mut idx = vec![0; counts.len()];
+    let flat = |i: &[usize]| i.iter().zip(counts).fold(0, |k, (i, n)| k * n + i);
+    let seed = if points[flat(start)].reachable {
+        flat(start)
+    } else {
+        let steps = |k: usize, idx: &mut Vec<usize>| {
+            unflatten(counts, k, idx);
+            idx.iter()
+                .zip(start)
+                .map(|(a, b)| a.abs_diff(*b))
+                .sum::<usize>()
+        };
+        match (0..points.len())
+            .filter(|&k| points[k].reachable)
+            .min_by_key(|&k| steps(k, &mut idx))
+        {
+            Some(k) => k,
+            None => return,
+        }
+    };
+    let mut seen = vec![false; points.len()];
+    let mut stack = vec![seed];
+    seen[seed] = true;
+    while let Some(k) = stack.pop() {
+        for nb in neighbours(counts, k) {
+            if !seen[nb] && points[nb].reachable {
+                seen[nb] = true;
+                stack.push(nb);
+            }
+        }
+    }
+    for (p, s) in points.iter_mut().zip(seen) {
+        if p.reachable && !s {
+            p.reachable = false;
+            p.status = PointStatus::Separate;
+            p.binding = Some("separate region (not connected to the base pose)".into());
+        }
+    }
 }
 
 /// Points per violated limit, each point counted once per limit it violates.
@@ -450,10 +534,11 @@ impl Tally {
 
 /// Flat indices of the grid neighbours (one step along one axis) of point `k`.
 fn neighbours(counts: &[usize], k: usize) -> Vec<usize> {
+    let mut idx = vec![0; counts.len()];
+    unflatten(counts, k, &mut idx);
     let mut out = Vec::new();
     let mut stride = 1;
-    for &n in counts.iter().rev() {
-        let i = (k / stride) % n;
+    for (&n, &i) in counts.iter().zip(&idx).rev() {
         if i > 0 {
             out.push(k - stride);
         }

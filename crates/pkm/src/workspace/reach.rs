@@ -213,8 +213,6 @@ pub fn reach_grid<M: Mechanism<P, A>, const P: usize, const A: usize>(
             .collect(),
     };
     let turn = std::f64::consts::TAU;
-    let full_turn =
-        |k: usize, (lo, hi): (f64, f64)| q(k) == Quantity::Angle && hi - lo >= turn - 1e-9;
     let mut method = match bound {
         Some(_) => "the type's bound on the tool position".to_string(),
         None => "the default span".to_string(),
@@ -223,49 +221,30 @@ pub fn reach_grid<M: Mechanism<P, A>, const P: usize, const A: usize>(
     let mut grown = 0;
     for round in 0..9 {
         let probe = grid_over(&idx, &ranges, &|_, lo, hi| (hi - lo) / PROBE_POINTS as f64);
-        let counts: Vec<usize> = probe.iter().map(|a| a.count()).collect();
         let map = map(m, base, &probe, &[], &|_| {})?;
-        let mut lo_i = vec![usize::MAX; idx.len()];
-        let mut hi_i = vec![0; idx.len()];
-        let mut any = false;
-        for (k, p) in map.points.iter().enumerate() {
-            if !p.reachable {
-                continue;
-            }
-            any = true;
-            let mut rem = k;
-            for i in (0..idx.len()).rev() {
-                let j = rem % counts[i];
-                rem /= counts[i];
-                lo_i[i] = lo_i[i].min(j);
-                hi_i[i] = hi_i[i].max(j);
-            }
-        }
-        if !any {
+        let Some(ext) = map.reachable_extent() else {
             method.push_str(" (no reachable point found by a probing grid: kept whole)");
             break;
-        }
+        };
         let mut grew = false;
         if bound.is_none() && round < 8 {
-            for (i, &k) in idx.iter().enumerate() {
-                let (lo, hi) = ranges[i];
-                if full_turn(k, (lo, hi)) {
+            for (i, a) in probe.iter().enumerate() {
+                let k = a.coordinate;
+                if a.covers_turn(q(k)) {
                     continue;
                 }
+                let (lo, hi) = ranges[i];
                 let half = 0.5 * (hi - lo);
-                let cap = |v: f64, c: f64| {
-                    if q(k) == Quantity::Angle {
-                        v.clamp(c - 0.5 * turn, c + 0.5 * turn)
-                    } else {
-                        v
-                    }
+                // Angles grow up to half a turn either side of the base.
+                let cap = |v: f64| match q(k) {
+                    Quantity::Angle => v.clamp(base[k] - 0.5 * turn, base[k] + 0.5 * turn),
+                    Quantity::Length => v,
                 };
-                let mid = base[k];
-                if lo_i[i] == 0 {
-                    ranges[i].0 = cap(lo - half, mid);
+                if ext[i][0] == 0 {
+                    ranges[i].0 = cap(lo - half);
                 }
-                if hi_i[i] + 1 == counts[i] {
-                    ranges[i].1 = cap(hi + half, mid);
+                if ext[i][1] + 1 == a.count() {
+                    ranges[i].1 = cap(hi + half);
                 }
                 grew |= ranges[i] != (lo, hi);
             }
@@ -275,14 +254,14 @@ pub fn reach_grid<M: Mechanism<P, A>, const P: usize, const A: usize>(
             continue;
         }
         for (i, a) in probe.iter().enumerate() {
-            if full_turn(idx[i], ranges[i]) {
+            if a.covers_turn(q(a.coordinate)) {
                 continue;
             }
             // A face moved in is no longer the type's bound.
-            closed[i][0] &= lo_i[i] == 0;
-            closed[i][1] &= hi_i[i] + 1 == counts[i];
-            let lo = a.value(lo_i[i].saturating_sub(1));
-            let hi = a.value((hi_i[i] + 1).min(counts[i] - 1));
+            closed[i][0] &= ext[i][0] == 0;
+            closed[i][1] &= ext[i][1] + 1 == a.count();
+            let lo = a.value(ext[i][0].saturating_sub(1));
+            let hi = a.value((ext[i][1] + 1).min(a.count() - 1));
             ranges[i] = (lo, hi.max(lo + a.step));
         }
         if grown > 0 {
@@ -338,31 +317,33 @@ pub fn map_reach<M: Mechanism<P, A>, const P: usize, const A: usize>(
     let g = reach_grid(m, base, steps, step)?;
     let mut axes = g.axes;
     let mut method = g.method;
-    let coordinates: Vec<crate::mechanism::Coordinate> = m.coordinates().to_vec();
     let mut round = 0;
     loop {
         let mut wm = map(m, base, &axes, orientations, progress)?;
         wm.closed = g.closed.clone();
-        let cut = wm.summary_of(&coordinates).cut;
-        if cut.is_empty() || round == 3 {
+        let open = wm.open_faces(m.coordinates());
+        if round == 3 || open.iter().all(|f| !f[0] && !f[1]) {
             return Ok((wm, method));
         }
         round += 1;
-        for a in axes.iter_mut() {
-            let name = &coordinates[a.coordinate].name;
-            let quarter = 0.25 * (a.max - a.min);
-            let n = ((quarter / a.step).ceil()).max(1.0) * a.step;
-            if cut.contains(&format!("{name} min")) {
+        let mut widened = Vec::new();
+        for (a, f) in axes.iter_mut().zip(&open) {
+            // A quarter of the span, in whole steps so the grid keeps its points.
+            let n = (0.25 * (a.max - a.min) / a.step).ceil().max(1.0) * a.step;
+            let name = &m.coordinates()[a.coordinate].name;
+            if f[0] {
                 a.min -= n;
+                widened.push(format!("{name} min"));
             }
-            if cut.contains(&format!("{name} max")) {
+            if f[1] {
                 a.max += n;
+                widened.push(format!("{name} max"));
             }
         }
         check_axes(&axes, P)?;
         method.push_str(&format!(
             "; widened at {} where the map reached its edge",
-            cut.join(", ")
+            widened.join(", ")
         ));
     }
 }

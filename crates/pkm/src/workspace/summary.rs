@@ -40,12 +40,22 @@ pub struct WorkspaceSummary {
     /// two struts' strokes counts for both), sorted by count.
     pub violated: Vec<(String, usize)>,
     /// Points per outcome: reachable, limits violated, no solution, solver failed,
-    /// singular.
+    /// singular, separate.
     pub outcomes: Vec<(PointStatus, usize)>,
     /// Faces of the grid that reachable points lie on (`"Z min"`), where the reachable
     /// region may go on beyond the grid; empty when the grid holds all of it. An angle
     /// axis spanning a whole turn has no faces.
     pub cut: Vec<String>,
+}
+
+impl WorkspaceSummary {
+    /// The number of points with outcome `status`.
+    pub fn outcome(&self, status: PointStatus) -> usize {
+        self.outcomes
+            .iter()
+            .find(|(k, _)| *k == status)
+            .map_or(0, |x| x.1)
+    }
 }
 
 impl WorkspaceMap {
@@ -61,23 +71,69 @@ impl WorkspaceMap {
         x
     }
 
+    /// Per axis, the smallest and largest grid index of the reachable points (`None`
+    /// when none is reachable).
+    pub fn reachable_extent(&self) -> Option<Vec<[usize; 2]>> {
+        let counts: Vec<usize> = self.axes.iter().map(|a| a.count()).collect();
+        let mut ext: Option<Vec<[usize; 2]>> = None;
+        let mut idx = vec![0; counts.len()];
+        for (k, p) in self.points.iter().enumerate() {
+            if !p.reachable {
+                continue;
+            }
+            super::unflatten(&counts, k, &mut idx);
+            let e = ext.get_or_insert_with(|| idx.iter().map(|&i| [i, i]).collect());
+            for (e, &i) in e.iter_mut().zip(&idx) {
+                e[0] = e[0].min(i);
+                e[1] = e[1].max(i);
+            }
+        }
+        ext
+    }
+
+    /// Per axis, whether reachable points lie on its `[min, max]` faces where the
+    /// region may go on beyond the grid: faces that are no bound of the reach
+    /// ([`WorkspaceMap::closed`]), of axes that do not go round a whole turn
+    /// (`coordinates`: the machine's pose coordinates, which the axes index).
+    pub fn open_faces(&self, coordinates: &[crate::mechanism::Coordinate]) -> Vec<[bool; 2]> {
+        let Some(ext) = self.reachable_extent() else {
+            return vec![[false; 2]; self.axes.len()];
+        };
+        self.axes
+            .iter()
+            .zip(ext)
+            .enumerate()
+            .map(|(i, (a, e))| {
+                let q = coordinates
+                    .get(a.coordinate)
+                    .map(|c| c.quantity)
+                    .unwrap_or(Quantity::Length);
+                let n = a.count();
+                if a.covers_turn(q) || n < 2 {
+                    return [false; 2];
+                }
+                let closed = self.closed.get(i).copied().unwrap_or([false; 2]);
+                [e[0] == 0 && !closed[0], e[1] + 1 == n && !closed[1]]
+            })
+            .collect()
+    }
+
     /// Summary statistics in user units (mm, deg); `coordinates` are the machine's
     /// pose coordinates (the axes name them by index).
     pub fn summary_of(&self, coordinates: &[crate::mechanism::Coordinate]) -> WorkspaceSummary {
         let coord = |i: usize| coordinates.get(self.axes[i].coordinate);
         let q = |i: usize| coord(i).map(|c| c.quantity).unwrap_or(Quantity::Length);
-        let names: Vec<(String, bool)> = (0..self.axes.len())
-            .map(|i| {
-                let a = &self.axes[i];
-                (
-                    coord(i)
-                        .map(|c| c.name.clone())
-                        .unwrap_or_else(|| format!("axis {}", i + 1)),
-                    q(i) == Quantity::Angle
-                        && a.max - a.min + a.step >= std::f64::consts::TAU - 1e-9,
-                )
-            })
-            .collect();
+        let mut cut = Vec::new();
+        for (i, f) in self.open_faces(coordinates).iter().enumerate() {
+            let name = coord(i)
+                .map(|c| c.name.clone())
+                .unwrap_or_else(|| format!("axis {}", i + 1));
+            for (side, open) in ["min", "max"].iter().zip(f) {
+                if *open {
+                    cut.push(format!("{name} {side}"));
+                }
+            }
+        }
         let cell: f64 = (0..self.axes.len())
             .map(|i| q(i).to_user(self.axes[i].step))
             .product();
@@ -101,20 +157,21 @@ impl WorkspaceMap {
             (1, 0) => "length",
             _ => "measure",
         };
-        self.summary(&|i, v| q(i).to_user(v), cell, &unit, name, &names)
+        let mut s = self.summary(&|i, v| q(i).to_user(v), cell, &unit, name);
+        s.cut = cut;
+        s
     }
 
     /// Summary statistics; `to_user` converts a coordinate value of axis `i` to user
     /// units; `cell` is the measure of one cell in user units, `unit` its unit and
-    /// `name` what it is (see [`WorkspaceSummary`]); `names` gives each axis' name and
-    /// whether it is an angle spanning a whole turn.
+    /// `name` what it is (see [`WorkspaceSummary`]). [`WorkspaceSummary::cut`] is left
+    /// empty ([`WorkspaceMap::summary_of`] names the open faces).
     pub fn summary(
         &self,
         to_user: &dyn Fn(usize, f64) -> f64,
         cell: f64,
         unit: &str,
         name: &str,
-        names: &[(String, bool)],
     ) -> WorkspaceSummary {
         let mut conds: Vec<f64> = Vec::new();
         let mut bbox = vec![[f64::INFINITY, f64::NEG_INFINITY]; self.axes.len()];
@@ -153,10 +210,10 @@ impl WorkspaceMap {
             PointStatus::NoSolution,
             PointStatus::SolverFailed,
             PointStatus::Singular,
+            PointStatus::Separate,
         ]
         .map(|st| (st, self.points.iter().filter(|p| p.status == st).count()))
         .to_vec();
-        let cut = self.cut_faces(names);
         WorkspaceSummary {
             points: self.points.len(),
             reachable: conds.len(),
@@ -170,48 +227,7 @@ impl WorkspaceMap {
             binding,
             violated: self.violated.clone(),
             outcomes,
-            cut,
+            cut: Vec::new(),
         }
-    }
-
-    /// The faces of the grid that reachable points lie on, named `"<axis> min|max"`
-    /// with `names` the axes' names; angle axes spanning a turn are skipped
-    /// (`full_turn` per axis).
-    fn cut_faces(&self, names: &[(String, bool)]) -> Vec<String> {
-        let counts: Vec<usize> = self.axes.iter().map(|a| a.count()).collect();
-        let mut touched = vec![[false; 2]; self.axes.len()];
-        for (k, p) in self.points.iter().enumerate() {
-            if !p.reachable {
-                continue;
-            }
-            let mut rem = k;
-            for (i, n) in counts.iter().enumerate().rev() {
-                let j = rem % n;
-                rem /= n;
-                if j == 0 {
-                    touched[i][0] = true;
-                }
-                if j + 1 == *n {
-                    touched[i][1] = true;
-                }
-            }
-        }
-        let mut out = Vec::new();
-        for (i, t) in touched.iter().enumerate() {
-            let (name, full_turn) = names
-                .get(i)
-                .cloned()
-                .unwrap_or_else(|| (format!("axis {}", i + 1), false));
-            if full_turn || counts[i] < 2 {
-                continue;
-            }
-            let closed = self.closed.get(i).copied().unwrap_or([false; 2]);
-            for ((side, hit), closed) in ["min", "max"].iter().zip(t).zip(closed) {
-                if *hit && !closed {
-                    out.push(format!("{name} {side}"));
-                }
-            }
-        }
-        out
     }
 }

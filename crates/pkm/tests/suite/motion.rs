@@ -419,3 +419,72 @@ fn motion_work_is_bounded_before_it_is_done() {
     // The estimate rounds each move up by at most two samples.
     assert!(run("G1 X33 F600\nG1 X34\n", Sampling::Rate(1000.0), n + 4).is_ok());
 }
+
+/// `Decimated` keeps at most its cap, evenly spaced, the first item always.
+#[test]
+fn decimated_streams_keep_evenly_spaced_items() {
+    use pkm::analysis::motion::Decimated;
+    for n in [1usize, 99, 100, 101, 1000, 12_345] {
+        let mut d = Decimated::new(100);
+        for i in 0..n {
+            d.push(|| i);
+        }
+        assert!(d.len() <= 100 && !d.is_empty(), "{n}: {}", d.len());
+        assert_eq!(d[0], 0);
+        let gaps: Vec<usize> = d.windows(2).map(|w| w[1] - w[0]).collect();
+        assert!(gaps.windows(2).all(|g| g[0] == g[1]), "{n}: {gaps:?}");
+        // Enough kept: more than half the cap once the stream is longer than it.
+        assert!(d.len() > n.min(100) / 2, "{n}: {}", d.len());
+    }
+}
+
+/// The study circle (issue 16): every point of the circle the report runs is within
+/// every limit, checked at ten times the points the search used; a circle 3 % larger
+/// than the largest one found leaves the limits; its program runs to its end with no
+/// violation and the tool travels 2 pi r.
+#[test]
+fn the_study_circle_fits_and_a_larger_one_does_not() {
+    use pkm::analysis::motion::{feed_options, run_motion, study_circle, MotionSource, NoSink};
+    let m = Machine::from_path(format!(
+        "{}/../../tests/fixtures/own-hexapod.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let home = m.mechanism().home();
+    let c = study_circle(&m, &home, 0.8).unwrap();
+    assert!(!c.moved);
+    assert!(
+        c.radius <= 0.8 * c.largest && c.radius > 0.79 * c.largest,
+        "{c:?}"
+    );
+    let within = |r: f64| {
+        (0..720).all(|k| {
+            let t = std::f64::consts::TAU * k as f64 / 720.0;
+            let mut x = home.clone();
+            x[0] += r * t.cos();
+            x[1] += r * t.sin();
+            let q = m.mechanism().inverse(&x).unwrap();
+            m.mechanism().check_limits(&x, &q).unwrap().is_empty()
+        })
+    };
+    assert!(within(c.radius));
+    assert!(!within(1.03 * c.largest), "{c:?}");
+    let out = run_motion(
+        &m,
+        MotionSource::Gcode {
+            reader: Box::new(std::io::Cursor::new(c.program(1000.0).into_bytes())),
+            from: Some(c.start()),
+        },
+        &feed_options(&m),
+        Sampling::Rate(1000.0),
+        &mut NoSink,
+    )
+    .unwrap();
+    assert!(out.summary.violations.is_empty());
+    let expected = std::f64::consts::TAU * c.radius / (1000.0 / 60.0);
+    assert!(
+        (out.summary.duration_s - expected).abs() < 1e-6,
+        "{}",
+        out.summary.duration_s
+    );
+}

@@ -342,7 +342,10 @@ fn default_maps_hold_the_whole_reach() {
 }
 
 /// The old default box (home +- 0.6 of the longest stroke) cut the own hexapod's
-/// region at Z min: the reach map goes below it.
+/// region at Z = -30 mm: the reach map goes below it, down to where the platform
+/// reaches the base plane (the tool hangs 150 mm below the platform, so its region at
+/// the home orientation ends just above Z = -150 mm) and no further: the mirror region
+/// below the base is another assembly mode, separate.
 #[test]
 fn the_own_hexapod_map_reaches_below_the_old_box() {
     let m = own_hexapod();
@@ -350,11 +353,41 @@ fn the_own_hexapod_map_reaches_below_the_old_box() {
     let (wm, _) = pkm::analysis::workspace::reach_map(&m, &home, 20, None, &[], &|_| {}).unwrap();
     let s = wm.summary_of(m.mechanism().coordinates());
     let old_z_min = 600.0 - 0.6 * 1050.0;
+    let z_min = s.bounding_box[2][0];
     assert!(
-        s.bounding_box[2][0] < old_z_min - 100.0,
+        z_min < old_z_min - 50.0 && z_min > -150.0,
         "{:?}",
         s.bounding_box
     );
+}
+
+/// A grid over both sides of seed 000's tripod base: the points above the base are
+/// within every limit (inverse kinematics and limits say so point by point) but the
+/// platform cannot get there without passing its base plane, a singular
+/// configuration: they are a separate region, not counted as reachable.
+#[test]
+fn a_mirror_assembly_mode_is_a_separate_region() {
+    use pkm::workspace::PointStatus;
+    let m = machine("tripod-seed000.toml");
+    let home = m.mechanism().home();
+    let bounds = [-100.0, 100.0, -100.0, 100.0, -400.0, 400.0];
+    let (wm, how) =
+        pkm::analysis::workspace::map(&m, &home, Some(&bounds), Some(20.0), &[], &|_| {}).unwrap();
+    assert_eq!(how, "the given bounds");
+    let mut separate = 0;
+    for (k, p) in wm.points.iter().enumerate() {
+        let x = wm.coords(k);
+        if p.reachable {
+            assert!(x[2] < 0.0, "{x:?}");
+        }
+        if p.status == PointStatus::Separate {
+            separate += 1;
+            assert!(x[2] > 0.0, "{x:?}");
+            let q = m.mechanism().inverse(&x).unwrap();
+            assert!(m.mechanism().check_limits(&x, &q).unwrap().is_empty());
+        }
+    }
+    assert!(separate > 10, "{separate}");
 }
 
 /// `Mechanism::position_bound` bounds: every pose within the strokes (strut machines)
@@ -383,6 +416,29 @@ fn position_bounds_hold_every_reachable_tool_point() {
         let q = h.inverse(&x).unwrap();
         let b = h.position_bound(&x).unwrap();
         if q.iter().all(|l| *l <= 1050.0) {
+            hits += 1;
+            assert!(inside(b, [x[0], x[1], x[2]]), "{x} outside {b:?}");
+        }
+    }
+    assert!(hits > 100, "{hits}");
+    // Seed 000's translational tripod (platform orientation held): struts within their
+    // 300 mm stroke end.
+    let Model::TranslationalTripod(t) = machine("tripod-seed000.toml").model else {
+        panic!()
+    };
+    let mut hits = 0;
+    for _ in 0..20_000 {
+        let x = Vector6::new(
+            rng.random_range(-400.0..400.0),
+            rng.random_range(-400.0..400.0),
+            rng.random_range(-500.0..100.0),
+            0.0,
+            0.0,
+            0.0,
+        );
+        let q = t.inverse(&x).unwrap();
+        let b = t.position_bound(&x).unwrap();
+        if q.iter().all(|l| *l <= 300.0) {
             hits += 1;
             assert!(inside(b, [x[0], x[1], x[2]]), "{x} outside {b:?}");
         }
