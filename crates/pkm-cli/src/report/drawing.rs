@@ -108,9 +108,10 @@ pub fn view_svg(skeletons: &[&Skeleton], view: View, size: (u32, u32)) -> Result
     if !lo[0].is_finite() {
         return Err(anyhow!("nothing to draw"));
     }
-    let (margin, xl, yl, cap) = (12u32, 32u32, 52u32, 28u32);
+    // A strip below the x axis' label holds the note of unlabelled points.
+    let (margin, xl, yl, cap, note) = (12u32, 32u32, 52u32, 28u32, 14u32);
     let pw = (size.0 - 2 * margin - yl) as f64;
-    let ph = (size.1 - 2 * margin - xl - cap) as f64;
+    let ph = (size.1 - 2 * margin - xl - cap - note) as f64;
     let span = [(hi[0] - lo[0]).max(1.0), (hi[1] - lo[1]).max(1.0)];
     // Equal scale on both axes (mm per pixel), with 12% padding.
     let scale = (span[0] / pw).max(span[1] / ph) * 1.24;
@@ -124,6 +125,7 @@ pub fn view_svg(skeletons: &[&Skeleton], view: View, size: (u32, u32)) -> Result
         root.fill(&WHITE).map_err(|e| anyhow!("{e}"))?;
         let mut chart = ChartBuilder::on(&root)
             .margin(margin)
+            .margin_bottom(margin + note)
             .caption(view.title, ("sans-serif", 16))
             .x_label_area_size(xl)
             .y_label_area_size(yl)
@@ -192,7 +194,7 @@ pub fn view_svg(skeletons: &[&Skeleton], view: View, size: (u32, u32)) -> Result
                 margin as i32 + yl as i32,
                 margin as i32 + cap as i32,
                 size.0 as i32 - margin as i32,
-                size.1 as i32 - margin as i32 - xl as i32,
+                size.1 as i32 - margin as i32 - note as i32 - xl as i32,
             ];
             for (members, q) in &groups {
                 let text = members
@@ -245,7 +247,7 @@ pub fn view_svg(skeletons: &[&Skeleton], view: View, size: (u32, u32)) -> Result
             }
             root.draw(&Text::new(
                 line,
-                (margin as i32, size.1 as i32 - 14),
+                (margin as i32, (size.1 - margin - note + 2) as i32),
                 ("sans-serif", 11)
                     .into_font()
                     .color(&RGBColor(110, 110, 110)),
