@@ -38,6 +38,7 @@ pub mod machine;
 pub mod mechanism;
 pub mod motion;
 pub mod p3rp;
+pub mod pentapod;
 pub mod pose;
 pub mod rotation;
 pub mod serial;

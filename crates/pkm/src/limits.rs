@@ -41,6 +41,9 @@ pub enum LimitKind {
     JointAngle,
     /// Two struts closer than their diameter.
     StrutInterference,
+    /// A pose coordinate outside its travel (a controller's soft limit, LinuxCNC's
+    /// `[AXIS_n] MIN_LIMIT / MAX_LIMIT`).
+    AxisTravel,
 }
 
 /// One violated limit.
@@ -144,5 +147,40 @@ impl Range {
         if let Some((side, bound)) = self.crossed(value) {
             out.push(Violation::new(name(), kind, side, quantity, value, bound));
         }
+    }
+}
+
+/// Soft limits of a machine's pose coordinates (LinuxCNC's `[AXIS_n] MIN_LIMIT` and
+/// `MAX_LIMIT`): a range per coordinate, in internal units, or none.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct AxisLimits {
+    /// `(coordinate index, range)` of every limited coordinate.
+    pub ranges: Vec<(usize, Range)>,
+}
+
+impl AxisLimits {
+    /// Pushes a violation for every coordinate of `x` outside its range.
+    pub fn check<const P: usize>(
+        &self,
+        coordinates: &[crate::mechanism::Coordinate; P],
+        x: &nalgebra::SVector<f64, P>,
+        out: &mut Vec<Violation>,
+    ) {
+        for (k, r) in &self.ranges {
+            if let Some(c) = coordinates.get(*k) {
+                r.check(
+                    || format!("axis {} travel", c.name),
+                    LimitKind::AxisTravel,
+                    c.quantity,
+                    x[*k],
+                    out,
+                );
+            }
+        }
+    }
+
+    /// Whether no coordinate is limited.
+    pub fn is_empty(&self) -> bool {
+        self.ranges.is_empty()
     }
 }

@@ -462,6 +462,59 @@ where
     }
 }
 
+/// Forward kinematics on the branch of solutions through `start`: when the actuators
+/// `q` are within `max_step` (mm or rad) of `IK(start)`, [`newton_forward`]; otherwise
+/// continuation, the actuators moved from `IK(start)` to `q` in steps of at most
+/// `max_step`, each solved by Newton from the last. Newton alone from a far start may
+/// stall in a local minimum of the residual or land on another assembly mode; the
+/// continuation returns the solution a machine moving from `start` reaches. When the
+/// continuation fails (a singularity on the way), Newton from `start` is tried; when
+/// that fails too, its error (with its residual) is returned.
+pub fn continued_forward<M, const P: usize, const A: usize>(
+    m: &M,
+    q: &SVector<f64, A>,
+    start: &SVector<f64, P>,
+    opt: &NewtonOptions,
+    max_step: f64,
+) -> Result<Forward<P>>
+where
+    M: Mechanism<P, A> + ?Sized,
+{
+    let span = match m.inverse(start) {
+        Ok(q0) => Some((q0, (q - q0).amax())),
+        Err(_) => None,
+    };
+    let Some((q0, span)) = span.filter(|(_, s)| s.is_finite() && *s > max_step) else {
+        return newton_forward(m, q, start, opt);
+    };
+    let steps = ((span / max_step).ceil() as usize).clamp(2, 1000);
+    let loose = NewtonOptions {
+        tolerance: opt.tolerance.max(1e-9 * span),
+        ..*opt
+    };
+    let mut x = *start;
+    let mut iterations = 0;
+    for k in 1..=steps {
+        let qk = q0 + (q - q0) * (k as f64 / steps as f64);
+        let o = if k == steps { opt } else { &loose };
+        match newton_forward(m, &qk, &x, o) {
+            Ok(f) => {
+                x = f.pose;
+                iterations += f.iterations;
+                if k == steps {
+                    return Ok(Forward {
+                        pose: x,
+                        iterations,
+                        residual: f.residual,
+                    });
+                }
+            }
+            Err(_) => break,
+        }
+    }
+    newton_forward(m, q, start, opt)
+}
+
 /// Inverse kinematics with every limit checked: the actuator coordinates, or
 /// [`Error::Unreachable`] listing every violated limit.
 pub fn inverse_checked<M, const P: usize, const A: usize>(

@@ -65,6 +65,8 @@ pub struct Hexapod {
     pub tool: Vector3<f64>,
     /// Strut diameter for strut-strut interference (mm), if checked.
     pub strut_diameter: Option<f64>,
+    /// Soft limits of the pose coordinates (LinuxCNC's `[AXIS_n]`); none by default.
+    pub axes: crate::limits::AxisLimits,
     /// Home pose (X, Y, Z mm; A, B, C rad).
     pub home: Vector6<f64>,
     /// Strut lengths at the control's zero readings (`L_j^(0)` of seed 001), from a
@@ -172,6 +174,7 @@ impl Hexapod {
             struts,
             tool,
             strut_diameter,
+            axes: Default::default(),
             home,
             zero_lengths: None,
             characteristic_length,
@@ -327,6 +330,7 @@ impl Mechanism<6, 6> for Hexapod {
     }
 
     fn check_limits(&self, x: &Vector6<f64>, q: &Vector6<f64>, out: &mut Vec<Violation>) {
+        self.axes.check(&self.coordinates, x, out);
         let (p, r) = split_pose(x);
         let joints = self.set.platform_joints(&p, &r);
         for i in 0..6 {

@@ -65,6 +65,8 @@ struct LimitsFile {
     platform_joint_axes: BTreeMap<String, Exact<3>>,
     #[serde(default)]
     strut_diameter: Option<f64>,
+    #[serde(default)]
+    axes: BTreeMap<String, Exact<2>>,
 }
 
 /// Result of an identification (`pkm calibrate`): the strut lengths at the control's
@@ -199,6 +201,7 @@ pub(super) fn build(src: &Source, f: HexapodFile) -> Result<super::Parts, Error>
         lim.strut_diameter,
         Vector6::new(hp[0], hp[1], hp[2], a[0], a[1], a[2]),
     );
+    h.axes = super::axis_limits(src, &lim.axes, &crate::mechanism::spatial_coordinates())?;
     if let Some(c) = &f.calibration {
         if c.zero_lengths.iter().any(|l| !(l.is_finite() && *l > 0.0)) {
             return Err(src.error(

@@ -8,6 +8,7 @@ mod clearance_file;
 mod hexapod_file;
 mod hybrid_am_file;
 mod p3rp_file;
+mod pentapod_file;
 mod reference;
 mod registry;
 mod report_file;
@@ -179,17 +180,88 @@ pub(crate) fn strut_entry(
     };
     let base = lookup(base_joints, &s.base, "base", "base")?;
     let plat = lookup(platform_joints, &s.platform, "platform", "platform")?;
-    let range = length_range(src, &p("length"), s.length)?;
-    positive_opt(src, &p("max_velocity"), s.max_velocity, "mm/s")?;
-    positive_opt(src, &p("max_acceleration"), s.max_acceleration, "mm/s^2")?;
-    let actuator = crate::mechanism::Actuator {
-        name: s.name.clone(),
+    let actuator = strut_actuator(
+        src,
+        i,
+        &s.name,
+        s.length,
+        s.max_velocity,
+        s.max_acceleration,
+    )?;
+    Ok((actuator, base, plat))
+}
+
+/// The linear actuator of strut `i` (`[[struts]]` entry): its stroke `length` and
+/// rate limits checked.
+pub(crate) fn strut_actuator(
+    src: &source::Source,
+    i: usize,
+    name: &str,
+    length: Exact<2>,
+    max_velocity: Option<f64>,
+    max_acceleration: Option<f64>,
+) -> Result<crate::mechanism::Actuator> {
+    use source::Seg;
+    let p = |k: &str| vec![Seg::Key("struts".into()), Seg::Index(i), Seg::Key(k.into())];
+    let range = length_range(src, &p("length"), length)?;
+    positive_opt(src, &p("max_velocity"), max_velocity, "mm/s")?;
+    positive_opt(src, &p("max_acceleration"), max_acceleration, "mm/s^2")?;
+    Ok(crate::mechanism::Actuator {
+        name: name.to_string(),
         quantity: crate::units::Quantity::Length,
         range,
-        max_velocity: s.max_velocity,
-        max_acceleration: s.max_acceleration,
-    };
-    Ok((actuator, base, plat))
+        max_velocity,
+        max_acceleration,
+    })
+}
+
+/// `[limits] axes`: the travel `[min, max]` of pose coordinates by name (mm, deg),
+/// e.g. `axes = { X = [-250, 250], A = [-50, 50] }` (LinuxCNC's `[AXIS_n]` limits).
+pub(crate) fn axis_limits(
+    src: &source::Source,
+    axes: &std::collections::BTreeMap<String, Exact<2>>,
+    coordinates: &[crate::mechanism::Coordinate],
+) -> Result<crate::limits::AxisLimits> {
+    use source::Seg;
+    let mut out = crate::limits::AxisLimits::default();
+    for (name, r) in axes {
+        let at = [
+            Seg::Key("limits".into()),
+            Seg::Key("axes".into()),
+            Seg::Key(name.clone()),
+        ];
+        let Some(k) = coordinates.iter().position(|c| c.name == *name) else {
+            return Err(src.error(
+                &at,
+                format!(
+                    "unknown axis `{name}`, expected one of {}",
+                    coordinates
+                        .iter()
+                        .map(|c| c.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            ));
+        };
+        if !(r[0] < r[1]) {
+            return Err(src.error(
+                &at,
+                format!(
+                    "expected [min, max] with min < max, found [{}, {}]",
+                    r[0], r[1]
+                ),
+            ));
+        }
+        let q = coordinates[k].quantity;
+        out.ranges.push((
+            k,
+            crate::limits::Range {
+                min: q.from_user(r[0]),
+                max: q.from_user(r[1]),
+            },
+        ));
+    }
+    Ok(out)
 }
 
 /// Checks that no joint name is used in both `[base_joints]` and `[platform_joints]`, nor

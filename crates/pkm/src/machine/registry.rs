@@ -38,6 +38,11 @@ pub const FILE_TYPES: &[FileType] = &[
         load: |s| super::hexapod_file::build(s, s.deserialize()?),
     },
     FileType {
+        name: "pentapod",
+        summary: "five struts to rings around the spindle (LinuxCNC pentakins): tool tip X, Y, Z and axis A, B",
+        load: |s| super::pentapod_file::build(s, s.deserialize()?),
+    },
+    FileType {
         name: "p3rp",
         summary: "the 2-DOF P3RP spindle head of seed 004, alone or on an XY table (4-axis hybrid machine)",
         load: |s| super::p3rp_file::build(s, s.deserialize()?),
@@ -78,6 +83,8 @@ pub enum Model {
     CentreLegTripod(CentreLegTripod),
     /// `type = "hexapod"`.
     Hexapod(Box<crate::hexapod::Hexapod>),
+    /// `type = "pentapod"`: LinuxCNC's pentakins machine.
+    Pentapod(Box<crate::pentapod::Pentapod>),
     /// `type = "p3rp"` without `[table]`: the P3RP spindle head of seed 004.
     P3rpHead(Box<crate::p3rp::P3rpHead>),
     /// `type = "p3rp"` with `[table]`: the 4-axis hybrid machine of seed 004.
@@ -95,6 +102,10 @@ macro_rules! dispatch {
             Model::TranslationalTripod($m) => $body,
             Model::CentreLegTripod($m) => $body,
             Model::Hexapod(b) => {
+                let $m = b.as_ref();
+                $body
+            }
+            Model::Pentapod(b) => {
                 let $m = b.as_ref();
                 $body
             }
@@ -118,6 +129,7 @@ macro_rules! dispatch {
 crate::impl_dyn_mechanism!(TranslationalTripod, 6, 3);
 crate::impl_dyn_mechanism!(CentreLegTripod, 3, 3);
 crate::impl_dyn_mechanism!(crate::hexapod::Hexapod, 6, 6);
+crate::impl_dyn_mechanism!(crate::pentapod::Pentapod, 6, 5);
 crate::impl_dyn_mechanism!(crate::p3rp::P3rpHead, 2, 2);
 crate::impl_dyn_mechanism!(crate::p3rp::HybridMachine, 6, 4);
 crate::impl_dyn_mechanism!(crate::hybrid_am::HybridAm, 6, 5);

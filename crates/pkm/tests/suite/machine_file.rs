@@ -126,10 +126,10 @@ fn semantic_errors() {
     assert_eq!(field, "struts[1].base");
     assert!(msg.contains("already used"), "{msg}");
 
-    let text = GOOD.replace("type = \"tripod\"", "type = \"pentapod\"");
+    let text = GOOD.replace("type = \"tripod\"", "type = \"octopod\"");
     let (_, field, msg) = parts(&err(&text));
     assert_eq!(field, "type");
-    assert!(msg.contains("unknown machine type `pentapod`"), "{msg}");
+    assert!(msg.contains("unknown machine type `octopod`"), "{msg}");
 
     let text = GOOD.replace("type = \"tripod\"", "");
     let (_, field, _) = parts(&err(&text));

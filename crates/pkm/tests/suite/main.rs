@@ -17,6 +17,7 @@ mod identify;
 mod machine_file;
 mod motion;
 mod p3rp;
+mod pentapod;
 mod pose;
 mod rotation;
 mod seed000;

@@ -1,0 +1,210 @@
+//! The `type = "pentapod"` machine file (LinuxCNC's pentakins geometry).
+
+use std::collections::BTreeMap;
+
+use nalgebra::Vector6;
+use serde::Deserialize;
+
+use super::reference::Reference;
+use super::source::{Exact, Seg, Source};
+use super::{v3, Model};
+use crate::error::Error;
+use crate::mechanism::Mechanism;
+use crate::pentapod::{PentaStrut, Pentapod};
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct PentapodFile {
+    #[serde(rename = "type")]
+    _kind: String,
+    /// `[[clearance]]` entries, read for every machine type by `clearance_file`.
+    #[serde(default, rename = "clearance")]
+    _clearance: Option<serde::de::IgnoredAny>,
+    /// The `[report]` table, read for every machine type by `report_file`.
+    #[serde(default, rename = "report")]
+    _report: Option<serde::de::IgnoredAny>,
+    #[serde(default)]
+    name: Option<String>,
+    #[serde(default)]
+    description: Option<String>,
+    base_joints: BTreeMap<String, Exact<3>>,
+    struts: Vec<StrutFile>,
+    tool: ToolFile,
+    #[serde(default)]
+    limits: LimitsFile,
+    home: HomeFile,
+    #[serde(default)]
+    reference: Vec<Reference>,
+    #[serde(default)]
+    motion: Option<super::MotionFile>,
+}
+
+/// One `[[struts]]` entry: a base joint and the ring of the effector joint.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct StrutFile {
+    name: String,
+    base: String,
+    ring_radius: f64,
+    ring_height: f64,
+    length: Exact<2>,
+    #[serde(default)]
+    max_velocity: Option<f64>,
+    #[serde(default)]
+    max_acceleration: Option<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ToolFile {
+    tip: Exact<3>,
+}
+
+#[derive(Debug, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct LimitsFile {
+    #[serde(default)]
+    base_joint_axis: Option<Exact<3>>,
+    #[serde(default)]
+    base_joint_max_angle: Option<f64>,
+    #[serde(default)]
+    strut_diameter: Option<f64>,
+    #[serde(default)]
+    axes: BTreeMap<String, Exact<2>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct HomeFile {
+    position: Exact<3>,
+    /// A and B (deg); C is 0 (the spin about the tool axis is free).
+    #[serde(default)]
+    angles: Option<Exact<2>>,
+}
+
+fn key(k: &str) -> Seg {
+    Seg::Key(k.into())
+}
+
+pub(super) fn build(src: &Source, f: PentapodFile) -> Result<super::Parts, Error> {
+    if f.struts.len() != 5 {
+        return Err(src.error(
+            &[key("struts")],
+            format!("a pentapod has exactly 5 struts, found {}", f.struts.len()),
+        ));
+    }
+    let lim = &f.limits;
+    let base_cone = super::joint_cone(
+        src,
+        lim.base_joint_axis,
+        [0.0, 0.0, 1.0],
+        lim.base_joint_max_angle,
+        "base",
+    )?;
+    if let Some(d) = lim.strut_diameter {
+        if !(d > 0.0) {
+            return Err(src.error(
+                &[key("limits"), key("strut_diameter")],
+                format!("expected a diameter > 0 mm, found {d}"),
+            ));
+        }
+    }
+    let tip = f.tool.tip;
+    if tip[0] != 0.0 || tip[1] != 0.0 {
+        return Err(src.error(
+            &[key("tool"), key("tip")],
+            format!(
+                "a pentapod's tool tip lies on the spindle axis (the struts leave the spin \
+                 about it free): expected [0, 0, z], found [{}, {}, {}]",
+                tip[0], tip[1], tip[2]
+            ),
+        ));
+    }
+    let mut struts = Vec::with_capacity(5);
+    for (i, s) in f.struts.iter().enumerate() {
+        let at = |k: &str| [key("struts"), Seg::Index(i), key(k)];
+        if s.name.trim().is_empty() {
+            return Err(src.error(&at("name"), "expected a non-empty strut name"));
+        }
+        if f.struts[..i].iter().any(|o| o.name == s.name) {
+            return Err(src.error(
+                &at("name"),
+                format!("strut name `{}` is used twice", s.name),
+            ));
+        }
+        let base = f.base_joints.get(&s.base).map(|v| v3(*v)).ok_or_else(|| {
+            src.error(
+                &at("base"),
+                format!(
+                    "unknown base joint `{}`, expected one of {}",
+                    s.base,
+                    f.base_joints.keys().cloned().collect::<Vec<_>>().join(", ")
+                ),
+            )
+        })?;
+        if !(s.ring_radius >= 0.0) {
+            return Err(src.error(
+                &at("ring_radius"),
+                format!("expected a radius >= 0 mm, found {}", s.ring_radius),
+            ));
+        }
+        let actuator = super::strut_actuator(
+            src,
+            i,
+            &s.name,
+            s.length,
+            s.max_velocity,
+            s.max_acceleration,
+        )?;
+        struts.push(PentaStrut {
+            actuator,
+            base_name: s.base.clone(),
+            base,
+            ring_radius: s.ring_radius,
+            ring_height: s.ring_height,
+            base_cone,
+        });
+    }
+    let struts: [PentaStrut; 5] = struts.try_into().expect("five struts checked above");
+    let a = f.home.angles.unwrap_or_default().0.map(f64::to_radians);
+    let hp = f.home.position;
+    let coordinates = crate::mechanism::spatial_coordinates();
+    let axes = super::axis_limits(src, &lim.axes, &coordinates)?;
+    if axes.ranges.iter().any(|(k, _)| *k == 5) {
+        return Err(src.error(
+            &[key("limits"), key("axes"), key("C")],
+            "a pentapod holds C (the spin about the tool axis is free): limit X, Y, Z, A, B",
+        ));
+    }
+    let m = Pentapod::new(
+        f.name.clone().unwrap_or_else(|| "pentapod".into()),
+        struts,
+        tip[2],
+        lim.strut_diameter,
+        axes,
+        Vector6::new(hp[0], hp[1], hp[2], a[0], a[1], 0.0),
+    );
+    // The five struts must fix the tool axis: a regular driven Jacobian at home.
+    let rc = match crate::mechanism::scaled_driven_jacobian(&m, &m.home()) {
+        Ok(j) => crate::linalg::rcond1(&j),
+        Err(e) => return Err(src.error(&[key("home")], e.to_string())),
+    };
+    if rc < 1e-9 {
+        return Err(src.error(
+            &[key("home")],
+            format!(
+                "the pentapod is singular at its home pose (reciprocal condition {rc:.2e}): \
+                 check the joints"
+            ),
+        ));
+    }
+    super::check_references(src, &f.reference)?;
+    let rapid = super::check_motion(src, f.motion.as_ref())?;
+    Ok(super::Parts {
+        model: Model::Pentapod(Box::new(m)),
+        name: f.name,
+        description: f.description,
+        references: f.reference,
+        rapid,
+    })
+}

@@ -1,0 +1,508 @@
+//! The pentapod of LinuxCNC's `pentakins`: five struts from base joints to joints that
+//! run on rings around the spindle.
+//!
+//! Strut `i` joins base joint `b_i` (base frame) to a joint on a ring of radius `r_i`
+//! whose centre lies on the tool axis `k = R e_z`, at height `z_i` above the effector
+//! origin `O`. The ring joint turns about the axis, so it lies in the plane through the
+//! axis and `b_i`, on the side of `b_i`; the strut length is the distance from `b_i` to
+//! that nearest point of the ring. With `w = b_i - O`, `h = w . k` and
+//! `rho = |w - h k|` (pentakins.c `InvKins`, written in the base frame):
+//!
+//! `L_i = sqrt((h - z_i)^2 + (rho - r_i)^2)`.
+//!
+//! Pose coordinates are X, Y, Z of the tool tip (on the axis, `t` above `O`:
+//! `p = O + t k`) and A, B, C of the default convention (`R = Rz(C) Ry(B) Rx(A)`). The
+//! struts drive X, Y, Z, A, B; the spin about the tool axis is free (the rings turn),
+//! so C is held: at `C = 0`, which is where a pentapod's home keeps it, `R = Ry(B)
+//! Rx(A)` is pentakins' `pmRpyMatConvert(a, b, 0)` and the coordinates are LinuxCNC's
+//! X, Y, Z, A, B.
+
+// Struts and vector components are indexed together.
+#![allow(clippy::needless_range_loop)]
+
+mod accuracy;
+
+use nalgebra::{Matrix3, SMatrix, SVector, Vector3, Vector6};
+
+use crate::error::{Error, Result};
+use crate::hexapod::{segment_distance, JointCone};
+use crate::legs::split_pose;
+use crate::limits::{AxisLimits, LimitKind, Side, Violation};
+use crate::mechanism::{
+    spatial_coordinates, Actuator, ActuatorMotion, Coordinate, LinkKind, Mechanism, PointRole,
+    PoseSpace, Skeleton,
+};
+use crate::pose::Pose;
+use crate::units::Quantity;
+
+/// One strut of a pentapod.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PentaStrut {
+    /// Actuator (name, stroke, rate limits).
+    pub actuator: Actuator,
+    /// Base joint name.
+    pub base_name: String,
+    /// Base joint centre (base frame, mm).
+    pub base: Vector3<f64>,
+    /// Radius `r_i` of the ring its effector joint runs on (mm).
+    pub ring_radius: f64,
+    /// Height `z_i` of the ring's centre along the tool axis above the effector origin
+    /// (mm; pentakins' `effector.N.z`).
+    pub ring_height: f64,
+    /// Cone of the base joint.
+    pub base_cone: Option<JointCone>,
+}
+
+/// A pentapod machine (see the module documentation).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Pentapod {
+    /// Machine name.
+    pub name: String,
+    /// The five struts.
+    pub struts: [PentaStrut; 5],
+    /// Tool tip height `t` along the tool axis above the effector origin (mm).
+    pub tool: f64,
+    /// Strut diameter for strut-strut interference (mm), if checked.
+    pub strut_diameter: Option<f64>,
+    /// Soft limits of the pose coordinates (LinuxCNC's `[AXIS_n]`).
+    pub axes: AxisLimits,
+    /// Home pose (X, Y, Z mm; A, B, C rad).
+    pub home: Vector6<f64>,
+    /// Length that scales rotations against translations in conditioning (mm): the
+    /// mean distance of the ring joints from the tool tip.
+    pub characteristic_length: f64,
+    actuators: [Actuator; 5],
+    coordinates: [Coordinate; 6],
+}
+
+/// One strut's geometry at a pose: what the length, the Jacobian and the motion share.
+struct StrutAt {
+    /// `b_i - O` in the effector frame: `s = R^T (b_i - O)`.
+    s: Vector3<f64>,
+    /// `rho = |s_xy|`.
+    rho: f64,
+    /// `A = s_z - z_i`.
+    a: f64,
+    /// `B = rho - r_i`.
+    b: f64,
+    /// The strut length `sqrt(A^2 + B^2)`.
+    l: f64,
+}
+
+impl Pentapod {
+    /// Assembles a pentapod.
+    pub fn new(
+        name: String,
+        struts: [PentaStrut; 5],
+        tool: f64,
+        strut_diameter: Option<f64>,
+        axes: AxisLimits,
+        home: Vector6<f64>,
+    ) -> Self {
+        let actuators = std::array::from_fn(|i| struts[i].actuator.clone());
+        let characteristic_length = characteristic_length(&struts, tool);
+        Pentapod {
+            name,
+            struts,
+            tool,
+            strut_diameter,
+            axes,
+            home,
+            characteristic_length,
+            actuators,
+            coordinates: spatial_coordinates(),
+        }
+    }
+
+    /// The same pentapod with other base joints, ring radii and heights (in strut
+    /// order), names, limits and home kept.
+    pub fn with_geometry(
+        &self,
+        base: &[Vector3<f64>; 5],
+        radius: &[f64; 5],
+        height: &[f64; 5],
+    ) -> Self {
+        let mut m = self.clone();
+        for i in 0..5 {
+            m.struts[i].base = base[i];
+            m.struts[i].ring_radius = radius[i];
+            m.struts[i].ring_height = height[i];
+        }
+        m.characteristic_length = characteristic_length(&m.struts, m.tool);
+        m
+    }
+
+    /// Effector origin `O = p - t k` and rotation of pose coordinates.
+    #[inline]
+    fn frame(&self, x: &Vector6<f64>) -> (Vector3<f64>, Matrix3<f64>) {
+        let (p, r) = split_pose(x);
+        (p - r.column(2) * self.tool, r)
+    }
+
+    #[inline]
+    fn strut_at(&self, i: usize, o: &Vector3<f64>, r: &Matrix3<f64>) -> StrutAt {
+        let st = &self.struts[i];
+        let s = r.tr_mul(&(st.base - o));
+        let rho = s.x.hypot(s.y);
+        let a = s.z - st.ring_height;
+        let b = rho - st.ring_radius;
+        StrutAt {
+            s,
+            rho,
+            a,
+            b,
+            l: a.hypot(b),
+        }
+    }
+
+    /// The ring joint's centre of strut `i` (base frame) at an effector frame: the
+    /// point of the ring nearest the base joint (on the axis' side of it when the base
+    /// joint lies on the axis, where the ring turns freely).
+    fn ring_joint(&self, i: usize, o: &Vector3<f64>, r: &Matrix3<f64>) -> Vector3<f64> {
+        let st = &self.struts[i];
+        let g = self.strut_at(i, o, r);
+        let radial = if g.rho > 0.0 {
+            Vector3::new(g.s.x / g.rho, g.s.y / g.rho, 0.0)
+        } else {
+            Vector3::x()
+        };
+        o + r * (radial * st.ring_radius + Vector3::z() * st.ring_height)
+    }
+
+    /// The effector joints (base frame) at pose `x`.
+    pub fn ring_joints(&self, x: &Vector6<f64>) -> [Vector3<f64>; 5] {
+        let (o, r) = self.frame(x);
+        std::array::from_fn(|i| self.ring_joint(i, &o, &r))
+    }
+
+    /// Unit strut vector of strut `i` (from the base joint to the ring joint) in the
+    /// base frame: `n = -R grad_s L`, with `grad_s L = (B/L s_xy/rho, A/L)`. Fails when
+    /// the base joint is on the tool axis (the ring joint's azimuth is undetermined) or
+    /// the strut has no length.
+    fn direction(&self, i: usize, g: &StrutAt, r: &Matrix3<f64>) -> Result<Vector3<f64>> {
+        let scale = g.s.norm().max(1.0);
+        if !(g.rho > 1e-12 * scale) || !(g.l > 1e-12 * scale) {
+            return Err(Error::Singular {
+                what: format!(
+                    "pentapod strut {}: its base joint {} lies on the tool axis (the ring \
+                     joint's position around the axis is undetermined) or the strut has no \
+                     length",
+                    self.struts[i].actuator.name, self.struts[i].base_name
+                ),
+                rcond: 0.0,
+            });
+        }
+        let grad = Vector3::new(
+            g.b / g.l * g.s.x / g.rho,
+            g.b / g.l * g.s.y / g.rho,
+            g.a / g.l,
+        );
+        Ok(-(r * grad))
+    }
+
+    /// Jacobian of the strut lengths with respect to the tool twist `(v, w)` (base
+    /// frame). The ring joint is where the distance to the ring is least, so moving it
+    /// along the ring changes the length to first order not at all (envelope theorem):
+    /// row i is the hexapod's `[n_i^T, ((b_i - p) x n_i)^T]` with the ring joint as the
+    /// platform joint (`(b_i - p) x n_i = (E_i - p) x n_i`, since `b_i - E_i` is
+    /// parallel to `n_i`).
+    pub fn twist_jacobian(&self, x: &Vector6<f64>) -> Result<SMatrix<f64, 5, 6>> {
+        let (o, r) = self.frame(x);
+        let p = Vector3::new(x[0], x[1], x[2]);
+        let mut j = SMatrix::<f64, 5, 6>::zeros();
+        for i in 0..5 {
+            let g = self.strut_at(i, &o, &r);
+            let n = self.direction(i, &g, &r)?;
+            let m = (self.struts[i].base - p).cross(&n);
+            for k in 0..3 {
+                j[(i, k)] = n[k];
+                j[(i, 3 + k)] = m[k];
+            }
+        }
+        Ok(j)
+    }
+}
+
+fn characteristic_length(struts: &[PentaStrut; 5], tool: f64) -> f64 {
+    (struts
+        .iter()
+        .map(|s| s.ring_radius.hypot(s.ring_height - tool))
+        .sum::<f64>()
+        / 5.0)
+        .max(1e-9)
+}
+
+impl Mechanism<6, 5> for Pentapod {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn kind(&self) -> &'static str {
+        "pentapod"
+    }
+
+    fn coordinates(&self) -> &[Coordinate; 6] {
+        &self.coordinates
+    }
+
+    fn actuators(&self) -> &[Actuator; 5] {
+        &self.actuators
+    }
+
+    fn driven(&self) -> [usize; 5] {
+        [0, 1, 2, 3, 4]
+    }
+
+    fn pose_space(&self) -> PoseSpace {
+        PoseSpace::Spatial
+    }
+
+    fn home(&self) -> Vector6<f64> {
+        self.home
+    }
+
+    /// `L_i = sqrt((s_z - z_i)^2 + (|s_xy| - r_i)^2)`, `s = R^T (b_i - O)` (pentakins.c
+    /// `InvKins`).
+    #[inline]
+    fn inverse(&self, x: &Vector6<f64>) -> Result<SVector<f64, 5>> {
+        let (o, r) = self.frame(x);
+        Ok(SVector::<f64, 5>::from_fn(|i, _| {
+            self.strut_at(i, &o, &r).l
+        }))
+    }
+
+    /// Newton on the driven coordinates X, Y, Z, A, B (C held), continued along the
+    /// actuators from `IK(start)` in steps of at most 20 mm when they are farther (see
+    /// [`crate::mechanism::continued_forward`]): the solution on the branch through
+    /// `start`.
+    fn forward(
+        &self,
+        q: &SVector<f64, 5>,
+        start: &Vector6<f64>,
+    ) -> Result<crate::mechanism::Forward<6>> {
+        crate::mechanism::continued_forward(
+            self,
+            q,
+            start,
+            &crate::mechanism::NewtonOptions::default(),
+            20.0,
+        )
+    }
+
+    /// The twist Jacobian (see [`Pentapod::twist_jacobian`]) times `diag(I, E(A, B, C))`.
+    fn jacobian(&self, x: &Vector6<f64>) -> Result<SMatrix<f64, 5, 6>> {
+        let mut j = self.twist_jacobian(x)?;
+        let e = crate::rotation::rpy_rate_matrix([x[3], x[4], x[5]]);
+        let rot = j.fixed_view::<5, 3>(0, 3) * e;
+        j.fixed_view_mut::<5, 3>(0, 3).copy_from(&rot);
+        Ok(j)
+    }
+
+    /// The tip is `p = E_i + (t - z_i) k - r_i u` with `|E_i - b_i| <= L_max` and `u` a
+    /// unit vector normal to `k`: within `L_max + r_i` of `b_i + (t - z_i) k` per axis.
+    fn position_bound(&self, x: &Vector6<f64>) -> Option<[[f64; 2]; 3]> {
+        let (_, r) = split_pose(x);
+        let k = r.column(2).into_owned();
+        let mut b = [[f64::NEG_INFINITY, f64::INFINITY]; 3];
+        for s in &self.struts {
+            let c = s.base + k * (self.tool - s.ring_height);
+            let h = s.actuator.range.max + s.ring_radius;
+            for a in 0..3 {
+                b[a][0] = b[a][0].max(c[a] - h);
+                b[a][1] = b[a][1].min(c[a] + h);
+            }
+        }
+        b.iter()
+            .all(|v| v[0] <= v[1] && v[0].is_finite() && v[1].is_finite())
+            .then_some(b)
+    }
+
+    fn tool_pose(&self, x: &Vector6<f64>) -> Result<Pose> {
+        Ok(crate::legs::spatial_tool_pose(x))
+    }
+
+    /// The tool tip, and the tool axis of a given orientation expressed with the held
+    /// C of home: `Rz(C) Ry(B) Rx(A) e_z = k` gives, with `k' = Rz(-C) k`,
+    /// `A = atan2(-k'_y, sqrt(k'_x^2 + k'_z^2))`, `B = atan2(k'_x, k'_z)`. The spin of
+    /// the given frame about its axis is not the machine's to set and is dropped.
+    fn coords_from_pose(&self, pose: &Pose, orientation_given: bool) -> Result<Vector6<f64>> {
+        let p = pose.translation.vector;
+        let c = self.home[5];
+        let (a, b) = if orientation_given {
+            let k = crate::pose::rotation_matrix(pose).column(2).into_owned();
+            let kk = crate::rotation::rz(-c) * k;
+            ((-kk.y).atan2(kk.x.hypot(kk.z)), kk.x.atan2(kk.z))
+        } else {
+            (self.home[3], self.home[4])
+        };
+        Ok(Vector6::new(p.x, p.y, p.z, a, b, c))
+    }
+
+    fn check_limits(&self, x: &Vector6<f64>, q: &SVector<f64, 5>, out: &mut Vec<Violation>) {
+        self.axes.check(&self.coordinates, x, out);
+        let joints = self.ring_joints(x);
+        for i in 0..5 {
+            let s = &self.struts[i];
+            s.actuator.range.check(
+                || format!("strut {} length", s.actuator.name),
+                LimitKind::ActuatorPosition,
+                Quantity::Length,
+                q[i],
+                out,
+            );
+            if let Some(c) = &s.base_cone {
+                let d = joints[i] - s.base;
+                let cos = if d.norm() > 0.0 {
+                    d.normalize().dot(&c.axis)
+                } else {
+                    1.0
+                };
+                if cos < c.max_angle.cos() {
+                    out.push(Violation::new(
+                        format!(
+                            "base joint {} angle (strut {})",
+                            s.base_name, s.actuator.name
+                        ),
+                        LimitKind::JointAngle,
+                        Side::Max,
+                        Quantity::Angle,
+                        cos.clamp(-1.0, 1.0).acos(),
+                        c.max_angle,
+                    ));
+                }
+            }
+        }
+        if let Some(dia) = self.strut_diameter {
+            for i in 0..5 {
+                for k in i + 1..5 {
+                    if self.struts[i].base_name == self.struts[k].base_name {
+                        continue;
+                    }
+                    let d = segment_distance(
+                        &self.struts[i].base,
+                        &joints[i],
+                        &self.struts[k].base,
+                        &joints[k],
+                    );
+                    if d < dia {
+                        out.push(Violation::new(
+                            format!(
+                                "struts {} and {} distance",
+                                self.struts[i].actuator.name, self.struts[k].actuator.name
+                            ),
+                            LimitKind::StrutInterference,
+                            Side::Min,
+                            Quantity::Length,
+                            d,
+                            dia,
+                        ));
+                    }
+                }
+            }
+        }
+    }
+
+    /// Base joints, ring joints, ring centres on the tool axis, the spindle from the
+    /// highest ring centre to the tool tip.
+    fn skeleton(&self, x: &Vector6<f64>) -> Result<Skeleton> {
+        let (o, r) = self.frame(x);
+        let k = r.column(2).into_owned();
+        let p = Vector3::new(x[0], x[1], x[2]);
+        let mut s = Skeleton::default();
+        let mut bases: Vec<(String, usize)> = Vec::new();
+        let mut top = (f64::NEG_INFINITY, 0usize);
+        let mut low = (f64::INFINITY, 0usize);
+        for (i, st) in self.struts.iter().enumerate() {
+            let b = match bases.iter().find(|(n, _)| *n == st.base_name) {
+                Some((_, b)) => *b,
+                None => {
+                    let b = s.point(&st.base_name, PointRole::BaseJoint, &st.base);
+                    bases.push((st.base_name.clone(), b));
+                    b
+                }
+            };
+            let e = s.point(
+                &format!("ring {}", st.actuator.name),
+                PointRole::PlatformJoint,
+                &self.ring_joint(i, &o, &r),
+            );
+            let c = s.point(
+                &format!("ring {} centre", st.actuator.name),
+                PointRole::Other,
+                &(o + k * st.ring_height),
+            );
+            s.link(&st.actuator.name, LinkKind::Strut, b, e);
+            s.link("", LinkKind::Platform, e, c);
+            if st.ring_height > top.0 {
+                top = (st.ring_height, c);
+            }
+            if st.ring_height < low.0 {
+                low = (st.ring_height, c);
+            }
+        }
+        if top.1 != low.1 {
+            s.link("spindle", LinkKind::Platform, low.1, top.1);
+        }
+        let t = s.point("tool", PointRole::Tool, &p);
+        let from = if (self.tool - top.0).abs() < (self.tool - low.0).abs() {
+            top.1
+        } else {
+            low.1
+        };
+        s.link("tool", LinkKind::Tool, from, t);
+        Ok(s)
+    }
+
+    fn characteristic_length(&self) -> f64 {
+        self.characteristic_length
+    }
+
+    /// `s' = -R^T (O' + w x (b - O))`,
+    /// `s'' = R^T (2 w x O' + w x (w x (b - O)) - O'' - al x (b - O))`, with
+    /// `O' = v - t w x k`, `O'' = a - t (al x k + w x (w x k))`; then `L' = g . s'` and
+    /// `L'' = s'^T H s' + g . s''`, `g` and `H` the gradient and Hessian of `L(s)`:
+    /// `s'^T H s' = (A (n . s'_xy) - B s'_z)^2 / L^3 + B / (L rho) (|s'_xy|^2 - (n . s'_xy)^2)`,
+    /// `n = s_xy / rho` (exact, no finite differences).
+    fn actuator_motion(
+        &self,
+        x: &Vector6<f64>,
+        xd: &Vector6<f64>,
+        xdd: &Vector6<f64>,
+    ) -> Result<ActuatorMotion<5>> {
+        let (o, r) = self.frame(x);
+        let k = r.column(2).into_owned();
+        let v = xd.fixed_rows::<3>(0).into_owned();
+        let acc = xdd.fixed_rows::<3>(0).into_owned();
+        let (w, al) = crate::rotation::rpy_angular_motion(
+            [x[3], x[4], x[5]],
+            &xd.fixed_rows::<3>(3).into_owned(),
+            &xdd.fixed_rows::<3>(3).into_owned(),
+        );
+        let od = v - w.cross(&k) * self.tool;
+        let odd = acc - (al.cross(&k) + w.cross(&w.cross(&k))) * self.tool;
+        let mut out = ActuatorMotion {
+            q: SVector::zeros(),
+            qd: SVector::zeros(),
+            qdd: SVector::zeros(),
+        };
+        for i in 0..5 {
+            let g = self.strut_at(i, &o, &r);
+            // Validates the strut (base joint off the axis, non-zero length).
+            self.direction(i, &g, &r)?;
+            let wb = self.struts[i].base - o;
+            let sd = -r.tr_mul(&(od + w.cross(&wb)));
+            let sdd =
+                r.tr_mul(&(w.cross(&od) * 2.0 + w.cross(&w.cross(&wb)) - odd - al.cross(&wb)));
+            let (nx, ny) = (g.s.x / g.rho, g.s.y / g.rho);
+            let grad = Vector3::new(g.b / g.l * nx, g.b / g.l * ny, g.a / g.l);
+            let ns = nx * sd.x + ny * sd.y;
+            let sxy2 = sd.x * sd.x + sd.y * sd.y;
+            let t = g.a * ns - g.b * sd.z;
+            let hess = t * t / (g.l * g.l * g.l) + g.b / (g.l * g.rho) * (sxy2 - ns * ns);
+            out.q[i] = g.l;
+            out.qd[i] = grad.dot(&sd);
+            out.qdd[i] = hess + grad.dot(&sdd);
+        }
+        Ok(out)
+    }
+}
