@@ -143,6 +143,12 @@ enum Command {
         pkm report my-hexapod.toml --sections drawing,workspace --bounds=-300,300,-300,300,300,900 --step 10"
     )]
     Report(ReportArgs),
+    /// Convert another program's machine description into a pkm machine file.
+    #[command(subcommand)]
+    Import(commands::linuxcnc::ImportFrom),
+    /// Write a machine for another program (a controller's configuration).
+    #[command(subcommand)]
+    Export(commands::linuxcnc::ExportTo),
 }
 
 #[derive(Args)]
@@ -185,6 +191,8 @@ fn main() -> ExitCode {
         Command::SimulateMeasurements(a) => commands::calibrate::simulate_run(&a),
         Command::Calibrate(a) => commands::calibrate::calibrate_run(&a),
         Command::Report(a) => report::run(&a),
+        Command::Import(a) => commands::linuxcnc::import_run(&a),
+        Command::Export(a) => commands::linuxcnc::export_run(&a),
     };
     match res {
         Ok(code) => ExitCode::from(code),

@@ -187,6 +187,30 @@ pub fn pose_from_user(m: &dyn DynMechanism, vals: &[f64], conv: Convention) -> R
     match m.pose_space() {
         PoseSpace::Spatial | PoseSpace::Position => {
             let names = pose_names(m, conv);
+            // A machine that drives X, Y, Z, A, B and holds C (a pentapod: LinuxCNC's
+            // X, Y, Z, A, B) takes five values in its own RPY angles, C its held value.
+            let holds_c = m.pose_space() == PoseSpace::Spatial && m.driven() == [0, 1, 2, 3, 4];
+            if holds_c && vals.len() == 5 && conv == Convention::Rpy {
+                let h = m.home();
+                return Ok(vec![
+                    vals[0],
+                    vals[1],
+                    vals[2],
+                    vals[3].to_radians(),
+                    vals[4].to_radians(),
+                    h[5],
+                ]);
+            }
+            if holds_c && vals.len() != 3 && vals.len() != 6 {
+                return Err(Error::InvalidInput {
+                    what: "pose".into(),
+                    message: format!(
+                        "expected 3, 5 (X,Y,Z,A,B; rpy angles, C held) or 6 values ({}), got {}",
+                        names.join(","),
+                        vals.len()
+                    ),
+                });
+            }
             if vals.len() != 3 && vals.len() != 6 {
                 return Err(Error::InvalidInput {
                     what: "pose".into(),

@@ -34,6 +34,7 @@ pub mod identify;
 pub mod legs;
 pub mod limits;
 pub mod linalg;
+pub mod linuxcnc;
 pub mod machine;
 pub mod mechanism;
 pub mod motion;

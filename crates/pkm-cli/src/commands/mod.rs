@@ -7,6 +7,7 @@ pub mod csvio;
 pub mod errors;
 pub mod fk;
 pub mod ik;
+pub mod linuxcnc;
 pub mod motion;
 pub mod workspace;
 

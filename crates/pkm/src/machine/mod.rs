@@ -261,6 +261,7 @@ pub(crate) fn axis_limits(
             },
         ));
     }
+    out.ranges.sort_by_key(|(k, _)| *k);
     Ok(out)
 }
 

@@ -281,6 +281,42 @@ impl Machine {
         }
     }
 
+    /// What a LinuxCNC controller needs of this machine ([`crate::linuxcnc::export`]):
+    /// hexapods (genhexkins) and pentapods (pentakins); other types answer
+    /// [`Error::Unsupported`].
+    pub fn controller_model(&self) -> Result<crate::linuxcnc::ControllerModel> {
+        use crate::linuxcnc::{ControllerModel, Geometry};
+        match &self.model {
+            Model::Hexapod(h) => Ok(ControllerModel {
+                geometry: Geometry::Genhex {
+                    base: std::array::from_fn(|i| h.struts[i].base),
+                    platform: std::array::from_fn(|i| h.struts[i].platform - h.tool),
+                },
+                axes: h.axes.clone(),
+                zero_lengths: h.zero_lengths.map(|z| z.iter().copied().collect()),
+            }),
+            Model::Pentapod(p) => Ok(ControllerModel {
+                geometry: Geometry::Penta {
+                    base: std::array::from_fn(|i| p.struts[i].base),
+                    radius: std::array::from_fn(|i| p.struts[i].ring_radius),
+                    height: std::array::from_fn(|i| p.struts[i].ring_height - p.tool),
+                },
+                axes: p.axes.clone(),
+                zero_lengths: None,
+            }),
+            _ => {
+                let m = self.mechanism();
+                Err(Error::Unsupported {
+                    machine: m.name().to_string(),
+                    kind: m.kind().to_string(),
+                    analysis: "LinuxCNC export",
+                    reason: "LinuxCNC configurations are written for hexapods (genhexkins) and                              pentapods (pentakins)"
+                        .into(),
+                })
+            }
+        }
+    }
+
     /// The hexapod, for the stream solver that tracks it ([`crate::hexapod::FkTracker`]).
     pub(crate) fn tracked_hexapod(&self) -> Option<&crate::hexapod::Hexapod> {
         match &self.model {

@@ -14,6 +14,7 @@ mod gcode;
 mod hexapod;
 mod hybrid_am;
 mod identify;
+mod linuxcnc;
 mod machine_file;
 mod motion;
 mod p3rp;

@@ -40,7 +40,7 @@ fn random_pose(rng: &mut rand::rngs::StdRng) -> Vector6<f64> {
 /// `b` moved into the effector frame by the inverse of `R = Ry(b) Rx(a)`
 /// (`pmRpyMatConvert(a, b, 0)`), then the distance to the ring in that frame. The ring
 /// data are the sim's `kinematics.hal`.
-fn pentakins_inverse(pose: &[f64; 5]) -> [f64; 5] {
+pub(crate) fn pentakins_inverse(pose: &[f64; 5]) -> [f64; 5] {
     let base = [
         [-418.0, 500.0, -140.0],
         [418.0, 500.0, -140.0],

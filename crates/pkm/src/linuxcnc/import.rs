@@ -1,0 +1,779 @@
+//! A LinuxCNC configuration (INI and the HAL files it names) as a pkm machine file.
+//!
+//! The kinematics module (`[KINS] KINEMATICS`) decides the machine type: `genhexkins`
+//! a hexapod, `pentakins` a pentapod. Its geometry comes from the HAL parameters
+//! (`genhexkins.base.N.x`, ...; the module's compiled-in defaults for what the HAL
+//! leaves unset, as in LinuxCNC), its strokes, rates and home from `[JOINT_n]`, the
+//! axis travel from `[AXIS_L]`, the home pose from `[TRAJ] HOME` (or `[AXIS_L] HOME`);
+//! lengths are converted from `[TRAJ] LINEAR_UNITS` to mm, angles from
+//! `ANGULAR_UNITS` to degrees. The file written says where every value came from.
+
+// Struts and their joint names are indexed together.
+#![allow(clippy::needless_range_loop)]
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use super::hal::{Hal, HalValue};
+use super::ini::{file_error, short, Ini, IniEntry};
+use super::{fmt_num, Kinematics};
+use crate::error::{Error, Result};
+use crate::Machine;
+
+/// A LinuxCNC configuration converted to a pkm machine file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Imported {
+    /// The machine file (TOML, commented).
+    pub toml: String,
+    /// The kinematics module (`genhexkins`, `pentakins`).
+    pub kinematics: &'static str,
+    /// What the user should know: values that were adjusted, HOME values that do not
+    /// match the geometry, parameters that follow run-time signals.
+    pub warnings: Vec<String>,
+}
+
+/// Imports the configuration of `ini` (HAL files it names are read relative to its
+/// directory; `LIB:` files and Tcl files hold no geometry and are skipped), then the
+/// `extra_hal` files, whose `setp` lines override the INI's.
+pub fn import(ini: &Path, extra_hal: &[std::path::PathBuf]) -> Result<Imported> {
+    let name = ini.display().to_string();
+    let text = read(ini, &name, None)?;
+    let dir = ini.parent().map(Path::to_path_buf).unwrap_or_default();
+    let mut extra = Vec::new();
+    for h in extra_hal {
+        extra.push((
+            h.display().to_string(),
+            read(h, &h.display().to_string(), None)?,
+        ));
+    }
+    import_with(
+        &name,
+        &text,
+        &mut |f: &str| std::fs::read_to_string(dir.join(f)).map_err(|e| e.to_string()),
+        &extra,
+    )
+}
+
+fn read(path: &Path, name: &str, line: Option<usize>) -> Result<String> {
+    let meta = std::fs::metadata(path)
+        .map_err(|e| file_error(name, line, "", format!("cannot read: {e}")))?;
+    if meta.len() > super::ini::MAX_TEXT as u64 {
+        return Err(file_error(
+            name,
+            line,
+            "",
+            format!("{} bytes is not a LinuxCNC configuration file", meta.len()),
+        ));
+    }
+    std::fs::read_to_string(path)
+        .map_err(|e| file_error(name, line, "", format!("cannot read: {e}")))
+}
+
+/// [`import`] on texts: the INI `ini_text` (named `ini_file`), the HAL files it names
+/// read by `read_named`, then `extra_hal` (name, text) pairs.
+pub fn import_with(
+    ini_file: &str,
+    ini_text: &str,
+    read_named: &mut dyn FnMut(&str) -> std::result::Result<String, String>,
+    extra_hal: &[(String, String)],
+) -> Result<Imported> {
+    let ini = Ini::parse(ini_file, ini_text)?;
+    let kins_entry = ini.get("KINS", "KINEMATICS").ok_or_else(|| {
+        file_error(
+            ini_file,
+            None,
+            "[KINS] KINEMATICS",
+            "no kinematics module named: expected `[KINS] KINEMATICS = genhexkins` or `pentakins`",
+        )
+    })?;
+    let module = kins_entry.value.split_whitespace().next().unwrap_or("");
+    let kins = Kinematics::from_module(module).ok_or_else(|| {
+        ini.error(
+            kins_entry,
+            format!(
+                "unsupported kinematics `{module}`: pkm imports genhexkins (hexapod) and \
+                 pentakins (pentapod)"
+            ),
+        )
+    })?;
+    let mut hal = Hal::default();
+    let mut sources = Vec::new();
+    let mut warnings = Vec::new();
+    for e in ini.all("HAL", "HALFILE") {
+        let f = e.value.as_str();
+        if f.starts_with("LIB:") || f.ends_with(".tcl") {
+            continue;
+        }
+        let text = read_named(f)
+            .map_err(|m| ini.error(e, format!("cannot read the HAL file `{f}` it names: {m}")))?;
+        hal.read(f, &text, 1, &ini)?;
+        sources.push(f.to_string());
+    }
+    for e in ini.all("HAL", "HALCMD") {
+        hal.read(ini_file, &e.value, e.line, &ini)?;
+    }
+    for (f, text) in extra_hal {
+        hal.read(f, text, 1, &ini)?;
+        sources.push(short(f).to_string());
+    }
+    let units = Units::read(&ini, &mut warnings)?;
+    let mut w = Writer {
+        ini: &ini,
+        hal: &hal,
+        units,
+        kins,
+        out: String::new(),
+        warnings,
+    };
+    w.header(&sources);
+    match kins {
+        Kinematics::Genhex => w.genhex()?,
+        Kinematics::Penta => w.penta()?,
+    }
+    w.finish()
+}
+
+/// The configuration's units: mm per length unit, degrees per angle unit.
+#[derive(Debug, Clone, Copy)]
+struct Units {
+    mm: f64,
+    linear: &'static str,
+    deg: f64,
+    angular: &'static str,
+}
+
+impl Units {
+    fn read(ini: &Ini, warnings: &mut Vec<String>) -> Result<Units> {
+        let (mm, linear) = match ini.get("TRAJ", "LINEAR_UNITS") {
+            None => {
+                warnings.push(format!(
+                    "{}: no [TRAJ] LINEAR_UNITS, lengths taken as mm",
+                    short(&ini.file)
+                ));
+                (1.0, "mm")
+            }
+            Some(e) => match e.value.to_ascii_lowercase().as_str() {
+                "mm" | "metric" => (1.0, "mm"),
+                "in" | "inch" | "imperial" => (25.4, "in"),
+                "cm" => (10.0, "cm"),
+                _ => {
+                    return Err(ini.error(
+                        e,
+                        format!(
+                            "unknown length unit `{}`: expected mm, metric, inch, in or imperial",
+                            e.value
+                        ),
+                    ))
+                }
+            },
+        };
+        let (deg, angular) = match ini.get("TRAJ", "ANGULAR_UNITS") {
+            None => (1.0, "deg"),
+            Some(e) => match e.value.to_ascii_lowercase().as_str() {
+                "deg" | "degree" | "degrees" => (1.0, "deg"),
+                "rad" | "radian" | "radians" => (180.0 / std::f64::consts::PI, "rad"),
+                "grad" | "gon" => (0.9, "grad"),
+                _ => {
+                    return Err(ini.error(
+                        e,
+                        format!(
+                            "unknown angle unit `{}`: expected degree, radian or grad",
+                            e.value
+                        ),
+                    ))
+                }
+            },
+        };
+        Ok(Units {
+            mm,
+            linear,
+            deg,
+            angular,
+        })
+    }
+}
+
+/// Largest stroke written for a joint the INI leaves unlimited (mm).
+const OPEN_STROKE: f64 = 100_000.0;
+
+struct Writer<'a> {
+    ini: &'a Ini,
+    hal: &'a Hal,
+    units: Units,
+    kins: Kinematics,
+    out: String,
+    warnings: Vec<String>,
+}
+
+/// A geometry value and where it came from.
+struct Param {
+    value: f64,
+    origin: String,
+}
+
+impl Writer<'_> {
+    fn line(&mut self, s: impl AsRef<str>) {
+        self.out.push_str(s.as_ref());
+        self.out.push('\n');
+    }
+
+    fn header(&mut self, sources: &[String]) {
+        let ini = short(&self.ini.file).to_string();
+        let module = self.kins.module();
+        self.line(format!(
+            "# Imported by `pkm import linuxcnc` from {ini} ({module}){}.",
+            if sources.is_empty() {
+                String::new()
+            } else {
+                format!(" and {}", sources.join(", "))
+            }
+        ));
+        let lengths = if self.units.mm == 1.0 {
+            "Lengths in mm".to_string()
+        } else {
+            format!(
+                "Lengths converted from {} to mm (x {})",
+                self.units.linear,
+                fmt_num(self.units.mm)
+            )
+        };
+        let angles = if self.units.deg == 1.0 {
+            "angles in deg".to_string()
+        } else {
+            format!("angles converted from {} to deg", self.units.angular)
+        };
+        self.line(format!("# {lengths}, {angles}. Comments give"));
+        self.line("# each value's origin: file:line and the configuration's own value and unit.");
+        self.line(format!("type = \"{}\"", self.kins.machine_type()));
+        let name = self
+            .ini
+            .get("EMC", "MACHINE")
+            .map(|e| e.value.clone())
+            .unwrap_or_else(|| module.to_string());
+        self.line(format!("name = {}", toml_str(&name)));
+        self.line(format!(
+            "description = {}",
+            toml_str(&format!("LinuxCNC configuration {ini} ({module})"))
+        ));
+    }
+
+    /// A kinematics parameter: its HAL value, or the module's default.
+    fn param(&mut self, name: &str, default: f64) -> Result<Param> {
+        match self.hal.value(name) {
+            Ok(Some(HalValue { value, at, .. })) => Ok(Param { value, origin: at }),
+            Ok(None) => Ok(Param {
+                value: default,
+                origin: format!("{} default", self.kins.module()),
+            }),
+            Err((signal, at)) => {
+                self.warnings.push(format!(
+                    "{name} follows signal `{signal}` ({at}), which changes at run time (a \
+                     tool length); taken as {default} here: give pkm the tool in `[tool] tip`"
+                ));
+                Ok(Param {
+                    value: default,
+                    origin: format!("run-time signal {signal} ({at}), taken as {default}"),
+                })
+            }
+        }
+    }
+
+    fn point(
+        &mut self,
+        prefix: &str,
+        i: usize,
+        default: [f64; 3],
+        z_offset: f64,
+    ) -> Result<([f64; 3], String)> {
+        let mut v = [0.0; 3];
+        let mut origins = Vec::new();
+        for (k, axis) in ["x", "y", "z"].iter().enumerate() {
+            let p = self.param(
+                &format!("{}.{prefix}.{i}.{axis}", self.kins.module()),
+                default[k],
+            )?;
+            v[k] = p.value;
+            origins.push(p.origin);
+        }
+        v[2] += z_offset;
+        let origin = join_origins(&origins);
+        let comment = format!(
+            "{}.{prefix}.{i} = ({}, {}, {}) {}{}: {origin}",
+            self.kins.module(),
+            fmt_num(v[0]),
+            fmt_num(v[1]),
+            fmt_num(v[2] - z_offset),
+            self.units.linear,
+            if z_offset != 0.0 {
+                format!(" + offset {} on z", fmt_num(z_offset))
+            } else {
+                String::new()
+            }
+        );
+        Ok((v.map(|c| c * self.units.mm), comment))
+    }
+
+    fn genhex(&mut self) -> Result<()> {
+        let lead = self.param("genhexkins.screw-lead", 0.0)?;
+        if lead.value != 0.0 {
+            let line = self
+                .hal
+                .setp
+                .get("genhexkins.screw-lead")
+                .map(|v| (v.file.clone(), v.line));
+            let (file, line) = line.unwrap_or((self.ini.file.clone(), 0));
+            return Err(file_error(
+                &file,
+                (line > 0).then_some(line),
+                "genhexkins.screw-lead",
+                format!(
+                    "screw-lead {} corrects strut lengths for non-captive screws turning with \
+                     the joints; pkm's hexapod has no such correction (set it to 0 to import \
+                     the geometry alone)",
+                    lead.value
+                ),
+            ));
+        }
+        let spindle = self.param("genhexkins.spindle-offset", 0.0)?;
+        let tool = self.param("genhexkins.tool-offset", 0.0)?;
+        let off = spindle.value + tool.value;
+        let mut base = Vec::new();
+        let mut plat = Vec::new();
+        for i in 0..6 {
+            base.push(self.point("base", i, super::GENHEX_BASE[i], off)?);
+            plat.push(self.point("platform", i, super::GENHEX_PLATFORM[i], off)?);
+        }
+        if off != 0.0 {
+            self.line(format!(
+                "# genhexkins adds spindle-offset ({}, {}) + tool-offset ({}, {}) to every joint's z.",
+                fmt_num(spindle.value),
+                spindle.origin,
+                fmt_num(tool.value),
+                tool.origin
+            ));
+        }
+        let base_names = self.joint_table("base_joints", "B", &base);
+        let plat_names = self.joint_table("platform_joints", "P", &plat);
+        for i in 0..6 {
+            self.line("");
+            self.line("[[struts]]");
+            self.line(format!("name = \"{i}\""));
+            self.line(format!("base = \"{}\"", base_names[i]));
+            self.line(format!("platform = \"{}\"", plat_names[i]));
+            self.joint(i)?;
+        }
+        self.line("");
+        self.line("[tool]");
+        self.line("tip = [0.0, 0.0, 0.0]  # genhexkins controls the platform frame's origin");
+        self.limits()?;
+        self.home()?;
+        Ok(())
+    }
+
+    fn penta(&mut self) -> Result<()> {
+        let tool = self.param("pentakins.tool-offset", 0.0)?;
+        let mut base = Vec::new();
+        for i in 0..5 {
+            base.push(self.point("base", i, super::PENTA_BASE[i], tool.value)?);
+        }
+        if tool.value != 0.0 {
+            self.line(format!(
+                "# pentakins adds tool-offset ({}, {}) to the base joints' z and the rings' heights.",
+                fmt_num(tool.value),
+                tool.origin
+            ));
+        }
+        let names = self.joint_table("base_joints", "B", &base);
+        for i in 0..5 {
+            let r = self.param(
+                &format!("pentakins.effector.{i}.r"),
+                super::PENTA_RING[i][0],
+            )?;
+            let z = self.param(
+                &format!("pentakins.effector.{i}.z"),
+                super::PENTA_RING[i][1],
+            )?;
+            self.line("");
+            self.line("[[struts]]");
+            self.line(format!("name = \"{i}\""));
+            self.line(format!("base = \"{}\"", names[i]));
+            self.line(format!(
+                "ring_radius = {}  # pentakins.effector.{i}.r = {} {}: {}",
+                fmt_num(r.value * self.units.mm),
+                fmt_num(r.value),
+                self.units.linear,
+                r.origin
+            ));
+            self.line(format!(
+                "ring_height = {}  # pentakins.effector.{i}.z = {} {}: {}",
+                fmt_num((z.value + tool.value) * self.units.mm),
+                fmt_num(z.value),
+                self.units.linear,
+                z.origin
+            ));
+            self.joint(i)?;
+        }
+        self.line("");
+        self.line("[tool]");
+        self.line("tip = [0.0, 0.0, 0.0]  # pentakins controls the effector frame's origin");
+        self.limits()?;
+        self.home()?;
+        Ok(())
+    }
+
+    /// Writes joints `[table]`, one per distinct point (struts sharing a point share
+    /// the joint, named after the first: `B0`, `B1`, `B3`); returns each strut's joint.
+    fn joint_table(
+        &mut self,
+        table: &str,
+        prefix: &str,
+        points: &[([f64; 3], String)],
+    ) -> Vec<String> {
+        self.line("");
+        self.line(format!("[{table}]"));
+        let mut names: Vec<String> = Vec::new();
+        for (i, (p, comment)) in points.iter().enumerate() {
+            if let Some(k) = (0..i).find(|k| points[*k].0 == *p) {
+                let n = names[k].clone();
+                self.line(format!("# strut {i}'s joint is {n}: {comment}"));
+                names.push(n);
+                continue;
+            }
+            let n = format!("{prefix}{i}");
+            self.line(format!(
+                "{n} = [{}, {}, {}]  # {comment}",
+                fmt_num(p[0]),
+                fmt_num(p[1]),
+                fmt_num(p[2])
+            ));
+            names.push(n);
+        }
+        names
+    }
+
+    fn number(&self, section: &str, key: &str) -> Result<Option<(f64, IniEntry)>> {
+        Ok(self.ini.number(section, key)?.map(|(v, e)| (v, e.clone())))
+    }
+
+    /// Stroke and rates of joint `i` (`[JOINT_i]`, lengths in the linear unit).
+    fn joint(&mut self, i: usize) -> Result<()> {
+        let sec = format!("JOINT_{i}");
+        if let Some(t) = self.ini.get(&sec, "TYPE") {
+            if !t.value.eq_ignore_ascii_case("LINEAR") {
+                return Err(self
+                    .ini
+                    .error(t, format!("a strut's joint is LINEAR, found `{}`", t.value)));
+            }
+        }
+        let k = self.units.mm;
+        let u = self.units.linear;
+        let min = self.number(&sec, "MIN_LIMIT")?;
+        let max = self.number(&sec, "MAX_LIMIT")?;
+        let (lo, lo_note) = match &min {
+            Some((v, e)) if *v >= 0.0 => (
+                v * k,
+                format!("MIN_LIMIT {} {u} ({})", fmt_num(*v), self.ini.at(e)),
+            ),
+            Some((v, e)) => (
+                0.0,
+                format!(
+                    "MIN_LIMIT {} {u} ({}) is below 0: a strut is never shorter than 0",
+                    fmt_num(*v),
+                    self.ini.at(e)
+                ),
+            ),
+            None => (0.0, "no MIN_LIMIT".into()),
+        };
+        let (hi, hi_note) = match &max {
+            Some((v, e)) if v * k <= OPEN_STROKE => (
+                v * k,
+                format!("MAX_LIMIT {} {u} ({})", fmt_num(*v), self.ini.at(e)),
+            ),
+            Some((v, e)) => (
+                OPEN_STROKE,
+                format!(
+                    "MAX_LIMIT {} {u} ({}) taken as {} mm",
+                    fmt_num(*v),
+                    self.ini.at(e),
+                    fmt_num(OPEN_STROKE)
+                ),
+            ),
+            None => {
+                self.warnings.push(format!(
+                    "[{sec}] has no MAX_LIMIT: the stroke is open up to {} mm",
+                    fmt_num(OPEN_STROKE)
+                ));
+                (OPEN_STROKE, "no MAX_LIMIT".into())
+            }
+        };
+        if !(hi > lo) {
+            let e = max.as_ref().map(|m| m.1.clone());
+            let msg = format!("the stroke [{}, {}] mm is empty", fmt_num(lo), fmt_num(hi));
+            return Err(match e {
+                Some(e) => self.ini.error(&e, msg),
+                None => file_error(&self.ini.file, None, &format!("[{sec}] MAX_LIMIT"), msg),
+            });
+        }
+        self.line(format!(
+            "length = [{}, {}]  # [{sec}] {lo_note}, {hi_note}",
+            fmt_num(lo),
+            fmt_num(hi)
+        ));
+        for (key, field, unit) in [
+            ("MAX_VELOCITY", "max_velocity", "/s"),
+            ("MAX_ACCELERATION", "max_acceleration", "/s^2"),
+        ] {
+            if let Some((v, e)) = self.number(&sec, key)? {
+                if v > 0.0 {
+                    self.line(format!(
+                        "{field} = {}  # [{sec}] {key} = {} {u}{unit} ({})",
+                        fmt_num(v * k),
+                        fmt_num(v),
+                        self.ini.at(&e)
+                    ));
+                } else {
+                    self.warnings.push(format!(
+                        "{}: [{sec}] {key} {v} is not > 0, left out",
+                        self.ini.at(&e)
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// `[limits] axes` from `[AXIS_L] MIN_LIMIT / MAX_LIMIT`.
+    fn limits(&mut self) -> Result<()> {
+        let mut items = Vec::new();
+        let mut notes = Vec::new();
+        for (c, linear) in self.kins.coordinates() {
+            let sec = format!("AXIS_{c}");
+            let (Some((lo, el)), Some((hi, eh))) = (
+                self.number(&sec, "MIN_LIMIT")?,
+                self.number(&sec, "MAX_LIMIT")?,
+            ) else {
+                continue;
+            };
+            let k = if *linear {
+                self.units.mm
+            } else {
+                self.units.deg
+            };
+            let (a, b) = (lo * k, hi * k);
+            if !(a < b) {
+                return Err(self
+                    .ini
+                    .error(&eh, format!("the travel [{lo}, {hi}] of axis {c} is empty")));
+            }
+            if a.abs() > crate::machine::MAX_MAGNITUDE || b.abs() > crate::machine::MAX_MAGNITUDE {
+                notes.push(format!(
+                    "{c}: [{lo}, {hi}] ({}), unlimited here",
+                    self.ini.at(&el)
+                ));
+                continue;
+            }
+            items.push(format!("{c} = [{}, {}]", fmt_num(a), fmt_num(b)));
+            notes.push(format!(
+                "{c}: [{}, {}] {} ({}, {})",
+                fmt_num(lo),
+                fmt_num(hi),
+                if *linear {
+                    self.units.linear
+                } else {
+                    self.units.angular
+                },
+                self.ini.at(&el),
+                self.ini.at(&eh)
+            ));
+        }
+        self.line("");
+        self.line("[limits]");
+        if !items.is_empty() {
+            self.line("# Axis travel from [AXIS_L] MIN_LIMIT, MAX_LIMIT:");
+            for n in notes {
+                self.line(format!("#   {n}"));
+            }
+            self.line(format!("axes = {{ {} }}", items.join(", ")));
+        }
+        Ok(())
+    }
+
+    /// `[home]` from `[TRAJ] HOME` (X Y Z A B C order) or `[AXIS_L] HOME`.
+    fn home(&mut self) -> Result<()> {
+        let coords = self.kins.coordinates();
+        let traj = self.ini.get("TRAJ", "HOME").cloned();
+        let mut v = vec![0.0; coords.len()];
+        let origin;
+        if let Some(e) = &traj {
+            let words: Vec<&str> = e.value.split_whitespace().collect();
+            for (k, w) in words.iter().take(coords.len()).enumerate() {
+                v[k] = w
+                    .parse::<f64>()
+                    .ok()
+                    .filter(|x| x.is_finite())
+                    .ok_or_else(|| {
+                        self.ini
+                            .error(e, format!("expected numbers X Y Z A B C, found `{w}`"))
+                    })?;
+            }
+            origin = format!("[TRAJ] HOME = {} ({})", e.value, self.ini.at(e));
+        } else {
+            let mut parts = Vec::new();
+            for (k, (c, _)) in coords.iter().enumerate() {
+                if let Some((x, e)) = self.number(&format!("AXIS_{c}"), "HOME")? {
+                    v[k] = x;
+                    parts.push(format!("{c} {} ({})", fmt_num(x), self.ini.at(&e)));
+                }
+            }
+            origin = if parts.is_empty() {
+                "no HOME given: 0".into()
+            } else {
+                format!("[AXIS_L] HOME: {}", parts.join(", "))
+            };
+        }
+        for (k, (_, linear)) in coords.iter().enumerate() {
+            v[k] *= if *linear {
+                self.units.mm
+            } else {
+                self.units.deg
+            };
+        }
+        self.line("");
+        self.line("[home]");
+        self.line(format!("# {origin}"));
+        self.line(format!(
+            "position = [{}, {}, {}]",
+            fmt_num(v[0]),
+            fmt_num(v[1]),
+            fmt_num(v[2])
+        ));
+        let angles: Vec<String> = v[3..].iter().map(|a| fmt_num(*a)).collect();
+        self.line(format!("angles = [{}]", angles.join(", ")));
+        Ok(())
+    }
+
+    /// Loads the file written so far, compares the INI's joint HOME and HOME_OFFSET
+    /// with the struts at the home pose, and adds what follows from them.
+    fn finish(mut self) -> Result<Imported> {
+        let m = Machine::from_toml_str(&self.out, "<imported machine>").map_err(|e| {
+            Error::InvalidInput {
+                what: format!("import of {}", short(&self.ini.file)),
+                message: format!("the configuration does not give a valid pkm machine: {e}"),
+            }
+        })?;
+        let mech = m.mechanism();
+        let home = mech.home();
+        let q = mech.inverse(&home)?;
+        let n = q.len();
+        let read = |key: &str| -> Result<Option<Vec<(f64, IniEntry)>>> {
+            let mut v = Vec::new();
+            for i in 0..n {
+                match self.number(&format!("JOINT_{i}"), key)? {
+                    Some((x, e)) => v.push((x * self.units.mm, e)),
+                    None => return Ok(None),
+                }
+            }
+            Ok(Some(v))
+        };
+        let joint_home = read("HOME")?;
+        let joint_offset = read("HOME_OFFSET")?;
+        let ik: Vec<String> = q.iter().map(|x| format!("{x:.4}")).collect();
+        let mut tail = String::new();
+        if let Some(h) = &joint_home {
+            let worst = h
+                .iter()
+                .zip(&q)
+                .map(|((a, _), b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            if worst <= 1e-2 {
+                let _ = writeln!(tail, "\n[[reference]]");
+                let _ = writeln!(
+                    tail,
+                    "source = {}",
+                    toml_str(&format!(
+                        "{}: [JOINT_n] HOME, the strut lengths LinuxCNC homes to at the home pose",
+                        short(&self.ini.file)
+                    ))
+                );
+                let angles: Vec<f64> = home[3..].iter().map(|a| a.to_degrees()).collect();
+                let pose: Vec<String> = home[..3]
+                    .iter()
+                    .copied()
+                    .chain(angles)
+                    .map(fmt_num)
+                    .collect();
+                let _ = writeln!(tail, "pose = [{}]", pose.join(", "));
+                let _ = writeln!(tail, "tolerance = 0.01");
+                let acts: Vec<String> = h
+                    .iter()
+                    .enumerate()
+                    .map(|(i, (v, _))| format!("\"{i}\" = {}", fmt_num(*v)))
+                    .collect();
+                let _ = writeln!(tail, "actuators = {{ {} }}", acts.join(", "));
+            } else {
+                let vals: Vec<String> = h.iter().map(|(v, _)| format!("{v:.4}")).collect();
+                let msg = format!(
+                    "the INI's [JOINT_n] HOME ({} mm) are not the strut lengths at the home \
+                     pose ({} mm; up to {worst:.3} mm off): LinuxCNC would home to another \
+                     pose; pkm uses the home pose",
+                    vals.join(", "),
+                    ik.join(", ")
+                );
+                self.warnings.push(msg.clone());
+                tail.push_str(&format!("\n# Note: {msg}.\n"));
+            }
+        }
+        if let (Some(off), Kinematics::Genhex) = (&joint_offset, self.kins) {
+            if off.iter().all(|(v, _)| *v > 0.0) {
+                let vals: Vec<String> = off.iter().map(|(v, _)| fmt_num(*v)).collect();
+                let _ = writeln!(tail, "\n[calibration]");
+                let _ = writeln!(
+                    tail,
+                    "# [JOINT_n] HOME_OFFSET ({}): the strut lengths at the home switches, where \
+                     the control's readings are zeroed",
+                    self.ini.at(&off[0].1)
+                );
+                let _ = writeln!(tail, "zero_lengths = [{}]", vals.join(", "));
+            }
+        }
+        self.out.push_str(&tail);
+        Machine::from_toml_str(&self.out, "<imported machine>").map_err(|e| {
+            Error::InvalidInput {
+                what: format!("import of {}", short(&self.ini.file)),
+                message: format!("the configuration does not give a valid pkm machine: {e}"),
+            }
+        })?;
+        Ok(Imported {
+            toml: self.out,
+            kinematics: self.kins.module(),
+            warnings: self.warnings,
+        })
+    }
+}
+
+/// `a.hal:4, a.hal:5, a.hal:6` as `a.hal:4-6`; equal origins once.
+fn join_origins(origins: &[String]) -> String {
+    if origins.iter().all(|o| *o == origins[0]) {
+        return origins[0].clone();
+    }
+    let parsed: Option<Vec<(&str, usize)>> = origins
+        .iter()
+        .map(|o| {
+            let (f, l) = o.rsplit_once(':')?;
+            Some((f, l.parse().ok()?))
+        })
+        .collect();
+    if let Some(p) = parsed {
+        let consecutive = p
+            .windows(2)
+            .all(|w| w[0].0 == w[1].0 && w[1].1 == w[0].1 + 1);
+        if consecutive {
+            return format!("{}:{}-{}", p[0].0, p[0].1, p[p.len() - 1].1);
+        }
+    }
+    origins.join(", ")
+}
+
+fn toml_str(s: &str) -> String {
+    toml::Value::String(s.to_string()).to_string()
+}
