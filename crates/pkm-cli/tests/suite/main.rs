@@ -7,6 +7,7 @@ mod browser;
 mod calibrate_cli;
 mod cli;
 mod errors_cli;
+mod linuxcnc_cli;
 mod motion_cli;
 mod pipes_cli;
 mod report_cli;

@@ -400,3 +400,128 @@ fn a_pentapod_pose_of_five_values_is_linuxcncs_x_y_z_a_b() {
     let want = Vector6::new(1.0, 2.0, 3.0, 10f64.to_radians(), -5f64.to_radians(), 0.0);
     assert!((Vector6::from_column_slice(&x) - want).amax() < 1e-15);
 }
+
+/// genhexkins' forward kinematics as its source describes it (for the comparison in
+/// docs/linuxcnc.md): Newton with the twist Jacobian `[u, (R a) x u]`, the angular step
+/// subtracted from the roll, pitch, yaw angles as if it were their rates; stops when
+/// every strut is within `1e-9` (inch), fails after 120 iterations or when the summed
+/// error exceeds 500. Returns the pose (inch, rad) and the iterations.
+fn genhexkins_forward(q: &[f64; 6], start: &[f64; 6]) -> Result<([f64; 6], usize), i32> {
+    let b = [
+        [-22.95, 13.25, 0.0],
+        [22.95, 13.25, 0.0],
+        [22.95, 13.25, 0.0],
+        [0.0, -26.5, 0.0],
+        [0.0, -26.5, 0.0],
+        [-22.95, 13.25, 0.0],
+    ];
+    let a = [
+        [-1.0, 11.5, 0.0],
+        [1.0, 11.5, 0.0],
+        [10.459, -4.884, 0.0],
+        [9.459, -6.616, 0.0],
+        [-9.459, -6.616, 0.0],
+        [-10.459, -4.884, 0.0],
+    ];
+    let mut x = *start;
+    let mut conv_err: f64 = 1.0;
+    for iteration in 1.. {
+        if conv_err.abs() > 500.0 {
+            return Err(-2);
+        }
+        if iteration > 120 {
+            return Err(-5);
+        }
+        let r = pkm::rotation::rpy_matrix(x[3], x[4], x[5]);
+        let p = Vector3::new(x[0], x[1], x[2]);
+        let mut j = nalgebra::Matrix6::<f64>::zeros();
+        let mut diff = nalgebra::Vector6::<f64>::zeros();
+        for i in 0..6 {
+            let ra = r * Vector3::from(a[i]);
+            let s = p + ra - Vector3::from(b[i]);
+            let l = s.norm();
+            let u = s / l;
+            let m = ra.cross(&u);
+            for k in 0..3 {
+                j[(i, k)] = u[k];
+                j[(i, 3 + k)] = m[k];
+            }
+            diff[i] = l - q[i];
+        }
+        let delta = j.try_inverse().ok_or(-1)? * diff;
+        for k in 0..6 {
+            x[k] -= delta[k];
+        }
+        conv_err = diff.iter().map(|d| d.abs()).sum();
+        if diff.iter().all(|d| d.abs() <= 1e-9) {
+            return Ok((x, iteration));
+        }
+    }
+    unreachable!()
+}
+
+#[test]
+fn forward_kinematics_against_genhexkins_algorithm() {
+    let (m, _, _) = imported("hexapod-sim/hexapod.ini");
+    let mech = m.mechanism();
+    let mut rng = rand::rngs::StdRng::seed_from_u64(4);
+    let (mut ours, mut theirs, mut failed) = (Vec::new(), Vec::new(), 0);
+    for _ in 0..500 {
+        let pin: [f64; 6] = [
+            rng.random_range(-4.0..4.0),
+            rng.random_range(-4.0..4.0),
+            rng.random_range(16.0..24.0),
+            rng.random_range(-20f64..20.0).to_radians(),
+            rng.random_range(-20f64..20.0).to_radians(),
+            rng.random_range(-20f64..20.0).to_radians(),
+        ];
+        let q = genhexkins_inverse(&[
+            pin[0],
+            pin[1],
+            pin[2],
+            pin[3].to_degrees(),
+            pin[4].to_degrees(),
+            pin[5].to_degrees(),
+        ]);
+        let home = [0.0, 0.0, 20.0, 0.0, 0.0, 0.0];
+        let qmm: Vec<f64> = q.iter().map(|l| l * 25.4).collect();
+        let f = mech.forward(&qmm, &mech.home()).unwrap();
+        let want = [
+            pin[0] * 25.4,
+            pin[1] * 25.4,
+            pin[2] * 25.4,
+            pin[3],
+            pin[4],
+            pin[5],
+        ];
+        for k in 0..6 {
+            assert!(
+                (f.pose[k] - want[k]).abs() < 1e-9,
+                "{:?} vs {want:?}",
+                f.pose
+            );
+        }
+        ours.push(f.iterations);
+        match genhexkins_forward(&q, &home) {
+            Ok((x, it)) => {
+                for k in 0..3 {
+                    assert!((x[k] - pin[k]).abs() < 1e-8);
+                }
+                theirs.push(it);
+            }
+            Err(_) => failed += 1,
+        }
+    }
+    ours.sort();
+    theirs.sort();
+    let med = |v: &[usize]| v[v.len() / 2];
+    eprintln!(
+        "FK from home, 500 poses tilted up to 20 deg: pkm median {} max {} iterations; \
+         genhexkins median {} max {}, {failed} failed",
+        med(&ours),
+        ours[ours.len() - 1],
+        med(&theirs),
+        theirs[theirs.len() - 1]
+    );
+    assert!(med(&ours) <= med(&theirs));
+}
