@@ -147,6 +147,40 @@ pub fn segment_distance(
     ((p0 + d1 * s) - (q0 + d2 * t)).norm()
 }
 
+/// Pushes a violation for every pair of struts (base joint `base[i]` to moving joint
+/// `joints[i]`) whose axes come closer than `dia`, except pairs `skip(i, k)` (struts
+/// that share a joint touch there by construction).
+pub(crate) fn strut_interference<const N: usize>(
+    names: &[&str; N],
+    base: &[Vector3<f64>; N],
+    joints: &[Vector3<f64>; N],
+    skip: impl Fn(usize, usize) -> bool,
+    dia: f64,
+    out: &mut Vec<Violation>,
+) {
+    for i in 0..N {
+        for k in i + 1..N {
+            if skip(i, k) {
+                continue;
+            }
+            let d = segment_distance(&base[i], &joints[i], &base[k], &joints[k]);
+            if d < dia {
+                out.push(Violation::new(
+                    format!(
+                        "struts {}/{} interference (axis distance)",
+                        names[i], names[k]
+                    ),
+                    LimitKind::StrutInterference,
+                    Side::Min,
+                    Quantity::Length,
+                    d,
+                    dia,
+                ));
+            }
+        }
+    }
+}
+
 impl Hexapod {
     /// Assembles a hexapod.
     pub fn new(
@@ -377,32 +411,9 @@ impl Mechanism<6, 6> for Hexapod {
             }
         }
         if let Some(dia) = self.strut_diameter {
-            for i in 0..6 {
-                for k in i + 1..6 {
-                    if self.shares[i][k] {
-                        continue;
-                    }
-                    let d = segment_distance(
-                        &self.struts[i].base,
-                        &joints[i],
-                        &self.struts[k].base,
-                        &joints[k],
-                    );
-                    if d < dia {
-                        out.push(Violation::new(
-                            format!(
-                                "struts {}/{} interference (axis distance)",
-                                self.struts[i].actuator.name, self.struts[k].actuator.name
-                            ),
-                            LimitKind::StrutInterference,
-                            Side::Min,
-                            Quantity::Length,
-                            d,
-                            dia,
-                        ));
-                    }
-                }
-            }
+            let base: [Vector3<f64>; 6] = std::array::from_fn(|i| self.struts[i].base);
+            let names: [&str; 6] = std::array::from_fn(|i| self.struts[i].actuator.name.as_str());
+            strut_interference(&names, &base, &joints, |i, k| self.shares[i][k], dia, out);
         }
     }
 

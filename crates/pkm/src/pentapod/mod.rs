@@ -25,7 +25,7 @@ mod accuracy;
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3, Vector6};
 
 use crate::error::{Error, Result};
-use crate::hexapod::{segment_distance, JointCone};
+use crate::hexapod::{strut_interference, JointCone};
 use crate::legs::split_pose;
 use crate::limits::{AxisLimits, LimitKind, Side, Violation};
 use crate::mechanism::{
@@ -373,32 +373,10 @@ impl Mechanism<6, 5> for Pentapod {
             }
         }
         if let Some(dia) = self.strut_diameter {
-            for i in 0..5 {
-                for k in i + 1..5 {
-                    if self.struts[i].base_name == self.struts[k].base_name {
-                        continue;
-                    }
-                    let d = segment_distance(
-                        &self.struts[i].base,
-                        &joints[i],
-                        &self.struts[k].base,
-                        &joints[k],
-                    );
-                    if d < dia {
-                        out.push(Violation::new(
-                            format!(
-                                "struts {} and {} distance",
-                                self.struts[i].actuator.name, self.struts[k].actuator.name
-                            ),
-                            LimitKind::StrutInterference,
-                            Side::Min,
-                            Quantity::Length,
-                            d,
-                            dia,
-                        ));
-                    }
-                }
-            }
+            let base: [Vector3<f64>; 5] = std::array::from_fn(|i| self.struts[i].base);
+            let names: [&str; 5] = std::array::from_fn(|i| self.struts[i].actuator.name.as_str());
+            let same = |i: usize, k: usize| self.struts[i].base_name == self.struts[k].base_name;
+            strut_interference(&names, &base, &joints, same, dia, out);
         }
     }
 

@@ -30,25 +30,28 @@ fn imported(rel: &str) -> (Machine, Vec<String>, String) {
     (m, imp.warnings, imp.toml)
 }
 
+/// The hexapod sim's kinematics.hal (inch): base joints, platform joints.
+const SIM_BASE: [[f64; 3]; 6] = [
+    [-22.95, 13.25, 0.0],
+    [22.95, 13.25, 0.0],
+    [22.95, 13.25, 0.0],
+    [0.0, -26.5, 0.0],
+    [0.0, -26.5, 0.0],
+    [-22.95, 13.25, 0.0],
+];
+const SIM_PLATFORM: [[f64; 3]; 6] = [
+    [-1.0, 11.5, 0.0],
+    [1.0, 11.5, 0.0],
+    [10.459, -4.884, 0.0],
+    [9.459, -6.616, 0.0],
+    [-9.459, -6.616, 0.0],
+    [-10.459, -4.884, 0.0],
+];
+
 /// genhexkins' inverse, in the configuration's inches, from the sim's kinematics.hal:
 /// `L = |p + R a - b|` with `R = Rz(c) Ry(b) Rx(a)` (pmRpyMatConvert).
 fn genhexkins_inverse(pose: &[f64; 6]) -> [f64; 6] {
-    let b = [
-        [-22.95, 13.25, 0.0],
-        [22.95, 13.25, 0.0],
-        [22.95, 13.25, 0.0],
-        [0.0, -26.5, 0.0],
-        [0.0, -26.5, 0.0],
-        [-22.95, 13.25, 0.0],
-    ];
-    let a = [
-        [-1.0, 11.5, 0.0],
-        [1.0, 11.5, 0.0],
-        [10.459, -4.884, 0.0],
-        [9.459, -6.616, 0.0],
-        [-9.459, -6.616, 0.0],
-        [-10.459, -4.884, 0.0],
-    ];
+    let (a, b) = (SIM_PLATFORM, SIM_BASE);
     let (sa, ca) = pose[3].to_radians().sin_cos();
     let (sb, cb) = pose[4].to_radians().sin_cos();
     let (sc, cc) = pose[5].to_radians().sin_cos();
@@ -407,22 +410,7 @@ fn a_pentapod_pose_of_five_values_is_linuxcncs_x_y_z_a_b() {
 /// every strut is within `1e-9` (inch), fails after 120 iterations or when the summed
 /// error exceeds 500. Returns the pose (inch, rad) and the iterations.
 fn genhexkins_forward(q: &[f64; 6], start: &[f64; 6]) -> Result<([f64; 6], usize), i32> {
-    let b = [
-        [-22.95, 13.25, 0.0],
-        [22.95, 13.25, 0.0],
-        [22.95, 13.25, 0.0],
-        [0.0, -26.5, 0.0],
-        [0.0, -26.5, 0.0],
-        [-22.95, 13.25, 0.0],
-    ];
-    let a = [
-        [-1.0, 11.5, 0.0],
-        [1.0, 11.5, 0.0],
-        [10.459, -4.884, 0.0],
-        [9.459, -6.616, 0.0],
-        [-9.459, -6.616, 0.0],
-        [-10.459, -4.884, 0.0],
-    ];
+    let (a, b) = (SIM_PLATFORM, SIM_BASE);
     let mut x = *start;
     let mut conv_err: f64 = 1.0;
     for iteration in 1.. {
