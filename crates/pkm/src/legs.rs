@@ -43,17 +43,7 @@ impl<const N: usize> StrutSet<N> {
     /// the intersection of those spheres and of their bounding boxes. `None` when the
     /// boxes do not meet (no tip with this rotation).
     pub fn tip_bound(&self, r: &Matrix3<f64>, max_length: &[f64; N]) -> Option<[[f64; 2]; 3]> {
-        let mut b = [[f64::NEG_INFINITY, f64::INFINITY]; 3];
-        for i in 0..N {
-            let c = self.base[i] - r * self.arms[i];
-            for k in 0..3 {
-                b[k][0] = b[k][0].max(c[k] - max_length[i]);
-                b[k][1] = b[k][1].min(c[k] + max_length[i]);
-            }
-        }
-        b.iter()
-            .all(|x| x[0] <= x[1] && x[0].is_finite() && x[1].is_finite())
-            .then_some(b)
+        box_intersection((0..N).map(|i| (self.base[i] - r * self.arms[i], max_length[i])))
     }
 
     /// Strut lengths for any platform pose. Allocation-free.
@@ -245,6 +235,32 @@ impl<const N: usize> StrutSoa<N> {
     }
 }
 
+/// The intersection of the boxes `centre +- half_width` (per axis, `[min, max]`), or
+/// `None` when they do not meet or none bounds an axis.
+pub fn box_intersection(
+    boxes: impl IntoIterator<Item = (Vector3<f64>, f64)>,
+) -> Option<[[f64; 2]; 3]> {
+    let mut b = [[f64::NEG_INFINITY, f64::INFINITY]; 3];
+    for (c, h) in boxes {
+        for k in 0..3 {
+            b[k][0] = b[k][0].max(c[k] - h);
+            b[k][1] = b[k][1].min(c[k] + h);
+        }
+    }
+    b.iter()
+        .all(|x| x[0] <= x[1] && x[0].is_finite() && x[1].is_finite())
+        .then_some(b)
+}
+
+/// A twist Jacobian (`N x 6`, columns v then w) turned into the Jacobian of spatial
+/// coordinates `X..C`: the rotation columns times `E(A, B, C)`, the map of the A, B, C
+/// rates to the angular velocity (`w = E [A', B', C']`).
+pub fn twist_to_coords<const N: usize>(j: &mut SMatrix<f64, N, 6>, x: &SVector<f64, 6>) {
+    let e = crate::rotation::rpy_rate_matrix([x[3], x[4], x[5]]);
+    let rot = j.fixed_view::<N, 3>(0, 3) * e;
+    j.fixed_view_mut::<N, 3>(0, 3).copy_from(&rot);
+}
+
 /// Tool tip and rotation of spatial pose coordinates `X, Y, Z, A, B, C`.
 #[inline]
 pub fn split_pose(x: &SVector<f64, 6>) -> (Vector3<f64>, Matrix3<f64>) {
@@ -281,9 +297,7 @@ impl<const N: usize> StrutSet<N> {
     pub fn coords_jacobian(&self, x: &SVector<f64, 6>) -> SMatrix<f64, N, 6> {
         let (p, r) = split_pose(x);
         let mut j = self.twist_jacobian(&p, &r);
-        let e = crate::rotation::rpy_rate_matrix([x[3], x[4], x[5]]);
-        let rot = j.fixed_view::<N, 3>(0, 3) * e;
-        j.fixed_view_mut::<N, 3>(0, 3).copy_from(&rot);
+        twist_to_coords(&mut j, x);
         j
     }
 

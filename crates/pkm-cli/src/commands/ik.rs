@@ -115,9 +115,17 @@ pub fn run(a: &IkArgs) -> Result<u8> {
                 act.quantity.to_user(act.range.max)
             );
         }
-        for p in m.skeleton(&r.pose)?.points {
+        let points = m.skeleton(&r.pose)?.points;
+        // Names as long as a user's file makes them stay in one column.
+        let w = points
+            .iter()
+            .map(|p| p.name.len())
+            .max()
+            .unwrap_or(0)
+            .max(8);
+        for p in points {
             println!(
-                "joint      {:<8} {:>10.4} {:>10.4} {:>10.4} mm",
+                "joint      {:<w$} {:>10.4} {:>10.4} {:>10.4} mm",
                 p.name, p.position[0], p.position[1], p.position[2]
             );
         }

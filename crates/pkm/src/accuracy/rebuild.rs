@@ -190,11 +190,7 @@ macro_rules! strut_rebuild {
                 Ok(())
             }
             fn drive_parameter(&self, k: usize) -> Parameter {
-                Parameter::new(
-                    format!("zero({})", self.actuators()[k].name),
-                    Quantity::Length,
-                    ParameterKind::ZeroLength,
-                )
+                zero_length_parameter(&self.actuators()[k].name)
             }
             fn passive_joints(&self) -> Vec<super::clearance::PassiveJoint> {
                 let s = crate::identify::struts::StrutMachine::struts(self);
@@ -207,11 +203,24 @@ macro_rules! strut_rebuild {
     };
 }
 
+/// The zero length of strut `name` as a parameter (`zero(L1)`): the drive parameter of
+/// every strut machine.
+pub(crate) fn zero_length_parameter(name: &str) -> Parameter {
+    Parameter::new(
+        format!("zero({name})"),
+        Quantity::Length,
+        ParameterKind::ZeroLength,
+    )
+}
+
 /// The passive joints of struts whose base joints are named `base` and platform joints
 /// `platform` (per strut; a name used by several struts is one joint): the base
 /// joints' centres are the first `3 n` geometric parameters, the platform joints' the
 /// next `3 n` (the order of [`crate::identify::struts::names`]).
-fn strut_joints(base: &[&str], platform: &[&str]) -> Vec<super::clearance::PassiveJoint> {
+pub(crate) fn strut_joints(
+    base: &[&str],
+    platform: &[&str],
+) -> Vec<super::clearance::PassiveJoint> {
     let n = base.len();
     let mut out: Vec<super::clearance::PassiveJoint> = Vec::new();
     for (body, names, offset) in [("base", base, 0), ("platform", platform, 3 * n)] {

@@ -43,6 +43,7 @@ impl StrutMachine<6> for Hexapod {
             self.home,
         );
         h.zero_lengths = self.zero_lengths;
+        h.axes = self.axes.clone();
         h
     }
 

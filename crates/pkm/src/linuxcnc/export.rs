@@ -67,18 +67,22 @@ pub fn export(machine: &Machine, unit: LengthUnit) -> Result<Exported> {
         "# Written by `pkm export linuxcnc` from {} ({}), lengths in {u}.",
         name, machine.source
     );
+    let (base, control) = match &model.geometry {
+        Geometry::Genhex { base, .. } => (&base[..], "platform frame's origin"),
+        Geometry::Penta { base, .. } => (&base[..], "effector frame's origin"),
+    };
+    let _ = writeln!(
+        hal,
+        "# {module} controls its {control}: pkm's tool tip, so the moving joints are\n\
+         # given relative to it.\n\n# Base joints in base (world) coordinates"
+    );
+    for (i, b) in base.iter().enumerate() {
+        for (a, c) in ["x", "y", "z"].iter().zip(b.iter()) {
+            let _ = writeln!(hal, "setp {module}.base.{i}.{a} {}", len(*c));
+        }
+    }
     match &model.geometry {
-        Geometry::Genhex { base, platform } => {
-            let _ = writeln!(
-                hal,
-                "# genhexkins controls the platform frame's origin: pkm's tool tip, so the\n\
-                 # platform joints are given relative to it.\n\n# Base joints in base (world) coordinates"
-            );
-            for (i, b) in base.iter().enumerate() {
-                for (a, c) in ["x", "y", "z"].iter().zip(b.iter()) {
-                    let _ = writeln!(hal, "setp {module}.base.{i}.{a} {}", len(*c));
-                }
-            }
+        Geometry::Genhex { platform, .. } => {
             let _ = writeln!(hal, "\n# Platform joints in platform coordinates");
             for (i, p) in platform.iter().enumerate() {
                 for (a, c) in ["x", "y", "z"].iter().zip(p.iter()) {
@@ -86,21 +90,7 @@ pub fn export(machine: &Machine, unit: LengthUnit) -> Result<Exported> {
                 }
             }
         }
-        Geometry::Penta {
-            base,
-            radius,
-            height,
-        } => {
-            let _ = writeln!(
-                hal,
-                "# pentakins controls the effector frame's origin: pkm's tool tip, so the\n\
-                 # rings' heights are given from it.\n\n# Base joints in base (world) coordinates"
-            );
-            for (i, b) in base.iter().enumerate() {
-                for (a, c) in ["x", "y", "z"].iter().zip(b.iter()) {
-                    let _ = writeln!(hal, "setp {module}.base.{i}.{a} {}", len(*c));
-                }
-            }
+        Geometry::Penta { radius, height, .. } => {
             let _ = writeln!(
                 hal,
                 "\n# Effector joints: ring radius, height along the tool axis"

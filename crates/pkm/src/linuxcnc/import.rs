@@ -266,9 +266,14 @@ impl Writer<'_> {
                 origin: format!("{} default", self.kins.module()),
             }),
             Err((signal, at)) => {
+                let hint = if name.ends_with("tool-offset") {
+                    " (a tool length from the tool table): give pkm the tool in `[tool] tip`"
+                } else {
+                    ""
+                };
                 self.warnings.push(format!(
-                    "{name} follows signal `{signal}` ({at}), which changes at run time (a \
-                     tool length); taken as {default} here: give pkm the tool in `[tool] tip`"
+                    "{name} follows signal `{signal}` ({at}), which nothing sets and which \
+                     changes at run time; taken as {default} here{hint}"
                 ));
                 Ok(Param {
                     value: default,

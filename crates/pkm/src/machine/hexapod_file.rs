@@ -111,14 +111,7 @@ pub(super) fn build(src: &Source, f: HexapodFile) -> Result<super::Parts, Error>
         lim.platform_joint_max_angle,
         "platform",
     )?;
-    if let Some(d) = lim.strut_diameter {
-        if !(d > 0.0) {
-            return Err(src.error(
-                &[key("limits"), key("strut_diameter")],
-                format!("expected a diameter > 0 mm, found {d}"),
-            ));
-        }
-    }
+    super::strut_diameter(src, lim.strut_diameter)?;
     // Per-joint axes (a universal joint is mounted along its own axis on a real
     // machine) override the common one; they need the angle and a known joint.
     let per_joint = |which: &str,

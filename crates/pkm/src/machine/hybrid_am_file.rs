@@ -320,14 +320,7 @@ pub(super) fn build(src: &Source, f: HybridAmFile) -> Result<super::Parts, Error
         lim.platform_joint_max_angle,
         "platform",
     )?;
-    if let Some(d) = lim.strut_diameter {
-        if !(d > 0.0) {
-            return Err(src.error(
-                &[key("limits"), key("strut_diameter")],
-                format!("expected a diameter > 0 mm, found {d}"),
-            ));
-        }
-    }
+    super::strut_diameter(src, lim.strut_diameter)?;
     m.strut_diameter = lim.strut_diameter;
     // The home pose must be an assembly, and not a singular one.
     let home_err = |e: Error| src.error(&[key("home")], format!("not a pose of the machine: {e}"));

@@ -161,12 +161,7 @@ pub(crate) fn strut_entry(
     use source::Seg;
     let s = &struts[i];
     let p = |k: &str| vec![Seg::Key("struts".into()), Seg::Index(i), Seg::Key(k.into())];
-    if s.name.trim().is_empty() {
-        return Err(src.error(&p("name"), "expected a non-empty strut name"));
-    }
-    if struts[..i].iter().any(|o| o.name == s.name) {
-        return Err(src.error(&p("name"), format!("strut name `{}` is used twice", s.name)));
-    }
+    strut_name(src, i, &s.name, struts[..i].iter().map(|o| o.name.as_str()))?;
     let lookup = |joints: &Joints, name: &str, field: &str, what: &str| {
         joints.get(name).map(|v| v3(*v)).ok_or_else(|| {
             src.error(
@@ -189,6 +184,42 @@ pub(crate) fn strut_entry(
         s.max_acceleration,
     )?;
     Ok((actuator, base, plat))
+}
+
+/// Checks the name of strut `i`: not empty, not among the `earlier` struts' names.
+pub(crate) fn strut_name<'a>(
+    src: &source::Source,
+    i: usize,
+    name: &str,
+    mut earlier: impl Iterator<Item = &'a str>,
+) -> Result<()> {
+    use source::Seg;
+    let at = [
+        Seg::Key("struts".into()),
+        Seg::Index(i),
+        Seg::Key("name".into()),
+    ];
+    if name.trim().is_empty() {
+        return Err(src.error(&at, "expected a non-empty strut name"));
+    }
+    if earlier.any(|o| o == name) {
+        return Err(src.error(&at, format!("strut name `{name}` is used twice")));
+    }
+    Ok(())
+}
+
+/// Checks `[limits] strut_diameter`: positive when given.
+pub(crate) fn strut_diameter(src: &source::Source, d: Option<f64>) -> Result<()> {
+    match d {
+        Some(d) if !(d > 0.0) => Err(src.error(
+            &[
+                source::Seg::Key("limits".into()),
+                source::Seg::Key("strut_diameter".into()),
+            ],
+            format!("expected a diameter > 0 mm, found {d}"),
+        )),
+        _ => Ok(()),
+    }
 }
 
 /// The linear actuator of strut `i` (`[[struts]]` entry): its stroke `length` and

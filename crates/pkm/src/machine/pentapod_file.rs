@@ -101,14 +101,7 @@ pub(super) fn build(src: &Source, f: PentapodFile) -> Result<super::Parts, Error
         lim.base_joint_max_angle,
         "base",
     )?;
-    if let Some(d) = lim.strut_diameter {
-        if !(d > 0.0) {
-            return Err(src.error(
-                &[key("limits"), key("strut_diameter")],
-                format!("expected a diameter > 0 mm, found {d}"),
-            ));
-        }
-    }
+    super::strut_diameter(src, lim.strut_diameter)?;
     let tip = f.tool.tip;
     if tip[0] != 0.0 || tip[1] != 0.0 {
         return Err(src.error(
@@ -123,15 +116,12 @@ pub(super) fn build(src: &Source, f: PentapodFile) -> Result<super::Parts, Error
     let mut struts = Vec::with_capacity(5);
     for (i, s) in f.struts.iter().enumerate() {
         let at = |k: &str| [key("struts"), Seg::Index(i), key(k)];
-        if s.name.trim().is_empty() {
-            return Err(src.error(&at("name"), "expected a non-empty strut name"));
-        }
-        if f.struts[..i].iter().any(|o| o.name == s.name) {
-            return Err(src.error(
-                &at("name"),
-                format!("strut name `{}` is used twice", s.name),
-            ));
-        }
+        super::strut_name(
+            src,
+            i,
+            &s.name,
+            f.struts[..i].iter().map(|o| o.name.as_str()),
+        )?;
         let base = f.base_joints.get(&s.base).map(|v| v3(*v)).ok_or_else(|| {
             src.error(
                 &at("base"),

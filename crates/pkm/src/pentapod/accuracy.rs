@@ -6,7 +6,9 @@ use nalgebra::{DMatrix, SVector, Vector3};
 
 use super::Pentapod;
 use crate::accuracy::clearance::PassiveJoint;
-use crate::accuracy::rebuild::{implicit_sensitivities, parametric_by_rebuild};
+use crate::accuracy::rebuild::{
+    implicit_sensitivities, parametric_by_rebuild, strut_joints, zero_length_parameter,
+};
 use crate::accuracy::{Parameter, ParameterKind, Rebuild};
 use crate::error::{Error, Result};
 use crate::mechanism::Mechanism;
@@ -19,22 +21,6 @@ const HEIGHT: usize = 20;
 const TOOL: usize = 25;
 
 impl Pentapod {
-    /// Base joint names made unique per strut (`B0`, or `B0[1]` when struts share it).
-    fn base_names(&self) -> Vec<String> {
-        let names: Vec<&str> = self.struts.iter().map(|s| s.base_name.as_str()).collect();
-        names
-            .iter()
-            .enumerate()
-            .map(|(i, n)| {
-                if names.iter().filter(|m| *m == n).count() > 1 {
-                    format!("{n}[{}]", self.struts[i].actuator.name)
-                } else {
-                    n.to_string()
-                }
-            })
-            .collect()
-    }
-
     /// `dL/dg` at pose `x` (`5 x 26`, the order of [`Rebuild::geometry_parameters`]):
     /// `dL_i/db_i = -n_i`, `dL_i/dr_i = -(rho - r_i) / L_i`, `dL_i/dz_i = -(s_z - z_i) /
     /// L_i`, `dL_i/dt = (s_z - z_i) / L_i` (the effector origin moves down the axis as
@@ -44,7 +30,7 @@ impl Pentapod {
         let mut j = DMatrix::zeros(5, GEOMETRY);
         for i in 0..5 {
             let g = self.strut_at(i, &o, &r);
-            let n = self.direction(i, &g, &r)?;
+            let n = -(r * self.gradient(i, &g)?);
             for a in 0..3 {
                 j[(i, 3 * i + a)] = -n[a];
             }
@@ -58,10 +44,15 @@ impl Pentapod {
 
 impl Rebuild<6, 5> for Pentapod {
     fn geometry_parameters(&self) -> Vec<Parameter> {
-        let mut v: Vec<Parameter> = self
-            .base_names()
+        let base: Vec<&str> = self.struts.iter().map(|s| s.base_name.as_str()).collect();
+        let names: Vec<&str> = self
+            .struts
+            .iter()
+            .map(|s| s.actuator.name.as_str())
+            .collect();
+        // The base joints' x, y, z, made unique per strut where struts share one.
+        let mut v: Vec<Parameter> = crate::identify::struts::names(&base, &[], &names)
             .into_iter()
-            .flat_map(|n| ["x", "y", "z"].map(|a| format!("{n}.{a}")))
             .map(|n| Parameter::new(n, Quantity::Length, ParameterKind::JointCentre))
             .collect();
         for what in ["radius", "height"] {
@@ -118,28 +109,13 @@ impl Rebuild<6, 5> for Pentapod {
     }
 
     fn drive_parameter(&self, k: usize) -> Parameter {
-        Parameter::new(
-            format!("zero({})", self.actuators()[k].name),
-            Quantity::Length,
-            ParameterKind::ZeroLength,
-        )
+        zero_length_parameter(&self.actuators()[k].name)
     }
 
     /// The base joints (a name several struts use is one joint).
     fn passive_joints(&self) -> Vec<PassiveJoint> {
-        let mut out: Vec<PassiveJoint> = Vec::new();
-        for (i, s) in self.struts.iter().enumerate() {
-            let c = [3 * i, 3 * i + 1, 3 * i + 2];
-            match out.iter_mut().find(|j| j.name == s.base_name) {
-                Some(j) => j.centres.push(c),
-                None => out.push(PassiveJoint {
-                    name: s.base_name.clone(),
-                    body: "base".into(),
-                    centres: vec![c],
-                }),
-            }
-        }
-        out
+        let base: Vec<&str> = self.struts.iter().map(|s| s.base_name.as_str()).collect();
+        strut_joints(&base, &[])
     }
 }
 

@@ -89,6 +89,21 @@ struct StrutAt {
     l: f64,
 }
 
+impl StrutAt {
+    /// `grad_s L = (B/L s_xy/rho, A/L)` (effector frame), or `None` when the base joint
+    /// is on the tool axis (the ring joint's azimuth is undetermined) or the strut has
+    /// no length.
+    #[inline]
+    fn gradient(&self) -> Option<Vector3<f64>> {
+        let scale = self.s.norm().max(1.0);
+        if !(self.rho > 1e-12 * scale) || !(self.l > 1e-12 * scale) {
+            return None;
+        }
+        let c = self.b / (self.l * self.rho);
+        Some(Vector3::new(c * self.s.x, c * self.s.y, self.a / self.l))
+    }
+}
+
 impl Pentapod {
     /// Assembles a pentapod.
     pub fn new(
@@ -112,24 +127,6 @@ impl Pentapod {
             actuators,
             coordinates: spatial_coordinates(),
         }
-    }
-
-    /// The same pentapod with other base joints, ring radii and heights (in strut
-    /// order), names, limits and home kept.
-    pub fn with_geometry(
-        &self,
-        base: &[Vector3<f64>; 5],
-        radius: &[f64; 5],
-        height: &[f64; 5],
-    ) -> Self {
-        let mut m = self.clone();
-        for i in 0..5 {
-            m.struts[i].base = base[i];
-            m.struts[i].ring_radius = radius[i];
-            m.struts[i].ring_height = height[i];
-        }
-        m.characteristic_length = characteristic_length(&m.struts, m.tool);
-        m
     }
 
     /// Effector origin `O = p - t k` and rotation of pose coordinates.
@@ -175,29 +172,18 @@ impl Pentapod {
         std::array::from_fn(|i| self.ring_joint(i, &o, &r))
     }
 
-    /// Unit strut vector of strut `i` (from the base joint to the ring joint) in the
-    /// base frame: `n = -R grad_s L`, with `grad_s L = (B/L s_xy/rho, A/L)`. Fails when
-    /// the base joint is on the tool axis (the ring joint's azimuth is undetermined) or
-    /// the strut has no length.
-    fn direction(&self, i: usize, g: &StrutAt, r: &Matrix3<f64>) -> Result<Vector3<f64>> {
-        let scale = g.s.norm().max(1.0);
-        if !(g.rho > 1e-12 * scale) || !(g.l > 1e-12 * scale) {
-            return Err(Error::Singular {
-                what: format!(
-                    "pentapod strut {}: its base joint {} lies on the tool axis (the ring \
-                     joint's position around the axis is undetermined) or the strut has no \
-                     length",
-                    self.struts[i].actuator.name, self.struts[i].base_name
-                ),
-                rcond: 0.0,
-            });
-        }
-        let grad = Vector3::new(
-            g.b / g.l * g.s.x / g.rho,
-            g.b / g.l * g.s.y / g.rho,
-            g.a / g.l,
-        );
-        Ok(-(r * grad))
+    /// `grad_s L` of strut `i` (see [`StrutAt`]), or [`Error::Singular`] naming the
+    /// strut whose base joint is on the tool axis.
+    fn gradient(&self, i: usize, g: &StrutAt) -> Result<Vector3<f64>> {
+        g.gradient().ok_or_else(|| Error::Singular {
+            what: format!(
+                "pentapod strut {}: its base joint {} lies on the tool axis (the ring \
+                 joint's position around the axis is undetermined) or the strut has no \
+                 length",
+                self.struts[i].actuator.name, self.struts[i].base_name
+            ),
+            rcond: 0.0,
+        })
     }
 
     /// Jacobian of the strut lengths with respect to the tool twist `(v, w)` (base
@@ -211,8 +197,8 @@ impl Pentapod {
         let p = Vector3::new(x[0], x[1], x[2]);
         let mut j = SMatrix::<f64, 5, 6>::zeros();
         for i in 0..5 {
-            let g = self.strut_at(i, &o, &r);
-            let n = self.direction(i, &g, &r)?;
+            // The unit strut vector (base joint to ring joint): n = -R grad_s L.
+            let n = -(r * self.gradient(i, &self.strut_at(i, &o, &r))?);
             let m = (self.struts[i].base - p).cross(&n);
             for k in 0..3 {
                 j[(i, k)] = n[k];
@@ -272,7 +258,8 @@ impl Mechanism<6, 5> for Pentapod {
     }
 
     /// Newton on the driven coordinates X, Y, Z, A, B (C held), continued along the
-    /// actuators from `IK(start)` in steps of at most 20 mm when they are farther (see
+    /// actuators from `IK(start)` in steps of at most a tenth of the characteristic
+    /// length (19 mm on LinuxCNC's sim) when they are farther (see
     /// [`crate::mechanism::continued_forward`]): the solution on the branch through
     /// `start`.
     fn forward(
@@ -285,16 +272,14 @@ impl Mechanism<6, 5> for Pentapod {
             q,
             start,
             &crate::mechanism::NewtonOptions::default(),
-            20.0,
+            0.1 * self.characteristic_length,
         )
     }
 
     /// The twist Jacobian (see [`Pentapod::twist_jacobian`]) times `diag(I, E(A, B, C))`.
     fn jacobian(&self, x: &Vector6<f64>) -> Result<SMatrix<f64, 5, 6>> {
         let mut j = self.twist_jacobian(x)?;
-        let e = crate::rotation::rpy_rate_matrix([x[3], x[4], x[5]]);
-        let rot = j.fixed_view::<5, 3>(0, 3) * e;
-        j.fixed_view_mut::<5, 3>(0, 3).copy_from(&rot);
+        crate::legs::twist_to_coords(&mut j, x);
         Ok(j)
     }
 
@@ -303,18 +288,12 @@ impl Mechanism<6, 5> for Pentapod {
     fn position_bound(&self, x: &Vector6<f64>) -> Option<[[f64; 2]; 3]> {
         let (_, r) = split_pose(x);
         let k = r.column(2).into_owned();
-        let mut b = [[f64::NEG_INFINITY, f64::INFINITY]; 3];
-        for s in &self.struts {
-            let c = s.base + k * (self.tool - s.ring_height);
-            let h = s.actuator.range.max + s.ring_radius;
-            for a in 0..3 {
-                b[a][0] = b[a][0].max(c[a] - h);
-                b[a][1] = b[a][1].min(c[a] + h);
-            }
-        }
-        b.iter()
-            .all(|v| v[0] <= v[1] && v[0].is_finite() && v[1].is_finite())
-            .then_some(b)
+        crate::legs::box_intersection(self.struts.iter().map(|s| {
+            (
+                s.base + k * (self.tool - s.ring_height),
+                s.actuator.range.max + s.ring_radius,
+            )
+        }))
     }
 
     fn tool_pose(&self, x: &Vector6<f64>) -> Result<Pose> {
@@ -380,8 +359,9 @@ impl Mechanism<6, 5> for Pentapod {
         }
     }
 
-    /// Base joints, ring joints, ring centres on the tool axis, the spindle from the
-    /// highest ring centre to the tool tip.
+    /// Base joints, the effector (ring) joints `effector <strut>`, the rings' centres on
+    /// the tool axis `ring <strut>`, the spindle between the lowest and the highest ring
+    /// and the tool from the ring nearer the tip.
     fn skeleton(&self, x: &Vector6<f64>) -> Result<Skeleton> {
         let (o, r) = self.frame(x);
         let k = r.column(2).into_owned();
@@ -400,12 +380,12 @@ impl Mechanism<6, 5> for Pentapod {
                 }
             };
             let e = s.point(
-                &format!("ring {}", st.actuator.name),
+                &format!("effector {}", st.actuator.name),
                 PointRole::PlatformJoint,
                 &self.ring_joint(i, &o, &r),
             );
             let c = s.point(
-                &format!("ring {} centre", st.actuator.name),
+                &format!("ring {}", st.actuator.name),
                 PointRole::Other,
                 &(o + k * st.ring_height),
             );
@@ -465,14 +445,12 @@ impl Mechanism<6, 5> for Pentapod {
         };
         for i in 0..5 {
             let g = self.strut_at(i, &o, &r);
-            // Validates the strut (base joint off the axis, non-zero length).
-            self.direction(i, &g, &r)?;
+            let grad = self.gradient(i, &g)?;
             let wb = self.struts[i].base - o;
             let sd = -r.tr_mul(&(od + w.cross(&wb)));
             let sdd =
                 r.tr_mul(&(w.cross(&od) * 2.0 + w.cross(&w.cross(&wb)) - odd - al.cross(&wb)));
             let (nx, ny) = (g.s.x / g.rho, g.s.y / g.rho);
-            let grad = Vector3::new(g.b / g.l * nx, g.b / g.l * ny, g.a / g.l);
             let ns = nx * sd.x + ny * sd.y;
             let sxy2 = sd.x * sd.x + sd.y * sd.y;
             let t = g.a * ns - g.b * sd.z;

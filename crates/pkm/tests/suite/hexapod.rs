@@ -521,3 +521,38 @@ fn joint_centres_moved_in_place_equal_a_rebuilt_machine() {
         assert_eq!(moved, rebuilt);
     }
 }
+
+#[test]
+fn axis_travel_is_checked_and_kept_by_a_rebuilt_hexapod() {
+    use pkm::identify::struts::StrutMachine;
+    let text = std::fs::read_to_string(format!(
+        "{}/../../examples/machines/hexapod-linuxcnc.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap()
+    .replace(
+        "strut_diameter = 25.0",
+        "strut_diameter = 25.0\naxes = { Z = [400, 700], A = [-20, 20] }",
+    );
+    let h = match Machine::from_toml_str(&text, "axes.toml").unwrap().model {
+        Model::Hexapod(h) => *h,
+        _ => panic!(),
+    };
+    let x = Vector6::new(0.0, 0.0, 720.0, 25f64.to_radians(), 0.0, 0.0);
+    for m in [h.clone(), h.with_struts(&h.struts())] {
+        let mut v = Vec::new();
+        m.check_limits(&x, &m.inverse(&x).unwrap(), &mut v);
+        let axes: Vec<String> = v
+            .iter()
+            .filter(|v| v.kind == LimitKind::AxisTravel)
+            .map(|v| v.to_string())
+            .collect();
+        assert_eq!(
+            axes,
+            [
+                "axis Z travel 720.000 mm is above its maximum 700.000 mm by 20.000 mm",
+                "axis A travel 25.000 deg is above its maximum 20.000 deg by 5.000 deg"
+            ]
+        );
+    }
+}
