@@ -177,7 +177,7 @@ pub fn pose_names(m: &dyn DynMechanism, conv: Convention) -> Vec<String> {
             v.extend(conv.angle_names().iter().map(|s| s.to_string()));
             v
         }
-        PoseSpace::Own => m.coordinates().iter().map(|c| c.name.clone()).collect(),
+        PoseSpace::Tcp | PoseSpace::Own => m.coordinates().iter().map(|c| c.name.clone()).collect(),
     }
 }
 
@@ -230,7 +230,7 @@ pub fn pose_from_user(m: &dyn DynMechanism, vals: &[f64], conv: Convention) -> R
             let pose = pose_from_angles(Vector3::new(vals[0], vals[1], vals[2]), angles, conv);
             m.coords_from_pose(&pose, given)
         }
-        PoseSpace::Own => {
+        PoseSpace::Tcp | PoseSpace::Own => {
             let c = m.coordinates();
             if vals.len() != c.len() {
                 return Err(Error::InvalidInput {

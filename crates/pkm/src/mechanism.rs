@@ -91,6 +91,10 @@ pub enum PoseSpace {
     Spatial,
     /// Coordinates are X, Y, Z of the tool tip; the mechanism determines the orientation.
     Position,
+    /// Tool-centre-point coordinates of a machine tool with rotary axes: X, Y, Z of the
+    /// tool tip in the part frame, then the rotary axes' own angles, named by their
+    /// letters (`B`, `C`), as a 5-axis controller in TCP mode takes them.
+    Tcp,
     /// The mechanism's own coordinates (a planar head's `z, theta`, joint space, ...).
     Own,
 }

@@ -360,3 +360,14 @@ impl Parametric<6, 6> for crate::serial::arm::SerialArm {
         SerialEvaluator::new(&self.machine, &self.completions, q.as_slice())
     }
 }
+
+impl<const N: usize> Parametric<N, N> for crate::serial::tcp::TcpMachine<N> {
+    type Evaluator<'a> = SerialEvaluator<'a>;
+    serial_parametric_common!(@ SVector<f64, N>);
+    /// The joints commanded for TCP pose `x` are the nominal inverse solution: the
+    /// error is the tool's relative to the part with the machine's deviations at them.
+    fn evaluator(&self, x: &SVector<f64, N>) -> Result<SerialEvaluator<'_>> {
+        let q = self.inverse(x)?;
+        SerialEvaluator::new(&self.machine, &self.completions, q.as_slice())
+    }
+}

@@ -142,6 +142,8 @@ crate::impl_dyn_mechanism!(crate::serial::mechanism::SerialMechanism<6>, 6, 6);
 crate::impl_dyn_mechanism!(crate::serial::mechanism::SerialMechanism<7>, 7, 7);
 crate::impl_dyn_mechanism!(crate::serial::mechanism::SerialMechanism<8>, 8, 8);
 crate::impl_dyn_mechanism!(crate::serial::arm::SerialArm, 6, 6);
+crate::impl_dyn_mechanism!(crate::serial::tcp::TcpMachine<4>, 4, 4);
+crate::impl_dyn_mechanism!(crate::serial::tcp::TcpMachine<5>, 5, 5);
 
 /// Code generic over strut machines (hexapods, translational tripods: the machines
 /// [`crate::identify`] identifies), run by [`Machine::visit_struts`].

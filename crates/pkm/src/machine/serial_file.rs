@@ -326,8 +326,10 @@ pub(super) fn build(src: &Source, f: SerialFile) -> Result<super::Parts, Error> 
     let given: Vec<usize> = tolerances.iter().map(|t| t.parameter).collect();
     crate::accuracy::serial_completions(&machine, &given)
         .map_err(|e| src.error(&[key("tolerance")], e.to_string()))?;
+    let tcp = f.pose.as_deref() == Some("tcp");
     let spatial = match f.pose.as_deref() {
         None => SerialAny::can_be_spatial(&machine),
+        Some("tcp") => false,
         Some("tool") => {
             if !SerialAny::can_be_spatial(&machine) {
                 return Err(src.error(
@@ -342,16 +344,17 @@ pub(super) fn build(src: &Source, f: SerialFile) -> Result<super::Parts, Error> 
         Some(other) => {
             return Err(src.error(
                 &[key("pose")],
-                format!("expected \"tool\" or \"joints\", found \"{other}\""),
+                format!("expected \"tool\", \"tcp\" or \"joints\", found \"{other}\""),
             ))
         }
     };
-    let mechanism = if spatial {
-        SerialAny::spatial(machine, &home)
+    let mechanism = if tcp {
+        SerialAny::tcp(machine, &home).map_err(|e| src.error(&[key("pose")], e.to_string()))?
+    } else if spatial {
+        SerialAny::spatial(machine, &home).map_err(|e| src.error(&[key("home")], e.to_string()))?
     } else {
-        SerialAny::new(machine, &home)
-    }
-    .map_err(|e| src.error(&[key("home")], e.to_string()))?;
+        SerialAny::new(machine, &home).map_err(|e| src.error(&[key("home")], e.to_string()))?
+    };
     super::check_references(src, &f.reference)?;
     let rapid = super::check_motion(src, f.motion.as_ref())?;
     let _ = Vector3::<f64>::zeros();

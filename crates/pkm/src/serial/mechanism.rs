@@ -209,6 +209,10 @@ pub enum SerialAny {
     J8(SerialMechanism<8>),
     /// A six-joint robot with tool-pose coordinates X..C.
     Arm(super::arm::SerialArm),
+    /// A 4-axis machine tool with tool-centre-point coordinates (X, Y, Z, one rotary).
+    Tcp4(super::tcp::TcpMachine<4>),
+    /// A 5-axis machine tool with tool-centre-point coordinates (X, Y, Z, two rotary).
+    Tcp5(super::tcp::TcpMachine<5>),
 }
 
 /// Applies `$body` to the `SerialMechanism<N>` inside a [`SerialAny`].
@@ -225,6 +229,8 @@ macro_rules! with_serial {
             $crate::serial::mechanism::SerialAny::J7($m) => $body,
             $crate::serial::mechanism::SerialAny::J8($m) => $body,
             $crate::serial::mechanism::SerialAny::Arm($m) => $body,
+            $crate::serial::mechanism::SerialAny::Tcp4($m) => $body,
+            $crate::serial::mechanism::SerialAny::Tcp5($m) => $body,
         }
     };
 }
@@ -265,6 +271,30 @@ impl SerialAny {
         Ok(SerialAny::Arm(super::arm::SerialArm::new(machine, home)?))
     }
 
+    /// Wraps a machine tool with three linear and one or two rotary axes with
+    /// tool-centre-point coordinates ([`super::tcp::TcpMachine`]).
+    pub fn tcp(machine: SerialMachine, home: &[f64]) -> Result<Self> {
+        Ok(match home.len() {
+            4 => SerialAny::Tcp4(super::tcp::TcpMachine::new(
+                machine,
+                crate::dynamic::fixed::<4>("home", home)?,
+            )?),
+            5 => SerialAny::Tcp5(super::tcp::TcpMachine::new(
+                machine,
+                crate::dynamic::fixed::<5>("home", home)?,
+            )?),
+            n => {
+                return Err(Error::InvalidInput {
+                    what: "TCP coordinates".into(),
+                    message: format!(
+                        "tool-centre-point coordinates are for 4- and 5-axis machine tools \
+                         (three linear axes, one or two rotary); this machine has {n} axes"
+                    ),
+                })
+            }
+        })
+    }
+
     /// Whether a machine can take tool-pose coordinates: six tool-chain joints and
     /// no workpiece joints.
     pub fn can_be_spatial(machine: &SerialMachine) -> bool {
@@ -280,6 +310,8 @@ impl SerialAny {
     pub fn home_joints(&self) -> Vec<f64> {
         match self {
             SerialAny::Arm(a) => a.home_joints.as_slice().to_vec(),
+            SerialAny::Tcp4(a) => a.home_joints.as_slice().to_vec(),
+            SerialAny::Tcp5(a) => a.home_joints.as_slice().to_vec(),
             other => with_serial!(other, m => m.home().as_slice().to_vec()),
         }
     }

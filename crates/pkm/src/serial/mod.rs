@@ -23,6 +23,8 @@ pub mod deviations;
 pub mod jacobian;
 pub mod machine;
 pub mod mechanism;
+pub mod tcp;
+pub mod tcp_axis;
 
 use nalgebra::{Matrix3, Matrix4, Vector3};
 

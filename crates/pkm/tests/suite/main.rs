@@ -24,5 +24,6 @@ mod rotation;
 mod seed000;
 mod serial;
 mod serial_arm;
+mod tcp;
 mod tripod;
 mod workspace;
