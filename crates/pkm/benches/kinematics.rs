@@ -278,6 +278,8 @@ fn serial(c: &mut Criterion) {
                     min: -3.0,
                     max: 3.0,
                 },
+                max_velocity: None,
+                max_acceleration: None,
             }),
             translation: Vector3::new(35.0 * (i % 2) as f64, 0.0, 150.0 + 50.0 * i as f64),
             rotation: if i % 2 == 0 {

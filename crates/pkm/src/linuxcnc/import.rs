@@ -11,6 +11,8 @@
 // Struts and their joint names are indexed together.
 #![allow(clippy::needless_range_loop)]
 
+mod trt;
+
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -83,7 +85,7 @@ pub fn import_with(
             ini_file,
             None,
             "[KINS] KINEMATICS",
-            "no kinematics module named: expected `[KINS] KINEMATICS = genhexkins` or `pentakins`",
+            "no kinematics module named: expected `[KINS] KINEMATICS = genhexkins`, `pentakins`, `xyzbc-trt-kins` or `xyzac-trt-kins`",
         )
     })?;
     let module = kins_entry.value.split_whitespace().next().unwrap_or("");
@@ -91,8 +93,8 @@ pub fn import_with(
         ini.error(
             kins_entry,
             format!(
-                "unsupported kinematics `{module}`: pkm imports genhexkins (hexapod) and \
-                 pentakins (pentapod)"
+                "unsupported kinematics `{module}`: pkm imports genhexkins (hexapod), \
+                 pentakins (pentapod), xyzbc-trt-kins and xyzac-trt-kins (5-axis mills)"
             ),
         )
     })?;
@@ -129,6 +131,10 @@ pub fn import_with(
     match kins {
         Kinematics::Genhex => w.genhex()?,
         Kinematics::Penta => w.penta()?,
+        Kinematics::XyzbcTrt | Kinematics::XyzacTrt => {
+            w.trt()?;
+            return w.trt_finish();
+        }
     }
     w.finish()
 }
@@ -266,10 +272,13 @@ impl Writer<'_> {
                 origin: format!("{} default", self.kins.module()),
             }),
             Err((signal, at)) => {
-                let hint = if name.ends_with("tool-offset") {
-                    " (a tool length from the tool table): give pkm the tool in `[tool] tip`"
-                } else {
-                    ""
+                let hint = match self.kins {
+                    _ if !name.ends_with("tool-offset") => "",
+                    Kinematics::XyzbcTrt | Kinematics::XyzacTrt => {
+                        " (the tool length a program's G43 H sets): give it to `pkm motion` \
+                         with --tool-length or --tool-table"
+                    }
+                    _ => " (a tool length from the tool table): give pkm the tool in `[tool] tip`",
                 };
                 self.warnings.push(format!(
                     "{name} follows signal `{signal}` ({at}), which nothing sets and which \

@@ -1,5 +1,6 @@
-//! LinuxCNC's parallel-machine configurations, both ways: [`import`] reads an INI and
-//! the HAL files it names (genhexkins: a hexapod; pentakins: a pentapod) into a pkm
+//! LinuxCNC's parallel-machine and 5-axis configurations, both ways: [`import`] reads an
+//! INI and the HAL files it names (genhexkins: a hexapod; pentakins: a pentapod;
+//! xyzbc-trt-kins, xyzac-trt-kins: a 5-axis mill with TCP coordinates) into a pkm
 //! machine file; [`export`] writes a machine's geometry back as the HAL `setp` lines
 //! and the INI's `[KINS]`, `[TRAJ]`, `[JOINT_n]` and `[AXIS_L]` entries, in the units
 //! the controller uses (how an identified machine goes back to the controller).
@@ -29,6 +30,10 @@ pub enum Kinematics {
     Genhex,
     /// `pentakins`: the pentapod.
     Penta,
+    /// `xyzbc-trt-kins`: a 5-axis mill with a table tilting about Y and turning about Z.
+    XyzbcTrt,
+    /// `xyzac-trt-kins`: a 5-axis mill with a table tilting about X and turning about Z.
+    XyzacTrt,
 }
 
 impl Kinematics {
@@ -37,6 +42,8 @@ impl Kinematics {
         match name {
             "genhexkins" => Some(Kinematics::Genhex),
             "pentakins" => Some(Kinematics::Penta),
+            "xyzbc-trt-kins" => Some(Kinematics::XyzbcTrt),
+            "xyzac-trt-kins" => Some(Kinematics::XyzacTrt),
             _ => None,
         }
     }
@@ -46,6 +53,8 @@ impl Kinematics {
         match self {
             Kinematics::Genhex => "genhexkins",
             Kinematics::Penta => "pentakins",
+            Kinematics::XyzbcTrt => "xyzbc-trt-kins",
+            Kinematics::XyzacTrt => "xyzac-trt-kins",
         }
     }
 
@@ -54,6 +63,7 @@ impl Kinematics {
         match self {
             Kinematics::Genhex => "hexapod",
             Kinematics::Penta => "pentapod",
+            Kinematics::XyzbcTrt | Kinematics::XyzacTrt => "serial",
         }
     }
 
@@ -74,6 +84,20 @@ impl Kinematics {
                 ("Z", true),
                 ("A", false),
                 ("B", false),
+            ],
+            Kinematics::XyzbcTrt => &[
+                ("X", true),
+                ("Y", true),
+                ("Z", true),
+                ("B", false),
+                ("C", false),
+            ],
+            Kinematics::XyzacTrt => &[
+                ("X", true),
+                ("Y", true),
+                ("Z", true),
+                ("A", false),
+                ("C", false),
             ],
         }
     }

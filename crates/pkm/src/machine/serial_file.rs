@@ -111,6 +111,8 @@ fn dh_links(rows: &[DhFile], tool: Option<&DhToolFile>) -> Vec<LinkFile> {
                 name: r.joint.name.clone(),
                 kind: r.joint.kind.clone(),
                 range: r.joint.range,
+                max_velocity: r.joint.max_velocity,
+                max_acceleration: r.joint.max_acceleration,
             }),
             translation: Exact([r.a * ct, r.a * st, r.d]),
             rotation: Some(Exact(rot.map(Exact))),
@@ -134,6 +136,12 @@ struct JointFile {
     #[serde(rename = "type")]
     kind: String,
     range: Exact<2>,
+    /// Largest speed (mm/s or deg/s).
+    #[serde(default)]
+    max_velocity: Option<f64>,
+    /// Largest acceleration (mm/s^2 or deg/s^2).
+    #[serde(default)]
+    max_acceleration: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -217,6 +225,13 @@ fn chain(
                     JointKind::Revolute => v.to_radians(),
                     JointKind::Prismatic => v,
                 };
+                let rate = |v: Option<f64>, k: &str| match v {
+                    Some(r) if !(r > 0.0 && r <= super::MAX_MAGNITUDE) => Err(src.error(
+                        &[key(field), Seg::Index(i), key("joint"), key(k)],
+                        format!("expected a rate > 0 (mm or deg per s, per s^2), found {r}"),
+                    )),
+                    v => Ok(v.map(conv)),
+                };
                 Some(Joint {
                     name: j.name.clone(),
                     kind,
@@ -224,6 +239,8 @@ fn chain(
                         min: conv(j.range[0]),
                         max: conv(j.range[1]),
                     },
+                    max_velocity: rate(j.max_velocity, "max_velocity")?,
+                    max_acceleration: rate(j.max_acceleration, "max_acceleration")?,
                 })
             }
         };

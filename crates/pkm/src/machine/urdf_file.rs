@@ -197,6 +197,8 @@ pub(super) fn build(text: &str, file: &str) -> Result<super::Parts, Error> {
                 name: j.name.clone(),
                 kind,
                 range,
+                max_velocity: None,
+                max_acceleration: None,
             }),
         ));
     }

@@ -109,8 +109,8 @@ impl SerialArm {
                 super::JointKind::Prismatic => Quantity::Length,
             },
             range: joints[i].range,
-            max_velocity: None,
-            max_acceleration: None,
+            max_velocity: joints[i].max_velocity,
+            max_acceleration: joints[i].max_acceleration,
         });
         let tool = PreparedChain::new(&machine.tool, &[], &[]);
         let mut arm = SerialArm {

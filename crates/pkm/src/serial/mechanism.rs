@@ -59,8 +59,8 @@ impl<const N: usize> SerialMechanism<N> {
             name: joints[i].name.clone(),
             quantity: quantity(joints[i].kind),
             range: joints[i].range,
-            max_velocity: None,
-            max_acceleration: None,
+            max_velocity: joints[i].max_velocity,
+            max_acceleration: joints[i].max_acceleration,
         });
         Ok(SerialMechanism {
             tool_joints: machine.tool.dof(),

@@ -60,6 +60,10 @@ pub struct Joint {
     pub kind: JointKind,
     /// Travel (mm or rad).
     pub range: Range,
+    /// Largest speed (mm/s or rad/s), when the file gives one.
+    pub max_velocity: Option<f64>,
+    /// Largest acceleration (mm/s^2 or rad/s^2), when the file gives one.
+    pub max_acceleration: Option<f64>,
 }
 
 /// One link: its input joint (none for a fixed link) and its nominal geometry.

@@ -154,8 +154,8 @@ impl<const N: usize> TcpMachine<N> {
             name: joints[i].name.clone(),
             quantity: quantity(joints[i].kind),
             range: joints[i].range,
-            max_velocity: None,
-            max_acceleration: None,
+            max_velocity: joints[i].max_velocity,
+            max_acceleration: joints[i].max_acceleration,
         });
         let coordinates = std::array::from_fn(|i| match i {
             0 => Coordinate::length("X"),

@@ -122,6 +122,8 @@ fn prismatic(name: &str) -> Option<Joint> {
             min: -500.0,
             max: 500.0,
         },
+        max_velocity: None,
+        max_acceleration: None,
     })
 }
 
@@ -222,6 +224,8 @@ fn revolute(name: &str) -> Option<Joint> {
             min: -3.2,
             max: 3.2,
         },
+        max_velocity: None,
+        max_acceleration: None,
     })
 }
 

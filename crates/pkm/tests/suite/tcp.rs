@@ -427,3 +427,86 @@ fn a_zero_or_not_finite_axis_is_refused() {
         .unwrap_err();
     assert!(e.to_string().contains("finite"), "{e}");
 }
+
+fn fixture(path: &str) -> String {
+    format!(
+        "{}/../../tests/fixtures/linuxcnc/{path}",
+        env!("CARGO_MANIFEST_DIR")
+    )
+}
+
+/// LinuxCNC's sim INI imported (with `conventional-directions` set to `conv`, a tool
+/// offset set by `sets`).
+fn import_sim(conv: u8, tool: Option<f64>) -> (Machine, pkm::linuxcnc::Imported) {
+    let path = fixture("xyzbc-trt/xyzbc-trt.ini");
+    let mut text = std::fs::read_to_string(&path).unwrap().replace(
+        "xyzbc-trt-kins.conventional-directions 0",
+        &format!("xyzbc-trt-kins.conventional-directions {conv}"),
+    );
+    if let Some(t) = tool {
+        text.push_str(&format!("\n[HAL]\nHALCMD = sets :tool-offset {t}\n"));
+    }
+    let imp =
+        pkm::linuxcnc::import_with(&path, &text, &mut |_| Err("no HAL files here".into()), &[])
+            .unwrap();
+    let m = Machine::from_toml_str(&imp.toml, "xyzbc.toml").unwrap();
+    (m, imp)
+}
+
+#[test]
+fn the_imported_sim_equals_xyzbc_trt_kins_both_directions() {
+    let mut rng = rand::rngs::StdRng::seed_from_u64(11);
+    for conv in [0u8, 1] {
+        for tool in [None, Some(42.5)] {
+            let (m, imp) = import_sim(conv, tool);
+            assert_eq!(imp.kinematics, "xyzbc-trt-kins");
+            let t = tcp5(&m);
+            let names: Vec<&str> = t.actuators().iter().map(|a| a.name.as_str()).collect();
+            assert_eq!(names, ["X", "Y", "Z", "B", "C"]);
+            assert_eq!(t.actuators()[3].range.max, 50f64.to_radians());
+            assert_eq!(t.actuators()[0].max_velocity, Some(20.0));
+            let p = Trt {
+                rot: [0.0; 3],
+                dx: -20.0,
+                dz: -15.0,
+                tool: tool.unwrap_or(0.0),
+                conventional: conv == 1,
+            };
+            for _ in 0..2000 {
+                let pos = [
+                    rng.random_range(-150.0..150.0),
+                    rng.random_range(-80.0..80.0),
+                    rng.random_range(-100.0..100.0),
+                ];
+                let (b, c) = (
+                    rng.random_range(-100.0..50.0),
+                    rng.random_range(-400.0..400.0),
+                );
+                let j = lcnc_inverse(&p, pos, b, c);
+                let x = SVector::<f64, 5>::new(
+                    pos[0],
+                    pos[1],
+                    pos[2] - p.tool,
+                    b.to_radians(),
+                    c.to_radians(),
+                );
+                let q = t.inverse(&x).unwrap();
+                for i in 0..3 {
+                    assert!((q[i] - j[i]).abs() < 1e-9, "{conv} {tool:?}: {q} vs {j:?}");
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn import_refuses_a_joint_order_it_does_not_map() {
+    let path = fixture("xyzbc-trt/xyzbc-trt.ini");
+    let text = std::fs::read_to_string(&path)
+        .unwrap()
+        .replace("COORDINATES = XYZBC", "COORDINATES = XYZCB");
+    let e = pkm::linuxcnc::import_with(&path, &text, &mut |_| Err("none".into()), &[])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("xyzbc-trt.ini") && e.contains("XYZCB"), "{e}");
+}
