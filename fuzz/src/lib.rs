@@ -117,7 +117,7 @@ pub fn urdf(data: &[u8]) {
 /// A G-code program, run through the tripod (X, Y, Z) and the hexapod (X..C) with a
 /// small work limit.
 pub fn gcode(data: &[u8]) {
-    for machine in [tripod(), hexapod()] {
+    for machine in [tripod(), hexapod(), mc300()] {
         let feed = FeedOptions {
             max_samples: MAX_SAMPLES,
             ..FeedOptions::default()
@@ -125,6 +125,7 @@ pub fn gcode(data: &[u8]) {
         let source = MotionSource::Gcode {
             reader: Box::new(data),
             from: None,
+            setup: Default::default(),
         };
         if let Ok(run) = run_motion(machine, source, &feed, Sampling::Rate(1000.0), &mut NoSink) {
             assert!(

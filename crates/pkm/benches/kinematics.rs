@@ -332,10 +332,13 @@ fn serial(c: &mut Criterion) {
     c.bench_function("MC-300 sensitivities of all 89 deviations", |b| {
         b.iter(|| m.sensitivities(black_box(&qt), &qw, &[], &params).unwrap())
     });
-    let pkm::serial::mechanism::SerialAny::J5(mc300) = &s.mechanism else {
+    let pkm::serial::mechanism::SerialAny::Tcp5(mc300) = &s.mechanism else {
         panic!()
     };
-    let x300 = nalgebra::SVector::<f64, 5>::from_column_slice(&[qt[0], qt[1], qt[2], qw[0], qw[1]]);
+    // The TCP pose of those joints.
+    let x300 = mc300.coords_of_joints(&nalgebra::SVector::<f64, 5>::from_column_slice(&[
+        qt[0], qt[1], qt[2], qw[0], qw[1],
+    ]));
     let mut g = c.benchmark_group("serial monte carlo");
     g.sample_size(10);
     g.bench_function(

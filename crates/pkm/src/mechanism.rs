@@ -299,6 +299,16 @@ pub trait Mechanism<const P: usize, const A: usize>: Send + Sync {
         1.0
     }
 
+    /// The same mechanism with a tool `length` mm longer along its tool axis than its
+    /// file's (a program's `G43 H`); `None` when the type does not take its tool from a
+    /// program (its tool is set in the machine file).
+    fn with_tool_length(&self, _length: f64) -> Option<Result<Self>>
+    where
+        Self: Sized,
+    {
+        None
+    }
+
     /// Exact actuator position, velocity and acceleration for a pose moving with
     /// coordinate rates `xd` and accelerations `xdd`: `q = IK(x)`, `q' = J x'`,
     /// `q'' = J x'' + J' x'`, computed from the mechanism's analytic derivatives (no

@@ -14,9 +14,10 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use indicatif::ProgressBar;
 use pkm::analysis::motion::{
-    run_motion, sample_columns, MotionRun, MotionSource, SampleRow, SampleSink,
+    run_motion, sample_columns, MotionRun, MotionSource, ProgramSetup, SampleRow, SampleSink,
 };
 use pkm::motion::program::FeedOptions;
+use pkm::motion::tools::parse_tool_table;
 use pkm::motion::{MotionSummary, Sampling};
 use pkm::{DynMechanism, Machine};
 use serde_json::json;
@@ -71,6 +72,15 @@ pub struct MotionArgs {
     /// refused before it is sampled (a dwell of years, a feed of 1e-6 mm/min).
     #[arg(long, default_value_t = pkm::motion::run::DEFAULT_MAX_SAMPLES)]
     pub max_samples: u64,
+    /// Tool length (mm) for every G43 H of the program the tool table does not list.
+    #[arg(long)]
+    pub tool_length: Option<f64>,
+    /// LinuxCNC tool table (`T1 P1 Z50.0 ...`, lengths in mm) for the program's G43 H.
+    #[arg(long)]
+    pub tool_table: Option<PathBuf>,
+    /// Work offset of G54..G59.3: `G55=X,Y,Z[,A,B,C]` (mm, deg); repeatable.
+    #[arg(long, allow_hyphen_values = true)]
+    pub work_offset: Vec<String>,
     /// Convention of angles in --from/--to.
     #[arg(long, default_value = "rpy", value_parser = parse_convention)]
     pub rotation: Convention,
@@ -287,6 +297,46 @@ pub fn plots(m: &dyn DynMechanism, o: &MotionRun, title: &str) -> Result<(String
     Ok((act, ser))
 }
 
+/// Tool lengths and work offsets from the options.
+fn program_setup(a: &MotionArgs) -> Result<ProgramSetup> {
+    let mut setup = ProgramSetup {
+        tool_length: a.tool_length,
+        ..Default::default()
+    };
+    if let Some(l) = a.tool_length {
+        anyhow::ensure!(
+            l.is_finite() && l.abs() <= pkm::machine::MAX_MAGNITUDE,
+            "--tool-length {l}: expected a length in mm"
+        );
+    }
+    if let Some(t) = &a.tool_table {
+        let text =
+            std::fs::read_to_string(t).with_context(|| format!("cannot read {}", t.display()))?;
+        setup.tool_lengths = parse_tool_table(&t.display().to_string(), &text)?;
+    }
+    for w in &a.work_offset {
+        let (code, vals) = w
+            .split_once('=')
+            .with_context(|| format!("--work-offset {w}: expected G54=X,Y,Z[,A,B,C]"))?;
+        let names = [
+            "G54", "G55", "G56", "G57", "G58", "G59", "G59.1", "G59.2", "G59.3",
+        ];
+        let k = names
+            .iter()
+            .position(|n| n.eq_ignore_ascii_case(code.trim()))
+            .with_context(|| format!("--work-offset {w}: expected one of {}", names.join(", ")))?;
+        let v = parse_list(vals, "--work-offset")?;
+        anyhow::ensure!(
+            v.len() == 3 || v.len() == 6,
+            "--work-offset {w}: expected 3 or 6 values (X,Y,Z[,A,B,C] in mm, deg)"
+        );
+        for (i, x) in v.iter().enumerate() {
+            setup.work_offsets[k][i] = if i < 3 { *x } else { x.to_radians() };
+        }
+    }
+    Ok(setup)
+}
+
 /// `summary.json` of a run.
 pub fn summary_json(machine: &Machine, s: &MotionSummary, feed: &FeedOptions) -> serde_json::Value {
     let axes = |v: &[(String, pkm::motion::AxisStats)]| {
@@ -342,6 +392,7 @@ pub fn run(a: &MotionArgs) -> Result<u8> {
         MotionSource::Gcode {
             reader: Box::new(BufReader::new(f)),
             from: from.clone(),
+            setup: Box::new(program_setup(a)?),
         }
     } else {
         let to =
@@ -398,6 +449,14 @@ pub fn run(a: &MotionArgs) -> Result<u8> {
     }
     let s = &outcome.summary;
     let mut summary = summary_json(&machine, s, &feed);
+    if !outcome.notes.is_empty() {
+        summary["notes"] = json!(outcome
+            .notes
+            .iter()
+            .map(|(l, t)| json!({"line": l, "note": t}))
+            .collect::<Vec<_>>());
+        summary["notes_not_listed"] = json!(outcome.notes_dropped);
+    }
     // A move timed by --duration (and --accel-time) is not shaped by the path
     // acceleration/jerk options: say what timed it instead.
     if let Some(d) = a.duration {
@@ -463,6 +522,13 @@ pub fn run(a: &MotionArgs) -> Result<u8> {
                 k
             ),
             None => println!("largest feed override: no rate limits in the machine file"),
+        }
+        for (l, t) in outcome.notes.iter().take(20) {
+            println!("note: line {l}: {t}");
+        }
+        let more = outcome.notes.len().saturating_sub(20) as u64 + outcome.notes_dropped;
+        if more > 0 {
+            println!("note: {more} more in summary.json");
         }
         println!("wrote {}", a.out.display());
     }

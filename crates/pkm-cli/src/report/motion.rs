@@ -119,6 +119,7 @@ pub fn section(h: &mut Html, machine: &Machine, ctx: &Context) -> Result<()> {
             MotionSource::Gcode {
                 reader: Box::new(std::io::Cursor::new(program.clone().into_bytes())),
                 from: Some(from.clone()),
+                setup: Default::default(),
             },
             &FeedOptions {
                 profile: ProfileKind::Constant,

@@ -126,3 +126,78 @@ fn import_never_writes_over_its_input_and_errors_name_the_line() {
     assert!(String::from_utf8_lossy(&o.stderr)
         .contains("LinuxCNC export is not available for a serial"));
 }
+
+/// Issue 20's interface: the XYZBC sim imported, its joints for a TCP pose, LinuxCNC's
+/// boat program run to its end (exit 3 with the violated limits listed: the sim's
+/// axes are slow for the program's inverse-time feeds).
+#[test]
+fn the_xyzbc_sim_imported_its_joints_and_the_boat_program() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = dir.path().join("xyzbc.toml");
+    let o = pkm()
+        .args([
+            "import",
+            "linuxcnc",
+            &path("tests/fixtures/linuxcnc/xyzbc-trt/xyzbc-trt.ini"),
+        ])
+        .arg("--out")
+        .arg(&m)
+        .output()
+        .unwrap();
+    ok(&o);
+    let o = pkm()
+        .arg("ik")
+        .arg(&m)
+        .args(["--pose=10,5,-3,30,40", "--json"])
+        .output()
+        .unwrap();
+    ok(&o);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let acts = v["actuators"].as_object().unwrap();
+    let names: Vec<&str> = acts.keys().map(|k| k.as_str()).collect();
+    assert_eq!(names, ["X", "Y", "Z", "B", "C"]);
+    // xyzbc-trt-kins with x-offset -20, z-offset -15 (trtfuncs' inverse, by hand).
+    let (sb, cb) = 30f64.to_radians().sin_cos();
+    let (sc, cc) = 40f64.to_radians().sin_cos();
+    let (dx, dz) = (-20.0, -15.0);
+    let want = [
+        cc * cb * 10.0 - sc * cb * 5.0 + sb * -3.0 - cb * dx - sb * dz + dx,
+        sc * 10.0 + cc * 5.0,
+        -cc * sb * 10.0 + sc * sb * 5.0 + cb * -3.0 + sb * dx - cb * dz + dz,
+        30.0,
+        40.0,
+    ];
+    for ((n, a), w) in acts.iter().zip(want) {
+        let got = a.as_f64().unwrap();
+        assert!((got - w).abs() < 1e-9, "{n} {got} vs {w}");
+    }
+    let out = dir.path().join("boat");
+    let o = pkm()
+        .arg("motion")
+        .arg(&m)
+        .args([
+            "--gcode",
+            &path("tests/fixtures/linuxcnc/xyzbc-trt/boat-xyzbc.ngc"),
+            "--summary-only",
+            "--tool-length",
+            "40",
+        ])
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(3),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("note: line 2: M428"), "{text}");
+    assert!(text.contains("G43 H1: tool length 40 mm"), "{text}");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("actuator X velocity"), "{err}");
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert!(s["duration_s"].as_f64().unwrap() > 300.0);
+}

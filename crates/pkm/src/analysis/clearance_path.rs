@@ -124,6 +124,7 @@ pub fn path_samples(machine: &Machine, req: &PathRequest) -> Result<(Vec<PathSam
         MotionSource::Gcode {
             reader: Box::new(std::io::Cursor::new(req.program.as_bytes())),
             from: req.from.clone(),
+            setup: Default::default(),
         },
         &req.feed,
         req.sampling,

@@ -11,7 +11,7 @@ use std::io::BufRead;
 use crate::error::{Error, Result};
 use crate::machine::{Analysable, Machine, Visitor};
 use crate::mechanism::PoseSpace;
-use crate::motion::gcode::Interpreter;
+use crate::motion::gcode::{Interpreter, ToolEvent};
 use crate::motion::program::{profile, to_move, FeedOptions, ProfileKind};
 use crate::motion::{MotionSummary, Move, Profile, Runner, Sample, Sampling, Segment};
 
@@ -24,6 +24,8 @@ pub enum MotionSource<'a> {
         reader: Box<dyn BufRead + 'a>,
         /// Start pose.
         from: Option<Vec<f64>>,
+        /// Tool lengths and work offsets.
+        setup: Box<ProgramSetup>,
     },
     /// One straight move in the machine's own coordinates (internal units).
     PointToPoint {
@@ -36,6 +38,29 @@ pub enum MotionSource<'a> {
         /// Acceleration time of a timed trapezoid (s).
         accel_time: Option<f64>,
     },
+}
+
+/// What a program needs besides its text: the tool lengths its `G43 H` words ask for
+/// and the work offsets of `G54`..`G59.3`.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ProgramSetup {
+    /// Tool lengths (mm) by tool number (a tool table).
+    pub tool_lengths: std::collections::BTreeMap<u32, f64>,
+    /// The length (mm) of every tool the table does not list.
+    pub tool_length: Option<f64>,
+    /// Work offsets of G54, G55, ..., G59.3 (mm, rad), added to the program's
+    /// coordinates.
+    pub work_offsets: [[f64; 6]; 9],
+}
+
+impl ProgramSetup {
+    /// The length of tool `h`, and whether it was given (0 when not).
+    fn length(&self, h: u32) -> (f64, bool) {
+        match self.tool_lengths.get(&h).copied().or(self.tool_length) {
+            Some(l) => (l, true),
+            None => (0.0, false),
+        }
+    }
 }
 
 /// One sample of a run (internal units: mm, rad, s).
@@ -179,6 +204,11 @@ pub struct MotionRun {
     pub summary: MotionSummary,
     /// Decimated series for plots.
     pub traces: Traces,
+    /// What the program asked for that pkm noted without acting on it, or applied with
+    /// an assumption (line, text): unknown M codes, tool changes, tool lengths.
+    pub notes: Vec<(u64, String)>,
+    /// Notes beyond the first [`crate::motion::gcode::MAX_NOTES`].
+    pub notes_dropped: u64,
 }
 
 /// The columns of a sample row for tables: `t_s`, `line`, the pose coordinates with
@@ -238,6 +268,8 @@ impl Visitor for Simulate<'_, '_> {
     ) -> Result<MotionRun> {
         let mut runner = Runner::new(m, self.sampling)?;
         runner.set_max_samples(self.feed.max_samples);
+        let mut notes: Vec<(u64, String)> = Vec::new();
+        let mut dropped = 0;
         let serial_idx: Vec<usize> = match m.pose_space() {
             PoseSpace::Own => (0..P).collect(),
             _ => (0..3).collect(),
@@ -326,21 +358,24 @@ impl Visitor for Simulate<'_, '_> {
                     &mut sink,
                 )?;
             }
-            MotionSource::Gcode { reader, from } => {
+            MotionSource::Gcode {
+                reader,
+                from,
+                setup,
+            } => {
                 if m.pose_space() == PoseSpace::Own {
                     return Err(invalid(
                         "G-code",
-                        "needs a machine whose pose is X, Y, Z[, A, B, C]",
+                        "needs a machine whose pose is X, Y, Z[, A, B, C] or tool-centre-point \
+                         coordinates",
                     ));
                 }
                 let x = match from {
-                    Some(x) => x,
-                    None => m.home().as_slice().to_vec(),
+                    Some(x) => crate::dynamic::fixed::<P>("start pose", &x)?,
+                    None => m.home(),
                 };
-                let mut start = [0.0; 6];
-                let n = x.len().min(6);
-                start[..n].copy_from_slice(&x[..n]);
-                let mut interp = Interpreter::new(start);
+                let mut interp = Interpreter::new(crate::motion::run::to_spatial(m, &x));
+                interp.work_offsets = setup.work_offsets;
                 let mut pending: Option<Move<P>> = None;
                 for (i, line) in reader.lines().enumerate() {
                     let text = line
@@ -349,8 +384,40 @@ impl Visitor for Simulate<'_, '_> {
                     if interp.ended {
                         break;
                     }
-                    if let Some(g) = interp.line(&text, i as u64 + 1)? {
-                        let mv = to_move(m, &g, self.feed)?;
+                    let g = interp.line(&text, i as u64 + 1)?;
+                    let mv = match &g {
+                        Some(g) => Some(to_move(m, g, self.feed)?),
+                        None => None,
+                    };
+                    if let Some(ev) = interp.tool_event.take() {
+                        // The moves before this line run with the tool they had.
+                        if let Some(p) = pending.take() {
+                            runner.run_move(&p, false, &mut sink)?;
+                        }
+                        let (line, length) = match ev {
+                            ToolEvent::Apply { h, line } => {
+                                let (l, given) = setup.length(h);
+                                let what = if given {
+                                    format!("G43 H{h}: tool length {l} mm")
+                                } else {
+                                    format!(
+                                        "G43 H{h}: no length given for tool {h} (--tool-table, \
+                                         --tool-length): taken as 0, the machine file's tool"
+                                    )
+                                };
+                                interp_note(&mut notes, line, what);
+                                (line, l)
+                            }
+                            ToolEvent::Cancel { line } => (line, 0.0),
+                        };
+                        runner
+                            .set_tool_length(length)
+                            .map_err(|e| Error::InvalidInput {
+                                what: format!("G-code line {line}"),
+                                message: e.to_string(),
+                            })?;
+                    }
+                    if let Some(mv) = mv {
                         if let Some(p) = pending.take() {
                             runner.run_move(&p, false, &mut sink)?;
                         }
@@ -360,12 +427,25 @@ impl Visitor for Simulate<'_, '_> {
                 if let Some(p) = pending.take() {
                     runner.run_move(&p, true, &mut sink)?;
                 }
+                let mut all = std::mem::take(&mut interp.notes);
+                all.append(&mut notes);
+                all.sort_by_key(|n| n.0);
+                dropped = interp.notes_dropped;
+                notes = all;
             }
         }
         Ok(MotionRun {
             summary: runner.finish(),
             traces,
+            notes,
+            notes_dropped: dropped,
         })
+    }
+}
+
+fn interp_note(notes: &mut Vec<(u64, String)>, line: u64, text: String) {
+    if notes.len() < crate::motion::gcode::MAX_NOTES {
+        notes.push((line, text));
     }
 }
 

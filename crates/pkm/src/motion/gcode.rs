@@ -1,9 +1,17 @@
 //! A modal G-code interpreter over the `gcode` crate's syntax tree.
 //!
-//! Supported (anything else is an error naming its line, never skipped):
+//! Supported (any other G code or word is an error naming its line, never skipped):
 //! G0, G1, G2, G3 (I J K and R forms, full circles, helical arcs, P turns), G4 (dwell,
-//! P seconds), G17/G18/G19, G20/G21, G90/G91, G90.1/G91.1, F (per minute), X Y Z A B C,
-//! N line numbers, comments, and M0/M1/M2/M30/M3/M4/M5 with S (no kinematic effect).
+//! P seconds), G17/G18/G19, G20/G21, G90/G91, G90.1/G91.1, G93 (inverse time: `F` is
+//! the reciprocal of the move's duration in minutes, on every feed move) and G94 (F
+//! per minute), X Y Z A B C, N line numbers, comments, `%` delimiters (a second `%`
+//! ends the program), G54-G59, G59.1-G59.3 (work offsets, added to the program's
+//! coordinates; zero unless [`Interpreter::work_offsets`] sets them), G53 (machine
+//! coordinates for its line), G43 H / G43 (tool length of tool H, or of the tool in
+//! the spindle) and G49 (cancel; reported as [`ToolEvent`]s for the caller to apply),
+//! G40 (cutter compensation off), T and M6 (tool change), M0/M1/M2/M30/M3/M4/M5/M7/
+//! M8/M9 with S (no kinematic effect). Other M codes (a controller's own, such as
+//! LinuxCNC's remapped M428) are accepted with a note ([`Interpreter::notes`]).
 //! Numbers are re-read from the source text as f64 (the syntax tree holds f32).
 //!
 //! Lines are interpreted one at a time ([`Interpreter::line`]), so a program of any
@@ -70,9 +78,31 @@ pub struct GMove {
     pub end: [f64; 6],
     /// What kind of move.
     pub motion: Motion,
-    /// Programmed feed (mm/s), for G1-G3.
+    /// Programmed feed (mm/s), for G1-G3 in G94.
     pub feed: Option<f64>,
+    /// Programmed duration (s), for G1-G3 in G93 (inverse time).
+    pub duration: Option<f64>,
 }
+
+/// A change of the tool length a program asks for.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ToolEvent {
+    /// G43: apply the length of tool `h` (`H` word, or the tool in the spindle).
+    Apply {
+        /// Tool number.
+        h: u32,
+        /// Line.
+        line: u64,
+    },
+    /// G49: no tool length.
+    Cancel {
+        /// Line.
+        line: u64,
+    },
+}
+
+/// The most notes an interpreter keeps ([`Interpreter::notes`]); later ones are counted.
+pub const MAX_NOTES: usize = 100;
 
 /// Modal state.
 #[derive(Debug, Clone, PartialEq)]
@@ -91,8 +121,27 @@ pub struct Interpreter {
     pub feed: Option<f64>,
     /// Modal motion: 0, 1, 2 or 3.
     pub mode: Option<u32>,
-    /// M2/M30 seen.
+    /// M2/M30 seen, or the closing `%`.
     pub ended: bool,
+    /// G93 (true: inverse time) or G94.
+    pub inverse_time: bool,
+    /// Work offsets of G54, G55, ..., G59, G59.1, G59.2, G59.3 (mm, rad), added to the
+    /// program's coordinates.
+    pub work_offsets: [[f64; 6]; 9],
+    /// The active work offset (0 = G54).
+    pub work: usize,
+    /// The tool in the spindle (last `T` before `M6`).
+    pub tool: Option<u32>,
+    /// `T` selected, not yet changed.
+    pub selected: Option<u32>,
+    /// A tool length change of the last line, for the caller to apply.
+    pub tool_event: Option<ToolEvent>,
+    /// What the program asked for that pkm took note of without acting on (line,
+    /// text): unknown M codes, tool changes. At most [`MAX_NOTES`].
+    pub notes: Vec<(u64, String)>,
+    /// Notes beyond [`MAX_NOTES`].
+    pub notes_dropped: u64,
+    percents: u32,
 }
 
 fn err(line: u64, message: String) -> Error {
@@ -169,6 +218,23 @@ impl Interpreter {
             feed: None,
             mode: None,
             ended: false,
+            inverse_time: false,
+            work_offsets: [[0.0; 6]; 9],
+            work: 0,
+            tool: None,
+            selected: None,
+            tool_event: None,
+            notes: Vec::new(),
+            notes_dropped: 0,
+            percents: 0,
+        }
+    }
+
+    fn note(&mut self, line: u64, text: String) {
+        if self.notes.len() < MAX_NOTES {
+            self.notes.push((line, text));
+        } else {
+            self.notes_dropped += 1;
         }
     }
 
@@ -176,7 +242,16 @@ impl Interpreter {
     pub fn line(&mut self, text: &str, line: u64) -> Result<Option<GMove>> {
         // A UTF-8 byte-order mark (editors on Windows write one) is not content.
         let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-        if text.trim().is_empty() || text.trim() == "%" {
+        self.tool_event = None;
+        if text.trim_start().starts_with('%') {
+            // The program is between two `%` lines; the second ends it.
+            self.percents += 1;
+            if self.percents >= 2 {
+                self.ended = true;
+            }
+            return Ok(None);
+        }
+        if text.trim().is_empty() {
             return Ok(None);
         }
         if let Some(word) = oversized_code(text) {
@@ -251,8 +326,30 @@ impl Interpreter {
         line: u64,
     ) -> Result<Option<GMove>> {
         let mut dwell = false;
+        let mut machine_coords = false;
+        let mut g43 = false;
+        let mut m6 = false;
         for (letter, major, minor) in &codes {
             match (letter, major, minor) {
+                ('G', 93, None) => self.inverse_time = true,
+                ('G', 94, None) => self.inverse_time = false,
+                ('G', 54..=59, None) => self.work = (*major - 54) as usize,
+                ('G', 59, Some(k @ 1..=3)) => self.work = 5 + *k as usize,
+                ('G', 53, None) => machine_coords = true,
+                ('G', 43, None) => g43 = true,
+                ('G', 49, None) => self.tool_event = Some(ToolEvent::Cancel { line }),
+                ('G', 40, None) => {}
+                ('M', 6, None) => m6 = true,
+                ('M', 7..=9, None) => {}
+                ('T', t, None) => self.selected = Some(*t),
+                ('M', m, None) if !matches!(m, 0..=5 | 30) => {
+                    self.note(
+                        line,
+                        format!(
+                            "M{m}: not a code pkm knows (a controller's own); no motion, ignored"
+                        ),
+                    );
+                }
                 ('G', 0..=3, None) => self.mode = Some(*major),
                 ('G', 4, None) => dwell = true,
                 ('G', 17, None) => self.plane = Plane::XY,
@@ -279,13 +376,22 @@ impl Interpreter {
         let mut target = self.position;
         let mut axis_given = false;
         let (mut ijk, mut r, mut p) = ([None::<f64>; 3], None::<f64>, None::<f64>);
+        let mut h = None::<f64>;
+        let mut duration = None::<f64>;
+        let mut f_word = false;
+        // Program coordinates are the part's less the active work offset (none for G53).
+        let offset = if machine_coords {
+            [0.0; 6]
+        } else {
+            self.work_offsets[self.work]
+        };
         for &(l, v) in &words {
             match l {
                 'X' | 'Y' | 'Z' => {
                     let k = (l as u8 - b'X') as usize;
                     let v = v * unit;
                     target[k] = if self.absolute {
-                        v
+                        v + offset[k]
                     } else {
                         self.position[k] + v
                     };
@@ -295,7 +401,7 @@ impl Interpreter {
                     let k = 3 + (l as u8 - b'A') as usize;
                     let v = v.to_radians();
                     target[k] = if self.absolute {
-                        v
+                        v + offset[k]
                     } else {
                         self.position[k] + v
                     };
@@ -308,12 +414,45 @@ impl Interpreter {
                     if !(v > 0.0) {
                         return Err(err(line, format!("F{v}: the feed must be > 0")));
                     }
-                    self.feed = Some(v * unit / 60.0);
+                    f_word = true;
+                    if self.inverse_time {
+                        // The move takes 1/F minutes.
+                        self.feed = None;
+                        duration = Some(60.0 / v);
+                    } else {
+                        self.feed = Some(v * unit / 60.0);
+                    }
                 }
-                'S' => {}
-                'N' => {}
+                'S' | 'N' | 'D' => {}
+                'H' => h = Some(v),
                 _ => return Err(err(line, format!("unsupported word {l}{v}"))),
             }
+        }
+        if m6 {
+            match self.selected {
+                Some(t) => {
+                    self.tool = Some(t);
+                    self.note(line, format!("M6: tool {t} in the spindle"));
+                }
+                None => return Err(err(line, "M6 without a tool selected (T)".into())),
+            }
+        }
+        if g43 {
+            let tool = match h {
+                Some(v) if v >= 0.0 && v.fract() == 0.0 && v <= u32::MAX as f64 => v as u32,
+                Some(v) => {
+                    return Err(err(line, format!("H{v}: expected a tool number")));
+                }
+                None => self.tool.ok_or_else(|| {
+                    err(
+                        line,
+                        "G43 without H and no tool in the spindle (T, M6)".into(),
+                    )
+                })?,
+            };
+            self.tool_event = Some(ToolEvent::Apply { h: tool, line });
+        } else if h.is_some() {
+            return Err(err(line, "H without G43".into()));
         }
         if dwell {
             let seconds = p.ok_or_else(|| err(line, "G4 needs P (seconds)".into()))?;
@@ -326,6 +465,7 @@ impl Interpreter {
                 end: self.position,
                 motion: Motion::Dwell { seconds },
                 feed: None,
+                duration: None,
             }));
         }
         let arc_words = ijk.iter().any(Option::is_some) || r.is_some();
@@ -354,12 +494,23 @@ impl Interpreter {
             }
             _ => self.arc(mode == 3, &start, &target, ijk, r, p, line)?,
         };
-        let feed = if mode == 0 {
-            None
+        let (feed, duration) = if mode == 0 {
+            (None, None)
+        } else if self.inverse_time {
+            if !f_word {
+                return Err(err(
+                    line,
+                    format!("G{mode} in inverse time (G93) needs its own F on the line"),
+                ));
+            }
+            (None, duration)
         } else {
-            Some(
-                self.feed
-                    .ok_or_else(|| err(line, format!("G{mode} without a feed (F)")))?,
+            (
+                Some(
+                    self.feed
+                        .ok_or_else(|| err(line, format!("G{mode} without a feed (F)")))?,
+                ),
+                None,
             )
         };
         self.position = target;
@@ -369,6 +520,7 @@ impl Interpreter {
             end: target,
             motion,
             feed,
+            duration,
         }))
     }
 

@@ -8,6 +8,7 @@ pub mod profile;
 pub mod program;
 pub mod run;
 pub mod stats;
+pub mod tools;
 
 pub use path::{Segment, Shape};
 pub use profile::Profile;

@@ -6,7 +6,7 @@ use serde::Serialize;
 use super::gcode::{plane_axes, GMove, Motion};
 use super::path::Segment;
 use super::profile::Profile;
-use super::run::{from_spatial, quantities, Move};
+use super::run::{from_spatial, missing_letters, quantities, Move};
 use crate::error::{Error, Result};
 use crate::mechanism::{Mechanism, PoseSpace};
 
@@ -70,13 +70,25 @@ pub fn to_move<M: Mechanism<P, A>, const P: usize, const A: usize>(
     o: &FeedOptions,
 ) -> Result<Move<P>> {
     let space = m.pose_space();
-    let start = from_spatial::<P>(space, &g.start)?;
-    let end = from_spatial::<P>(space, &g.end)?;
+    let start = from_spatial(m, &g.start)?;
+    let end = from_spatial(m, &g.end)?;
     if space == PoseSpace::Position && (3..6).any(|k| (g.end[k] - g.start[k]).abs() > 1e-12) {
         return Err(Error::InvalidInput {
             what: format!("G-code line {}", g.line),
             message: "A, B, C words: this machine's orientation follows from its position".into(),
         });
+    }
+    for i in missing_letters(m) {
+        if (g.end[i] - g.start[i]).abs() > 1e-12 {
+            return Err(Error::InvalidInput {
+                what: format!("G-code line {}", g.line),
+                message: format!(
+                    "{} words: this machine has no {} axis",
+                    ["A", "B", "C"][i - 3],
+                    ["A", "B", "C"][i - 3]
+                ),
+            });
+        }
     }
     let q = quantities(m);
     let segment = match g.motion {
@@ -95,7 +107,30 @@ pub fn to_move<M: Mechanism<P, A>, const P: usize, const A: usize>(
     };
     let profile = match g.motion {
         Motion::Dwell { seconds } => Profile::dwell(seconds),
-        Motion::Line { rapid: true } => profile(o.profile, segment.length, o.rapid, o)?,
+        Motion::Line { rapid: true } => {
+            // A rapid takes as long as its slowest part at the rapid rate: mm/min for
+            // the tip, deg/min for each rotary axis (a turn of C with a small move of
+            // the tip is not done in the tip's time).
+            let turn = (0..P)
+                .filter(|&k| q[k] == crate::units::Quantity::Angle)
+                .map(|k| q[k].to_user(end[k] - start[k]).abs())
+                .fold(0.0, f64::max);
+            let v = if turn > segment.length && segment.length > 0.0 {
+                o.rapid * segment.length / turn
+            } else {
+                o.rapid
+            };
+            profile(o.profile, segment.length, v, o)?
+        }
+        // Inverse time (G93): the move takes the programmed time at constant speed.
+        _ if g.duration.is_some() && o.feed.is_none() => {
+            let d = g.duration.unwrap_or(1.0);
+            if segment.length > 0.0 {
+                Profile::constant(segment.length, segment.length / d)?
+            } else {
+                Profile::dwell(d)
+            }
+        }
         _ => {
             let v = o.feed.or(g.feed).ok_or_else(|| Error::InvalidInput {
                 what: format!("G-code line {}", g.line),

@@ -100,6 +100,9 @@ const MAX_RUNS: usize = 10_000;
 /// Runs moves through a mechanism one at a time (streaming: memory stays flat).
 pub struct Runner<'m, M, const P: usize, const A: usize> {
     m: &'m M,
+    /// The mechanism with the program's tool length, when it has one.
+    tooled: Option<Box<M>>,
+    tool_length: f64,
     sampling: Sampling,
     t0: f64,
     k: u64,
@@ -147,6 +150,8 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
         };
         Ok(Runner {
             m,
+            tooled: None,
+            tool_length: 0.0,
             sampling,
             t0: 0.0,
             k: 0,
@@ -171,6 +176,30 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
             .iter()
             .map(|&k| self.m.coordinates()[k].name.clone())
             .collect()
+    }
+
+    /// Runs the following moves with a tool `length` mm longer than the machine file's
+    /// ([`Mechanism::with_tool_length`]; a program's `G43 H`, 0 for `G49`).
+    pub fn set_tool_length(&mut self, length: f64) -> Result<()> {
+        if length == self.tool_length {
+            return Ok(());
+        }
+        match self.m.with_tool_length(length) {
+            Some(m) => {
+                self.tooled = Some(Box::new(m?));
+            }
+            None if length == 0.0 => self.tooled = None,
+            None => {
+                return Err(Error::Unsupported {
+                    machine: self.m.name().into(),
+                    kind: self.m.kind().into(),
+                    analysis: "a tool length from the program (G43)",
+                    reason: "its tool is set in the machine file".into(),
+                })
+            }
+        }
+        self.tool_length = length;
+        Ok(())
     }
 
     /// Sets the work limit: at most `n` samples over the run.
@@ -260,7 +289,11 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
         let (x, xs, xss) = mv.segment.eval(s);
         let xd = xs * sd;
         let xdd = xss * (sd * sd) + xs * sdd;
-        let act = self.m.actuator_motion(&x, &xd, &xdd)?;
+        let m: &M = match &self.tooled {
+            Some(b) => b,
+            None => self.m,
+        };
+        let act = m.actuator_motion(&x, &xd, &xdd)?;
         let t = self.t0 + tl;
         self.samples += 1;
         for i in 0..A {
@@ -277,7 +310,7 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
         }
         // Limits: positions (and the mechanism's own), then rates.
         self.buf.clear();
-        self.m.check_limits(&x, &act.q, &mut self.buf);
+        m.check_limits(&x, &act.q, &mut self.buf);
         for i in 0..A {
             let a = &self.m.actuators()[i];
             if let Some(vm) = a.max_velocity {
@@ -397,20 +430,80 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
     }
 }
 
-/// Pose coordinates of a mechanism from a spatial pose `[X, Y, Z, A, B, C]` (mm, rad):
-/// all six for a spatial machine, X, Y, Z for a position machine.
-pub fn from_spatial<const P: usize>(space: PoseSpace, v: &[f64; 6]) -> Result<SVector<f64, P>> {
-    match (space, P) {
-        (PoseSpace::Spatial, 6) | (PoseSpace::Position, 3) => {
-            Ok(SVector::<f64, P>::from_fn(|k, _| v[k]))
-        }
-        _ => Err(Error::InvalidInput {
-            what: "tool path".into(),
-            message:
-                "this machine's pose is not X, Y, Z[, A, B, C]; give moves in its own coordinates"
-                    .into(),
-        }),
+/// Where coordinate `k` of `m` sits in a G-code position `[X, Y, Z, A, B, C]`: all six
+/// for a spatial machine, X, Y, Z for a position machine; X, Y, Z and the rotary axes
+/// by their letters for a TCP machine. `None` for a coordinate no letter addresses.
+fn gcode_slot<M: Mechanism<P, A>, const P: usize, const A: usize>(
+    m: &M,
+    k: usize,
+) -> Option<usize> {
+    match (m.pose_space(), P) {
+        (PoseSpace::Spatial, 6) | (PoseSpace::Position, 3) => Some(k),
+        (PoseSpace::Tcp, _) if k < 3 => Some(k),
+        (PoseSpace::Tcp, _) => match m.coordinates()[k].name.as_str() {
+            "A" => Some(3),
+            "B" => Some(4),
+            "C" => Some(5),
+            _ => None,
+        },
+        _ => None,
     }
+}
+
+/// Pose coordinates of a mechanism from a G-code position `[X, Y, Z, A, B, C]` (mm,
+/// rad): all six for a spatial machine, X, Y, Z for a position machine, X, Y, Z and the
+/// rotary axes by their letters for a TCP machine.
+pub fn from_spatial<M: Mechanism<P, A>, const P: usize, const A: usize>(
+    m: &M,
+    v: &[f64; 6],
+) -> Result<SVector<f64, P>> {
+    let mut x = SVector::<f64, P>::zeros();
+    for k in 0..P {
+        match gcode_slot(m, k) {
+            Some(i) => x[k] = v[i],
+            None => {
+                return Err(Error::InvalidInput {
+                    what: "tool path".into(),
+                    message: match m.pose_space() {
+                        PoseSpace::Tcp => format!(
+                            "the rotary axis `{}` has no G-code letter (A, B or C)",
+                            m.coordinates()[k].name
+                        ),
+                        _ => "this machine's pose is not X, Y, Z[, A, B, C]; give moves in its \
+                              own coordinates"
+                            .into(),
+                    },
+                })
+            }
+        }
+    }
+    Ok(x)
+}
+
+/// The G-code position `[X, Y, Z, A, B, C]` of pose coordinates `x` (letters the
+/// machine has no coordinate for at 0), the inverse of [`from_spatial`].
+pub fn to_spatial<M: Mechanism<P, A>, const P: usize, const A: usize>(
+    m: &M,
+    x: &SVector<f64, P>,
+) -> [f64; 6] {
+    let mut v = [0.0; 6];
+    for k in 0..P {
+        if let Some(i) = gcode_slot(m, k) {
+            v[i] = x[k];
+        }
+    }
+    v
+}
+
+/// G-code letters a TCP machine has no axis for (`A` on an XYZBC machine), by index
+/// 3..6 of the G-code position: a move that changes one is refused.
+pub fn missing_letters<M: Mechanism<P, A>, const P: usize, const A: usize>(m: &M) -> Vec<usize> {
+    if m.pose_space() != PoseSpace::Tcp {
+        return Vec::new();
+    }
+    (3..6)
+        .filter(|i| !(0..P).any(|k| gcode_slot(m, k) == Some(*i)))
+        .collect()
 }
 
 /// Quantities of the coordinates, for [`Segment::line`].

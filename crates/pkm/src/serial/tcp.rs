@@ -525,6 +525,10 @@ impl<const N: usize> Mechanism<N, N> for TcpMachine<N> {
         self.characteristic_length
     }
 
+    fn with_tool_length(&self, length: f64) -> Option<Result<Self>> {
+        Some(TcpMachine::with_tool_length(self, length))
+    }
+
     /// Exact: `q' = J x'`, `M q_lin'' = x_p'' - G x_r'' - J' q'` (module docs).
     fn actuator_motion(
         &self,

@@ -18,7 +18,9 @@ fn mc300_text() -> String {
 }
 
 fn mc300() -> pkm::serial::mechanism::SerialMechanism<5> {
-    let m = Machine::from_toml_str(&mc300_text(), "mc300.toml").unwrap();
+    // In joint coordinates (the example file takes TCP coordinates).
+    let text = mc300_text().replace("pose = \"tcp\"", "pose = \"joints\"");
+    let m = Machine::from_toml_str(&text, "mc300.toml").unwrap();
     let Model::Serial(s) = m.model else { panic!() };
     let SerialAny::J5(j) = s.mechanism else {
         panic!()

@@ -101,14 +101,14 @@ fn orientation_words() {
 fn malformed_programs_name_the_line() {
     let cases = [
         ("G1 X10 F100\nG1 Q5", 2, "unsupported word Q"),
-        ("G1 X10 F100\nG1 X20\nG43 H1", 3, "unsupported code G43"),
+        ("G1 X10 F100\nG1 X20\nG41 D1", 3, "unsupported code G41"),
         ("G1 X10", 1, "without a feed"),
         ("X10", 1, "without a motion mode"),
         ("G1 X10 F100\nG2 X20 Y0", 2, "without a centre"),
         ("G1 X10 F100\nG2 X20 Y0 I1 J0", 2, "differs from radius"),
         ("G2 X100 Y0 R10 F100", 1, "more than the diameter"),
         ("G2 X0 Y0 R10 F100", 1, "full circle"),
-        ("G1 X10 F100\nT2 M6", 2, "unsupported code"),
+        ("G1 X10 F100\nM6", 2, "without a tool selected"),
         ("G1 X10 F100\nG1 X#1", 2, "malformed"),
         ("G1 X10 F100\n\nG1 X1 Y[2]", 3, "malformed"),
         ("G4", 1, "P"),
@@ -162,4 +162,87 @@ fn code_numbers_that_overflow_are_refused() {
     // Leading zeros and comments are not numbers to refuse.
     let r = run("G0000001 X1 F100 (G123456789)\nG1 X2 ; M99999999\n");
     assert!(r.is_ok(), "{r:?}");
+}
+
+#[test]
+fn five_axis_program_words() {
+    let text = "%\nM428 ;TCP on\nT1 M6\nG0 G54 G17 G40 G90 G94\nG43 H1 Z5.0 M08\nG93\n\
+                G1 X1 Y2 Z3 B-5.5 C64.4 F60\nX2 F30\nG94\nG1 X3 F600\nG49\n%\nG1 X100 F600\n";
+    let mut g = Interpreter::new([0.0; 6]);
+    g.work_offsets[0] = [10.0, 20.0, 30.0, 0.0, 0.0, 0.0];
+    let mut moves = Vec::new();
+    let mut events = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        if g.ended {
+            break;
+        }
+        if let Some(m) = g.line(line, i as u64 + 1).unwrap() {
+            moves.push(m);
+        }
+        if let Some(e) = g.tool_event {
+            events.push(e);
+        }
+    }
+    // The second `%` ends the program: the G1 X100 after it is not read.
+    assert_eq!(moves.len(), 4);
+    // G43 H1 with the Z move on its line; G49 cancels.
+    assert_eq!(
+        events,
+        [
+            pkm::motion::gcode::ToolEvent::Apply { h: 1, line: 5 },
+            pkm::motion::gcode::ToolEvent::Cancel { line: 11 }
+        ]
+    );
+    assert_eq!(g.tool, Some(1));
+    // G54's offset is added to the program's coordinates.
+    assert_eq!(moves[0].end[2], 35.0);
+    assert_eq!(moves[1].end[..3], [11.0, 22.0, 33.0]);
+    assert!((moves[1].end[4] - (-5.5f64).to_radians()).abs() < 1e-15);
+    // G93: F60 is 1/60 min = 1 s; F30 2 s; no feed rate.
+    assert_eq!((moves[1].duration, moves[1].feed), (Some(1.0), None));
+    assert_eq!(moves[2].duration, Some(2.0));
+    // G94 again: F per minute.
+    assert_eq!((moves[3].duration, moves[3].feed), (None, Some(10.0)));
+    // The unknown M428 and the tool change are noted, not errors.
+    let notes: Vec<&str> = g.notes.iter().map(|n| n.1.as_str()).collect();
+    assert!(notes[0].starts_with("M428"), "{notes:?}");
+    assert!(notes.iter().any(|n| n.contains("tool 1")), "{notes:?}");
+}
+
+#[test]
+fn five_axis_word_errors_name_the_line() {
+    for (text, want) in [
+        ("G93\nG1 X1 F10\nX2\n", "line 3"),
+        ("G93\nG1 X1 F10\nX2\n", "own F"),
+        ("G43\n", "no tool in the spindle"),
+        ("G1 X1 H2 F10\n", "H without G43"),
+        ("M6\n", "without a tool selected"),
+        ("G43 H1.5\n", "tool number"),
+        ("G41 X1\n", "unsupported code G41"),
+    ] {
+        let e = run(text).unwrap_err().to_string();
+        assert!(e.contains(want), "{text:?}: {e}");
+    }
+}
+
+#[test]
+fn a_linuxcnc_tool_table_gives_lengths() {
+    let t = pkm::motion::tools::parse_tool_table(
+        "sim.tbl",
+        "T1 P1 Z50.0 D10.0 ;end mill\n\nT2 P2 D3 Z-1.5\n",
+    )
+    .unwrap();
+    assert_eq!(t.get(&1), Some(&50.0));
+    assert_eq!(t.get(&2), Some(&-1.5));
+    for (text, want) in [
+        ("T1 Z1\nT1 Z2\n", "sim.tbl:2"),
+        ("P1 Z5\n", "needs T"),
+        ("T1 Zx\n", "length"),
+        ("T1 K5\n", "not a tool table word"),
+    ] {
+        let e = pkm::motion::tools::parse_tool_table("sim.tbl", text)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(want), "{text:?}: {e}");
+    }
 }

@@ -328,6 +328,7 @@ fn ratios_are_not_given_for_turning_drives() {
         pkm::analysis::motion::MotionSource::Gcode {
             reader: Box::new(program.as_bytes()),
             from: None,
+            setup: Default::default(),
         },
         &pkm::motion::program::FeedOptions::default(),
         Sampling::Rate(100.0),
@@ -378,6 +379,7 @@ fn motion_work_is_bounded_before_it_is_done() {
             MotionSource::Gcode {
                 reader: Box::new(std::io::Cursor::new(program.to_string())),
                 from: Some(vec![32.0, -32.0, -290.0, 0.0, 0.0, 0.0]),
+                setup: Default::default(),
             },
             &FeedOptions {
                 max_samples: max,
@@ -474,6 +476,7 @@ fn the_study_circle_fits_and_a_larger_one_does_not() {
         MotionSource::Gcode {
             reader: Box::new(std::io::Cursor::new(c.program(1000.0).into_bytes())),
             from: Some(c.start()),
+            setup: Default::default(),
         },
         &feed_options(&m),
         Sampling::Rate(1000.0),

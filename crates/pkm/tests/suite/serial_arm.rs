@@ -72,7 +72,8 @@ fn six_joint_files_take_tool_poses_and_five_axis_files_their_joints() {
         env!("CARGO_MANIFEST_DIR")
     ))
     .unwrap();
-    assert_eq!(m.mechanism().pose_space(), PoseSpace::Own);
+    // Its file asks for tool-centre-point coordinates (a 5-axis machine tool).
+    assert_eq!(m.mechanism().pose_space(), PoseSpace::Tcp);
 }
 
 #[test]

@@ -510,3 +510,112 @@ fn import_refuses_a_joint_order_it_does_not_map() {
         .to_string();
     assert!(e.contains("xyzbc-trt.ini") && e.contains("XYZCB"), "{e}");
 }
+
+struct Keep(Vec<(Option<u64>, Vec<f64>, Vec<f64>)>);
+
+impl pkm::analysis::motion::SampleSink for Keep {
+    fn sample(&mut self, s: &pkm::analysis::motion::SampleRow) -> pkm::Result<()> {
+        self.0.push((s.line, s.x.to_vec(), s.q.to_vec()));
+        Ok(())
+    }
+}
+
+fn boat(
+    m: &Machine,
+    setup: Box<pkm::analysis::motion::ProgramSetup>,
+) -> (pkm::analysis::motion::MotionRun, Keep) {
+    let text = std::fs::read_to_string(fixture("xyzbc-trt/boat-xyzbc.ngc")).unwrap();
+    let mut keep = Keep(Vec::new());
+    let run = pkm::analysis::motion::run_motion(
+        m,
+        pkm::analysis::motion::MotionSource::Gcode {
+            reader: Box::new(std::io::Cursor::new(text)),
+            from: None,
+            setup,
+        },
+        &pkm::analysis::motion::feed_options(m),
+        pkm::motion::Sampling::Rate(200.0),
+        &mut keep,
+    )
+    .unwrap();
+    (run, keep)
+}
+
+#[test]
+fn linuxcncs_boat_program_runs_to_its_end_through_the_sim_and_mc300() {
+    let (sim, _) = import_sim(0, None);
+    let mc300 = Machine::from_path(format!(
+        "{}/../../examples/machines/mc300.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    for m in [&sim, &mc300] {
+        let (run, keep) = boat(m, Default::default());
+        // The program's last move (line 1864, G53 Y0 B0 C0) is run.
+        assert_eq!(keep.0.last().unwrap().0, Some(1864));
+        assert!(run.summary.duration_s > 300.0, "{}", run.summary.duration_s);
+        // M428 / M429 are noted, not errors.
+        assert!(run.notes.iter().any(|n| n.1.starts_with("M428")));
+        // Joint values continuous: no turn of C or flip of B between samples.
+        for w in keep.0.windows(2) {
+            let (a, b) = (&w[0].2, &w[1].2);
+            assert!(
+                (a[3] - b[3]).abs() < 0.5 && (a[4] - b[4]).abs() < 1.0,
+                "{w:?}"
+            );
+        }
+    }
+}
+
+#[test]
+fn g43_sets_the_tool_length_from_the_table() {
+    let (sim, _) = import_sim(0, None);
+    let setup = Box::new(pkm::analysis::motion::ProgramSetup {
+        tool_lengths: [(1, 50.0)].into_iter().collect(),
+        ..Default::default()
+    });
+    let (run, keep) = boat(&sim, setup);
+    assert!(
+        run.notes.iter().any(|n| n.1.contains("tool length 50 mm")),
+        "{:?}",
+        run.notes
+    );
+    let tooled = tcp5(&sim).with_tool_length(50.0).unwrap();
+    let plain = tcp5(&sim);
+    // Before G43 (line 12) the machine file's tool; from it on, 50 mm longer; after
+    // G49 (line 1863) none again.
+    for (line, x, q) in &keep.0 {
+        let x = SVector::<f64, 5>::from_column_slice(x);
+        let want = match line {
+            Some(l) if (12..1863).contains(l) => tooled.inverse(&x).unwrap(),
+            _ => plain.inverse(&x).unwrap(),
+        };
+        assert!(
+            (SVector::<f64, 5>::from_column_slice(q) - want).amax() < 1e-9,
+            "line {line:?}"
+        );
+    }
+    // A machine whose tool is in its file refuses G43 with a length, naming the line.
+    let hexapod = Machine::from_path(format!(
+        "{}/../../examples/machines/hexapod-seed001.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let e = pkm::analysis::motion::run_motion(
+        &hexapod,
+        pkm::analysis::motion::MotionSource::Gcode {
+            reader: Box::new(std::io::Cursor::new("T1 M6\nG43 H1\n".to_string())),
+            from: None,
+            setup: Box::new(pkm::analysis::motion::ProgramSetup {
+                tool_length: Some(10.0),
+                ..Default::default()
+            }),
+        },
+        &pkm::analysis::motion::feed_options(&hexapod),
+        pkm::motion::Sampling::Rate(200.0),
+        &mut pkm::analysis::motion::NoSink,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("line 2") && e.contains("G43"), "{e}");
+}
