@@ -226,10 +226,20 @@ fn fk_works_directly_on_a_urdf_file() {
 fn error_map_over_two_axes() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("map");
+    // Mapped over the joints X and B (the example file takes TCP coordinates).
+    let joints = dir.path().join("mc300-joints.toml");
+    std::fs::write(
+        &joints,
+        std::fs::read_to_string(path("examples/machines/mc300.toml"))
+            .unwrap()
+            .replace("pose = \"tcp\"", "pose = \"joints\""),
+    )
+    .unwrap();
+    let joints = joints.display().to_string();
     let o = pkm()
         .args([
             "errors",
-            &path("examples/machines/mc300.toml"),
+            &joints,
             "--actuators",
             "0,0,-100,30,45",
             "--map",
@@ -258,11 +268,7 @@ fn error_map_over_two_axes() {
         .map(|x| x.parse().unwrap())
         .collect();
     let o = pkm()
-        .args([
-            "errors",
-            &path("examples/machines/mc300.toml"),
-            "--actuators",
-        ])
+        .args(["errors", &joints, "--actuators"])
         .arg(format!("{},0,-100,{},45", centre[0], centre[1]))
         .args(["--json", "--out"])
         .arg(dir.path().join("one"))
