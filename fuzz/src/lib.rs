@@ -104,6 +104,19 @@ pub fn machine_toml(data: &[u8]) {
     }
 }
 
+/// A LinuxCNC tool table: parsed lengths are finite and within the magnitude bound.
+pub fn tool_table(data: &[u8]) {
+    let Ok(text) = std::str::from_utf8(data) else {
+        return;
+    };
+    if let Ok(t) = pkm::motion::tools::parse_tool_table("fuzz.tbl", text) {
+        assert!(t.len() <= pkm::motion::tools::MAX_TOOLS);
+        for l in t.values() {
+            assert!(l.is_finite() && l.abs() <= pkm::machine::MAX_MAGNITUDE);
+        }
+    }
+}
+
 /// A URDF robot description.
 pub fn urdf(data: &[u8]) {
     let Ok(text) = std::str::from_utf8(data) else {

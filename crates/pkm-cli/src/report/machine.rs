@@ -18,7 +18,6 @@ const JACOBIAN_TOL: f64 = 1e-6;
 pub fn summary(h: &mut Html, machine: &Machine, _ctx: &Context) -> Result<()> {
     let m = machine.mechanism();
     h.h2_id("machine", "Machine");
-    h.h2_id("machine", "Machine");
     let driven = m.driven();
     let mut rows = Vec::new();
     let home = m.home();
@@ -136,10 +135,17 @@ pub fn checks(h: &mut Html, machine: &Machine, _ctx: &Context) -> Result<()> {
 fn check_table_html(machine: &Machine, rows: &[CheckRow]) -> String {
     let m = machine.mechanism();
     let mut head: Vec<String> = vec!["pose".into()];
+    // A machine tool's joints share their names with its coordinates (X, Y, Z, B, C):
+    // the columns say they are the joints.
+    let shared = m
+        .actuators()
+        .iter()
+        .any(|a| m.coordinates().iter().any(|c| c.name == a.name));
+    let prefix = if shared { "joint " } else { "" };
     head.extend(
         m.actuators()
             .iter()
-            .map(|a| format!("{} [{}]", a.name, a.quantity.unit())),
+            .map(|a| format!("{prefix}{} [{}]", a.name, a.quantity.unit())),
     );
     head.extend(
         [

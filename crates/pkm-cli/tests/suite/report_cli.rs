@@ -64,6 +64,17 @@ fn the_report_of_an_own_hexapod_has_every_section() {
     assert!(!html.contains("lie on the grid's faces"));
     // Every violated limit counted, first ones beside.
     assert!(html.contains("points violating it"));
+    // Every anchor once (the machine section wrote its heading twice).
+    let mut ids: Vec<&str> = html
+        .split(" id=\"")
+        .skip(1)
+        .filter_map(|r| r.split('"').next())
+        .collect();
+    let n = ids.len();
+    ids.sort();
+    ids.dedup();
+    assert_eq!(ids.len(), n, "an id written twice");
+    assert_eq!(html.matches(">Machine</h2>").count(), 1);
 }
 
 /// A section that cannot be computed shows its error in its place; the others are

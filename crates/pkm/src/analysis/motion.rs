@@ -18,7 +18,8 @@ use crate::motion::{MotionSummary, Move, Profile, Runner, Sample, Sampling, Segm
 /// Where the moves come from.
 pub enum MotionSource<'a> {
     /// A G-code program, read line by line, starting at `from` (pose coordinates,
-    /// internal units; `None`: home). Needs a machine whose pose is X, Y, Z[, A, B, C].
+    /// internal units; `None`: home). Needs a machine whose pose is X, Y, Z[, A, B, C]
+    /// or tool-centre-point coordinates (X, Y, Z and rotary axes named A, B, C).
     Gcode {
         /// The program text.
         reader: Box<dyn BufRead + 'a>,
@@ -405,7 +406,7 @@ impl Visitor for Simulate<'_, '_> {
                                          --tool-length): taken as 0, the machine file's tool"
                                     )
                                 };
-                                interp_note(&mut notes, line, what);
+                                interp.note(line, what);
                                 (line, l)
                             }
                             ToolEvent::Cancel { line } => (line, 0.0),
@@ -427,11 +428,8 @@ impl Visitor for Simulate<'_, '_> {
                 if let Some(p) = pending.take() {
                     runner.run_move(&p, true, &mut sink)?;
                 }
-                let mut all = std::mem::take(&mut interp.notes);
-                all.append(&mut notes);
-                all.sort_by_key(|n| n.0);
+                notes = std::mem::take(&mut interp.notes);
                 dropped = interp.notes_dropped;
-                notes = all;
             }
         }
         Ok(MotionRun {
@@ -440,12 +438,6 @@ impl Visitor for Simulate<'_, '_> {
             notes,
             notes_dropped: dropped,
         })
-    }
-}
-
-fn interp_note(notes: &mut Vec<(u64, String)>, line: u64, text: String) {
-    if notes.len() < crate::motion::gcode::MAX_NOTES {
-        notes.push((line, text));
     }
 }
 

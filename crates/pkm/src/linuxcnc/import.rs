@@ -666,15 +666,19 @@ impl Writer<'_> {
         Ok(())
     }
 
+    /// The machine file written so far, loaded (an error when the configuration does
+    /// not give a valid pkm machine).
+    fn load(&self) -> Result<Machine> {
+        Machine::from_toml_str(&self.out, "<imported machine>").map_err(|e| Error::InvalidInput {
+            what: format!("import of {}", short(&self.ini.file)),
+            message: format!("the configuration does not give a valid pkm machine: {e}"),
+        })
+    }
+
     /// Loads the file written so far, compares the INI's joint HOME and HOME_OFFSET
     /// with the struts at the home pose, and adds what follows from them.
     fn finish(mut self) -> Result<Imported> {
-        let m = Machine::from_toml_str(&self.out, "<imported machine>").map_err(|e| {
-            Error::InvalidInput {
-                what: format!("import of {}", short(&self.ini.file)),
-                message: format!("the configuration does not give a valid pkm machine: {e}"),
-            }
-        })?;
+        let m = self.load()?;
         let mech = m.mechanism();
         let home = mech.home();
         let q = mech.inverse(&home)?;
@@ -751,12 +755,7 @@ impl Writer<'_> {
             }
         }
         self.out.push_str(&tail);
-        Machine::from_toml_str(&self.out, "<imported machine>").map_err(|e| {
-            Error::InvalidInput {
-                what: format!("import of {}", short(&self.ini.file)),
-                message: format!("the configuration does not give a valid pkm machine: {e}"),
-            }
-        })?;
+        self.load()?;
         Ok(Imported {
             toml: self.out,
             kinematics: self.kins.module(),

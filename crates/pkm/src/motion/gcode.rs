@@ -230,7 +230,8 @@ impl Interpreter {
         }
     }
 
-    fn note(&mut self, line: u64, text: String) {
+    /// Adds a note (line, text), at most [`MAX_NOTES`] (later ones are counted).
+    pub fn note(&mut self, line: u64, text: String) {
         if self.notes.len() < MAX_NOTES {
             self.notes.push((line, text));
         } else {

@@ -123,14 +123,13 @@ pub fn to_move<M: Mechanism<P, A>, const P: usize, const A: usize>(
             profile(o.profile, segment.length, v, o)?
         }
         // Inverse time (G93): the move takes the programmed time at constant speed.
-        _ if g.duration.is_some() && o.feed.is_none() => {
-            let d = g.duration.unwrap_or(1.0);
-            if segment.length > 0.0 {
+        _ if o.feed.is_none() && g.duration.is_some() => match g.duration {
+            Some(d) if segment.length > 0.0 => {
                 Profile::constant(segment.length, segment.length / d)?
-            } else {
-                Profile::dwell(d)
             }
-        }
+            Some(d) => Profile::dwell(d),
+            None => unreachable!("guarded above"),
+        },
         _ => {
             let v = o.feed.or(g.feed).ok_or_else(|| Error::InvalidInput {
                 what: format!("G-code line {}", g.line),

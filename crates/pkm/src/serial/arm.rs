@@ -102,16 +102,7 @@ impl SerialArm {
             .try_inverse()
             .ok_or_else(|| invalid("the workpiece frame is not invertible".into()))?;
         let joints: Vec<_> = machine.tool.joints().cloned().collect();
-        let actuators = std::array::from_fn(|i| Actuator {
-            name: joints[i].name.clone(),
-            quantity: match joints[i].kind {
-                super::JointKind::Revolute => Quantity::Angle,
-                super::JointKind::Prismatic => Quantity::Length,
-            },
-            range: joints[i].range,
-            max_velocity: joints[i].max_velocity,
-            max_acceleration: joints[i].max_acceleration,
-        });
+        let actuators = std::array::from_fn(|i| joints[i].actuator());
         let tool = PreparedChain::new(&machine.tool, &[], &[]);
         let mut arm = SerialArm {
             machine,

@@ -76,6 +76,16 @@ pub enum Parameter {
 const AXES: [&str; 3] = ["x", "y", "z"];
 
 impl SerialMachine {
+    /// Every joint, tool chain first, then workpiece chain: the order of a serial
+    /// mechanism's actuators.
+    pub fn all_joints(&self) -> Vec<super::Joint> {
+        self.tool
+            .joints()
+            .chain(self.workpiece.iter().flat_map(|w| w.joints()))
+            .cloned()
+            .collect()
+    }
+
     pub(super) fn chain(&self, k: usize) -> Result<&Chain> {
         match k {
             0 => Ok(&self.tool),

@@ -8,14 +8,12 @@
 use nalgebra::{Isometry3, Matrix3, SMatrix, SVector, Translation3, UnitQuaternion, Vector3};
 
 use super::machine::SerialMachine;
-use super::JointKind;
 use crate::error::{Error, Result};
 use crate::limits::{LimitKind, Violation};
 use crate::mechanism::{
     Actuator, ActuatorMotion, Coordinate, LinkKind, Mechanism, PointRole, PoseSpace, Skeleton,
 };
 use crate::pose::Pose;
-use crate::units::Quantity;
 
 /// A serial machine with `N` joints in all.
 #[derive(Debug, Clone, PartialEq)]
@@ -35,33 +33,18 @@ pub struct SerialMechanism<const N: usize> {
 impl<const N: usize> SerialMechanism<N> {
     /// Wraps a machine with `N` joints; `home` in internal units.
     pub fn new(machine: SerialMachine, home: SVector<f64, N>) -> Result<Self> {
-        let joints: Vec<_> = machine
-            .tool
-            .joints()
-            .chain(machine.workpiece.iter().flat_map(|w| w.joints()))
-            .cloned()
-            .collect();
+        let joints = machine.all_joints();
         if joints.len() != N {
             return Err(Error::InvalidInput {
                 what: "serial machine".into(),
                 message: format!("{} joints, expected {N}", joints.len()),
             });
         }
-        let quantity = |k: JointKind| match k {
-            JointKind::Revolute => Quantity::Angle,
-            JointKind::Prismatic => Quantity::Length,
-        };
         let coordinates = std::array::from_fn(|i| Coordinate {
             name: joints[i].name.clone(),
-            quantity: quantity(joints[i].kind),
+            quantity: joints[i].quantity(),
         });
-        let actuators = std::array::from_fn(|i| Actuator {
-            name: joints[i].name.clone(),
-            quantity: quantity(joints[i].kind),
-            range: joints[i].range,
-            max_velocity: joints[i].max_velocity,
-            max_acceleration: joints[i].max_acceleration,
-        });
+        let actuators = std::array::from_fn(|i| joints[i].actuator());
         Ok(SerialMechanism {
             tool_joints: machine.tool.dof(),
             machine,

@@ -66,6 +66,27 @@ pub struct Joint {
     pub max_acceleration: Option<f64>,
 }
 
+impl Joint {
+    /// Angle (revolute) or length (prismatic).
+    pub fn quantity(&self) -> crate::units::Quantity {
+        match self.kind {
+            JointKind::Revolute => crate::units::Quantity::Angle,
+            JointKind::Prismatic => crate::units::Quantity::Length,
+        }
+    }
+
+    /// The joint as a mechanism's actuator (its name, travel and rates).
+    pub fn actuator(&self) -> crate::mechanism::Actuator {
+        crate::mechanism::Actuator {
+            name: self.name.clone(),
+            quantity: self.quantity(),
+            range: self.range,
+            max_velocity: self.max_velocity,
+            max_acceleration: self.max_acceleration,
+        }
+    }
+}
+
 /// One link: its input joint (none for a fixed link) and its nominal geometry.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Link {

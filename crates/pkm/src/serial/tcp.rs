@@ -44,10 +44,9 @@ use crate::mechanism::{
     Actuator, ActuatorMotion, Coordinate, Forward, Mechanism, PoseSpace, Skeleton,
 };
 use crate::pose::Pose;
-use crate::units::Quantity;
 
 /// The relative kinematics at one joint configuration (part frame).
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct Relative<const N: usize> {
     /// Tool tip.
     pub tip: Vector3<f64>,
@@ -99,12 +98,12 @@ pub struct TcpMachine<const N: usize> {
     tool: PreparedChain,
     work: Option<PreparedChain>,
     characteristic_length: f64,
+    /// The relative kinematics at zero joint values: the rotary axes and the tool axis
+    /// the tool-axis inverse turns ([`super::tcp_axis`]).
+    pub(super) at_zero: Relative<N>,
     /// Links whose angular deviations are completed from a triple (accuracy engine).
     pub(crate) completions: Vec<crate::accuracy::LinkCompletion>,
 }
-
-/// Most joints of a TCP machine (three linear, three rotary).
-pub const MAX_TCP_JOINTS: usize = 6;
 
 impl<const N: usize> TcpMachine<N> {
     /// Wraps a machine with three prismatic and `N - 3` revolute joints; `home` are the
@@ -114,21 +113,16 @@ impl<const N: usize> TcpMachine<N> {
             what: "TCP coordinates".into(),
             message,
         };
-        let joints: Vec<super::Joint> = machine
-            .tool
-            .joints()
-            .chain(machine.workpiece.iter().flat_map(|w| w.joints()))
-            .cloned()
-            .collect();
+        let joints = machine.all_joints();
         let prismatic: Vec<usize> = (0..joints.len())
             .filter(|&i| joints[i].kind == JointKind::Prismatic)
             .collect();
         let revolute: Vec<usize> = (0..joints.len())
             .filter(|&i| joints[i].kind == JointKind::Revolute)
             .collect();
-        if joints.len() != N || prismatic.len() != 3 || revolute.is_empty() {
+        if joints.len() != N || prismatic.len() != 3 || !(1..=2).contains(&revolute.len()) {
             return Err(invalid(format!(
-                "tool-centre-point coordinates need three linear axes and one to three \
+                "tool-centre-point coordinates need three linear axes and one or two \
                  rotary axes; this machine has {} linear and {} rotary",
                 prismatic.len(),
                 revolute.len()
@@ -146,17 +140,7 @@ impl<const N: usize> TcpMachine<N> {
                 )));
             }
         }
-        let quantity = |k: JointKind| match k {
-            JointKind::Revolute => Quantity::Angle,
-            JointKind::Prismatic => Quantity::Length,
-        };
-        let actuators = std::array::from_fn(|i| Actuator {
-            name: joints[i].name.clone(),
-            quantity: quantity(joints[i].kind),
-            range: joints[i].range,
-            max_velocity: joints[i].max_velocity,
-            max_acceleration: joints[i].max_acceleration,
-        });
+        let actuators = std::array::from_fn(|i| joints[i].actuator());
         let coordinates = std::array::from_fn(|i| match i {
             0 => Coordinate::length("X"),
             1 => Coordinate::length("Y"),
@@ -194,8 +178,15 @@ impl<const N: usize> TcpMachine<N> {
             rotary: std::array::from_fn(|k| revolute.get(k).copied().unwrap_or(0)),
             order,
             characteristic_length: 1.0,
+            at_zero: Relative {
+                tip: Vector3::zeros(),
+                frame: Matrix3::identity(),
+                axis: [Vector3::zeros(); N],
+                point: [Vector3::zeros(); N],
+            },
             completions: Vec::new(),
         };
+        m.at_zero = m.relative(&SVector::zeros());
         let rel = m.relative(&home);
         let mcols = m.linear_matrix(&rel);
         let rc = crate::linalg::rcond1(&mcols);
@@ -318,8 +309,8 @@ impl<const N: usize> TcpMachine<N> {
         q
     }
 
-    /// Inverse kinematics and the pieces of the Jacobian at the solution: `q`, the
-    /// relative kinematics there, `M^-1`.
+    /// Inverse kinematics: `q` with the relative kinematics at the rotary angles and the
+    /// linear joints at zero, and `M^-1`.
     fn solve(&self, x: &SVector<f64, N>) -> Result<(SVector<f64, N>, Relative<N>, Matrix3<f64>)> {
         if x.iter().any(|v| !v.is_finite()) {
             return Err(Error::InvalidInput {
@@ -335,8 +326,23 @@ impl<const N: usize> TcpMachine<N> {
         for (k, &j) in self.linear.iter().enumerate() {
             q[j] = ql[k];
         }
-        let rel = self.relative(&q);
-        Ok((q, rel, minv))
+        Ok((q, rel0, minv))
+    }
+
+    /// The relative kinematics at the solution `q` from those with the linear joints at
+    /// zero (`rel0`), without walking the chains again: the slides change no axis, they
+    /// move every joint after them (from the part) and the tip along their axes.
+    fn at_solution(&self, rel0: &Relative<N>, q: &SVector<f64, N>) -> Relative<N> {
+        let mut rel = *rel0;
+        let mut shift = Vector3::zeros();
+        for &j in &self.order {
+            rel.point[j] += shift;
+            if self.kinds[j] == JointKind::Prismatic {
+                shift += rel.axis[j] * q[j];
+            }
+        }
+        rel.tip += shift;
+        rel
     }
 
     /// `h = J' q'`: the tip's acceleration (part frame) for joint rates `qd` and no
@@ -439,7 +445,8 @@ impl<const N: usize> Mechanism<N, N> for TcpMachine<N> {
     }
 
     fn jacobian(&self, x: &SVector<f64, N>) -> Result<SMatrix<f64, N, N>> {
-        let (_, rel, minv) = self.solve(x)?;
+        let (q, rel0, minv) = self.solve(x)?;
+        let rel = self.at_solution(&rel0, &q);
         let mut j = SMatrix::<f64, N, N>::zeros();
         for (r, &lj) in self.linear.iter().enumerate() {
             for c in 0..3 {
@@ -477,7 +484,8 @@ impl<const N: usize> Mechanism<N, N> for TcpMachine<N> {
 
     /// The nominal tool pose relative to the part.
     fn tool_pose(&self, x: &SVector<f64, N>) -> Result<Pose> {
-        let (_, rel, _) = self.solve(x)?;
+        let (q, rel0, _) = self.solve(x)?;
+        let rel = self.at_solution(&rel0, &q);
         Ok(Isometry3::from_parts(
             Translation3::from(rel.tip),
             UnitQuaternion::from_matrix(&rel.frame),
@@ -525,6 +533,20 @@ impl<const N: usize> Mechanism<N, N> for TcpMachine<N> {
         self.characteristic_length
     }
 
+    /// The 2-norm condition number of `dq/dx` with every angle, of a coordinate (column)
+    /// or of a rotary axis (row), counted as [`Mechanism::characteristic_length`] mm per
+    /// radian: the default scales only the columns, and a rotary axis' own row (1 rad
+    /// per rad) would then weigh a 150th of a slide's.
+    fn condition(&self, x: &SVector<f64, N>) -> Result<f64> {
+        let mut j = crate::mechanism::scaled_driven_jacobian(self, x)?;
+        for (r, a) in self.actuators.iter().enumerate() {
+            if a.quantity == crate::units::Quantity::Angle {
+                j.row_mut(r).scale_mut(self.characteristic_length);
+            }
+        }
+        Ok(crate::linalg::condition_number(&j))
+    }
+
     fn with_tool_length(&self, length: f64) -> Option<Result<Self>> {
         Some(TcpMachine::with_tool_length(self, length))
     }
@@ -536,7 +558,8 @@ impl<const N: usize> Mechanism<N, N> for TcpMachine<N> {
         xd: &SVector<f64, N>,
         xdd: &SVector<f64, N>,
     ) -> Result<ActuatorMotion<N>> {
-        let (q, rel, minv) = self.solve(x)?;
+        let (q, rel0, minv) = self.solve(x)?;
+        let rel = self.at_solution(&rel0, &q);
         let qd = self.rates(&rel, &minv, xd, Vector3::zeros());
         let h = self.velocity_product(&rel, &qd);
         let qdd = self.rates(&rel, &minv, xdd, h);

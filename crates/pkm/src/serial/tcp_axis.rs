@@ -134,7 +134,7 @@ impl<const N: usize> TcpMachine<N> {
             None => [home[3], home[4]],
         };
         let rot = self.rotary_joints();
-        let rel0 = self.relative(&SVector::<f64, N>::zeros());
+        let rel0 = &self.at_zero;
         let a0: Vector3<f64> = rel0.frame.column(2).into_owned();
         // Coordinates k1 (nearer the part) and k2, in pose-coordinate order 0, 1.
         let pos = |j: usize| self.order.iter().position(|&o| o == j).unwrap_or(0);

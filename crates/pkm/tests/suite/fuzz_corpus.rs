@@ -52,3 +52,8 @@ fn measurement_files() {
 fn tolerance_files() {
     replay("tolerance_file", targets::tolerance_file);
 }
+
+#[test]
+fn tool_tables() {
+    replay("tool_table", targets::tool_table);
+}

@@ -179,6 +179,58 @@ fn params(rng: &mut rand::rngs::StdRng, conventional: bool) -> Trt {
     }
 }
 
+/// A LinuxCNC trt formula: joints (or world pose) from a world pose (or joints) and
+/// the two rotary angles (deg).
+type TrtFormula = fn(&Trt, [f64; 3], f64, f64) -> [f64; 3];
+
+/// The largest difference (mm) between pkm's inverse kinematics and LinuxCNC's
+/// `inverse` (and its forward against `forward`) over `n` random poses.
+fn worst_against(
+    t: &TcpMachine<5>,
+    p: &Trt,
+    rng: &mut rand::rngs::StdRng,
+    n: usize,
+    inverse: TrtFormula,
+    forward: Option<TrtFormula>,
+) -> f64 {
+    let mut worst: f64 = 0.0;
+    for _ in 0..n {
+        let pos = [
+            rng.random_range(-150.0..150.0),
+            rng.random_range(-80.0..80.0),
+            rng.random_range(-100.0..100.0),
+        ];
+        let (a, c) = (
+            rng.random_range(-100.0..50.0),
+            rng.random_range(-720.0..720.0),
+        );
+        let j = inverse(p, pos, a, c);
+        // pkm's X, Y, Z are the tip; LinuxCNC's world Z carries the tool length on top
+        // (its interpreter adds it): tip = world - tool e_z.
+        let x = SVector::<f64, 5>::new(
+            pos[0],
+            pos[1],
+            pos[2] - p.tool,
+            a.to_radians(),
+            c.to_radians(),
+        );
+        let q = t.inverse(&x).unwrap();
+        for i in 0..3 {
+            worst = worst.max((q[i] - j[i]).abs());
+        }
+        assert!((q[3] - x[3]).abs() < 1e-15 && (q[4] - x[4]).abs() < 1e-15);
+        if let Some(forward) = forward {
+            let f = forward(p, j, a, c);
+            let back = t.forward(&q, &x).unwrap().pose;
+            for i in 0..3 {
+                let want = if i == 2 { f[2] - p.tool } else { f[i] };
+                worst = worst.max((back[i] - want).abs());
+            }
+        }
+    }
+    worst
+}
+
 #[test]
 fn inverse_and_forward_equal_linuxcnc_xyzbc_trt_kins_both_directions() {
     let mut rng = rand::rngs::StdRng::seed_from_u64(20);
@@ -200,39 +252,14 @@ fn inverse_and_forward_equal_linuxcnc_xyzbc_trt_kins_both_directions() {
             };
             let m = Machine::from_toml_str(&trt_toml(&p), "trt.toml").unwrap();
             let t = tcp5(&m);
-            for _ in 0..50 {
-                let pos = [
-                    rng.random_range(-150.0..150.0),
-                    rng.random_range(-80.0..80.0),
-                    rng.random_range(-100.0..100.0),
-                ];
-                let (b, c) = (
-                    rng.random_range(-100.0..50.0),
-                    rng.random_range(-720.0..720.0),
-                );
-                let j = lcnc_inverse(&p, pos, b, c);
-                // pkm's X, Y, Z are the tip; LinuxCNC's world Z carries the tool
-                // length on top (its interpreter adds it): tip = world - tool e_z.
-                let x = SVector::<f64, 5>::new(
-                    pos[0],
-                    pos[1],
-                    pos[2] - p.tool,
-                    b.to_radians(),
-                    c.to_radians(),
-                );
-                let q = t.inverse(&x).unwrap();
-                for i in 0..3 {
-                    worst = worst.max((q[i] - j[i]).abs());
-                }
-                assert!((q[3] - x[3]).abs() < 1e-15 && (q[4] - x[4]).abs() < 1e-15);
-                // Forward: pkm's from joints against LinuxCNC's.
-                let f = lcnc_forward(&p, j, b, c);
-                let back = t.forward(&q, &x).unwrap().pose;
-                for i in 0..3 {
-                    let want = if i == 2 { f[2] - p.tool } else { f[i] };
-                    worst = worst.max((back[i] - want).abs());
-                }
-            }
+            worst = worst.max(worst_against(
+                t,
+                &p,
+                &mut rng,
+                50,
+                lcnc_inverse,
+                Some(lcnc_forward),
+            ));
         }
     }
     assert!(worst < 1e-9, "largest difference {worst:.3e} mm");
@@ -253,8 +280,12 @@ fn the_2024_header_inverse_is_not_its_forwards_inverse_with_default_directions()
     let (pos, b, c) = ([10.0, 5.0, -3.0], 30.0, 40.0);
     let printed = lcnc_inverse_2024(&p, pos, b, c);
     let f = lcnc_forward(&p, printed, b, c);
-    let off = (0..3).map(|i| (f[i] - pos[i]).abs()).fold(0.0, f64::max);
-    assert!(off > 1.0, "the printed inverse round-trips ({off:.3e} mm)");
+    // Its offset terms have the sign of sin(B) dz and sin(B) dx flipped, so the round
+    // trip misses by 2 sin(B) |(dx, dz)|: 25 mm here.
+    let off = (0..3).map(|i| (f[i] - pos[i]).powi(2)).sum::<f64>().sqrt();
+    let want = 2.0 * 30f64.to_radians().sin() * p.dx.hypot(p.dz);
+    assert!((off - want).abs() < 1e-9, "{off} vs {want} mm");
+    assert!((want - 25.0).abs() < 1e-12);
     let consistent = lcnc_inverse(&p, pos, b, c);
     let f = lcnc_forward(&p, consistent, b, c);
     let off = (0..3).map(|i| (f[i] - pos[i]).abs()).fold(0.0, f64::max);
@@ -280,6 +311,54 @@ fn sim(conventional: bool) -> Machine {
     Machine::from_toml_str(&trt_toml(&p), "trt.toml").unwrap()
 }
 
+/// The Jacobian at `x` against central differences of the inverse, and q', q'' along
+/// `x + v t + a t^2 / 2` against differences of q(t) (fourth order for q'').
+fn check_derivatives(t: &TcpMachine<5>, x: SVector<f64, 5>, v: SVector<f64, 5>) {
+    let j = t.jacobian(&x).unwrap();
+    for c in 0..5 {
+        let h = if c < 3 { 1e-4 } else { 1e-6 };
+        let mut xp = x;
+        let mut xm = x;
+        xp[c] += h;
+        xm[c] -= h;
+        let fd = (t.inverse(&xp).unwrap() - t.inverse(&xm).unwrap()) / (2.0 * h);
+        let scale = j.column(c).amax().max(1.0);
+        assert!(
+            (fd - j.column(c)).amax() < 1e-7 * scale,
+            "column {c}: {fd} vs {}",
+            j.column(c)
+        );
+    }
+    let a = v * 0.7 + SVector::<f64, 5>::new(3.0, -2.0, 1.0, 0.3, -0.4);
+    let at = |s: f64| t.inverse(&(x + v * s + a * (s * s / 2.0))).unwrap();
+    let mo = t.actuator_motion(&x, &v, &a).unwrap();
+    let h = 1e-3;
+    let qd = (at(-2.0 * h) - at(-h) * 8.0 + at(h) * 8.0 - at(2.0 * h)) / (12.0 * h);
+    let qdd = (at(-2.0 * h) * -1.0 + at(-h) * 16.0 - at(0.0) * 30.0 + at(h) * 16.0 - at(2.0 * h))
+        / (12.0 * h * h);
+    assert!((mo.q - at(0.0)).amax() < 1e-12);
+    assert!(
+        (mo.qd - qd).amax() < 1e-8 * qd.amax().max(1.0),
+        "{} vs {qd}",
+        mo.qd
+    );
+    assert!(
+        (mo.qdd - qdd).amax() < 1e-6 * qdd.amax().max(1.0),
+        "{} vs {qdd}",
+        mo.qdd
+    );
+}
+
+fn random_rates(rng: &mut rand::rngs::StdRng) -> SVector<f64, 5> {
+    SVector::<f64, 5>::new(
+        rng.random_range(-50.0..50.0),
+        rng.random_range(-50.0..50.0),
+        rng.random_range(-50.0..50.0),
+        rng.random_range(-1.0..1.0),
+        rng.random_range(-2.0..2.0),
+    )
+}
+
 #[test]
 fn jacobian_and_actuator_motion_match_finite_differences() {
     let m = sim(false);
@@ -293,46 +372,142 @@ fn jacobian_and_actuator_motion_match_finite_differences() {
             rng.random_range(-1.5..0.8),
             rng.random_range(-7.0..7.0),
         );
-        let j = t.jacobian(&x).unwrap();
-        for c in 0..5 {
-            let h = if c < 3 { 1e-4 } else { 1e-6 };
-            let mut xp = x;
-            let mut xm = x;
-            xp[c] += h;
-            xm[c] -= h;
-            let fd = (t.inverse(&xp).unwrap() - t.inverse(&xm).unwrap()) / (2.0 * h);
-            let scale = j.column(c).amax().max(1.0);
-            assert!(
-                (fd - j.column(c)).amax() < 1e-7 * scale,
-                "column {c}: {fd} vs {}",
-                j.column(c)
-            );
-        }
-        // Along x(t) = x + v t + a t^2 / 2: q' and q'' against differences of q(t).
-        let v = SVector::<f64, 5>::new(
-            rng.random_range(-50.0..50.0),
-            rng.random_range(-50.0..50.0),
-            rng.random_range(-50.0..50.0),
-            rng.random_range(-1.0..1.0),
-            rng.random_range(-2.0..2.0),
+        let v = random_rates(&mut rng);
+        check_derivatives(t, x, v);
+    }
+}
+
+/// A machine with a tilting head (A about X, in the tool chain after the slides, the
+/// tool 150 mm from its axis) and a rotary table C off the origin, written by hand:
+/// the slides move the head's axis, which a table machine's do not.
+const HEAD: &str = r#"type = "serial"
+name = "head A, table C"
+pose = "tcp"
+
+[[tool_chain]]
+name = "bed"
+rotation = [[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
+
+[[tool_chain]]
+name = "x slide"
+joint = { name = "X", type = "prismatic", range = [-500.0, 500.0] }
+rotation = [[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
+
+[[tool_chain]]
+name = "y slide"
+joint = { name = "Y", type = "prismatic", range = [-500.0, 500.0] }
+rotation = [[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
+
+[[tool_chain]]
+name = "z slide"
+joint = { name = "Z", type = "prismatic", range = [-500.0, 500.0] }
+translation = [0.0, 0.0, 300.0]
+rotation = [[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
+
+[[tool_chain]]
+name = "head"
+joint = { name = "A", type = "revolute", range = [-100.0, 100.0] }
+translation = [0.0, -150.0, 0.0]
+rotation = [[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]]
+
+[[workpiece_chain]]
+name = "table mount"
+translation = [10.0, 20.0, -50.0]
+
+[[workpiece_chain]]
+name = "table"
+joint = { name = "C", type = "revolute", range = [-3600.0, 3600.0] }
+"#;
+
+#[test]
+fn a_tilting_head_machine_inverts_forwards_and_differentiates_exactly() {
+    let m = Machine::from_toml_str(HEAD, "head.toml").unwrap();
+    let t = tcp5(&m);
+    let names: Vec<&str> = t.coordinates().iter().map(|c| c.name.as_str()).collect();
+    assert_eq!(names, ["X", "Y", "Z", "A", "C"]);
+    // At A = C = 0 the tool hangs 150 mm below the head's axis, which is 300 mm above
+    // the Z slide's origin: tip = slides + (0, 0, 150) less the table's origin.
+    let q0 = SVector::<f64, 5>::new(1.0, 2.0, 3.0, 0.0, 0.0);
+    let x0 = t.forward(&q0, &q0).unwrap().pose;
+    assert!(
+        (x0 - SVector::<f64, 5>::new(-9.0, -18.0, 203.0, 0.0, 0.0)).amax() < 1e-12,
+        "{x0}"
+    );
+    // A turns the tool about the head's axis (world X, 303 mm up): at A = 90 deg the
+    // tip is at Rx(90) (0, 0, -150) = (0, 150, 0) from the axis.
+    let q1 = SVector::<f64, 5>::new(1.0, 2.0, 3.0, std::f64::consts::FRAC_PI_2, 0.0);
+    let x1 = t.forward(&q1, &q1).unwrap().pose;
+    assert!(
+        (x1.fixed_rows::<3>(0) - Vector3::new(-9.0, 132.0, 353.0)).amax() < 1e-9,
+        "{x1}"
+    );
+    // Conditioning with angles counted as the lever (150 mm, the tool from A's axis) in
+    // rows and columns: by hand, dq/dx at home is I with the slides' compensation of
+    // A (tip 150 mm below its axis: -(0, 150, 0) / 150) and of C (tip at (-10, -20) from
+    // its axis, seen from the part turning the other way: (20, -10, 0) / 150).
+    assert_eq!(t.characteristic_length(), 150.0);
+    let mut hand = nalgebra::SMatrix::<f64, 5, 5>::identity();
+    hand[(1, 3)] = -1.0;
+    hand[(0, 4)] = 20.0 / 150.0;
+    hand[(1, 4)] = -10.0 / 150.0;
+    let sv = hand.singular_values();
+    let want = sv.max() / sv.min();
+    let got = t.condition(&t.home()).unwrap();
+    assert!((got - want).abs() < 1e-9 * want, "{got} vs {want}");
+    let mut rng = rand::rngs::StdRng::seed_from_u64(5);
+    for _ in 0..500 {
+        let x = SVector::<f64, 5>::new(
+            rng.random_range(-200.0..200.0),
+            rng.random_range(-200.0..200.0),
+            rng.random_range(-100.0..300.0),
+            rng.random_range(-1.5..1.5),
+            rng.random_range(-7.0..7.0),
         );
-        let a = v * 0.7 + SVector::<f64, 5>::new(3.0, -2.0, 1.0, 0.3, -0.4);
-        let at = |s: f64| t.inverse(&(x + v * s + a * (s * s / 2.0))).unwrap();
-        let mo = t.actuator_motion(&x, &v, &a).unwrap();
-        let h = 1e-4;
-        let qd = (at(h) - at(-h)) / (2.0 * h);
-        let qdd = (at(h) - at(0.0) * 2.0 + at(-h)) / (h * h);
-        assert!((mo.q - at(0.0)).amax() < 1e-12);
-        assert!(
-            (mo.qd - qd).amax() < 1e-6 * qd.amax().max(1.0),
-            "{} vs {qd}",
-            mo.qd
-        );
-        assert!(
-            (mo.qdd - qdd).amax() < 1e-3 * qdd.amax().max(1.0),
-            "{} vs {qdd}",
-            mo.qdd
-        );
+        let q = t.inverse(&x).unwrap();
+        assert!((t.forward(&q, &x).unwrap().pose - x).amax() < 1e-9);
+        // Through the tool axis: the branch nearest the pose's own angles is them.
+        let (xa, _) = t
+            .pose_for_axis(
+                &Vector3::new(x[0], x[1], x[2]),
+                &t.tool_axis(&q),
+                Some(&[x[3], x[4]]),
+            )
+            .unwrap();
+        assert!((xa - x).amax() < 1e-9, "{xa} vs {x}");
+        check_derivatives(t, x, random_rates(&mut rng));
+    }
+}
+
+#[test]
+fn an_axis_beyond_the_rotary_axes_reach_is_refused_with_the_angle() {
+    // The tool tilted 30 deg about Y in the head, out of the plane A turns it in: it
+    // stays at 60 deg from the head's axis (X), so no turn of the table about Z brings
+    // it nearer the vertical than 30 deg.
+    let (s30, c30) = 30f64.to_radians().sin_cos();
+    let text = HEAD.replace(
+        "translation = [0.0, -150.0, 0.0]\nrotation = [[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]]",
+        &format!(
+            "translation = [0.0, -150.0, 0.0]\nrotation = [[0.0, 1.0, 0.0], [{ms30}, 0.0, {c30}], [{c30}, 0.0, {s30}]]",
+            ms30 = -s30
+        ),
+    );
+    assert_ne!(text, HEAD);
+    let m = Machine::from_toml_str(&text, "tilted.toml").unwrap();
+    let t = tcp5(&m);
+    let e = t
+        .rotary_for_axis(&Vector3::new(0.0, 0.0, 1.0), None)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("30.0000 deg beyond"), "{e}");
+    // 40 deg from the vertical is within reach, and pointed exactly.
+    let (s40, c40) = 40f64.to_radians().sin_cos();
+    let axis = Vector3::new(s40, 0.0, c40);
+    let sol = t.rotary_for_axis(&axis, None).unwrap();
+    for b in &sol.branches {
+        let q = t
+            .inverse(&SVector::<f64, 5>::new(0.0, 0.0, 0.0, b[0], b[1]))
+            .unwrap();
+        assert!((t.tool_axis(&q) - axis).amax() < 1e-12);
     }
 }
 
@@ -472,29 +647,8 @@ fn the_imported_sim_equals_xyzbc_trt_kins_both_directions() {
                 tool: tool.unwrap_or(0.0),
                 conventional: conv == 1,
             };
-            for _ in 0..2000 {
-                let pos = [
-                    rng.random_range(-150.0..150.0),
-                    rng.random_range(-80.0..80.0),
-                    rng.random_range(-100.0..100.0),
-                ];
-                let (b, c) = (
-                    rng.random_range(-100.0..50.0),
-                    rng.random_range(-400.0..400.0),
-                );
-                let j = lcnc_inverse(&p, pos, b, c);
-                let x = SVector::<f64, 5>::new(
-                    pos[0],
-                    pos[1],
-                    pos[2] - p.tool,
-                    b.to_radians(),
-                    c.to_radians(),
-                );
-                let q = t.inverse(&x).unwrap();
-                for i in 0..3 {
-                    assert!((q[i] - j[i]).abs() < 1e-9, "{conv} {tool:?}: {q} vs {j:?}");
-                }
-            }
+            let worst = worst_against(t, &p, &mut rng, 2000, lcnc_inverse, None);
+            assert!(worst < 1e-9, "{conv} {tool:?}: {worst:.3e} mm");
         }
     }
 }
@@ -556,14 +710,23 @@ fn linuxcncs_boat_program_runs_to_its_end_through_the_sim_and_mc300() {
         assert!(run.summary.duration_s > 300.0, "{}", run.summary.duration_s);
         // M428 / M429 are noted, not errors.
         assert!(run.notes.iter().any(|n| n.1.starts_with("M428")));
-        // Joint values continuous: no turn of C or flip of B between samples.
-        for w in keep.0.windows(2) {
-            let (a, b) = (&w[0].2, &w[1].2);
-            assert!(
-                (a[3] - b[3]).abs() < 0.5 && (a[4] - b[4]).abs() < 1.0,
-                "{w:?}"
-            );
-        }
+        // Joint values continuous, no turn of C or flip of B between samples: no
+        // rotary axis moves faster than the rapid rate (deg/s for a rotary axis) over
+        // a sample (5 ms).
+        let step = keep
+            .0
+            .windows(2)
+            .map(|w| {
+                (w[0].2[3] - w[1].2[3])
+                    .abs()
+                    .max((w[0].2[4] - w[1].2[4]).abs())
+            })
+            .fold(0.0, f64::max);
+        let bound = pkm::analysis::motion::feed_options(m).rapid.to_radians() / 200.0;
+        assert!(
+            step <= bound * (1.0 + 1e-9),
+            "{step} rad in a sample, bound {bound}"
+        );
     }
 }
 
@@ -618,4 +781,108 @@ fn g43_sets_the_tool_length_from_the_table() {
     .unwrap_err()
     .to_string();
     assert!(e.contains("line 2") && e.contains("G43"), "{e}");
+}
+
+/// `xyzac_inverse_math` of LinuxCNC's trtfuncs (A about X; `dx` is the y-offset here).
+fn lcnc_inverse_ac(p: &Trt, pos: [f64; 3], a: f64, c: f64) -> [f64; 3] {
+    let con = if p.conventional { 1.0 } else { -1.0 };
+    let (sa, ca) = a.to_radians().sin_cos();
+    let (sc, cc) = c.to_radians().sin_cos();
+    let (dy, dz) = (p.dx, p.dz + p.tool);
+    let [rx, ry, rz] = p.rot;
+    let (x, y, z) = (pos[0] - rx, pos[1] - ry, pos[2] - rz);
+    [
+        cc * x + con * sc * y + rx,
+        -con * sc * ca * x + cc * ca * y + con * sa * z - ca * dy - con * sa * dz + dy + ry,
+        sc * sa * x - con * cc * sa * y + ca * z + con * sa * dy - ca * dz + dz + rz,
+    ]
+}
+
+/// `xyzac_forward_math`.
+fn lcnc_forward_ac(p: &Trt, j: [f64; 3], a: f64, c: f64) -> [f64; 3] {
+    let con = if p.conventional { 1.0 } else { -1.0 };
+    let (sa, ca) = a.to_radians().sin_cos();
+    let (sc, cc) = c.to_radians().sin_cos();
+    let (dy, dz) = (p.dx, p.dz + p.tool);
+    let [rx, ry, rz] = p.rot;
+    let (u, v, w) = (j[0] - rx, j[1] - dy - ry, j[2] - dz - rz);
+    [
+        cc * u - con * sc * ca * v + sc * sa * w - con * sc * dy + rx,
+        con * sc * u + cc * ca * v - con * cc * sa * w + cc * dy + ry,
+        con * sa * v + ca * w + dz + rz,
+    ]
+}
+
+#[test]
+fn an_xyzac_configuration_imports_as_xyzac_trt_kins() {
+    // The sim's INI turned into an XYZAC one: the module, its coordinates, and the
+    // x-offset signal joined to the module's y-offset.
+    let path = fixture("xyzbc-trt/xyzbc-trt.ini");
+    let base = std::fs::read_to_string(&path)
+        .unwrap()
+        .replace("xyzbc-trt-kins", "xyzac-trt-kins")
+        .replace("xyzac-trt-kins.x-offset", "xyzac-trt-kins.y-offset")
+        .replace("COORDINATES = XYZBC", "COORDINATES = XYZAC");
+    let mut rng = rand::rngs::StdRng::seed_from_u64(13);
+    for conv in [0u8, 1] {
+        let text = base.replace(
+            "xyzac-trt-kins.conventional-directions 0",
+            &format!("xyzac-trt-kins.conventional-directions {conv}"),
+        );
+        let imp =
+            pkm::linuxcnc::import_with(&path, &text, &mut |_| Err("none".into()), &[]).unwrap();
+        assert_eq!(imp.kinematics, "xyzac-trt-kins");
+        let m = Machine::from_toml_str(&imp.toml, "xyzac.toml").unwrap();
+        let t = tcp5(&m);
+        let names: Vec<&str> = t.coordinates().iter().map(|c| c.name.as_str()).collect();
+        assert_eq!(names, ["X", "Y", "Z", "A", "C"]);
+        let p = Trt {
+            rot: [0.0; 3],
+            dx: -20.0,
+            dz: -15.0,
+            tool: 0.0,
+            conventional: conv == 1,
+        };
+        let worst = worst_against(
+            t,
+            &p,
+            &mut rng,
+            2000,
+            lcnc_inverse_ac,
+            Some(lcnc_forward_ac),
+        );
+        assert!(worst < 1e-9, "{conv}: {worst:.3e} mm");
+    }
+}
+
+#[test]
+fn joint_rates_are_read_and_bad_ones_named() {
+    let text = HEAD.replace(
+        "range = [-100.0, 100.0] }",
+        "range = [-100.0, 100.0], max_velocity = 90.0, max_acceleration = 900.0 }",
+    );
+    let m = Machine::from_toml_str(&text, "head.toml").unwrap();
+    let a = &tcp5(&m).actuators()[3];
+    assert_eq!(a.max_velocity, Some(90f64.to_radians()));
+    assert_eq!(a.max_acceleration, Some(900f64.to_radians()));
+    let bad = HEAD.replace(
+        "range = [-100.0, 100.0] }",
+        "range = [-100.0, 100.0], max_velocity = -1.0 }",
+    );
+    let e = Machine::from_toml_str(&bad, "head.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("head.toml") && e.contains("max_velocity") && e.contains("> 0"),
+        "{e}"
+    );
+    // Three rotary axes are refused for TCP coordinates, saying why.
+    let three = HEAD.replace(
+        "[[workpiece_chain]]\nname = \"table mount\"",
+        "[[workpiece_chain]]\nname = \"table mount\"\n\n[[workpiece_chain]]\nname = \"tilt\"\njoint = { name = \"B\", type = \"revolute\", range = [-90.0, 90.0] }\nrotation = [[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]\n\n[[workpiece_chain]]\nname = \"mount2\"",
+    );
+    let e = Machine::from_toml_str(&three, "three.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("pose") && e.contains("one or two rotary"), "{e}");
 }

@@ -17,7 +17,7 @@
 
 use nalgebra::{Matrix3, Vector3};
 
-use super::{fmt_num, short, Imported, Kinematics, Writer};
+use super::{fmt_num, Imported, Kinematics, Writer};
 use crate::error::Result;
 
 /// A right-handed frame whose Z is the unit `z` (columns x, y, z): X the next world
@@ -250,14 +250,23 @@ impl Writer<'_> {
             fmt_num(hi),
             self.ini.at(&eh)
         )];
-        for (key, field) in [
-            ("MAX_VELOCITY", "max_velocity"),
-            ("MAX_ACCELERATION", "max_acceleration"),
+        for (key, field, per) in [
+            ("MAX_VELOCITY", "max_velocity", "/s"),
+            ("MAX_ACCELERATION", "max_acceleration", "/s^2"),
         ] {
             if let Some((v, e)) = self.number(&sec, key)? {
                 if v > 0.0 {
                     fields.push(format!("{field} = {}", fmt_num(v * k)));
-                    notes.push(format!("{key} {} ({})", fmt_num(v), self.ini.at(&e)));
+                    notes.push(format!(
+                        "{key} {} {unit}{per} ({})",
+                        fmt_num(v),
+                        self.ini.at(&e)
+                    ));
+                } else {
+                    self.warnings.push(format!(
+                        "{}: [{sec}] {key} {v} is not > 0, left out",
+                        self.ini.at(&e)
+                    ));
                 }
             }
         }
@@ -292,12 +301,7 @@ impl Writer<'_> {
 
     /// Checks the file written by loading it.
     pub(super) fn trt_finish(self) -> Result<Imported> {
-        crate::Machine::from_toml_str(&self.out, "<imported machine>").map_err(|e| {
-            crate::Error::InvalidInput {
-                what: format!("import of {}", short(&self.ini.file)),
-                message: format!("the configuration does not give a valid pkm machine: {e}"),
-            }
-        })?;
+        self.load()?;
         Ok(Imported {
             toml: self.out,
             kinematics: self.kins.module(),
