@@ -78,7 +78,7 @@ enum Command {
         velocity, acceleration), DIR/summary.json and DIR/actuators.svg, DIR/serial.svg.\n\
         A program starts at --from when given, else at the machine's home pose. Moves stop\n\
         exactly at each segment end (no blending). Exit code 3 when a limit is violated.")]
-    Motion(MotionArgs),
+    Motion(Box<MotionArgs>),
     /// Map the workspace: reachable points, the limit that binds elsewhere, and the
     /// Jacobian's conditioning, on a grid (rayon, all cores).
     #[command(after_help = "Examples:\n  \

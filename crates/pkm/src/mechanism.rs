@@ -293,6 +293,15 @@ pub trait Mechanism<const P: usize, const A: usize>: Send + Sync {
         self.condition(x)
     }
 
+    /// Angle (rad, 0 to pi/2) between the tool axis at `x` and the nearest direction in
+    /// which one of the mechanism's rotary axes has an undetermined angle: a 5-axis
+    /// machine's tool axis along its rotary axis nearest the part (a trt table's C axis
+    /// at B = 0), where a path passing close by makes that axis turn fast. `None` for
+    /// mechanisms without such a direction (the default).
+    fn singular_distance(&self, _x: &SVector<f64, P>) -> Option<f64> {
+        None
+    }
+
     /// Length (mm) that scales rotations against translations in conditioning: a
     /// rotation of 1 rad counts as a displacement of this many mm. Default 1 mm.
     fn characteristic_length(&self) -> f64 {

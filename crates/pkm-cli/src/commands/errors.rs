@@ -5,9 +5,7 @@
 use crate::parse_convention;
 use anyhow::{bail, Context, Result};
 use clap::Args;
-use pkm::analysis::{
-    accuracy_with_progress, AccuracyOptions, AccuracyReport, KindTolerances, MapRequest, Tolerances,
-};
+use pkm::analysis::{accuracy_with_progress, AccuracyOptions, AccuracyReport, MapRequest};
 use pkm::Convention;
 use serde_json::json;
 use std::path::PathBuf;
@@ -30,30 +28,12 @@ pub struct ErrorsArgs {
     /// Convention of the angles in --pose.
     #[arg(long, default_value = "rpy", value_parser = parse_convention)]
     pub rotation: Convention,
-    /// Tolerance of every joint-centre coordinate (mm).
-    #[arg(long, allow_negative_numbers = true)]
-    pub joint_tolerance: Option<f64>,
-    /// Tolerance of every zero length and linear drive positioning (mm).
-    #[arg(long, allow_negative_numbers = true)]
-    pub length_tolerance: Option<f64>,
-    /// Tolerance of every link dimension and linear link deviation (mm).
-    #[arg(long, allow_negative_numbers = true)]
-    pub link_tolerance: Option<f64>,
-    /// Tolerance of every angular parameter, revolute drives included (deg).
-    #[arg(long, allow_negative_numbers = true)]
-    pub angle_tolerance: Option<f64>,
-    /// With the per-kind tolerances: `uniform` (in +-tolerance, the default) or `normal`
-    /// (tolerance = 3 sigma).
-    #[arg(long)]
-    pub distribution: Option<String>,
+    #[command(flatten)]
+    pub tol: super::tolerance_args::ToleranceArgs,
     /// TOML file of deviation values by parameter name (mm; deg for angles): their
     /// exact tool-pose error.
     #[arg(long)]
     pub deviations: Option<PathBuf>,
-    /// Tolerances file (`[[tolerance]]` entries with `deviation`, `value`, optional
-    /// `distribution`) instead of the machine file's or the per-kind ones.
-    #[arg(long)]
-    pub tolerances: Option<PathBuf>,
     /// Monte Carlo of the tolerances with this many machines.
     #[arg(long)]
     pub monte_carlo: Option<usize>,
@@ -141,40 +121,7 @@ pub fn run(a: &ErrorsArgs) -> Result<u8> {
         Some(p) => pkm::machine::read_deviations(&params, &read(p)?, &p.display().to_string())?,
         None => Vec::new(),
     };
-    let by_kind = [
-        a.joint_tolerance,
-        a.length_tolerance,
-        a.link_tolerance,
-        a.angle_tolerance,
-    ];
-    let tolerances = match &a.tolerances {
-        Some(p) => {
-            if by_kind.iter().any(Option::is_some) {
-                bail!(
-                    "--tolerances and --joint/length/link/angle-tolerance: give one or the other"
-                );
-            }
-            Tolerances::Given(pkm::machine::read_tolerances(
-                &params,
-                &read(p)?,
-                &p.display().to_string(),
-            )?)
-        }
-        None if by_kind.iter().any(Option::is_some) || a.distribution.is_some() => {
-            let d = KindTolerances::default();
-            Tolerances::ByKind(KindTolerances {
-                joint: a.joint_tolerance.unwrap_or(d.joint),
-                zero: a.length_tolerance.unwrap_or(d.zero),
-                length: a.link_tolerance.unwrap_or(d.length),
-                angle: a.angle_tolerance.map(f64::to_radians).unwrap_or(d.angle),
-                distribution: match &a.distribution {
-                    Some(t) => t.parse()?,
-                    None => d.distribution,
-                },
-            })
-        }
-        None => Tolerances::Default,
-    };
+    let tolerances = a.tol.tolerances(&params)?;
     let map = match &a.map {
         None => None,
         Some(spec) => {
@@ -236,7 +183,7 @@ pub fn run(a: &ErrorsArgs) -> Result<u8> {
         .with_context(|| format!("cannot create {}", a.out.display()))?;
     let inputs: Vec<&std::path::Path> = std::iter::once(a.machine.as_path())
         .chain(a.deviations.as_deref())
-        .chain(a.tolerances.as_deref())
+        .chain(a.tol.tolerances.as_deref())
         .collect();
     let mut out = report_json(m, &r);
     write_budget(&a.out, &r.budget, &inputs)?;

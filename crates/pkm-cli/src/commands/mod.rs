@@ -9,6 +9,8 @@ pub mod fk;
 pub mod ik;
 pub mod linuxcnc;
 pub mod motion;
+pub mod motion_accuracy;
+pub mod tolerance_args;
 pub mod workspace;
 
 use std::path::Path;

@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use indicatif::ProgressBar;
 use pkm::analysis::motion::{
-    run_motion, sample_columns, MotionRun, MotionSource, ProgramSetup, SampleRow, SampleSink,
+    run_motion_with, sample_columns, MotionRun, MotionSource, ProgramSetup, SampleRow, SampleSink,
 };
 use pkm::motion::program::FeedOptions;
 use pkm::motion::tools::parse_tool_table;
@@ -81,12 +81,19 @@ pub struct MotionArgs {
     /// Work offset of G54..G59.3: `G55=X,Y,Z[,A,B,C]` (mm, deg); repeatable.
     #[arg(long, allow_hyphen_values = true)]
     pub work_offset: Vec<String>,
+    /// Threshold (deg) of a passage near the singular direction of a 5-axis machine
+    /// (tool axis along the rotary axis nearer the part), listed with the rotary axes'
+    /// peak speeds in it.
+    #[arg(long, default_value_t = 2.0)]
+    pub singular_angle: f64,
     /// Convention of angles in --from/--to.
     #[arg(long, default_value = "rpy", value_parser = parse_convention)]
     pub rotation: Convention,
     /// Output directory.
     #[arg(long)]
     pub out: PathBuf,
+    #[command(flatten)]
+    pub accuracy: super::motion_accuracy::AccuracyArgs,
     /// Skip actuators.csv (summary and plots only), for very long programs.
     #[arg(long)]
     pub summary_only: bool,
@@ -355,6 +362,7 @@ pub fn summary_json(machine: &Machine, s: &MotionSummary, feed: &FeedOptions) ->
         "violations": s.violations,
         "violations_not_listed": s.violations_not_listed,
         "feed_override_max": s.feed_override_max,
+        "singular": s.singular,
         "duration_s": s.duration_s,
         "samples": s.samples,
         "profile": feed,
@@ -375,6 +383,7 @@ pub fn run(a: &MotionArgs) -> Result<u8> {
             .unwrap_or(pkm::analysis::motion::feed_options(&machine).rapid),
         feed: a.feed.map(|f| f / 60.0),
         max_samples: a.max_samples,
+        singular_angle: a.singular_angle.to_radians(),
     };
     let sampling = match (a.rate, a.points) {
         (_, Some(n)) => Sampling::Points(n),
@@ -405,9 +414,13 @@ pub fn run(a: &MotionArgs) -> Result<u8> {
             accel_time: a.accel_time,
         }
     };
+    let accuracy = a.accuracy.request(&machine)?;
     let mut inputs: Vec<&Path> = vec![&a.machine];
     if let Some(g) = &a.gcode {
         inputs.push(g);
+    }
+    if let Some(t) = &a.accuracy.tol.tolerances {
+        inputs.push(t);
     }
     std::fs::create_dir_all(&a.out)
         .with_context(|| format!("cannot create {}", a.out.display()))?;
@@ -430,7 +443,14 @@ pub fn run(a: &MotionArgs) -> Result<u8> {
         bytes,
     )
     .and_then(|mut sink| {
-        let r = run_motion(&machine, source, &feed, sampling, &mut sink);
+        let r = run_motion_with(
+            &machine,
+            source,
+            &feed,
+            sampling,
+            accuracy.as_ref(),
+            &mut sink,
+        );
         sink.finish();
         Ok(r?)
     });
@@ -465,6 +485,10 @@ pub fn run(a: &MotionArgs) -> Result<u8> {
             "duration_s": d,
             "accel_time_s": a.accel_time,
         });
+    }
+    if let Some(acc) = &outcome.accuracy {
+        summary["accuracy"] = super::motion_accuracy::summary(acc);
+        super::motion_accuracy::write(&a.out, acc, m.name(), &inputs)?;
     }
     write_atomic(
         &a.out.join("summary.json"),
@@ -523,6 +547,12 @@ pub fn run(a: &MotionArgs) -> Result<u8> {
             ),
             None => println!("largest feed override: no rate limits in the machine file"),
         }
+        if let Some(sg) = &s.singular {
+            print_singular(sg);
+        }
+        if let Some(acc) = &outcome.accuracy {
+            super::motion_accuracy::print(acc);
+        }
         for (l, t) in outcome.notes.iter().take(20) {
             println!("note: line {l}: {t}");
         }
@@ -548,5 +578,51 @@ pub fn run(a: &MotionArgs) -> Result<u8> {
             v.line.map(|l| format!(" (G-code line {l})")).unwrap_or_default()
         );
         Ok(EXIT_UNREACHABLE)
+    }
+}
+
+/// The closest approach to the singular direction and the worst passages near it.
+fn print_singular(sg: &pkm::motion::singular::SingularReport) {
+    let line = |l: Option<u64>| l.map(|l| format!("line {l}")).unwrap_or("-".into());
+    let (deg, t, l) = sg.closest;
+    println!(
+        "singular direction (tool axis along the rotary axis nearer the part), feed moves: \
+         closest {deg:.4} deg at t = {t:.3} s ({}); {} passage(s) within {:.3} deg{}",
+        line(l),
+        sg.passages.len() as u64 + sg.passages_not_listed,
+        sg.threshold_deg,
+        if sg.passages.is_empty() {
+            ""
+        } else {
+            ", largest speed-ups:"
+        }
+    );
+    for p in sg.worst().into_iter().take(5) {
+        let peaks: Vec<String> = p
+            .rotary
+            .iter()
+            .zip(&sg.peak_outside)
+            .map(|(r, o)| {
+                format!(
+                    "{} {:.2} deg/s ({}{}; {:.2} elsewhere)",
+                    r.axis,
+                    r.peak,
+                    line(r.line),
+                    r.limit
+                        .map(|lim| format!(", limit {lim:.2}"))
+                        .unwrap_or_default(),
+                    o.1
+                )
+            })
+            .collect();
+        println!(
+            "  {} to {} (t {:.3}-{:.3} s), closest {:.4} deg: {}",
+            line(p.start_line),
+            line(p.end_line),
+            p.start_s,
+            p.end_s,
+            p.closest_deg,
+            peaks.join(", ")
+        );
     }
 }

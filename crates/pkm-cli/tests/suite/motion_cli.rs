@@ -337,3 +337,94 @@ fn motion_plots_mark_segments_and_near_limits() {
     let svg = std::fs::read_to_string(out.join("serial.svg")).unwrap();
     assert!(!svg.contains("\nlimit\n"));
 }
+
+/// Issue 20: the boat program through MC-300 with the accuracy along it (the file's
+/// 39 tolerances; budget per G-code line, Monte Carlo band) and its closest approach
+/// to the singular direction.
+#[test]
+fn accuracy_and_singular_passages_along_a_five_axis_program() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("boat");
+    let o = pkm()
+        .args([
+            "motion",
+            &path("examples/machines/mc300.toml"),
+            "--gcode",
+            &path("tests/fixtures/linuxcnc/xyzbc-trt/boat-xyzbc.ngc"),
+            "--summary-only",
+            "--rate",
+            "200",
+            "--accuracy",
+            "--band-machines",
+            "20",
+        ])
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    // C's 360 deg turn at line 1081 is beyond MC-300's +-180 deg.
+    assert_eq!(
+        o.status.code(),
+        Some(3),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.contains("accuracy along the program (39 tolerances"),
+        "{text}"
+    );
+    assert!(text.contains("closest 5.5450 deg"), "{text}");
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let a = &s["accuracy"];
+    assert_eq!(a["tolerances"], 39);
+    assert_eq!(a["tolerance_source"], "machine-file");
+    assert_eq!(a["monte_carlo"]["machines"], 20);
+    let wc = a["worst_case"]["mm"].as_f64().unwrap();
+    let rss = a["rss"]["mm"].as_f64().unwrap();
+    assert!(wc > rss && rss > 0.0, "{a}");
+    // The program's feed moves come no nearer than |B| = 5.545 deg (its B-5.545 at
+    // line 55): no passage within the default 2 deg.
+    let sg = &s["singular"];
+    assert!(
+        (sg["closest"][0].as_f64().unwrap() - 5.545).abs() < 1e-6,
+        "{sg}"
+    );
+    assert_eq!(sg["passages"].as_array().unwrap().len(), 0);
+    // One row per G-code line with motion; the largest worst case is the summary's.
+    let csv = std::fs::read_to_string(out.join("accuracy.csv")).unwrap();
+    let mut lines = csv.lines();
+    assert!(lines
+        .next()
+        .unwrap()
+        .starts_with("line,start_s,end_s,samples,worst_case_mm"));
+    let rows: Vec<Vec<String>> = lines
+        .map(|l| l.split(',').map(String::from).collect())
+        .collect();
+    assert!(rows.len() > 1000, "{}", rows.len());
+    let max = rows
+        .iter()
+        .map(|r| r[4].parse::<f64>().unwrap())
+        .fold(0.0, f64::max);
+    assert!((max - wc).abs() < 1e-6 * wc, "{max} {wc}");
+    let svg = std::fs::read_to_string(out.join("accuracy.svg")).unwrap();
+    assert!(svg.contains("along the tool axis"));
+    // Tolerance options need --accuracy; with it, per-kind tolerances replace the
+    // file's.
+    let o = pkm()
+        .args([
+            "motion",
+            &path("examples/machines/mc300.toml"),
+            "--gcode",
+            &path("tests/fixtures/linuxcnc/xyzbc-trt/boat-xyzbc.ngc"),
+            "--angle-tolerance",
+            "0.001",
+        ])
+        .arg("--out")
+        .arg(dir.path().join("x"))
+        .output()
+        .unwrap();
+    assert_ne!(o.status.code(), Some(0));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("need --accuracy"));
+}

@@ -27,6 +27,7 @@ pub mod budget;
 pub mod clearance;
 pub mod map;
 pub mod monte_carlo;
+pub mod path;
 pub(crate) mod rebuild;
 mod serial;
 pub mod streamed;
@@ -160,6 +161,29 @@ pub trait Parametric<const P: usize, const A: usize>: Mechanism<P, A> {
         None
     }
 
+    /// First-order sensitivities of the tool pose to the parameters `which` (indices
+    /// into [`Parametric::parameters`]) at `x`, into `out` (one per entry of `which`),
+    /// with scratch `s` kept between calls (a path's samples, one scratch per thread):
+    /// serial machines evaluate a plan prepared on the first call without allocating
+    /// ([`crate::serial::sensitivity`]); the default picks them from [`sensitivities`].
+    /// Returns the tool axis at `x` (the tool frame's Z, unit, in the frame of the
+    /// errors), which a path's surface error is taken along.
+    fn sensitivities_into(
+        &self,
+        x: &SVector<f64, P>,
+        which: &[usize],
+        s: &mut SensitivityScratch,
+        out: &mut [PoseError],
+    ) -> Result<Vector3<f64>> {
+        let _ = s;
+        let all = match self.analytic_sensitivities(x) {
+            Some(a) => a?,
+            None => finite_difference_sensitivities(self, x)?,
+        };
+        pick(&all, which, out)?;
+        Ok(self.tool_pose(x)?.rotation * Vector3::z())
+    }
+
     /// The machine prepared for deviations of the parameters `given` (the toleranced or
     /// measured ones): `None` when nothing changes, an error saying why when one of them
     /// cannot be given (a serial machine completes a link's angular deviations from the
@@ -182,6 +206,30 @@ pub trait Parametric<const P: usize, const A: usize>: Mechanism<P, A> {
     fn passive_joints(&self) -> Vec<clearance::PassiveJoint> {
         Vec::new()
     }
+}
+
+/// Scratch of [`Parametric::sensitivities_into`]: what a machine prepares on the first
+/// call for the parameters asked for (a serial machine's plan), reused by the next.
+#[derive(Debug, Clone, Default)]
+pub struct SensitivityScratch {
+    pub(crate) serial: Option<serial::SerialScratch>,
+}
+
+/// `out[i] = all[which[i]]`, refusing an index beyond `all`.
+pub(crate) fn pick(all: &[PoseError], which: &[usize], out: &mut [PoseError]) -> Result<()> {
+    if out.len() != which.len() {
+        return Err(Error::InvalidInput {
+            what: "sensitivities".into(),
+            message: format!("expected {} outputs, got {}", which.len(), out.len()),
+        });
+    }
+    for (o, &k) in out.iter_mut().zip(which) {
+        *o = *all.get(k).ok_or_else(|| Error::InvalidInput {
+            what: "sensitivities".into(),
+            message: format!("parameter index {k} beyond the machine's {}", all.len()),
+        })?;
+    }
+    Ok(())
 }
 
 /// First-order sensitivities of the tool pose to every parameter at `x`: the machine's
@@ -207,7 +255,7 @@ pub fn finite_difference_sensitivities<M, const P: usize, const A: usize>(
     x: &SVector<f64, P>,
 ) -> Result<Vec<PoseError>>
 where
-    M: Parametric<P, A>,
+    M: Parametric<P, A> + ?Sized,
 {
     let params = m.parameters();
     let mut ev = m.evaluator(x)?;

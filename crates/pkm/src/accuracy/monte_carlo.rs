@@ -115,10 +115,7 @@ where
             let mut buckets = Vec::with_capacity(count);
             for _ in 0..count {
                 for (slot, t) in d.iter_mut().zip(tol) {
-                    slot.1 = match t.distribution {
-                        Distribution::Uniform => rng.random_range(-1.0..=1.0) * t.value,
-                        Distribution::Normal => normal.sample(&mut rng) * t.value / 3.0,
-                    };
+                    slot.1 = draw(t, &mut rng, &normal);
                 }
                 if let Ok(e) = ev.pose_error(&d) {
                     mo.push(&e.position);
@@ -137,6 +134,15 @@ where
         },
     );
     Ok(finish(&moments, &sketch, failed))
+}
+
+/// One deviation drawn within tolerance `t`: uniform in `[-t, t]`, or normal with
+/// `t` as three standard deviations (`normal` the unit normal).
+pub(crate) fn draw(t: &Tolerance, rng: &mut impl Rng, normal: &Normal<f64>) -> f64 {
+    match t.distribution {
+        Distribution::Uniform => rng.random_range(-1.0..=1.0) * t.value,
+        Distribution::Normal => normal.sample(rng) * t.value / 3.0,
+    }
 }
 
 /// Statistics of a stored sample of tool-point error vectors (mm): mean, standard

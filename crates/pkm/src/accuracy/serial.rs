@@ -12,7 +12,7 @@
 //! and the installation angles of a machine with a workpiece chain (they turn tool and
 //! part alike).
 
-use nalgebra::{Matrix4, SVector};
+use nalgebra::{Matrix4, SVector, Vector3};
 
 use super::{Evaluate, Parameter, ParameterKind, Parametric, PoseError};
 use crate::error::{Error, Result};
@@ -302,6 +302,63 @@ impl Evaluate for SerialEvaluator<'_> {
     }
 }
 
+/// A serial machine's prepared sensitivity plan for one list of parameters.
+#[derive(Debug, Clone)]
+pub(crate) struct SerialScratch {
+    which: Vec<usize>,
+    plan: crate::serial::sensitivity::SensitivityPlan,
+    frames: crate::serial::sensitivity::SensitivityScratch,
+    buf: Vec<(Vector3<f64>, Vector3<f64>)>,
+}
+
+/// [`Parametric::sensitivities_into`] of a serial machine at joints `q` (tool chain,
+/// then workpiece chain): the plan for `which` built on the first call (or when
+/// `which` changes), then evaluated without allocating.
+fn serial_sensitivities_into(
+    m: &SerialMachine,
+    completions: &[LinkCompletion],
+    q: &[f64],
+    which: &[usize],
+    s: &mut super::SensitivityScratch,
+    out: &mut [PoseError],
+) -> Result<Vector3<f64>> {
+    if s.serial.as_ref().is_none_or(|x| x.which != which) {
+        let all = m.all_parameters();
+        let params = which
+            .iter()
+            .map(|&k| {
+                all.get(k).copied().ok_or_else(|| Error::InvalidInput {
+                    what: "sensitivities".into(),
+                    message: format!("parameter index {k} beyond the machine's {}", all.len()),
+                })
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let plan = crate::serial::sensitivity::SensitivityPlan::new(m, completions, &params)?;
+        s.serial = Some(SerialScratch {
+            which: which.to_vec(),
+            frames: plan.scratch(),
+            plan,
+            buf: vec![(Vector3::zeros(), Vector3::zeros()); which.len()],
+        });
+    }
+    let sc = s.serial.as_mut().expect("set above");
+    if out.len() != which.len() {
+        return Err(Error::InvalidInput {
+            what: "sensitivities".into(),
+            message: format!("expected {} outputs, got {}", which.len(), out.len()),
+        });
+    }
+    let (qt, qw) = q.split_at(m.tool.dof().min(q.len()));
+    let axis = sc.plan.evaluate(qt, qw, &mut sc.frames, &mut sc.buf)?;
+    for (o, (position, orientation)) in out.iter_mut().zip(&sc.buf) {
+        *o = PoseError {
+            position: *position,
+            orientation: *orientation,
+        };
+    }
+    Ok(axis)
+}
+
 /// `mech` with the completions for `given`, `None` when they are its own already.
 fn with_completions<T: Clone>(
     mech: &T,
@@ -319,12 +376,10 @@ fn with_completions<T: Clone>(
     Ok(Some(m))
 }
 
-/// The methods both serial mechanisms share (they differ in the joints commanded for
-/// a pose: the pose itself in joint space, the inverse solution for a robot).
+/// The methods every serial mechanism shares (they differ in the joints commanded for
+/// a pose: the pose itself in joint space, the inverse solution for a robot or TCP
+/// coordinates).
 macro_rules! serial_parametric_common {
-    ($p:literal) => {
-        serial_parametric_common!(@ SVector<f64, $p>);
-    };
     (@ $x:ty) => {
         fn parameters(&self) -> Vec<Parameter> {
             serial_parameters(&self.machine)
@@ -349,25 +404,60 @@ impl<const N: usize> Parametric<N, N> for crate::serial::mechanism::SerialMechan
     fn evaluator(&self, x: &SVector<f64, N>) -> Result<SerialEvaluator<'_>> {
         SerialEvaluator::new(&self.machine, &self.completions, x.as_slice())
     }
+    fn sensitivities_into(
+        &self,
+        x: &SVector<f64, N>,
+        which: &[usize],
+        s: &mut super::SensitivityScratch,
+        out: &mut [PoseError],
+    ) -> Result<Vector3<f64>> {
+        serial_sensitivities_into(
+            &self.machine,
+            &self.completions,
+            x.as_slice(),
+            which,
+            s,
+            out,
+        )
+    }
+}
+
+/// `Parametric` of a serial mechanism whose pose coordinates are not its joints: the
+/// joints commanded for pose `x` are the nominal inverse solution (a robot's tool pose,
+/// a machine tool's TCP coordinates: the error is the tool's relative to the part with
+/// the machine's deviations at them).
+macro_rules! serial_parametric_by_inverse {
+    ($x:ty) => {
+        type Evaluator<'a> = SerialEvaluator<'a>;
+        serial_parametric_common!(@ $x);
+        fn evaluator(&self, x: &$x) -> Result<SerialEvaluator<'_>> {
+            let q = self.inverse(x)?;
+            SerialEvaluator::new(&self.machine, &self.completions, q.as_slice())
+        }
+        fn sensitivities_into(
+            &self,
+            x: &$x,
+            which: &[usize],
+            s: &mut super::SensitivityScratch,
+            out: &mut [PoseError],
+        ) -> Result<Vector3<f64>> {
+            let q = self.inverse(x)?;
+            serial_sensitivities_into(
+                &self.machine,
+                &self.completions,
+                q.as_slice(),
+                which,
+                s,
+                out,
+            )
+        }
+    };
 }
 
 impl Parametric<6, 6> for crate::serial::arm::SerialArm {
-    type Evaluator<'a> = SerialEvaluator<'a>;
-    serial_parametric_common!(6);
-    /// The joints commanded for tool pose `x` are the nominal inverse solution.
-    fn evaluator(&self, x: &SVector<f64, 6>) -> Result<SerialEvaluator<'_>> {
-        let q = self.inverse(x)?;
-        SerialEvaluator::new(&self.machine, &self.completions, q.as_slice())
-    }
+    serial_parametric_by_inverse!(SVector<f64, 6>);
 }
 
 impl<const N: usize> Parametric<N, N> for crate::serial::tcp::TcpMachine<N> {
-    type Evaluator<'a> = SerialEvaluator<'a>;
-    serial_parametric_common!(@ SVector<f64, N>);
-    /// The joints commanded for TCP pose `x` are the nominal inverse solution: the
-    /// error is the tool's relative to the part with the machine's deviations at them.
-    fn evaluator(&self, x: &SVector<f64, N>) -> Result<SerialEvaluator<'_>> {
-        let q = self.inverse(x)?;
-        SerialEvaluator::new(&self.machine, &self.completions, q.as_slice())
-    }
+    serial_parametric_by_inverse!(SVector<f64, N>);
 }

@@ -126,6 +126,32 @@ pub enum Tolerances {
     Default,
 }
 
+impl Tolerances {
+    /// The tolerances on a machine with parameters `params` (those `tolerable` alone)
+    /// whose file gives `file`, and where they came from.
+    pub fn resolve(
+        &self,
+        params: &[Parameter],
+        tolerable: &[bool],
+        file: &[Tolerance],
+    ) -> Result<(ToleranceSource, Vec<Tolerance>)> {
+        Ok(match self {
+            Tolerances::Given(t) => (ToleranceSource::Given, t.clone()),
+            Tolerances::ByKind(k) => {
+                k.validate()?;
+                (ToleranceSource::ByKind, k.tolerances(params, tolerable))
+            }
+            Tolerances::Default if !file.is_empty() => {
+                (ToleranceSource::MachineFile, file.to_vec())
+            }
+            Tolerances::Default => (
+                ToleranceSource::ByKind,
+                KindTolerances::default().tolerances(params, tolerable),
+            ),
+        })
+    }
+}
+
 /// An error map request: two pose coordinates over their default span
 /// ([`crate::workspace::default_span`]), `points` per axis.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -289,21 +315,10 @@ impl Visitor for AccuracyJob<'_> {
     fn visit<M: Analysable<P, A>, const P: usize, const A: usize>(self, m: &M) -> Self::Output {
         let x = crate::dynamic::fixed::<P>("pose", self.pose)?;
         let params = m.parameters();
-        let tolerable = m.tolerable();
-        let (tolerance_source, tolerances) = match &self.opt.tolerances {
-            Tolerances::Given(t) => (ToleranceSource::Given, t.clone()),
-            Tolerances::ByKind(k) => {
-                k.validate()?;
-                (ToleranceSource::ByKind, k.tolerances(&params, &tolerable))
-            }
-            Tolerances::Default if !self.file.is_empty() => {
-                (ToleranceSource::MachineFile, self.file.to_vec())
-            }
-            Tolerances::Default => (
-                ToleranceSource::ByKind,
-                KindTolerances::default().tolerances(&params, &tolerable),
-            ),
-        };
+        let (tolerance_source, tolerances) =
+            self.opt
+                .tolerances
+                .resolve(&params, &m.tolerable(), self.file)?;
         // The machine prepared for what is given (a serial machine completes the
         // angular deviations of a link from the ones given, and refuses what means
         // nothing alone).

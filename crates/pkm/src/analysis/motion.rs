@@ -8,6 +8,7 @@
 
 use std::io::BufRead;
 
+use crate::accuracy::path::{PathOptions, PathTracker};
 use crate::error::{Error, Result};
 use crate::machine::{Analysable, Machine, Visitor};
 use crate::mechanism::PoseSpace;
@@ -98,56 +99,7 @@ impl SampleSink for NoSink {
     }
 }
 
-/// At most `cap` evenly spaced items of a stream of unknown length, in flat memory:
-/// every item is kept until `cap`, then every second one is dropped and from there
-/// only every second item kept, and so on (the stride doubles each time it fills).
-#[derive(Debug, Clone)]
-pub struct Decimated<T> {
-    rows: Vec<T>,
-    cap: usize,
-    stride: u64,
-    seen: u64,
-}
-
-impl<T> Decimated<T> {
-    /// Keeps at most `cap` items (at least 2).
-    pub fn new(cap: usize) -> Self {
-        Decimated {
-            rows: Vec::new(),
-            cap: cap.max(2),
-            stride: 1,
-            seen: 0,
-        }
-    }
-
-    /// The next item of the stream; `item` is called only when it is kept.
-    pub fn push(&mut self, item: impl FnOnce() -> T) {
-        if self.seen.is_multiple_of(self.stride) {
-            if self.rows.len() >= self.cap {
-                let kept: Vec<T> = self.rows.drain(..).step_by(2).collect();
-                self.rows = kept;
-                self.stride *= 2;
-            }
-            if self.seen.is_multiple_of(self.stride) {
-                self.rows.push(item());
-            }
-        }
-        self.seen += 1;
-    }
-}
-
-impl<T> std::ops::Deref for Decimated<T> {
-    type Target = [T];
-    fn deref(&self) -> &[T] {
-        &self.rows
-    }
-}
-
-impl<T: serde::Serialize> serde::Serialize for Decimated<T> {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        self.rows.serialize(s)
-    }
-}
+pub use crate::motion::decimated::Decimated;
 
 /// Decimated time series kept for plots (at most 4000 rows, flat memory): per row
 /// `t`, then per actuator `q, q', q''`, then per serial axis `x, x', x''`, in user
@@ -210,6 +162,46 @@ pub struct MotionRun {
     pub notes: Vec<(u64, String)>,
     /// Notes beyond the first [`crate::motion::gcode::MAX_NOTES`].
     pub notes_dropped: u64,
+    /// The accuracy along the run, when asked for.
+    pub accuracy: Option<PathAccuracyRun>,
+}
+
+/// Accuracy along a run: the tolerances' budget at every sample and per G-code line,
+/// and a Monte Carlo band ([`crate::accuracy::path`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PathAccuracyRequest {
+    /// Which tolerances.
+    pub tolerances: super::accuracy::Tolerances,
+    /// Machines of the Monte Carlo band (0: none).
+    pub machines: usize,
+    /// The band at every `every`-th sample.
+    pub every: usize,
+    /// Seed of the draws.
+    pub seed: u64,
+}
+
+impl Default for PathAccuracyRequest {
+    /// The machine file's tolerances, 100 machines at every 10th sample, seed 1.
+    fn default() -> Self {
+        PathAccuracyRequest {
+            tolerances: super::accuracy::Tolerances::Default,
+            machines: 100,
+            every: 10,
+            seed: 1,
+        }
+    }
+}
+
+/// What the accuracy along a run found.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct PathAccuracyRun {
+    /// Where the tolerances came from.
+    pub tolerance_source: super::accuracy::ToleranceSource,
+    /// The tolerances (internal units).
+    pub tolerances: Vec<crate::accuracy::Tolerance>,
+    /// Budget per sample and line, Monte Carlo band.
+    #[serde(flatten)]
+    pub path: crate::accuracy::path::PathAccuracy,
 }
 
 /// The columns of a sample row for tables: `t_s`, `line`, the pose coordinates with
@@ -238,11 +230,25 @@ pub fn run_motion(
     sampling: Sampling,
     sink: &mut dyn SampleSink,
 ) -> Result<MotionRun> {
+    run_motion_with(machine, source, feed, sampling, None, sink)
+}
+
+/// [`run_motion`], and the accuracy along the run when `accuracy` asks for it (every
+/// machine type: the tolerances' budget at each sample, [`crate::accuracy::path`]).
+pub fn run_motion_with(
+    machine: &Machine,
+    source: MotionSource<'_>,
+    feed: &FeedOptions,
+    sampling: Sampling,
+    accuracy: Option<&PathAccuracyRequest>,
+    sink: &mut dyn SampleSink,
+) -> Result<MotionRun> {
     machine.visit(Simulate {
         source,
         feed,
         sampling,
         sink,
+        accuracy: accuracy.map(|a| (a, machine.tolerances())),
     })
 }
 
@@ -251,6 +257,7 @@ struct Simulate<'a, 'b> {
     feed: &'a FeedOptions,
     sampling: Sampling,
     sink: &'a mut dyn SampleSink,
+    accuracy: Option<(&'a PathAccuracyRequest, &'a [crate::accuracy::Tolerance])>,
 }
 
 fn invalid(what: &str, message: impl Into<String>) -> Error {
@@ -269,6 +276,7 @@ impl Visitor for Simulate<'_, '_> {
     ) -> Result<MotionRun> {
         let mut runner = Runner::new(m, self.sampling)?;
         runner.set_max_samples(self.feed.max_samples);
+        runner.set_singular_angle(self.feed.singular_angle)?;
         let mut notes: Vec<(u64, String)> = Vec::new();
         let mut dropped = 0;
         let serial_idx: Vec<usize> = match m.pose_space() {
@@ -276,10 +284,38 @@ impl Visitor for Simulate<'_, '_> {
             _ => (0..3).collect(),
         };
         let mut traces = Traces::default();
+        // The accuracy along the path: on the machine prepared for the tolerances.
+        let prepared;
+        let mut tracker = match self.accuracy {
+            Some((req, file)) => {
+                let params = m.parameters();
+                let (source, tol) = req.tolerances.resolve(&params, &m.tolerable(), file)?;
+                let mut given: Vec<usize> = tol.iter().map(|t| t.parameter).collect();
+                given.sort_unstable();
+                given.dedup();
+                prepared = m.with_given(&given)?;
+                let pm = prepared.as_ref().unwrap_or(m);
+                let t = PathTracker::new(
+                    pm,
+                    &PathOptions {
+                        tolerances: tol.clone(),
+                        machines: req.machines,
+                        every: req.every,
+                        seed: req.seed,
+                    },
+                )?;
+                Some((source, tol, t))
+            }
+            None => None,
+        };
+        let tracker_cell = std::cell::RefCell::new(tracker.as_mut().map(|t| &mut t.2));
         // Samples and progress go to the same sink: shared by a RefCell, borrowed
         // once per sample and once per program line.
         let out = std::cell::RefCell::new(self.sink);
         let mut sink = |s: &Sample<P, A>| -> Result<()> {
+            if let Some(t) = tracker_cell.borrow_mut().as_mut() {
+                t.add(s.t, s.line, &s.x)?;
+            }
             let act = m.actuators();
             let coords = m.coordinates();
             traces.line(s.t, s.line);
@@ -354,6 +390,7 @@ impl Visitor for Simulate<'_, '_> {
                         segment,
                         profile: prof,
                         line: None,
+                        rapid: false,
                     },
                     true,
                     &mut sink,
@@ -417,6 +454,9 @@ impl Visitor for Simulate<'_, '_> {
                                 what: format!("G-code line {line}"),
                                 message: e.to_string(),
                             })?;
+                        if let Some(t) = tracker_cell.borrow_mut().as_mut() {
+                            t.set_tool_length(length)?;
+                        }
                     }
                     if let Some(mv) = mv {
                         if let Some(p) = pending.take() {
@@ -432,11 +472,17 @@ impl Visitor for Simulate<'_, '_> {
                 dropped = interp.notes_dropped;
             }
         }
+        let summary = runner.finish();
         Ok(MotionRun {
-            summary: runner.finish(),
+            summary,
             traces,
             notes,
             notes_dropped: dropped,
+            accuracy: tracker.map(|(tolerance_source, tolerances, t)| PathAccuracyRun {
+                tolerance_source,
+                tolerances,
+                path: t.finish(),
+            }),
         })
     }
 }

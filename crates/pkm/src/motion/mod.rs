@@ -2,11 +2,13 @@
 //! velocity and acceleration, a serial-machine comparison (seed 000) and limits along
 //! the path.
 
+pub mod decimated;
 pub mod gcode;
 pub mod path;
 pub mod profile;
 pub mod program;
 pub mod run;
+pub mod singular;
 pub mod stats;
 pub mod tools;
 

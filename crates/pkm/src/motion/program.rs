@@ -39,6 +39,9 @@ pub struct FeedOptions {
     /// ([`crate::motion::run::DEFAULT_MAX_SAMPLES`] by default). A move that would
     /// cross it is refused before any of its samples is computed.
     pub max_samples: u64,
+    /// Threshold (rad) of a passage near the mechanism's singular direction, reported
+    /// with the rotary axes' speeds in it ([`crate::motion::singular`]).
+    pub singular_angle: f64,
 }
 
 impl Default for FeedOptions {
@@ -50,6 +53,7 @@ impl Default for FeedOptions {
             rapid: 10_000.0 / 60.0,
             feed: None,
             max_samples: crate::motion::run::DEFAULT_MAX_SAMPLES,
+            singular_angle: crate::motion::singular::DEFAULT_SINGULAR_ANGLE,
         }
     }
 }
@@ -142,5 +146,6 @@ pub fn to_move<M: Mechanism<P, A>, const P: usize, const A: usize>(
         segment,
         profile,
         line: Some(g.line),
+        rapid: matches!(g.motion, Motion::Line { rapid: true }),
     })
 }

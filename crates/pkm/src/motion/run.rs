@@ -6,6 +6,7 @@ use serde::Serialize;
 
 use super::path::Segment;
 use super::profile::Profile;
+use super::singular::{SingularReport, SingularTracker, DEFAULT_SINGULAR_ANGLE};
 use super::stats::{ratios, AxisStats, Ratios};
 use crate::error::{Error, Result};
 use crate::limits::{LimitKind, Side, Violation};
@@ -21,6 +22,8 @@ pub struct Move<const P: usize> {
     pub profile: Profile,
     /// G-code line (1-based), when the move comes from a program.
     pub line: Option<u64>,
+    /// A rapid (G0): each axis at its own rate, not a programmed feed.
+    pub rapid: bool,
 }
 
 /// How to sample time.
@@ -89,6 +92,9 @@ pub struct MotionSummary {
     /// (velocities scale with it, accelerations with its square); `None` when the
     /// machine gives no rate limits or nothing moves.
     pub feed_override_max: Option<f64>,
+    /// Passages near the mechanism's singular direction with the rotary axes' speeds
+    /// in them; `None` for mechanisms without one.
+    pub singular: Option<SingularReport>,
     /// Program duration (s).
     pub duration_s: f64,
     /// Samples taken.
@@ -120,6 +126,7 @@ pub struct Runner<'m, M, const P: usize, const A: usize> {
     a_ratio: f64,
     /// The work limit (samples).
     max_samples: u64,
+    singular: SingularTracker,
 }
 
 /// The default work limit of a run: 2e7 samples (about 10 s on one core for a hexapod;
@@ -167,6 +174,7 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
             v_ratio: 0.0,
             a_ratio: 0.0,
             max_samples: DEFAULT_MAX_SAMPLES,
+            singular: SingularTracker::new(m.actuators(), DEFAULT_SINGULAR_ANGLE)?,
         })
     }
 
@@ -199,6 +207,13 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
             }
         }
         self.tool_length = length;
+        Ok(())
+    }
+
+    /// Sets the threshold (rad, 0 to pi/2) of a passage near the singular direction
+    /// ([`SingularTracker`]); default [`DEFAULT_SINGULAR_ANGLE`].
+    pub fn set_singular_angle(&mut self, angle: f64) -> Result<()> {
+        self.singular = SingularTracker::new(self.m.actuators(), angle)?;
         Ok(())
     }
 
@@ -347,6 +362,12 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
             }
         }
         self.track(t, mv.line);
+        // The singular direction does not depend on the tool length. Rapids run each
+        // axis at its rapid rate whatever the direction: what a passage costs is the
+        // feed moves'.
+        if let Some(d) = self.m.singular_distance(&x).filter(|_| !mv.rapid) {
+            self.singular.add(t, mv.line, d, act.qd.as_slice());
+        }
         sink(&Sample {
             t,
             line: mv.line,
@@ -424,6 +445,7 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
                 let k = (1.0 / self.v_ratio).min((1.0 / self.a_ratio).sqrt());
                 k.is_finite().then_some(k)
             },
+            singular: self.singular.finish(),
             duration_s: self.t0,
             samples: self.samples,
         }

@@ -110,6 +110,7 @@ pub fn fig7_peaks(h: &P3rpHead) -> Result<[(f64, f64); 2]> {
         profile: Profile::trapezoid_timed(seg.length, 1.0, 0.1)?,
         segment: seg,
         line: None,
+        rapid: false,
     };
     let mut r = Runner::new(h, Sampling::Rate(1000.0))?;
     r.run_move(&mv, true, &mut |_| Ok(()))?;

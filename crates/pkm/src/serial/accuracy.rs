@@ -129,7 +129,7 @@ impl Products {
 }
 
 /// The chain, the index of the factor a parameter enters, and that factor's derivative.
-fn derivative(
+pub(super) fn derivative(
     m: &SerialMachine,
     p: &Parameter,
     qt: &[f64],

@@ -23,6 +23,7 @@ pub mod deviations;
 pub mod jacobian;
 pub mod machine;
 pub mod mechanism;
+pub mod sensitivity;
 pub mod tcp;
 pub mod tcp_axis;
 

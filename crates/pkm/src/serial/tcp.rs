@@ -529,6 +529,10 @@ impl<const N: usize> Mechanism<N, N> for TcpMachine<N> {
         chain_skeleton(&self.machine, qt, qw)
     }
 
+    fn singular_distance(&self, x: &SVector<f64, N>) -> Option<f64> {
+        self.singular_angle(x)
+    }
+
     fn characteristic_length(&self) -> f64 {
         self.characteristic_length
     }

@@ -134,16 +134,8 @@ impl<const N: usize> TcpMachine<N> {
             None => [home[3], home[4]],
         };
         let rot = self.rotary_joints();
-        let rel0 = &self.at_zero;
-        let a0: Vector3<f64> = rel0.frame.column(2).into_owned();
-        // Coordinates k1 (nearer the part) and k2, in pose-coordinate order 0, 1.
-        let pos = |j: usize| self.order.iter().position(|&o| o == j).unwrap_or(0);
-        let (k1, k2) = if pos(rot[0]) < pos(rot[1]) {
-            (0, 1)
-        } else {
-            (1, 0)
-        };
-        let (w1, w2) = (rel0.axis[rot[k1]], rel0.axis[rot[k2]]);
+        let a0: Vector3<f64> = self.at_zero.frame.column(2).into_owned();
+        let (k1, k2, w1, w2) = self.rotary_pair();
         let c = w1.dot(&w2);
         let s2 = 1.0 - c * c;
         if s2 < 1e-12 {
@@ -225,6 +217,42 @@ impl<const N: usize> TcpMachine<N> {
             singular,
             singular_distance,
         })
+    }
+
+    /// The two rotary axes as pose coordinates `k1` (the one nearer the part) and `k2`
+    /// (0 or 1 after X, Y, Z) and their directions at zero, `w1`, `w2` (part frame,
+    /// as seen from the part). Machines with two rotary axes.
+    fn rotary_pair(&self) -> (usize, usize, Vector3<f64>, Vector3<f64>) {
+        let rot = self.rotary_joints();
+        let pos = |j: usize| self.order.iter().position(|&o| o == j).unwrap_or(0);
+        let (k1, k2) = if pos(rot[0]) < pos(rot[1]) {
+            (0, 1)
+        } else {
+            (1, 0)
+        };
+        (
+            k1,
+            k2,
+            self.at_zero.axis[rot[k1]],
+            self.at_zero.axis[rot[k2]],
+        )
+    }
+
+    /// Angle (rad, 0 to pi/2) between the tool axis at pose `x` and the rotary axis
+    /// nearer the part, whose angle is undetermined when they are aligned: with
+    /// `R(t1, t2) = exp(w1 t1) exp(w2 t2) R(0)` the turn about `w1` keeps the angle to
+    /// `w1`, so it is the angle between `w1` and `exp(w2 t2) a0` (Rodrigues), folded
+    /// onto the line (`min(f, pi - f)`). `None` unless the machine has two rotary axes.
+    pub fn singular_angle(&self, x: &SVector<f64, N>) -> Option<f64> {
+        if N != 5 {
+            return None;
+        }
+        let (_, k2, w1, w2) = self.rotary_pair();
+        let a0: Vector3<f64> = self.at_zero.frame.column(2).into_owned();
+        let z = nalgebra::Rotation3::from_axis_angle(&nalgebra::Unit::new_unchecked(w2), x[3 + k2])
+            * a0;
+        let f = w1.cross(&z).norm().atan2(w1.dot(&z));
+        Some(f.min(std::f64::consts::PI - f))
     }
 
     /// Pose coordinates (tip X, Y, Z and rotary angles) for a tip `tip` and a tool axis

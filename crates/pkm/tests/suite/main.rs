@@ -18,6 +18,7 @@ mod linuxcnc;
 mod machine_file;
 mod motion;
 mod p3rp;
+mod path_accuracy;
 mod pentapod;
 mod pose;
 mod rotation;

@@ -303,6 +303,7 @@ fn paper_move_reproduces_slider_v_peaks() {
         profile: Profile::trapezoid_timed(seg.length, 1.0, 0.1).unwrap(),
         segment: seg,
         line: None,
+        rapid: false,
     };
     let mut r = Runner::new(&h, Sampling::Rate(1000.0)).unwrap();
     r.run_move(&mv, true, &mut |_| Ok(())).unwrap();
