@@ -73,9 +73,11 @@ enum Command {
     #[command(after_help = "Examples:\n  \
         pkm motion examples/machines/tripod-seed000.toml --gcode examples/paths/seed000-arc.ngc --feed 10000 --points 101 --out arc\n  \
         pkm motion examples/machines/tripod-seed000.toml --from 0,0,-290 --to 40,20,-300 --feed 3000 --profile scurve --out p2p\n  \
-        pkm motion MACHINE.toml --from POSE --to POSE --duration 1 --profile trapezoid --accel-time 0.1 --out DIR\n\n\
+        pkm motion MACHINE.toml --from POSE --to POSE --duration 1 --profile trapezoid --accel-time 0.1 --out DIR\n  \
+        pkm motion examples/machines/mc300.toml --gcode tests/fixtures/linuxcnc/xyzbc-trt/boat-xyzbc.ngc --accuracy --out DIR\n\n\
         Writes DIR/actuators.csv (t, line, pose coordinates, then per actuator position,\n\
-        velocity, acceleration), DIR/summary.json and DIR/actuators.svg, DIR/serial.svg.\n\
+        velocity, acceleration), DIR/summary.json and DIR/actuators.svg, DIR/serial.svg;\n\
+        with --accuracy DIR/accuracy.csv (per G-code line) and DIR/accuracy.svg.\n\
         A program starts at --from when given, else at the machine's home pose. Moves stop\n\
         exactly at each segment end (no blending). Exit code 3 when a limit is violated.")]
     Motion(Box<MotionArgs>),

@@ -132,7 +132,51 @@ fn motion(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(motion_benches, motion);
+/// Issue 20's target: LinuxCNC's boat program (1 867 lines, 316 s of motion) through
+/// MC-300 at 1 kHz with the accuracy along it (the file's 39 tolerances at every sample,
+/// a band of 100 machines at every 10th), one thread; and the run alone.
+fn five_axis_program(c: &mut Criterion) {
+    use pkm::analysis::motion::{
+        feed_options, run_motion_with, MotionSource, NoSink, PathAccuracyRequest,
+    };
+    let m = machine("mc300.toml");
+    let text = std::fs::read_to_string(format!(
+        "{}/../../tests/fixtures/linuxcnc/xyzbc-trt/boat-xyzbc.ngc",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let run = |acc: Option<&PathAccuracyRequest>| {
+        run_motion_with(
+            &m,
+            MotionSource::Gcode {
+                reader: Box::new(std::io::Cursor::new(text.as_bytes())),
+                from: None,
+                setup: Default::default(),
+            },
+            &feed_options(&m),
+            pkm::motion::Sampling::Rate(1000.0),
+            acc,
+            &mut NoSink,
+        )
+        .unwrap()
+        .summary
+        .samples
+    };
+    let mut g = c.benchmark_group("five-axis program");
+    g.sample_size(10);
+    g.bench_function(
+        "boat through MC-300 at 1 kHz (316 201 samples), one thread",
+        |b| b.iter(|| run(None)),
+    );
+    let req = PathAccuracyRequest::default();
+    g.bench_function(
+        "boat through MC-300 at 1 kHz with accuracy (39 tolerances, 100 machines every 10th sample), one thread",
+        |b| b.iter(|| run(Some(&req))),
+    );
+    g.finish();
+}
+
+criterion_group!(motion_benches, motion, five_axis_program);
 
 fn hexapod(c: &mut Criterion) {
     let Model::Hexapod(h) = machine("hexapod-linuxcnc.toml").model else {

@@ -231,76 +231,108 @@ pub fn plots(m: &dyn DynMechanism, o: &MotionRun, title: &str) -> Result<(String
         .skip(1)
         .map(|(t, l)| (*t, format!("N{l}")))
         .collect();
-    // Limits per kind (position, velocity, acceleration) of the drawn axes, in user
+    // Limits per kind (position, velocity, acceleration) of actuator `x`, in user
     // units; only the actuators have them.
-    let limits = |k: usize| -> Vec<(f64, String)> {
-        let mut v = Vec::new();
-        for x in a {
-            let u = |q: f64| x.quantity.to_user(q);
-            match k {
-                0 => {
-                    v.push((u(x.range.min), format!("{} min", x.name)));
-                    v.push((u(x.range.max), format!("{} max", x.name)));
-                }
-                1 => {
-                    if let Some(m) = x.max_velocity {
-                        v.extend([(u(m), "max".into()), (-u(m), "-max".into())]);
-                    }
-                }
-                _ => {
-                    if let Some(m) = x.max_acceleration {
-                        v.extend([(u(m), "max".into()), (-u(m), "-max".into())]);
-                    }
-                }
+    let limits = |x: &pkm::Actuator, k: usize| -> Vec<(f64, String)> {
+        let u = |q: f64| x.quantity.to_user(q);
+        match k {
+            0 => vec![
+                (u(x.range.min), format!("{} min", x.name)),
+                (u(x.range.max), format!("{} max", x.name)),
+            ],
+            1 => x
+                .max_velocity
+                .map(|m| vec![(u(m), "max".into()), (-u(m), "-max".into())])
+                .unwrap_or_default(),
+            _ => x
+                .max_acceleration
+                .map(|m| vec![(u(m), "max".into()), (-u(m), "-max".into())])
+                .unwrap_or_default(),
+        }
+    };
+    // Axes drawn: name, unit, first column (position; velocity and acceleration
+    // follow), the actuator whose limits are drawn. Lengths and angles get panels of
+    // their own (a 5-axis machine's B, C in deg beside X, Y, Z in mm).
+    type Axis<'a> = (String, &'static str, usize, Option<&'a pkm::Actuator>);
+    let panel = |axes: &[Axis], title: &str| -> Result<String> {
+        let kinds = [
+            ("position", ""),
+            ("velocity", "/s"),
+            ("acceleration", "/s²"),
+        ];
+        let mut units: Vec<&str> = Vec::new();
+        for x in axes {
+            if !units.contains(&x.1) {
+                units.push(x.1);
             }
         }
-        v
-    };
-    let panel =
-        |names: &[(String, &str)], base: usize, title: &str, with_limits: bool| -> Result<String> {
-            let kinds = [
-                ("position", ""),
-                ("velocity", "/s"),
-                ("acceleration", "/s²"),
-            ];
-            let unit = names.first().map(|n| n.1).unwrap_or("mm");
-            let series: Vec<Vec<Series>> = (0..3)
-                .map(|k| {
-                    names
+        let mut series: Vec<Vec<Series>> = Vec::new();
+        let mut labels: Vec<(String, String)> = Vec::new();
+        let mut lims: Vec<Vec<(f64, String)>> = Vec::new();
+        for unit in &units {
+            let group: Vec<&Axis> = axes.iter().filter(|x| x.1 == *unit).collect();
+            for (k, (kind, suffix)) in kinds.iter().enumerate() {
+                series.push(
+                    group
                         .iter()
-                        .enumerate()
-                        .map(|(i, (n, _))| Series {
+                        .map(|(n, _, c, _)| Series {
                             name: n.clone(),
-                            points: col(base + 3 * i + k),
+                            points: col(c + k),
                         })
-                        .collect()
-                })
-                .collect();
-            let ylabels: Vec<String> = kinds
-                .iter()
-                .map(|(kind, suffix)| format!("{kind} [{unit}{suffix}]"))
-                .collect();
-            let panels: Vec<Panel> = (0..3)
-                .map(|k| Panel {
-                    title: kinds[k].0,
-                    ylabel: &ylabels[k],
-                    series: &series[k],
-                    limits: if with_limits { limits(k) } else { Vec::new() },
-                })
-                .collect();
-            panels_marked(title, "t [s]", None, &panels, &marks, (700, 760))
-        };
-    let anames: Vec<(String, &str)> = a
+                        .collect(),
+                );
+                let t = if units.len() > 1 {
+                    let group = match *unit {
+                        "deg" => "rotary axes",
+                        "mm" => "linear axes",
+                        u => u,
+                    };
+                    format!("{kind}, {group}")
+                } else {
+                    kind.to_string()
+                };
+                labels.push((t, format!("{kind} [{unit}{suffix}]")));
+                lims.push(
+                    group
+                        .iter()
+                        .filter_map(|x| x.3)
+                        .flat_map(|x| limits(x, k))
+                        .collect(),
+                );
+            }
+        }
+        let panels: Vec<Panel> = series
+            .iter()
+            .zip(&labels)
+            .zip(lims)
+            .map(|((s, (t, y)), l)| Panel {
+                title: t,
+                ylabel: y,
+                series: s,
+                limits: l,
+            })
+            .collect();
+        panels_marked(
+            title,
+            "t [s]",
+            None,
+            &panels,
+            &marks,
+            (700, 760 * units.len().max(1) as u32),
+        )
+    };
+    let act_axes: Vec<Axis> = a
         .iter()
-        .map(|x| (x.name.clone(), x.quantity.unit()))
+        .enumerate()
+        .map(|(i, x)| (x.name.clone(), x.quantity.unit(), 1 + 3 * i, Some(x)))
         .collect();
-    let act = panel(&anames, 1, &format!("{title}: actuators"), true)?;
-    let ser = panel(
-        &serial,
-        1 + 3 * a.len(),
-        &format!("{title}: serial machine"),
-        false,
-    )?;
+    let ser_axes: Vec<Axis> = serial
+        .iter()
+        .enumerate()
+        .map(|(i, (n, u))| (n.clone(), *u, 1 + 3 * a.len() + 3 * i, None))
+        .collect();
+    let act = panel(&act_axes, &format!("{title}: actuators"))?;
+    let ser = panel(&ser_axes, &format!("{title}: serial machine"))?;
     Ok((act, ser))
 }
 
