@@ -197,6 +197,21 @@ impl Skeleton {
     }
 }
 
+/// The pose coordinates for a tool tip and tool axis
+/// ([`Mechanism::poses_for_tool_axis`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ToolAxisPoses<const P: usize> {
+    /// Every branch (pose coordinates, internal units).
+    pub branches: Vec<SVector<f64, P>>,
+    /// The branch the continuity rule chose.
+    pub chosen: usize,
+    /// The axis is (within rounding) along the singular direction: the rotary angle
+    /// it leaves undetermined was held at its previous value.
+    pub singular: bool,
+    /// Angle between the axis and the singular direction (rad).
+    pub singular_distance: f64,
+}
+
 /// A mechanism with `P` pose coordinates and `A` actuators.
 pub trait Mechanism<const P: usize, const A: usize>: Send + Sync {
     /// Machine name from its file.
@@ -291,6 +306,21 @@ pub trait Mechanism<const P: usize, const A: usize>: Send + Sync {
     /// iterative (a serial robot's) override it so the sweep does not solve twice.
     fn condition_at(&self, x: &SVector<f64, P>, _q: &SVector<f64, A>) -> Result<f64> {
         self.condition(x)
+    }
+
+    /// Pose coordinates putting the tool tip at `tip` with the tool axis along `axis`
+    /// (the frame of the pose coordinates; from the tip towards the spindle, any length):
+    /// every branch of the rotary axes, the continuity rule's choice (the branch within
+    /// the ranges nearest `near`, pose coordinates; home when `None`) and the angle to
+    /// the singular direction. `None` for mechanisms that take no tool axis vector
+    /// (the default; a 5-axis TCP machine takes one, [`crate::serial::tcp_axis`]).
+    fn poses_for_tool_axis(
+        &self,
+        _tip: &nalgebra::Vector3<f64>,
+        _axis: &nalgebra::Vector3<f64>,
+        _near: Option<&SVector<f64, P>>,
+    ) -> Option<Result<ToolAxisPoses<P>>> {
+        None
     }
 
     /// Angle (rad, 0 to pi/2) between the tool axis at `x` and the nearest direction in

@@ -6,7 +6,9 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 use anyhow::Result;
-use pkm::analysis::kinematics::{inverse, inverse_solutions, transmission, InverseSolution};
+use pkm::analysis::kinematics::{
+    inverse, inverse_for_tool_axis, inverse_solutions, transmission, InverseSolution,
+};
 use pkm::{Machine, PoseSpace};
 use serde_json::{json, Map, Value};
 
@@ -39,6 +41,12 @@ pub struct IkArgs {
     /// nearest to home first, each with its limit status.
     #[arg(long, conflicts_with = "input")]
     pub all_solutions: bool,
+    /// 5-axis machines in TCP coordinates: the tool axis I,J,K (part frame, from the
+    /// tip towards the spindle) instead of the rotary angles; --pose is then X,Y,Z. Both
+    /// branches of the rotary axes are given, the one within the ranges nearest home
+    /// chosen.
+    #[arg(long, allow_hyphen_values = true, conflicts_with_all = ["input", "all_solutions"])]
+    pub tool_axis: Option<String>,
     #[command(flatten)]
     pub opts: PoseOptions,
 }
@@ -92,19 +100,70 @@ pub fn run(a: &IkArgs) -> Result<u8> {
         return batch(&machine, a, input, output);
     }
     let vals = parse_list(a.pose.as_deref().unwrap_or_default(), "--pose")?;
-    let x = pose_from_user(m, &vals, conv)?;
-    if a.all_solutions {
-        return all_solutions(&machine, &x, a.opts.json);
-    }
-    let r = solve(&machine, x)?;
+    let (r, axis) = match &a.tool_axis {
+        Some(t) => {
+            let tip: [f64; 3] = vals.as_slice().try_into().map_err(|_| {
+                anyhow::anyhow!(
+                    "--pose: with --tool-axis expected X,Y,Z (mm), got {} values",
+                    vals.len()
+                )
+            })?;
+            let ijk = parse_list(t, "--tool-axis")?;
+            let ijk: [f64; 3] = ijk.as_slice().try_into().map_err(|_| {
+                anyhow::anyhow!("--tool-axis: expected I,J,K, got {} values", ijk.len())
+            })?;
+            let sol = inverse_for_tool_axis(&machine, tip, ijk, None)?;
+            (sol.branches[sol.chosen].clone(), Some(sol))
+        }
+        None => {
+            let x = pose_from_user(m, &vals, conv)?;
+            if a.all_solutions {
+                return all_solutions(&machine, &x, a.opts.json);
+            }
+            (solve(&machine, x)?, None)
+        }
+    };
     if a.opts.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&to_json(&machine, &r, conv)?)?
-        );
+        let mut v = to_json(&machine, &r, conv)?;
+        if let Some(sol) = &axis {
+            v["tool_axis"] = json!({
+                "branches": sol.branches.iter().map(|b| json!({
+                    "pose": coords_json(m, &b.pose),
+                    "reachable": b.violations.is_empty(),
+                })).collect::<Vec<_>>(),
+                "chosen": sol.chosen,
+                "singular": sol.singular,
+                "singular_distance_deg": sol.singular_distance.to_degrees(),
+            });
+        }
+        println!("{}", serde_json::to_string_pretty(&v)?);
     } else {
         println!("{} ({})", m.name(), m.kind());
         println!("pose       {}", coords_text(m, &r.pose));
+        if let Some(sol) = &axis {
+            for (k, b) in sol.branches.iter().enumerate() {
+                println!(
+                    "branch {}{}  {}{}",
+                    k + 1,
+                    if k == sol.chosen { "*" } else { " " },
+                    coords_text(m, &b.pose),
+                    if b.violations.is_empty() {
+                        String::new()
+                    } else {
+                        format!("  ({} limit(s) violated)", b.violations.len())
+                    }
+                );
+            }
+            println!(
+                "tool axis  {:.4} deg from the singular direction{}",
+                sol.singular_distance.to_degrees(),
+                if sol.singular {
+                    ": along it, the first rotary angle held at home's"
+                } else {
+                    ""
+                }
+            );
+        }
         for (act, v) in m.actuators().iter().zip(&r.actuators) {
             println!(
                 "actuator   {:<8} {:>12.4} {}   range [{:.3}, {:.3}]",

@@ -428,3 +428,59 @@ fn accuracy_and_singular_passages_along_a_five_axis_program() {
     assert_ne!(o.status.code(), Some(0));
     assert!(String::from_utf8_lossy(&o.stderr).contains("need --accuracy"));
 }
+
+/// `pkm ik --tool-axis I,J,K` on a 5-axis TCP machine: both branches, the chosen one's
+/// joints equal to `pkm ik` of its angles.
+#[test]
+fn ik_from_a_tool_axis_vector() {
+    let mc300 = path("examples/machines/mc300.toml");
+    let o = pkm()
+        .args([
+            "ik",
+            &mc300,
+            "--pose=10,5,-3",
+            "--tool-axis=0.3,0.2,1",
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    ok(&o);
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let ta = &v["tool_axis"];
+    assert_eq!(ta["branches"].as_array().unwrap().len(), 2);
+    let chosen = ta["chosen"].as_u64().unwrap() as usize;
+    let pose = &ta["branches"][chosen]["pose"];
+    // B = -atan(hypot(0.3, 0.2)) on the branch nearest home.
+    let b = pose["B"].as_f64().unwrap();
+    assert!(
+        (b.abs() - 0.3f64.hypot(0.2).atan().to_degrees()).abs() < 1e-9,
+        "{b}"
+    );
+    let c = pose["C"].as_f64().unwrap();
+    let o2 = pkm()
+        .args(["ik", &mc300, &format!("--pose=10,5,-3,{b},{c}"), "--json"])
+        .output()
+        .unwrap();
+    ok(&o2);
+    let w: Value = serde_json::from_slice(&o2.stdout).unwrap();
+    for (k, a) in w["actuators"].as_object().unwrap() {
+        let x = v["actuators"][k].as_f64().unwrap();
+        assert!((x - a.as_f64().unwrap()).abs() < 1e-9, "{k}");
+    }
+    // --pose takes X,Y,Z only with --tool-axis; a hexapod takes no tool axis.
+    let o = pkm()
+        .args(["ik", &mc300, "--pose=10,5,-3,0,0", "--tool-axis=0,0,1"])
+        .output()
+        .unwrap();
+    assert!(String::from_utf8_lossy(&o.stderr).contains("expected X,Y,Z"));
+    let o = pkm()
+        .args([
+            "ik",
+            &path("examples/machines/hexapod-seed001.toml"),
+            "--pose=0,0,0",
+            "--tool-axis=0,0,1",
+        ])
+        .output()
+        .unwrap();
+    assert!(String::from_utf8_lossy(&o.stderr).contains("tool axis vector"));
+}

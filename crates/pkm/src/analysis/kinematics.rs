@@ -5,9 +5,9 @@
 use serde::Serialize;
 
 use crate::dynamic::DynForward;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::limits::Violation;
-use crate::machine::Machine;
+use crate::machine::{Analysable, Machine, Visitor};
 
 /// An inverse solution with its limit check.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -29,6 +29,74 @@ pub fn inverse(machine: &Machine, x: &[f64]) -> Result<InverseSolution> {
         pose: x.to_vec(),
         actuators: q,
         violations,
+    })
+}
+
+/// The inverse kinematics for a tool tip and a tool axis vector: every branch of the
+/// rotary axes with its limit check.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ToolAxisSolution {
+    /// Every branch (pose coordinates with the rotary angles, actuators, violations).
+    pub branches: Vec<InverseSolution>,
+    /// The branch chosen: within the rotary axes' ranges and nearest the previous
+    /// angles (home's when none are given).
+    pub chosen: usize,
+    /// The axis is along the singular direction: the first rotary angle is held.
+    pub singular: bool,
+    /// Angle between the axis and the singular direction (rad).
+    pub singular_distance: f64,
+}
+
+/// Inverse kinematics of a tool tip `tip` (mm) and tool axis `axis` (`I, J, K`, any
+/// length; from the tip towards the spindle), both in the frame of the pose
+/// coordinates (a TCP machine's part frame), with every limit checked per branch;
+/// `near`: the previous pose coordinates (internal units) for the continuity rule.
+/// Machines whose pose takes a tool axis ([`crate::Mechanism::poses_for_tool_axis`]);
+/// the others answer [`Error::Unsupported`].
+pub fn inverse_for_tool_axis(
+    machine: &Machine,
+    tip: [f64; 3],
+    axis: [f64; 3],
+    near: Option<&[f64]>,
+) -> Result<ToolAxisSolution> {
+    struct Job<'a>([f64; 3], [f64; 3], Option<&'a [f64]>);
+    type Branches = (Vec<Vec<f64>>, usize, bool, f64);
+    impl Visitor for Job<'_> {
+        type Output = Result<Branches>;
+        fn visit<M: Analysable<P, A>, const P: usize, const A: usize>(self, m: &M) -> Self::Output {
+            let near = match self.2 {
+                Some(x) => Some(crate::dynamic::fixed::<P>("previous pose", x)?),
+                None => None,
+            };
+            let tip = nalgebra::Vector3::from(self.0);
+            let axis = nalgebra::Vector3::from(self.1);
+            let sol = m
+                .poses_for_tool_axis(&tip, &axis, near.as_ref())
+                .ok_or_else(|| Error::Unsupported {
+                    machine: m.name().into(),
+                    kind: m.kind().into(),
+                    analysis: "a tool axis vector (I, J, K)",
+                    reason: "its tool orientation is not set by two rotary axes in \
+                             tool-centre-point coordinates"
+                        .into(),
+                })??;
+            Ok((
+                sol.branches.iter().map(|x| x.as_slice().to_vec()).collect(),
+                sol.chosen,
+                sol.singular,
+                sol.singular_distance,
+            ))
+        }
+    }
+    let (poses, chosen, singular, singular_distance) = machine.visit(Job(tip, axis, near))?;
+    Ok(ToolAxisSolution {
+        branches: poses
+            .iter()
+            .map(|x| inverse(machine, x))
+            .collect::<Result<Vec<_>>>()?,
+        chosen,
+        singular,
+        singular_distance,
     })
 }
 

@@ -529,6 +529,27 @@ impl<const N: usize> Mechanism<N, N> for TcpMachine<N> {
         chain_skeleton(&self.machine, qt, qw)
     }
 
+    fn poses_for_tool_axis(
+        &self,
+        tip: &Vector3<f64>,
+        axis: &Vector3<f64>,
+        near: Option<&SVector<f64, N>>,
+    ) -> Option<Result<crate::mechanism::ToolAxisPoses<N>>> {
+        let near: Option<Vec<f64>> = near.map(|x| x.as_slice()[3..].to_vec());
+        Some(self.rotary_for_axis(axis, near.as_deref()).map(|sol| {
+            crate::mechanism::ToolAxisPoses {
+                branches: sol
+                    .branches
+                    .iter()
+                    .map(|b| super::tcp_axis::tcp_coords(tip, b))
+                    .collect(),
+                chosen: sol.chosen,
+                singular: sol.singular,
+                singular_distance: sol.singular_distance,
+            }
+        }))
+    }
+
     fn singular_distance(&self, x: &SVector<f64, N>) -> Option<f64> {
         self.singular_angle(x)
     }

@@ -264,13 +264,18 @@ impl<const N: usize> TcpMachine<N> {
         near: Option<&[f64]>,
     ) -> Result<(SVector<f64, N>, AxisSolution)> {
         let sol = self.rotary_for_axis(axis, near)?;
-        let mut x = SVector::<f64, N>::zeros();
-        x[0] = tip.x;
-        x[1] = tip.y;
-        x[2] = tip.z;
-        for (k, v) in sol.chosen().iter().enumerate() {
-            x[3 + k] = *v;
-        }
-        Ok((x, sol))
+        Ok((tcp_coords(tip, sol.chosen()), sol))
     }
+}
+
+/// TCP pose coordinates of tip `tip` and rotary angles `angles`.
+pub(super) fn tcp_coords<const N: usize>(tip: &Vector3<f64>, angles: &[f64]) -> SVector<f64, N> {
+    let mut x = SVector::<f64, N>::zeros();
+    x[0] = tip.x;
+    x[1] = tip.y;
+    x[2] = tip.z;
+    for (k, v) in angles.iter().enumerate() {
+        x[3 + k] = *v;
+    }
+    x
 }

@@ -381,3 +381,51 @@ fn first_order_errors_equal_exact_ones_at_tolerance_size() {
     println!("first order against exact: {worst:e} mm at errors up to {largest:e} mm");
     assert!(largest > 0.01 && worst < 1e-5, "{worst:e} {largest:e}");
 }
+
+/// The tool-axis inverse through the analysis layer: every branch points the tool
+/// along the axis asked for and is checked against the limits; machines without a
+/// tool-axis inverse refuse it by name.
+#[test]
+fn inverse_for_a_tool_axis_gives_both_branches_with_their_limits() {
+    use pkm::analysis::kinematics::inverse_for_tool_axis;
+    let m = mc300();
+    let t = tcp5(&m);
+    let mut rng = rand::rngs::StdRng::seed_from_u64(5);
+    for _ in 0..200 {
+        let axis = Vector3::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(0.2..1.0),
+        );
+        let tip = [
+            rng.random_range(-50.0..50.0),
+            rng.random_range(-50.0..50.0),
+            rng.random_range(-50.0..50.0),
+        ];
+        let sol = inverse_for_tool_axis(&m, tip, axis.into(), None).unwrap();
+        assert_eq!(sol.branches.len(), 2);
+        for b in &sol.branches {
+            let q = SVector::<f64, 5>::from_column_slice(&b.actuators);
+            assert!((t.tool_axis(&q) - axis.normalize()).norm() < 1e-12);
+            let x = t.coords_of_joints(&q);
+            for k in 0..3 {
+                assert!((x[k] - tip[k]).abs() < 1e-9);
+            }
+            let mut v = Vec::new();
+            t.check_limits(&x, &q, &mut v);
+            assert_eq!(v.len(), b.violations.len());
+        }
+        // The chosen branch is within the ranges when one is, and nearest home.
+        let c = &sol.branches[sol.chosen];
+        let o = &sol.branches[1 - sol.chosen];
+        let d = |b: &pkm::analysis::kinematics::InverseSolution| b.pose[3].hypot(b.pose[4]);
+        assert!(
+            (c.violations.is_empty() && !o.violations.is_empty())
+                || (c.violations.is_empty() == o.violations.is_empty() && d(c) <= d(o) + 1e-12),
+            "{sol:?}"
+        );
+    }
+    let hexapod = example("hexapod-seed001.toml");
+    let e = inverse_for_tool_axis(&hexapod, [0.0; 3], [0.0, 0.0, 1.0], None).unwrap_err();
+    assert!(e.to_string().contains("tool axis vector"), "{e}");
+}
