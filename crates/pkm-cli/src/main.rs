@@ -71,7 +71,7 @@ enum Command {
     /// position, velocity and acceleration over time, the same path on a serial machine,
     /// limits along the path.
     #[command(after_help = "Examples:\n  \
-        pkm motion examples/machines/tripod-seed000.toml --gcode examples/paths/seed000-arc.ngc --feed 10000 --points 101 --out arc\n  \
+        pkm motion examples/machines/tripod-seed000.toml --gcode examples/paths/seed000-arc.ngc --from 32,-32,-290 --feed 10000 --points 101 --out arc\n  \
         pkm motion examples/machines/tripod-seed000.toml --from 0,0,-290 --to 40,20,-300 --feed 3000 --profile scurve --out p2p\n  \
         pkm motion MACHINE.toml --from POSE --to POSE --duration 1 --profile trapezoid --accel-time 0.1 --out DIR\n  \
         pkm motion examples/machines/mc300.toml --gcode tests/fixtures/linuxcnc/xyzbc-trt/boat-xyzbc.ngc --accuracy --out DIR\n\n\

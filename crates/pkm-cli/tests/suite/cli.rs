@@ -522,3 +522,64 @@ fn fk_reports_the_conditioning_of_its_solution() {
     assert_eq!(v["near_singular"], false, "{v}");
     assert!(v["condition"].as_f64().unwrap() < 10.0);
 }
+
+/// Every example of every command's `--help` that names only files in the repository
+/// runs as printed (from the repository root, its outputs in a temporary directory):
+/// exit 0, or 3 where it says a limit is violated along a path.
+#[test]
+fn every_help_example_runs_as_printed() {
+    let dir = tempfile::tempdir().unwrap();
+    let placeholders = [
+        "MACHINE",
+        "POSE",
+        "my-",
+        "devs.toml",
+        "tight.toml",
+        "part.ngc",
+        "sim/",
+        "poses.csv",
+        "lengths.csv",
+        "tracker.csv",
+        "m.csv",
+    ];
+    let mut ran = 0;
+    for cmd in [
+        "ik",
+        "fk",
+        "check",
+        "motion",
+        "workspace",
+        "errors",
+        "report",
+        "calibrate",
+        "import",
+        "export",
+    ] {
+        let o = pkm().args([cmd, "--help"]).output().unwrap();
+        assert!(o.status.success());
+        let help = String::from_utf8_lossy(&o.stdout).to_string();
+        for line in help.lines().filter(|l| l.starts_with("  pkm ")) {
+            // A trailing comment is separated by spaces and `#`.
+            let line = line.split("   #").next().unwrap().trim();
+            if placeholders.iter().any(|p| line.contains(p)) {
+                continue;
+            }
+            let mut args: Vec<String> = line.split_whitespace().skip(1).map(String::from).collect();
+            // Outputs go to the temporary directory, never into the repository.
+            let out = dir.path().join(format!("out{ran}")).display().to_string();
+            match args.iter().position(|a| a == "--out") {
+                Some(k) => args[k + 1] = out,
+                None if cmd == "report" => args.extend(["--out".into(), out]),
+                None => {}
+            }
+            let o = pkm().current_dir(root()).args(&args).output().unwrap();
+            assert!(
+                matches!(o.status.code(), Some(0) | Some(3)),
+                "`{line}`: {}",
+                String::from_utf8_lossy(&o.stderr)
+            );
+            ran += 1;
+        }
+    }
+    assert!(ran >= 15, "{ran} examples ran");
+}
