@@ -387,3 +387,69 @@ fn every_example_runs_every_analysis_it_supports() {
         }
     }
 }
+
+/// The batch inverse (rayon, chunks) equals the single-pose inverse with its limit
+/// check on every example machine, row by row, across chunk boundaries; a ragged
+/// array is refused.
+#[test]
+fn batch_inverse_equals_single_poses_on_every_example() {
+    use pkm::analysis::kinematics::{inverse, inverse_batch};
+    use rand::{Rng, SeedableRng};
+    for path in examples() {
+        let machine = Machine::from_path(&path).unwrap();
+        let m = machine.mechanism();
+        let p = m.coordinates().len();
+        let a = m.actuators().len();
+        let home = m.home();
+        let scale = m.characteristic_length().max(1.0);
+        let driven = m.driven();
+        let mut rng = rand::rngs::StdRng::seed_from_u64(9);
+        // 9 000 poses about home (held coordinates at home's value) (over two chunks of 4 096), some far out of reach.
+        let n = 9000;
+        let poses: Vec<f64> = (0..n * p)
+            .map(|i| {
+                let k = i % p;
+                // Every third row near home, the others spread wide.
+                let f = if !driven.contains(&k) {
+                    0.0
+                } else if (i / p).is_multiple_of(3) {
+                    0.01
+                } else {
+                    0.3
+                };
+                let spread = match m.coordinates()[k].quantity {
+                    Quantity::Length => f * scale,
+                    Quantity::Angle => f,
+                };
+                home[k] + rng.random_range(-1.0..1.0) * spread
+            })
+            .collect();
+        let b = inverse_batch(&machine, &poses).unwrap();
+        assert_eq!(b.actuators.len(), n * a);
+        let mut reachable = 0;
+        for r in (0..n).step_by(3) {
+            let x = &poses[r * p..(r + 1) * p];
+            match inverse(&machine, x) {
+                Ok(s) => {
+                    for (u, v) in s.actuators.iter().zip(&b.actuators[r * a..(r + 1) * a]) {
+                        assert!((u - v).abs() <= 1e-9 * (1.0 + u.abs()), "{path:?} row {r}");
+                    }
+                    assert_eq!(b.reachable[r], s.violations.is_empty(), "{path:?} row {r}");
+                    assert_eq!(
+                        b.reason[r],
+                        s.violations.first().map(|v| v.to_string()),
+                        "{path:?} row {r}"
+                    );
+                    reachable += usize::from(b.reachable[r]);
+                }
+                Err(e) => {
+                    assert!(!b.reachable[r]);
+                    assert_eq!(b.reason[r], Some(e.to_string()));
+                    assert!(b.actuators[r * a].is_nan());
+                }
+            }
+        }
+        assert!(reachable > 0, "{path:?}: no reachable pose drawn");
+        assert!(inverse_batch(&machine, &poses[..p + 1]).is_err());
+    }
+}
