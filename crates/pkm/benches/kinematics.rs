@@ -176,7 +176,54 @@ fn five_axis_program(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(motion_benches, motion, five_axis_program);
+/// Issue 15's batch: `analysis::kinematics::inverse_batch` of 10^6 random hexapod poses
+/// (uniform in +-100 mm, +-10 deg about home; the limit check included), rayon on all
+/// cores of the machine (2 here) and on one.
+fn batch_inverse(c: &mut Criterion) {
+    use pkm::analysis::kinematics::inverse_batch;
+    use rand::{Rng, SeedableRng};
+    let m = machine("hexapod-linuxcnc.toml");
+    let home = m.mechanism().home();
+    let mut rng = rand::rngs::StdRng::seed_from_u64(1);
+    let poses: Vec<f64> = (0..6_000_000)
+        .map(|i| {
+            let k = i % 6;
+            let s = if k < 3 { 100.0 } else { 10f64.to_radians() };
+            home[k] + rng.random_range(-s..s)
+        })
+        .collect();
+    let mut g = c.benchmark_group("batch inverse");
+    g.sample_size(10);
+    g.throughput(criterion::Throughput::Elements(1_000_000));
+    g.bench_function(
+        "hexapod 1e6 random poses with limits (rayon, all cores)",
+        |b| {
+            b.iter(|| {
+                inverse_batch(&m, black_box(&poses))
+                    .unwrap()
+                    .reachable
+                    .len()
+            })
+        },
+    );
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    g.bench_function("hexapod 1e6 random poses with limits (one thread)", |b| {
+        b.iter(|| {
+            one.install(|| {
+                inverse_batch(&m, black_box(&poses))
+                    .unwrap()
+                    .reachable
+                    .len()
+            })
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(motion_benches, motion, five_axis_program, batch_inverse);
 
 fn hexapod(c: &mut Criterion) {
     let Model::Hexapod(h) = machine("hexapod-linuxcnc.toml").model else {
