@@ -33,6 +33,27 @@ pub struct JointCone {
     pub axis: Vector3<f64>,
     /// Largest angle between the strut and the axis (rad).
     pub max_angle: f64,
+    /// `cos(max_angle)`, computed once: the limit checks compare the strut's cosine
+    /// with it (per pose, six struts, two cones each).
+    cos_max: f64,
+}
+
+impl JointCone {
+    /// The cone of half-angle `max_angle` (rad) about unit `axis`.
+    pub fn new(axis: Vector3<f64>, max_angle: f64) -> Self {
+        JointCone {
+            axis,
+            max_angle,
+            cos_max: max_angle.cos(),
+        }
+    }
+
+    /// `cos(max_angle)`: a strut along unit `n` is within the cone when
+    /// `n . axis >= cos_max`.
+    #[inline]
+    pub fn cos_max(&self) -> f64 {
+        self.cos_max
+    }
 }
 
 /// One strut of a hexapod.
@@ -379,7 +400,7 @@ impl Mechanism<6, 6> for Hexapod {
             let n = (joints[i] - s.base) / q[i];
             if let Some(c) = &s.base_cone {
                 let cos = n.dot(&c.axis);
-                if cos < c.max_angle.cos() {
+                if cos < c.cos_max() {
                     out.push(Violation::new(
                         format!(
                             "base joint {} angle (strut {})",
@@ -395,7 +416,7 @@ impl Mechanism<6, 6> for Hexapod {
             }
             if let Some(c) = &s.platform_cone {
                 let cos = (-n).dot(&(r * c.axis));
-                if cos < c.max_angle.cos() {
+                if cos < c.cos_max() {
                     out.push(Violation::new(
                         format!(
                             "platform joint {} angle (strut {})",

@@ -88,7 +88,7 @@ pub(super) fn check(m: &HybridAm, x: &Vector6<f64>, q: &SVector<f64, 5>, out: &m
 /// Pushes a joint-angle violation when `cos`, the cosine of the strut's angle from the
 /// cone's axis, is below the cone's.
 fn cone_check(cn: &JointCone, cos: f64, out: &mut Vec<Violation>, name: impl FnOnce() -> String) {
-    if cos < cn.max_angle.cos() {
+    if cos < cn.cos_max() {
         out.push(Violation::new(
             name(),
             LimitKind::JointAngle,

@@ -142,13 +142,7 @@ pub(super) fn build(src: &Source, f: HexapodFile) -> Result<super::Parts, Error>
             if v.norm() < 1e-12 {
                 return Err(src.error(&at, "expected a non-zero vector"));
             }
-            out.insert(
-                name.clone(),
-                JointCone {
-                    axis: v.normalize(),
-                    max_angle: c.max_angle,
-                },
-            );
+            out.insert(name.clone(), JointCone::new(v.normalize(), c.max_angle));
         }
         Ok(out)
     };

@@ -123,10 +123,10 @@ pub(crate) fn joint_cone(
             "expected a non-zero vector",
         ));
     }
-    Ok(Some(crate::hexapod::JointCone {
-        axis: ax.normalize(),
-        max_angle: a.to_radians(),
-    }))
+    Ok(Some(crate::hexapod::JointCone::new(
+        ax.normalize(),
+        a.to_radians(),
+    )))
 }
 
 /// One `[[struts]]` entry (tripods and hexapods).

@@ -336,7 +336,7 @@ impl Mechanism<6, 5> for Pentapod {
                 } else {
                     1.0
                 };
-                if cos < c.max_angle.cos() {
+                if cos < c.cos_max() {
                     out.push(Violation::new(
                         format!(
                             "base joint {} angle (strut {})",
