@@ -393,11 +393,7 @@ fn print_text(m: &dyn pkm::DynMechanism, r: &AccuracyReport) {
             dw.x, dw.y, dw.z
         );
     }
-    let source = match r.tolerance_source {
-        pkm::analysis::ToleranceSource::Given => "from the tolerances file",
-        pkm::analysis::ToleranceSource::MachineFile => "from the machine file",
-        pkm::analysis::ToleranceSource::ByKind => "one per kind of parameter",
-    };
+    let source = r.tolerance_source.describe();
     println!(
         "parameters       {} ({} sensitivities), {} toleranced, {source}",
         r.parameters.len(),

@@ -84,7 +84,7 @@ pub struct MotionArgs {
     /// Threshold (deg) of a passage near the singular direction of a 5-axis machine
     /// (tool axis along the rotary axis nearer the part), listed with the rotary axes'
     /// peak speeds in it.
-    #[arg(long, default_value_t = 2.0)]
+    #[arg(long, default_value_t = pkm::motion::singular::DEFAULT_SINGULAR_ANGLE.to_degrees())]
     pub singular_angle: f64,
     /// Convention of angles in --from/--to.
     #[arg(long, default_value = "rpy", value_parser = parse_convention)]

@@ -27,10 +27,10 @@ pub struct AccuracyArgs {
     #[command(flatten)]
     pub tol: ToleranceArgs,
     /// Machines of the Monte Carlo band (0: budget only).
-    #[arg(long, default_value_t = 100)]
+    #[arg(long, default_value_t = PathAccuracyRequest::default().machines)]
     pub band_machines: usize,
     /// The band at every N-th sample.
-    #[arg(long, default_value_t = 10)]
+    #[arg(long, default_value_t = PathAccuracyRequest::default().every)]
     pub band_every: usize,
     /// Seed of the band's machines.
     #[arg(long, default_value_t = 1)]
@@ -163,9 +163,10 @@ pub fn print(r: &PathAccuracyRun) {
     let p = &r.path;
     let line = |l: Option<u64>| l.map(|l| format!("line {l}")).unwrap_or("-".into());
     println!(
-        "accuracy along the program ({} tolerances, {:?}; first order, tool tip relative to \
-         the part):",
-        p.tolerances, r.tolerance_source
+        "accuracy along the program ({} tolerances {}; first order, tool tip relative to \
+         the part or base):",
+        p.tolerances,
+        r.tolerance_source.describe()
     );
     for (what, v) in [
         ("worst case", &p.worst_case),

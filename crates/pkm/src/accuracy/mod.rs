@@ -163,19 +163,22 @@ pub trait Parametric<const P: usize, const A: usize>: Mechanism<P, A> {
 
     /// First-order sensitivities of the tool pose to the parameters `which` (indices
     /// into [`Parametric::parameters`]) at `x`, into `out` (one per entry of `which`),
-    /// with scratch `s` kept between calls (a path's samples, one scratch per thread):
-    /// serial machines evaluate a plan prepared on the first call without allocating
-    /// ([`crate::serial::sensitivity`]); the default picks them from [`sensitivities`].
-    /// Returns the tool axis at `x` (the tool frame's Z, unit, in the frame of the
-    /// errors), which a path's surface error is taken along.
+    /// with scratch `s` kept between calls (a path's samples, one scratch per thread).
+    /// `q` are the actuators at `x` as the caller solved them (a run's sample): serial
+    /// machines evaluate at those joints (a robot keeps the posture the run chose, no
+    /// second inverse per sample) with a plan prepared on the first call, without
+    /// allocating ([`crate::serial::sensitivity`]); the default picks the sensitivities
+    /// at `x` from [`sensitivities`]. Returns the tool axis (the tool frame's Z, unit,
+    /// in the frame of the errors), which a path's surface error is taken along.
     fn sensitivities_into(
         &self,
         x: &SVector<f64, P>,
+        q: &SVector<f64, A>,
         which: &[usize],
         s: &mut SensitivityScratch,
         out: &mut [PoseError],
     ) -> Result<Vector3<f64>> {
-        let _ = s;
+        let _ = (s, q);
         let all = match self.analytic_sensitivities(x) {
             Some(a) => a?,
             None => finite_difference_sensitivities(self, x)?,

@@ -257,10 +257,17 @@ where
         Ok(())
     }
 
-    /// One sample at pose `x`, time `t`, G-code line `line`.
-    pub fn add(&mut self, t: f64, line: Option<u64>, x: &SVector<f64, P>) -> Result<()> {
+    /// One sample at pose `x` with actuators `q` (as the run solved them), time `t`,
+    /// G-code line `line`.
+    pub fn add(
+        &mut self,
+        t: f64,
+        line: Option<u64>,
+        x: &SVector<f64, P>,
+        q: &SVector<f64, A>,
+    ) -> Result<()> {
         let m: &M = self.tooled.as_ref().unwrap_or(self.m);
-        let n = m.sensitivities_into(x, &self.which, &mut self.scratch, &mut self.sens)?;
+        let n = m.sensitivities_into(x, q, &self.which, &mut self.scratch, &mut self.sens)?;
         let (mut wc, mut ss, mut swc, mut sss) = (0.0, 0.0, 0.0, 0.0);
         let mut top = (0, 0.0);
         for (k, (s, v)) in self.sens.iter().zip(&self.values).enumerate() {

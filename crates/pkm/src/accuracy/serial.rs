@@ -384,6 +384,24 @@ macro_rules! serial_parametric_common {
         fn parameters(&self) -> Vec<Parameter> {
             serial_parameters(&self.machine)
         }
+        /// At the joints `q` the caller solved (actuators are the joints).
+        fn sensitivities_into(
+            &self,
+            _x: &$x,
+            q: &$x,
+            which: &[usize],
+            s: &mut super::SensitivityScratch,
+            out: &mut [PoseError],
+        ) -> Result<Vector3<f64>> {
+            serial_sensitivities_into(
+                &self.machine,
+                &self.completions,
+                q.as_slice(),
+                which,
+                s,
+                out,
+            )
+        }
         fn analytic_sensitivities(&self, x: &$x) -> Option<Result<Vec<PoseError>>> {
             Some(self.evaluator(x).and_then(|e| e.analytic()))
         }
@@ -404,22 +422,6 @@ impl<const N: usize> Parametric<N, N> for crate::serial::mechanism::SerialMechan
     fn evaluator(&self, x: &SVector<f64, N>) -> Result<SerialEvaluator<'_>> {
         SerialEvaluator::new(&self.machine, &self.completions, x.as_slice())
     }
-    fn sensitivities_into(
-        &self,
-        x: &SVector<f64, N>,
-        which: &[usize],
-        s: &mut super::SensitivityScratch,
-        out: &mut [PoseError],
-    ) -> Result<Vector3<f64>> {
-        serial_sensitivities_into(
-            &self.machine,
-            &self.completions,
-            x.as_slice(),
-            which,
-            s,
-            out,
-        )
-    }
 }
 
 /// `Parametric` of a serial mechanism whose pose coordinates are not its joints: the
@@ -433,23 +435,6 @@ macro_rules! serial_parametric_by_inverse {
         fn evaluator(&self, x: &$x) -> Result<SerialEvaluator<'_>> {
             let q = self.inverse(x)?;
             SerialEvaluator::new(&self.machine, &self.completions, q.as_slice())
-        }
-        fn sensitivities_into(
-            &self,
-            x: &$x,
-            which: &[usize],
-            s: &mut super::SensitivityScratch,
-            out: &mut [PoseError],
-        ) -> Result<Vector3<f64>> {
-            let q = self.inverse(x)?;
-            serial_sensitivities_into(
-                &self.machine,
-                &self.completions,
-                q.as_slice(),
-                which,
-                s,
-                out,
-            )
         }
     };
 }

@@ -126,6 +126,17 @@ pub enum Tolerances {
     Default,
 }
 
+impl ToleranceSource {
+    /// Where the tolerances came from, for a sentence (`from the machine file`).
+    pub fn describe(self) -> &'static str {
+        match self {
+            ToleranceSource::Given => "from the tolerances file",
+            ToleranceSource::MachineFile => "from the machine file",
+            ToleranceSource::ByKind => "one per kind of parameter",
+        }
+    }
+}
+
 impl Tolerances {
     /// The tolerances on a machine with parameters `params` (those `tolerable` alone)
     /// whose file gives `file`, and where they came from.

@@ -314,7 +314,7 @@ impl Visitor for Simulate<'_, '_> {
         let out = std::cell::RefCell::new(self.sink);
         let mut sink = |s: &Sample<P, A>| -> Result<()> {
             if let Some(t) = tracker_cell.borrow_mut().as_mut() {
-                t.add(s.t, s.line, &s.x)?;
+                t.add(s.t, s.line, &s.x, &s.act.q)?;
             }
             let act = m.actuators();
             let coords = m.coordinates();

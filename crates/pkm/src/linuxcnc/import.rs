@@ -533,27 +533,47 @@ impl Writer<'_> {
             fmt_num(lo),
             fmt_num(hi)
         ));
-        for (key, field, unit) in [
+        for r in self.rates(&sec)? {
+            self.line(format!(
+                "{} = {}  # [{sec}] {} = {} {u}{} ({})",
+                r.field,
+                fmt_num(r.value * k),
+                r.key,
+                fmt_num(r.value),
+                r.per,
+                r.at
+            ));
+        }
+        Ok(())
+    }
+
+    /// A joint's `MAX_VELOCITY` and `MAX_ACCELERATION` of INI section `sec` that are
+    /// given and positive (controller units); a non-positive one is left out with a
+    /// warning naming its line.
+    fn rates(&mut self, sec: &str) -> Result<Vec<Rate>> {
+        let mut out = Vec::new();
+        for (key, field, per) in [
             ("MAX_VELOCITY", "max_velocity", "/s"),
             ("MAX_ACCELERATION", "max_acceleration", "/s^2"),
         ] {
-            if let Some((v, e)) = self.number(&sec, key)? {
-                if v > 0.0 {
-                    self.line(format!(
-                        "{field} = {}  # [{sec}] {key} = {} {u}{unit} ({})",
-                        fmt_num(v * k),
-                        fmt_num(v),
-                        self.ini.at(&e)
-                    ));
+            if let Some((value, e)) = self.number(sec, key)? {
+                if value > 0.0 {
+                    out.push(Rate {
+                        key,
+                        field,
+                        per,
+                        value,
+                        at: self.ini.at(&e),
+                    });
                 } else {
                     self.warnings.push(format!(
-                        "{}: [{sec}] {key} {v} is not > 0, left out",
+                        "{}: [{sec}] {key} {value} is not > 0, left out",
                         self.ini.at(&e)
                     ));
                 }
             }
         }
-        Ok(())
+        Ok(out)
     }
 
     /// `[limits] axes` from `[AXIS_L] MIN_LIMIT / MAX_LIMIT`.
@@ -789,4 +809,18 @@ fn join_origins(origins: &[String]) -> String {
 
 fn toml_str(s: &str) -> String {
     toml::Value::String(s.to_string()).to_string()
+}
+
+/// A joint rate read from the INI ([`Writer::rates`]).
+struct Rate {
+    /// INI key.
+    key: &'static str,
+    /// pkm's field.
+    field: &'static str,
+    /// Unit suffix (`/s`, `/s^2`).
+    per: &'static str,
+    /// Value in the controller's units.
+    value: f64,
+    /// Where it was read.
+    at: String,
 }

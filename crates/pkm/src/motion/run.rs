@@ -365,8 +365,10 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
         // The singular direction does not depend on the tool length. Rapids run each
         // axis at its rapid rate whatever the direction: what a passage costs is the
         // feed moves'.
-        if let Some(d) = self.m.singular_distance(&x).filter(|_| !mv.rapid) {
-            self.singular.add(t, mv.line, d, act.qd.as_slice());
+        if !mv.rapid {
+            if let Some(d) = self.m.singular_distance(&x) {
+                self.singular.add(t, mv.line, d, act.qd.as_slice());
+            }
         }
         sink(&Sample {
             t,

@@ -35,6 +35,15 @@ fn given(m: &Machine) -> Vec<usize> {
     g
 }
 
+/// Random MC-300 joints within its travel (mm, rad).
+fn mc300_joints(rng: &mut rand::rngs::StdRng) -> SVector<f64, 5> {
+    SVector::<f64, 5>::from_fn(|i, _| match i {
+        0..=2 => rng.random_range(-200.0..200.0),
+        3 => rng.random_range(-1.8..1.8),
+        _ => rng.random_range(-3.1..3.1),
+    })
+}
+
 /// `a` and `b` agree to `tol` relative to the largest of them.
 fn assert_close(a: &[PoseError], b: &[PoseError], tol: f64, what: &str) {
     let scale = b
@@ -66,7 +75,10 @@ fn plan_matches_general<M, const P: usize, const A: usize>(
     let mut s = SensitivityScratch::default();
     let mut out = vec![PoseError::default(); n];
     for x in poses {
-        let axis = m.sensitivities_into(x, &which, &mut s, &mut out).unwrap();
+        let q = m.inverse(x).unwrap();
+        let axis = m
+            .sensitivities_into(x, &q, &which, &mut s, &mut out)
+            .unwrap();
         let general = accuracy::sensitivities(m, x).unwrap();
         // Completed angles are central differences (h = 1e-6 rad) in both, of the
         // completion in the plan and of the whole pose in the general path.
@@ -88,14 +100,7 @@ fn the_sensitivity_plan_equals_the_general_formula_on_serial_machines() {
     // `Some`: the file's angles are completed (eq. 3).
     let prepared = t.with_given(&given(&m)).unwrap().unwrap();
     let poses: Vec<SVector<f64, 5>> = (0..200)
-        .map(|_| {
-            let q = SVector::<f64, 5>::from_fn(|i, _| match i {
-                0..=2 => rng.random_range(-200.0..200.0),
-                3 => rng.random_range(-1.8..1.8),
-                _ => rng.random_range(-3.1..3.1),
-            });
-            t.coords_of_joints(&q)
-        })
+        .map(|_| t.coords_of_joints(&mc300_joints(&mut rng)))
         .collect();
     plan_matches_general(&prepared, &poses, "MC-300 (TCP, completed)");
     plan_matches_general(t, &poses, "MC-300 (TCP)");
@@ -356,14 +361,10 @@ fn first_order_errors_equal_exact_ones_at_tolerance_size() {
     let mut sens = vec![PoseError::default(); which.len()];
     let (mut worst, mut largest) = (0.0f64, 0.0f64);
     for _ in 0..100 {
-        let q = SVector::<f64, 5>::from_fn(|i, _| match i {
-            0..=2 => rng.random_range(-200.0..200.0),
-            3 => rng.random_range(-1.8..1.8),
-            _ => rng.random_range(-3.1..3.1),
-        });
+        let q = mc300_joints(&mut rng);
         let x = t.coords_of_joints(&q);
         prepared
-            .sensitivities_into(&x, &which, &mut s, &mut sens)
+            .sensitivities_into(&x, &q, &which, &mut s, &mut sens)
             .unwrap();
         let d: Vec<(usize, f64)> = tol
             .iter()
@@ -428,4 +429,49 @@ fn inverse_for_a_tool_axis_gives_both_branches_with_their_limits() {
     let hexapod = example("hexapod-seed001.toml");
     let e = inverse_for_tool_axis(&hexapod, [0.0; 3], [0.0, 0.0, 1.0], None).unwrap_err();
     assert!(e.to_string().contains("tool axis vector"), "{e}");
+}
+
+/// Along a path the sensitivities are taken at the joints the run solved: a robot in
+/// a posture its default inverse does not choose keeps that posture (no second solve
+/// per sample, which would land on another posture and give another machine's errors).
+#[test]
+fn sensitivities_along_a_path_are_at_the_runs_joints() {
+    let kr = example("kr30-dh.toml");
+    let Model::Serial(s) = &kr.model else {
+        panic!()
+    };
+    let SerialAny::Arm(arm) = &s.mechanism else {
+        panic!("a robot expected")
+    };
+    let machine = &arm.machine;
+    let params = machine.all_parameters();
+    let which: Vec<usize> = (0..params.len()).collect();
+    let mut rng = rand::rngs::StdRng::seed_from_u64(21);
+    let mut other_posture = 0;
+    for _ in 0..200 {
+        let q = SVector::<f64, 6>::from_fn(|_, _| rng.random_range(-2.5..2.5));
+        let x = arm.coords_of_joints(&q);
+        let Ok(q_default) = arm.inverse(&x) else {
+            continue;
+        };
+        if (q_default - q).amax() < 1e-3 {
+            continue;
+        }
+        other_posture += 1;
+        let mut sc = SensitivityScratch::default();
+        let mut out = vec![PoseError::default(); which.len()];
+        arm.sensitivities_into(&x, &q, &which, &mut sc, &mut out)
+            .unwrap();
+        let at_q: Vec<PoseError> = machine
+            .sensitivities(q.as_slice(), &[], &[], &params)
+            .unwrap()
+            .into_iter()
+            .map(|(position, orientation)| PoseError {
+                position,
+                orientation,
+            })
+            .collect();
+        assert_close(&out, &at_q, 1e-9, "KR 30 in another posture");
+    }
+    assert!(other_posture > 20, "{other_posture}");
 }

@@ -250,25 +250,15 @@ impl Writer<'_> {
             fmt_num(hi),
             self.ini.at(&eh)
         )];
-        for (key, field, per) in [
-            ("MAX_VELOCITY", "max_velocity", "/s"),
-            ("MAX_ACCELERATION", "max_acceleration", "/s^2"),
-        ] {
-            if let Some((v, e)) = self.number(&sec, key)? {
-                if v > 0.0 {
-                    fields.push(format!("{field} = {}", fmt_num(v * k)));
-                    notes.push(format!(
-                        "{key} {} {unit}{per} ({})",
-                        fmt_num(v),
-                        self.ini.at(&e)
-                    ));
-                } else {
-                    self.warnings.push(format!(
-                        "{}: [{sec}] {key} {v} is not > 0, left out",
-                        self.ini.at(&e)
-                    ));
-                }
-            }
+        for r in self.rates(&sec)? {
+            fields.push(format!("{} = {}", r.field, fmt_num(r.value * k)));
+            notes.push(format!(
+                "{} {} {unit}{} ({})",
+                r.key,
+                fmt_num(r.value),
+                r.per,
+                r.at
+            ));
         }
         self.line(format!("# {}", notes.join(", ")));
         self.line(format!("joint = {{ {} }}", fields.join(", ")));
