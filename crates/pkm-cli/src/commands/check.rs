@@ -129,6 +129,23 @@ pub fn run(a: &CheckArgs) -> Result<u8> {
                  fast joint motion"
             );
         }
+        // TCP coordinates are in the part frame, the workpiece chain's last frame: a
+        // file whose last link leaves that frame turned makes a program's Z move along
+        // another machine axis.
+        if m.pose_space() == pkm::PoseSpace::Tcp {
+            if let Ok(p) = m.tool_pose(&home) {
+                let z = p.rotation * nalgebra::Vector3::z();
+                if z.z < 1.0 - 1e-9 {
+                    println!(
+                        "warning     at home the tool axis is ({:.4}, {:.4}, {:.4}) in the part \
+                         frame, not +Z: a program's X, Y, Z are along the axes of the workpiece \
+                         chain's last frame; end the chain with a link turning them onto the \
+                         machine's (as the tilting table link of examples/machines/mc300.toml does)",
+                        z.x, z.y, z.z
+                    );
+                }
+            }
+        }
         if violations.is_empty() {
             println!("home limits all satisfied");
         } else {

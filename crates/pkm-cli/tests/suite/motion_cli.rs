@@ -484,3 +484,36 @@ fn ik_from_a_tool_axis_vector() {
         .unwrap();
     assert!(String::from_utf8_lossy(&o.stderr).contains("tool axis vector"));
 }
+
+/// `pkm check` warns when a TCP machine's part frame is turned against the machine's
+/// axes (a program's Z would move along another axis); the examples are not.
+#[test]
+fn check_warns_of_a_turned_part_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(path("examples/machines/head-table-5axis.toml"))
+        .unwrap()
+        .replace(
+            "translation = [10.0, 20.0, -50.0]   # the C axis off the world origin",
+            "translation = [10.0, 20.0, -50.0]\nrotation = [[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]",
+        );
+    let f = dir.path().join("turned.toml");
+    std::fs::write(&f, text).unwrap();
+    let o = pkm().arg("check").arg(&f).output().unwrap();
+    ok(&o);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        out.contains("warning     at home the tool axis is (0.0000, 1.0000"),
+        "{out}"
+    );
+    for m in ["mc300.toml", "head-table-5axis.toml"] {
+        let o = pkm()
+            .args(["check", &path(&format!("examples/machines/{m}"))])
+            .output()
+            .unwrap();
+        ok(&o);
+        assert!(
+            !String::from_utf8_lossy(&o.stdout).contains("warning"),
+            "{m}"
+        );
+    }
+}
