@@ -6,7 +6,7 @@ use serde::Serialize;
 
 use crate::dynamic::DynForward;
 use crate::error::{Error, Result};
-use crate::limits::Violation;
+use crate::limits::{LimitKind, Side, Violation};
 use crate::machine::{Analysable, Machine, Visitor};
 
 /// An inverse solution with its limit check.
@@ -100,7 +100,21 @@ pub fn inverse_for_tool_axis(
     })
 }
 
-/// Inverse kinematics of many poses at once (a design sweep's, a notebook's array).
+/// Why poses of a batch are not reachable: one entry per distinct cause, shared by
+/// every row with that cause (a million rows need no million strings).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct BatchReason {
+    /// The violated limit's name (`strut L2 length`), or the solver's message where
+    /// the pose has no solution.
+    pub text: String,
+    /// Family of the limit; `None` where the pose has no solution.
+    pub kind: Option<LimitKind>,
+    /// Unit of the rows' values and bounds (empty where the pose has no solution).
+    pub unit: &'static str,
+}
+
+/// Inverse kinematics of many poses at once (a design sweep's, a notebook's array),
+/// in columns: one value per pose, no allocation per pose.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct BatchInverse {
     /// Actuators per pose, row-major (`poses x actuators`, internal units); NaN where
@@ -108,9 +122,63 @@ pub struct BatchInverse {
     pub actuators: Vec<f64>,
     /// Per pose: a solution within every limit.
     pub reachable: Vec<bool>,
-    /// Per pose: `None` when reachable; else the first violated limit with its excess
-    /// (`strut L2 length 612.3 mm beyond 600 mm`) or why there is no solution.
-    pub reason: Vec<Option<String>>,
+    /// Per pose: index into [`BatchInverse::reasons`] of its first violated limit or
+    /// of why it has no solution; -1 when reachable.
+    pub reason: Vec<i32>,
+    /// Per pose: the value found for its first violated limit (user units); NaN when
+    /// reachable or without solution.
+    pub value: Vec<f64>,
+    /// Per pose: the bound that value crossed (user units); NaN when reachable or
+    /// without solution.
+    pub bound: Vec<f64>,
+    /// The distinct causes the rows point to.
+    pub reasons: Vec<BatchReason>,
+}
+
+impl BatchInverse {
+    /// Number of poses.
+    pub fn len(&self) -> usize {
+        self.reachable.len()
+    }
+
+    /// Whether the batch has no pose.
+    pub fn is_empty(&self) -> bool {
+        self.reachable.is_empty()
+    }
+
+    /// By how much pose `i`'s first violated limit is crossed (user units, positive);
+    /// NaN when it is reachable or has no solution.
+    pub fn excess(&self, i: usize) -> f64 {
+        (self.value[i] - self.bound[i]).abs()
+    }
+
+    /// The first violated limit of pose `i`, as [`crate::Violation`] (`None` when it is
+    /// reachable or has no solution).
+    pub fn violation(&self, i: usize) -> Option<Violation> {
+        let r = &self.reasons[usize::try_from(self.reason[i]).ok()?];
+        let kind = r.kind?;
+        let (value, bound) = (self.value[i], self.bound[i]);
+        Some(Violation {
+            limit: r.text.clone(),
+            kind,
+            side: if value < bound { Side::Min } else { Side::Max },
+            value,
+            bound,
+            excess: (value - bound).abs(),
+            unit: r.unit,
+        })
+    }
+
+    /// Why pose `i` is not reachable, as the single-pose call says it (the violated
+    /// limit with its value, bound and excess, or the solver's message); `None` when
+    /// reachable.
+    pub fn message(&self, i: usize) -> Option<String> {
+        let r = &self.reasons[usize::try_from(self.reason[i]).ok()?];
+        Some(match self.violation(i) {
+            Some(v) => v.to_string(),
+            None => r.text.clone(),
+        })
+    }
 }
 
 /// Poses per rayon task of [`inverse_batch`] (per-task overhead small against the
@@ -121,10 +189,36 @@ const BATCH_CHUNK: usize = 4096;
 /// coordinates).
 pub const MAX_BATCH: usize = 100_000_000;
 
+/// One chunk's distinct reasons and the map from them to their indices.
+#[derive(Default)]
+struct Interner {
+    reasons: Vec<BatchReason>,
+    index: std::collections::HashMap<(String, Option<LimitKind>), i32>,
+}
+
+impl Interner {
+    fn code(&mut self, text: String, kind: Option<LimitKind>, unit: &'static str) -> i32 {
+        let next = self.reasons.len() as i32;
+        *self
+            .index
+            .entry((text, kind))
+            .or_insert_with_key(|(text, kind)| {
+                self.reasons.push(BatchReason {
+                    text: text.clone(),
+                    kind: *kind,
+                    unit,
+                });
+                next
+            })
+    }
+}
+
 /// Inverse kinematics with the limit check of every pose in `poses` (row-major,
 /// `n x P` pose coordinates in internal units, `P` the machine's coordinate count),
-/// on all cores (rayon, chunks of 4 096 poses, fixed-size types per pose: no
-/// allocation but the violated limits' messages).
+/// on all cores (rayon, chunks of 4 096 poses, fixed-size types per pose). The
+/// violated limits are kept as codes into a table of distinct causes
+/// ([`BatchInverse::reasons`]) with their values and bounds, so a row's message is
+/// only formatted when asked for ([`BatchInverse::message`]).
 pub fn inverse_batch(machine: &Machine, poses: &[f64]) -> Result<BatchInverse> {
     struct Job<'a>(&'a [f64]);
     impl Visitor for Job<'_> {
@@ -146,15 +240,22 @@ pub fn inverse_batch(machine: &Machine, poses: &[f64]) -> Result<BatchInverse> {
             let mut out = BatchInverse {
                 actuators: vec![f64::NAN; n * A],
                 reachable: vec![false; n],
-                reason: vec![None; n],
+                reason: vec![-1; n],
+                value: vec![f64::NAN; n],
+                bound: vec![f64::NAN; n],
+                reasons: Vec::new(),
             };
-            poses
+            let tables: Vec<(usize, Vec<BatchReason>)> = poses
                 .par_chunks(P * BATCH_CHUNK)
                 .zip(out.actuators.par_chunks_mut(A * BATCH_CHUNK))
                 .zip(out.reachable.par_chunks_mut(BATCH_CHUNK))
                 .zip(out.reason.par_chunks_mut(BATCH_CHUNK))
-                .for_each(|(((xs, qs), ok), why)| {
+                .zip(out.value.par_chunks_mut(BATCH_CHUNK))
+                .zip(out.bound.par_chunks_mut(BATCH_CHUNK))
+                .enumerate()
+                .map(|(c, (((((xs, qs), ok), why), value), bound))| {
                     let mut buf = Vec::new();
+                    let mut table = Interner::default();
                     for (i, x) in xs.chunks_exact(P).enumerate() {
                         let x = nalgebra::SVector::<f64, P>::from_column_slice(x);
                         match m.inverse(&x) {
@@ -162,15 +263,39 @@ pub fn inverse_batch(machine: &Machine, poses: &[f64]) -> Result<BatchInverse> {
                                 qs[i * A..(i + 1) * A].copy_from_slice(q.as_slice());
                                 buf.clear();
                                 m.check_limits(&x, &q, &mut buf);
-                                match buf.first() {
+                                match buf.drain(..).next() {
                                     None => ok[i] = true,
-                                    Some(v) => why[i] = Some(v.to_string()),
+                                    Some(v) => {
+                                        why[i] = table.code(v.limit, Some(v.kind), v.unit);
+                                        value[i] = v.value;
+                                        bound[i] = v.bound;
+                                    }
                                 }
                             }
-                            Err(e) => why[i] = Some(e.to_string()),
+                            Err(e) => why[i] = table.code(e.to_string(), None, ""),
                         }
                     }
-                });
+                    (c, table.reasons)
+                })
+                .collect();
+            // One table for the batch: the chunks' codes renumbered into it.
+            let mut all = Interner::default();
+            for (c, reasons) in tables {
+                if reasons.is_empty() {
+                    continue;
+                }
+                let map: Vec<i32> = reasons
+                    .into_iter()
+                    .map(|r| all.code(r.text, r.kind, r.unit))
+                    .collect();
+                let rows = c * BATCH_CHUNK..((c + 1) * BATCH_CHUNK).min(n);
+                for code in &mut out.reason[rows] {
+                    if *code >= 0 {
+                        *code = map[*code as usize];
+                    }
+                }
+            }
+            out.reasons = all.reasons;
             Ok(out)
         }
     }

@@ -436,15 +436,17 @@ fn batch_inverse_equals_single_poses_on_every_example() {
                     }
                     assert_eq!(b.reachable[r], s.violations.is_empty(), "{path:?} row {r}");
                     assert_eq!(
-                        b.reason[r],
+                        b.message(r),
                         s.violations.first().map(|v| v.to_string()),
                         "{path:?} row {r}"
                     );
+                    assert_eq!(b.violation(r).as_ref(), s.violations.first());
                     reachable += usize::from(b.reachable[r]);
                 }
                 Err(e) => {
                     assert!(!b.reachable[r]);
-                    assert_eq!(b.reason[r], Some(e.to_string()));
+                    assert_eq!(b.message(r), Some(e.to_string()));
+                    assert!(b.violation(r).is_none() && b.value[r].is_nan());
                     assert!(b.actuators[r * a].is_nan());
                 }
             }
