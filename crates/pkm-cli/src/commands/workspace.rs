@@ -259,21 +259,10 @@ pub fn run(a: &WorkspaceArgs) -> Result<u8> {
         None => None,
     };
 
-    let orientations: Vec<[f64; 3]> = match a.tilt {
-        Some(t) => {
-            let t = t.to_radians();
-            let mut o = vec![[0.0; 3]];
-            for k in 0..8 {
-                let az = k as f64 * std::f64::consts::FRAC_PI_4;
-                let axis =
-                    nalgebra::Unit::new_normalize(nalgebra::Vector3::new(-az.sin(), az.cos(), 0.0));
-                let r = nalgebra::Rotation3::from_axis_angle(&axis, t);
-                o.push(pkm::Convention::Rpy.from_matrix(r.matrix()));
-            }
-            o
-        }
-        None => Vec::new(),
-    };
+    let orientations: Vec<[f64; 3]> = a
+        .tilt
+        .map(|t| pkm::workspace::tilt_orientations(t.to_radians()))
+        .unwrap_or_default();
     let start = std::time::Instant::now();
     let (wm, grid_bounds) = run_map(
         &machine,

@@ -29,6 +29,13 @@ pub enum MotionSource<'a> {
         /// Tool lengths and work offsets.
         setup: Box<ProgramSetup>,
     },
+    /// Straight moves through waypoints in the machine's own coordinates (internal
+    /// units), each from rest to rest at the feed of [`FeedOptions::feed`] with its
+    /// profile; the line number of a sample is its move's (1 = first to second point).
+    Polyline {
+        /// The waypoints, at least two.
+        points: Vec<Vec<f64>>,
+    },
     /// One straight move in the machine's own coordinates (internal units).
     PointToPoint {
         /// Start pose coordinates.
@@ -395,6 +402,46 @@ impl Visitor for Simulate<'_, '_> {
                     true,
                     &mut sink,
                 )?;
+            }
+            MotionSource::Polyline { points } => {
+                if points.len() < 2 {
+                    return Err(invalid(
+                        "path",
+                        format!("expected at least 2 waypoints, got {}", points.len()),
+                    ));
+                }
+                let v = self
+                    .feed
+                    .feed
+                    .ok_or_else(|| invalid("feed", "a path needs a feed (mm/s or deg/s)"))?;
+                let q = crate::motion::run::quantities(m);
+                let spatial = m.pose_space() != PoseSpace::Own;
+                let pts = points
+                    .iter()
+                    .enumerate()
+                    .map(|(i, x)| crate::dynamic::fixed::<P>(&format!("waypoint {}", i + 1), x))
+                    .collect::<Result<Vec<_>>>()?;
+                // Repeated waypoints make no move.
+                let moves: Vec<(usize, Segment<P>)> = pts
+                    .windows(2)
+                    .map(|w| Segment::line(w[0], w[1], &q, spatial))
+                    .enumerate()
+                    .filter(|(_, s)| s.length > 0.0)
+                    .collect();
+                let n = moves.len();
+                for (k, (i, segment)) in moves.into_iter().enumerate() {
+                    let prof = profile(self.feed.profile, segment.length, v, self.feed)?;
+                    runner.run_move(
+                        &Move {
+                            segment,
+                            profile: prof,
+                            line: Some(i as u64 + 1),
+                            rapid: false,
+                        },
+                        k + 1 == n,
+                        &mut sink,
+                    )?;
+                }
             }
             MotionSource::Gcode {
                 reader,

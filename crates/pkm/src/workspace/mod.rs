@@ -9,7 +9,9 @@ pub mod forward;
 mod reach;
 mod summary;
 
-pub use reach::{default_grid, default_span, map_reach, reach_grid, reachable_tilt, ReachGrid};
+pub use reach::{
+    default_grid, default_span, map_reach, reach_grid, reachable_tilt, tilt_orientations, ReachGrid,
+};
 pub use summary::WorkspaceSummary;
 
 use nalgebra::SVector;

@@ -65,6 +65,21 @@ pub fn reachable_tilt<M: Mechanism<P, A>, const P: usize, const A: usize>(
         .collect())
 }
 
+/// The orientation set of a tilt workspace: the base orientation and a tilt of `tilt`
+/// (rad) about eight horizontal axes 45 degrees apart, as A, B, C offsets (rad, RPY)
+/// for [`map`](super::map)'s `orientations`: a point is in the workspace when the
+/// machine reaches it at all nine (the "tilt capability" of a PKM spindle).
+pub fn tilt_orientations(tilt: f64) -> Vec<[f64; 3]> {
+    let mut o = vec![[0.0; 3]];
+    for k in 0..8 {
+        let az = k as f64 * std::f64::consts::FRAC_PI_4;
+        let axis = nalgebra::Unit::new_normalize(nalgebra::Vector3::new(-az.sin(), az.cos(), 0.0));
+        let r = nalgebra::Rotation3::from_axis_angle(&axis, tilt);
+        o.push(crate::Convention::Rpy.from_matrix(r.matrix()));
+    }
+    o
+}
+
 /// The default grid of a machine around pose `base`: X, Y, Z for spatial machines
 /// (the other coordinates from `base`), else up to three of its own coordinates, over
 /// `bounds` (user units, min,max per axis) or [`default_span`], with `step` (user

@@ -168,6 +168,74 @@ fn motion_and_workspace(name: &str, machine: &Machine) {
         let d = m.actuators()[i].quantity.to_user((q1[i] - q0[i]).abs());
         assert!(st.travel >= d - 1e-6, "{name} {n}: {} < {d}", st.travel);
     }
+    // The same out and back as a polyline at a feed: every sample of the first move
+    // equals the point-to-point move's at that feed; the run ends back at home.
+    struct Keep(Vec<(f64, Option<u64>, Vec<f64>)>);
+    impl pkm::analysis::motion::SampleSink for Keep {
+        fn sample(&mut self, s: &pkm::analysis::motion::SampleRow) -> pkm::Result<()> {
+            self.0.push((s.t, s.line, s.q.to_vec()));
+            Ok(())
+        }
+    }
+    let feed = FeedOptions {
+        profile: ProfileKind::Trapezoid,
+        feed: Some(2.0),
+        ..Default::default()
+    };
+    let mut poly = Keep(Vec::new());
+    run_motion(
+        machine,
+        MotionSource::Polyline {
+            points: vec![home.clone(), x.clone(), x.clone(), home.clone()],
+        },
+        &feed,
+        Sampling::Rate(200.0),
+        &mut poly,
+    )
+    .unwrap();
+    let mut single = Keep(Vec::new());
+    run_motion(
+        machine,
+        MotionSource::PointToPoint {
+            from: home.clone(),
+            to: x.clone(),
+            duration: None,
+            accel_time: None,
+        },
+        &feed,
+        Sampling::Rate(200.0),
+        &mut single,
+    )
+    .unwrap();
+    let out: Vec<_> = poly.0.iter().filter(|s| s.1 == Some(1)).collect();
+    assert_eq!(
+        out.len() + 1,
+        single.0.len(),
+        "{name}: the first move's samples"
+    );
+    for (a, b) in out.iter().zip(&single.0) {
+        assert!((a.0 - b.0).abs() < 1e-12, "{name}");
+        for (u, v) in a.2.iter().zip(&b.2) {
+            assert!((u - v).abs() < 1e-9 * (1.0 + u.abs()), "{name}");
+        }
+    }
+    // The repeated waypoint makes no move; the way back is line 3 and ends at home.
+    assert!(poly.0.iter().all(|s| s.1 != Some(2)), "{name}");
+    let (_, line, q_end) = poly.0.last().unwrap();
+    assert_eq!(*line, Some(3), "{name}");
+    for (u, v) in q_end.iter().zip(q0.iter()) {
+        assert!((u - v).abs() < 1e-9 * (1.0 + u.abs()), "{name}: {u} vs {v}");
+    }
+    assert!(run_motion(
+        machine,
+        MotionSource::Polyline {
+            points: vec![home.clone()]
+        },
+        &feed,
+        Sampling::Rate(200.0),
+        &mut NoSink,
+    )
+    .is_err());
     // A small grid around that pose: the pose itself is reachable.
     let axes: Vec<GridAxis> = pkm::workspace::default_grid(m, &home, None, None)
         .unwrap()

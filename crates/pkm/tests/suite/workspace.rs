@@ -493,3 +493,25 @@ fn a_ur5_map_holds_its_whole_reach() {
         .1;
     assert!(proven > 0, "{:?}", s.outcomes);
 }
+
+/// The tilt set: the base orientation and eight rotations by the tilt about horizontal
+/// axes 45 degrees apart, each turning the tool axis by exactly the tilt towards its
+/// azimuth (built back from the RPY angles).
+#[test]
+fn tilt_orientations_tilt_the_tool_axis_by_the_tilt_all_around() {
+    let t = 15f64.to_radians();
+    let o = pkm::workspace::tilt_orientations(t);
+    assert_eq!(o.len(), 9);
+    assert_eq!(o[0], [0.0; 3]);
+    let mut azimuths = Vec::new();
+    for a in &o[1..] {
+        let r = pkm::Convention::Rpy.to_matrix(*a);
+        let z = r * nalgebra::Vector3::z();
+        assert!((z.z.acos() - t).abs() < 1e-12, "{a:?}");
+        azimuths.push(z.y.atan2(z.x).to_degrees().rem_euclid(360.0));
+    }
+    azimuths.sort_by(f64::total_cmp);
+    for (k, az) in azimuths.iter().enumerate() {
+        assert!((az - 45.0 * k as f64).abs() < 1e-9, "{azimuths:?}");
+    }
+}
