@@ -6,6 +6,7 @@
 //! [`Machine`]: crate::Machine
 
 pub mod accuracy;
+pub mod batch;
 pub mod clearance;
 pub mod clearance_class;
 pub mod clearance_path;

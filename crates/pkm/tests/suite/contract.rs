@@ -456,12 +456,13 @@ fn every_example_runs_every_analysis_it_supports() {
     }
 }
 
-/// The batch inverse (rayon, chunks) equals the single-pose inverse with its limit
+/// The batch inverse and forward (rayon, chunks) equal the single calls with their limit
 /// check on every example machine, row by row, across chunk boundaries; a ragged
 /// array is refused.
 #[test]
-fn batch_inverse_equals_single_poses_on_every_example() {
-    use pkm::analysis::kinematics::{inverse, inverse_batch};
+fn batch_kinematics_equal_single_calls_on_every_example() {
+    use pkm::analysis::batch::forward_batch;
+    use pkm::analysis::kinematics::{forward, inverse, inverse_batch};
     use rand::{Rng, SeedableRng};
     for path in examples() {
         let machine = Machine::from_path(&path).unwrap();
@@ -504,22 +505,53 @@ fn batch_inverse_equals_single_poses_on_every_example() {
                     }
                     assert_eq!(b.reachable[r], s.violations.is_empty(), "{path:?} row {r}");
                     assert_eq!(
-                        b.message(r),
+                        b.causes.message(r),
                         s.violations.first().map(|v| v.to_string()),
                         "{path:?} row {r}"
                     );
-                    assert_eq!(b.violation(r).as_ref(), s.violations.first());
+                    assert_eq!(b.causes.violation(r).as_ref(), s.violations.first());
                     reachable += usize::from(b.reachable[r]);
                 }
                 Err(e) => {
                     assert!(!b.reachable[r]);
-                    assert_eq!(b.message(r), Some(e.to_string()));
-                    assert!(b.violation(r).is_none() && b.value[r].is_nan());
+                    assert_eq!(b.causes.message(r), Some(e.to_string()));
+                    assert!(b.causes.violation(r).is_none() && b.causes.value[r].is_nan());
                     assert!(b.actuators[r * a].is_nan());
                 }
             }
         }
         assert!(reachable > 0, "{path:?}: no reachable pose drawn");
         assert!(inverse_batch(&machine, &poses[..p + 1]).is_err());
+        // Forward kinematics of the batch's actuators from home: row by row the
+        // single-set call's pose, iterations, residual and limit check.
+        let qs: Vec<f64> = (0..n)
+            .filter(|r| !b.actuators[r * a].is_nan())
+            .flat_map(|r| b.actuators[r * a..(r + 1) * a].to_vec())
+            .collect();
+        let f = forward_batch(&machine, &qs, None).unwrap();
+        let nq = qs.len() / a;
+        assert_eq!(f.solved.len(), nq);
+        for r in (0..nq).step_by(7) {
+            let q = &qs[r * a..(r + 1) * a];
+            match forward(&machine, q, &home) {
+                Ok(s) => {
+                    assert!(f.solved[r], "{path:?} row {r}");
+                    assert_eq!(
+                        &f.poses[r * p..(r + 1) * p],
+                        &s.pose[..],
+                        "{path:?} row {r}"
+                    );
+                    assert_eq!(f.iterations[r] as usize, s.iterations);
+                    assert_eq!(f.residual[r], s.residual);
+                    assert_eq!(f.reachable[r], s.violations.is_empty(), "{path:?} row {r}");
+                    assert_eq!(f.causes.violation(r).as_ref(), s.violations.first());
+                }
+                Err(e) => {
+                    assert!(!f.solved[r] && !f.reachable[r]);
+                    assert_eq!(f.causes.message(r), Some(e.to_string()));
+                }
+            }
+        }
+        assert!(forward_batch(&machine, &qs[..a + 1], None).is_err());
     }
 }

@@ -1,0 +1,399 @@
+//! Kinematics of many poses or actuator sets at once (a design sweep's, a notebook's
+//! arrays): columns in, columns out, on all cores (rayon, chunks of
+//! [`BATCH_CHUNK`] rows), fixed-size types per row, and why a row failed kept as a
+//! code into a table of distinct causes rather than a message per row.
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::error::{Error, Result};
+use crate::limits::{LimitKind, Side, Violation};
+use crate::machine::{Analysable, Machine, Visitor};
+
+/// Rows per rayon task (per-task overhead small against the work: a hexapod solves
+/// 4 096 poses in about 20 us). A batch of at most one chunk runs on the calling
+/// thread.
+pub const BATCH_CHUNK: usize = 4096;
+
+/// The most rows one batch call takes (1e8: 4.8 GB of input at six coordinates).
+pub const MAX_BATCH: usize = 100_000_000;
+
+/// A cause shared by every row of a batch that fails for it (a million rows need no
+/// million strings).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct BatchReason {
+    /// The violated limit's name (`strut L2 length`), or the solver's message where
+    /// the row has no solution.
+    pub text: String,
+    /// Family of the limit; `None` where the row has no solution.
+    pub kind: Option<LimitKind>,
+    /// Unit of the rows' values and bounds (empty where the row has no solution).
+    pub unit: &'static str,
+}
+
+/// Why each row of a batch failed, in columns.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Causes {
+    /// Per row: index into [`Causes::reasons`] of its first violated limit or of why
+    /// it has no solution; -1 when it is fine.
+    pub reason: Vec<i32>,
+    /// Per row: the value found for its first violated limit (user units); NaN when
+    /// fine or without solution.
+    pub value: Vec<f64>,
+    /// Per row: the bound that value crossed (user units); NaN when fine or without
+    /// solution.
+    pub bound: Vec<f64>,
+    /// The distinct causes the rows point to.
+    pub reasons: Vec<BatchReason>,
+}
+
+impl Causes {
+    fn new(n: usize) -> Self {
+        Causes {
+            reason: vec![-1; n],
+            value: vec![f64::NAN; n],
+            bound: vec![f64::NAN; n],
+            reasons: Vec::new(),
+        }
+    }
+
+    /// By how much row `i`'s first violated limit is crossed (user units, positive);
+    /// NaN when it is fine or has no solution.
+    pub fn excess(&self, i: usize) -> f64 {
+        (self.value[i] - self.bound[i]).abs()
+    }
+
+    /// The first violated limit of row `i`, as [`Violation`] (`None` when it is fine
+    /// or has no solution).
+    pub fn violation(&self, i: usize) -> Option<Violation> {
+        let r = &self.reasons[usize::try_from(self.reason[i]).ok()?];
+        let kind = r.kind?;
+        let (value, bound) = (self.value[i], self.bound[i]);
+        Some(Violation {
+            limit: r.text.clone(),
+            kind,
+            side: if value < bound { Side::Min } else { Side::Max },
+            value,
+            bound,
+            excess: (value - bound).abs(),
+            unit: r.unit,
+        })
+    }
+
+    /// Why row `i` failed, as the single-row call says it (the violated limit with its
+    /// value, bound and excess, or the solver's message); `None` when it is fine.
+    pub fn message(&self, i: usize) -> Option<String> {
+        let r = &self.reasons[usize::try_from(self.reason[i]).ok()?];
+        Some(match self.violation(i) {
+            Some(v) => v.to_string(),
+            None => r.text.clone(),
+        })
+    }
+}
+
+/// Inverse kinematics of many poses: [`inverse_batch`].
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct BatchInverse {
+    /// Actuators per pose, row-major (`poses x actuators`, internal units); NaN where
+    /// the pose has no geometric solution.
+    pub actuators: Vec<f64>,
+    /// Per pose: a solution within every limit.
+    pub reachable: Vec<bool>,
+    /// Why the others are not reachable.
+    pub causes: Causes,
+}
+
+impl BatchInverse {
+    /// Number of poses.
+    pub fn len(&self) -> usize {
+        self.reachable.len()
+    }
+
+    /// Whether the batch has no pose.
+    pub fn is_empty(&self) -> bool {
+        self.reachable.is_empty()
+    }
+}
+
+/// Forward kinematics of many actuator sets: [`forward_batch`].
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct BatchForward {
+    /// Pose coordinates per set, row-major (`sets x coordinates`, internal units); NaN
+    /// where the solver failed.
+    pub poses: Vec<f64>,
+    /// Per set: the solver found a pose.
+    pub solved: Vec<bool>,
+    /// Per set: a pose found within every limit.
+    pub reachable: Vec<bool>,
+    /// Per set: solver iterations (0 for a closed form or a failure).
+    pub iterations: Vec<u32>,
+    /// Per set: largest actuator residual `|IK(pose) - q|` (mm or rad; NaN on failure).
+    pub residual: Vec<f64>,
+    /// Why the others failed or are not reachable.
+    pub causes: Causes,
+}
+
+/// One chunk's distinct causes and the map from them to their indices.
+#[derive(Default)]
+struct Interner {
+    reasons: Vec<BatchReason>,
+    index: std::collections::HashMap<(String, Option<LimitKind>), i32>,
+}
+
+impl Interner {
+    fn code(&mut self, text: String, kind: Option<LimitKind>, unit: &'static str) -> i32 {
+        let next = self.reasons.len() as i32;
+        *self
+            .index
+            .entry((text, kind))
+            .or_insert_with_key(|(text, kind)| {
+                self.reasons.push(BatchReason {
+                    text: text.clone(),
+                    kind: *kind,
+                    unit,
+                });
+                next
+            })
+    }
+}
+
+/// The rows of one chunk of [`Causes`], written by one task.
+struct CauseRows<'a> {
+    reason: &'a mut [i32],
+    value: &'a mut [f64],
+    bound: &'a mut [f64],
+    table: Interner,
+}
+
+impl CauseRows<'_> {
+    fn violation(&mut self, i: usize, v: Violation) {
+        self.reason[i] = self.table.code(v.limit, Some(v.kind), v.unit);
+        self.value[i] = v.value;
+        self.bound[i] = v.bound;
+    }
+
+    fn error(&mut self, i: usize, e: &Error) {
+        self.reason[i] = self.table.code(e.to_string(), None, "");
+    }
+}
+
+/// Checks a batch's shape: `values` holds whole rows of `width` and at most
+/// [`MAX_BATCH`] of them; the row count.
+fn rows(values: &[f64], width: usize, what: &str) -> Result<usize> {
+    if !values.len().is_multiple_of(width) || values.len() / width > MAX_BATCH {
+        return Err(Error::InvalidInput {
+            what: what.into(),
+            message: format!(
+                "expected up to {MAX_BATCH:.0e} rows of {width} values, got {} values",
+                values.len()
+            ),
+        });
+    }
+    Ok(values.len() / width)
+}
+
+/// Runs `work(input rows, value rows, flags, records, cause rows)` over chunks of
+/// [`BATCH_CHUNK`] rows (on the calling thread for one chunk), then merges the
+/// chunks' cause tables into `causes`.
+type Task<'a, E> = (
+    (
+        (
+            (((&'a [f64], &'a mut [f64]), &'a mut [bool]), &'a mut [E]),
+            &'a mut [i32],
+        ),
+        &'a mut [f64],
+    ),
+    &'a mut [f64],
+);
+
+/// Per-row outputs of a chunked batch: `values` (rows of `width`), a flag and a
+/// record `E` per row.
+struct Outputs<'a, E> {
+    values: &'a mut [f64],
+    width: usize,
+    flags: &'a mut [bool],
+    records: &'a mut [E],
+}
+
+fn chunked<E, F>(input: &[f64], width_in: usize, out: Outputs<E>, causes: &mut Causes, work: F)
+where
+    E: Send,
+    F: Fn(&[f64], &mut [f64], &mut [bool], &mut [E], &mut CauseRows) + Sync,
+{
+    let n = out.flags.len();
+    let task = |((((((xs, vals), ok), rec), reason), value), bound): Task<E>| {
+        let mut rows = CauseRows {
+            reason,
+            value,
+            bound,
+            table: Interner::default(),
+        };
+        work(xs, vals, ok, rec, &mut rows);
+        rows.table.reasons
+    };
+    let tables: Vec<Vec<BatchReason>> = if n <= BATCH_CHUNK {
+        vec![task((
+            (
+                (
+                    (((input, out.values), out.flags), out.records),
+                    &mut causes.reason[..],
+                ),
+                &mut causes.value[..],
+            ),
+            &mut causes.bound[..],
+        ))]
+    } else {
+        input
+            .par_chunks(width_in * BATCH_CHUNK)
+            .zip(out.values.par_chunks_mut(out.width * BATCH_CHUNK))
+            .zip(out.flags.par_chunks_mut(BATCH_CHUNK))
+            .zip(out.records.par_chunks_mut(BATCH_CHUNK))
+            .zip(causes.reason.par_chunks_mut(BATCH_CHUNK))
+            .zip(causes.value.par_chunks_mut(BATCH_CHUNK))
+            .zip(causes.bound.par_chunks_mut(BATCH_CHUNK))
+            .map(task)
+            .collect()
+    };
+    // One table for the batch: the chunks' codes renumbered into it.
+    let mut all = Interner::default();
+    for (c, reasons) in tables.into_iter().enumerate() {
+        if reasons.is_empty() {
+            continue;
+        }
+        let map: Vec<i32> = reasons
+            .into_iter()
+            .map(|r| all.code(r.text, r.kind, r.unit))
+            .collect();
+        let range = c * BATCH_CHUNK..((c + 1) * BATCH_CHUNK).min(n);
+        for code in &mut causes.reason[range] {
+            if *code >= 0 {
+                *code = map[*code as usize];
+            }
+        }
+    }
+    causes.reasons = all.reasons;
+}
+
+/// Inverse kinematics with the limit check of every pose in `poses` (row-major,
+/// `n x P` pose coordinates in internal units, `P` the machine's coordinate count),
+/// on all cores. The first violated limit of a pose is kept as a code into a table of
+/// distinct causes with its value and bound ([`Causes`]), so a row's message is only
+/// formatted when asked for ([`Causes::message`]).
+pub fn inverse_batch(machine: &Machine, poses: &[f64]) -> Result<BatchInverse> {
+    struct Job<'a>(&'a [f64]);
+    impl Visitor for Job<'_> {
+        type Output = Result<BatchInverse>;
+        fn visit<M: Analysable<P, A>, const P: usize, const A: usize>(self, m: &M) -> Self::Output {
+            let n = rows(self.0, P, "poses")?;
+            let mut actuators = vec![f64::NAN; n * A];
+            let mut reachable = vec![false; n];
+            let mut causes = Causes::new(n);
+            chunked(
+                self.0,
+                P,
+                Outputs {
+                    values: &mut actuators,
+                    width: A,
+                    flags: &mut reachable,
+                    records: &mut vec![(); n],
+                },
+                &mut causes,
+                |xs, qs, ok, _, why| {
+                    let mut buf = Vec::new();
+                    for (i, x) in xs.chunks_exact(P).enumerate() {
+                        let x = nalgebra::SVector::<f64, P>::from_column_slice(x);
+                        match m.inverse(&x) {
+                            Ok(q) => {
+                                qs[i * A..(i + 1) * A].copy_from_slice(q.as_slice());
+                                buf.clear();
+                                m.check_limits(&x, &q, &mut buf);
+                                match buf.drain(..).next() {
+                                    None => ok[i] = true,
+                                    Some(v) => why.violation(i, v),
+                                }
+                            }
+                            Err(e) => why.error(i, &e),
+                        }
+                    }
+                },
+            );
+            Ok(BatchInverse {
+                actuators,
+                reachable,
+                causes,
+            })
+        }
+    }
+    machine.visit(Job(poses))
+}
+
+/// Forward kinematics with the limit check of every actuator set in `actuators`
+/// (row-major, `n x A`, internal units), each solved from `start` (pose coordinates;
+/// `None`: home) on all cores: rows are independent (a trajectory whose rows follow
+/// each other is better served by [`super::kinematics::ForwardStream`]). Per row the
+/// pose, whether the solver found one, its iterations and residual, and the first
+/// violated limit or the solver's failure ([`Causes`]).
+pub fn forward_batch(
+    machine: &Machine,
+    actuators: &[f64],
+    start: Option<&[f64]>,
+) -> Result<BatchForward> {
+    struct Job<'a>(&'a [f64], Option<&'a [f64]>);
+    impl Visitor for Job<'_> {
+        type Output = Result<BatchForward>;
+        fn visit<M: Analysable<P, A>, const P: usize, const A: usize>(self, m: &M) -> Self::Output {
+            let n = rows(self.0, A, "actuators")?;
+            let start = match self.1 {
+                Some(x) => crate::dynamic::fixed::<P>("start pose", x)?,
+                None => m.home(),
+            };
+            let mut poses = vec![f64::NAN; n * P];
+            let mut reachable = vec![false; n];
+            // Per row: solved, iterations, residual.
+            let mut solver = vec![(false, 0u32, f64::NAN); n];
+            let mut causes = Causes::new(n);
+            chunked(
+                self.0,
+                A,
+                Outputs {
+                    values: &mut poses,
+                    width: P,
+                    flags: &mut reachable,
+                    records: &mut solver,
+                },
+                &mut causes,
+                |qs, xs, ok, rec, why| {
+                    let mut buf = Vec::new();
+                    for (i, q) in qs.chunks_exact(A).enumerate() {
+                        let q = nalgebra::SVector::<f64, A>::from_column_slice(q);
+                        match m.forward(&q, &start) {
+                            Ok(f) => {
+                                xs[i * P..(i + 1) * P].copy_from_slice(f.pose.as_slice());
+                                rec[i] = (true, f.iterations as u32, f.residual);
+                                buf.clear();
+                                m.check_limits(&f.pose, &q, &mut buf);
+                                match buf.drain(..).next() {
+                                    None => ok[i] = true,
+                                    Some(v) => why.violation(i, v),
+                                }
+                            }
+                            Err(e) => why.error(i, &e),
+                        }
+                    }
+                },
+            );
+            let solved = solver.iter().map(|r| r.0).collect();
+            let iterations = solver.iter().map(|r| r.1).collect();
+            let residual = solver.iter().map(|r| r.2).collect();
+            Ok(BatchForward {
+                poses,
+                solved,
+                reachable,
+                iterations,
+                residual,
+                causes,
+            })
+        }
+    }
+    machine.visit(Job(actuators, start))
+}
