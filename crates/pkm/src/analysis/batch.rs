@@ -397,3 +397,36 @@ pub fn forward_batch(
     }
     machine.visit(Job(actuators, start))
 }
+
+/// The condition number ([`crate::Mechanism::condition`]: 2-norm of the driven
+/// Jacobian, dimensionally consistent) of every pose in `poses` (row-major, `n x P`,
+/// internal units) on all cores; NaN where the pose has no inverse solution or the
+/// Jacobian cannot be formed, infinity at a singular pose.
+pub fn condition_batch(machine: &Machine, poses: &[f64]) -> Result<Vec<f64>> {
+    struct Job<'a>(&'a [f64]);
+    impl Visitor for Job<'_> {
+        type Output = Result<Vec<f64>>;
+        fn visit<M: Analysable<P, A>, const P: usize, const A: usize>(self, m: &M) -> Self::Output {
+            let n = rows(self.0, P, "poses")?;
+            let mut out = vec![f64::NAN; n];
+            let work = |(xs, c): (&[f64], &mut [f64])| {
+                for (x, c) in xs.chunks_exact(P).zip(c.iter_mut()) {
+                    let x = nalgebra::SVector::<f64, P>::from_column_slice(x);
+                    if let Ok(k) = m.condition(&x) {
+                        *c = k;
+                    }
+                }
+            };
+            if n <= BATCH_CHUNK {
+                work((self.0, &mut out));
+            } else {
+                self.0
+                    .par_chunks(P * BATCH_CHUNK)
+                    .zip(out.par_chunks_mut(BATCH_CHUNK))
+                    .for_each(work);
+            }
+            Ok(out)
+        }
+    }
+    machine.visit(Job(poses))
+}

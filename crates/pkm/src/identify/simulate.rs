@@ -49,6 +49,27 @@ pub struct Experiment {
     pub seed: u64,
 }
 
+impl Default for Experiment {
+    /// `pkm simulate-measurements`' defaults: deviations of +-1 mm, point noise 5 um,
+    /// reading noise 1 um, 50 random states within +-100 mm and +-10 deg of home,
+    /// 40 mm per state of the one-actuator design, a triangular fixture of
+    /// circumradius 200 mm, seed 1.
+    fn default() -> Self {
+        Experiment {
+            deviation: 1.0,
+            point_noise: 0.005,
+            length_noise: 0.001,
+            states: 50,
+            design: Design::Random,
+            translation: 100.0,
+            rotation: 10f64.to_radians(),
+            step: 40.0,
+            fixture: triangle(200.0, 0.0),
+            seed: 1,
+        }
+    }
+}
+
 /// A simulated campaign and the truth behind it.
 #[derive(Debug, Clone)]
 pub struct Simulated<M, const P: usize, const A: usize> {

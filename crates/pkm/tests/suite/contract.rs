@@ -461,7 +461,7 @@ fn every_example_runs_every_analysis_it_supports() {
 /// array is refused.
 #[test]
 fn batch_kinematics_equal_single_calls_on_every_example() {
-    use pkm::analysis::batch::forward_batch;
+    use pkm::analysis::batch::{condition_batch, forward_batch};
     use pkm::analysis::kinematics::{forward, inverse, inverse_batch};
     use rand::{Rng, SeedableRng};
     for path in examples() {
@@ -553,5 +553,13 @@ fn batch_kinematics_equal_single_calls_on_every_example() {
             }
         }
         assert!(forward_batch(&machine, &qs[..a + 1], None).is_err());
+        // Condition numbers of the poses: the single call's where it answers.
+        let c = condition_batch(&machine, &poses).unwrap();
+        for r in (0..n).step_by(11) {
+            match m.condition(&poses[r * p..(r + 1) * p]) {
+                Ok(k) => assert_eq!(c[r].to_bits(), k.to_bits(), "{path:?} row {r}"),
+                Err(_) => assert!(c[r].is_nan(), "{path:?} row {r}"),
+            }
+        }
     }
 }

@@ -1,0 +1,515 @@
+//! The analyses on a machine: `Machine.workspace`, `motion`, `errors`. Options are
+//! keyword arguments (mm, rad, s); results are numpy arrays and plain dicts. Each
+//! calls one entry point of `pkm::analysis` with the GIL released.
+
+use std::collections::BTreeMap;
+
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use crate::convert::{self, rows, vec1, vec2};
+use crate::errors::{invalid, to_py};
+use crate::machine::{internal_unit, Machine};
+
+/// Collects a run's samples in columns (mm, rad, s).
+#[derive(Default)]
+struct Columns {
+    max: usize,
+    t: Vec<f64>,
+    line: Vec<i64>,
+    x: Vec<f64>,
+    q: Vec<f64>,
+    qd: Vec<f64>,
+    qdd: Vec<f64>,
+}
+
+impl pkm::analysis::motion::SampleSink for Columns {
+    fn sample(&mut self, s: &pkm::analysis::motion::SampleRow) -> pkm::Result<()> {
+        if self.t.len() >= self.max {
+            return Err(pkm::Error::InvalidInput {
+                what: "max_samples".into(),
+                message: format!(
+                    "the run makes more than {} samples; raise max_samples or sample less \
+                     densely (rate, points)",
+                    self.max
+                ),
+            });
+        }
+        self.t.push(s.t);
+        self.line.push(s.line.map_or(-1, |l| l as i64));
+        self.x.extend_from_slice(s.x);
+        self.q.extend_from_slice(s.q);
+        self.qd.extend_from_slice(s.qd);
+        self.qdd.extend_from_slice(s.qdd);
+        Ok(())
+    }
+}
+
+fn profile_kind(s: &str) -> PyResult<pkm::motion::program::ProfileKind> {
+    use pkm::motion::program::ProfileKind;
+    match s {
+        "constant" => Ok(ProfileKind::Constant),
+        "trapezoid" => Ok(ProfileKind::Trapezoid),
+        "scurve" => Ok(ProfileKind::Scurve),
+        p => Err(invalid(
+            "profile",
+            format!("expected `constant`, `trapezoid` or `scurve`, got `{p}`"),
+        )),
+    }
+}
+
+/// A positive, finite option value.
+fn positive(what: &str, v: Option<f64>) -> PyResult<Option<f64>> {
+    match v {
+        Some(x) if !(x > 0.0 && x.is_finite()) => Err(invalid(
+            what,
+            format!("expected a positive number, got {x}"),
+        )),
+        v => Ok(v),
+    }
+}
+
+#[pymethods]
+impl Machine {
+    /// The reachable workspace on a grid: every point checked against every limit,
+    /// with its condition number (pkm workspace).
+    ///
+    /// `bounds`: `[[min, max], ...]` per grid axis (mm, rad; the axes are X, Y, Z for
+    /// spatial machines, else up to three of the machine's own coordinates); None:
+    /// the machine's whole reach, found by search. `step`: grid step (mm, or rad when
+    /// every axis is an angle); None: 1/40 of each range. `orientation`: the pose
+    /// whose orientation the grid holds (default home). `tilt`: a point counts only
+    /// when reachable at this tilt (rad) in eight directions too.
+    ///
+    /// Returns a dict: `axes` (name, unit, min, max, step, count), `points` (N, axes)
+    /// array, `reachable` (N,) bool, `condition` (N,) (NaN where unreachable),
+    /// `status` (N,) codes into `status_names`, `binding` (N,) codes into
+    /// `binding_names` (-1 where reachable), `summary` (as `pkm workspace` writes
+    /// it: mm, deg) and `grid` (how its bounds were found).
+    #[pyo3(signature = (bounds = None, step = None, orientation = None, tilt = None))]
+    fn workspace<'py>(
+        &self,
+        py: Python<'py>,
+        bounds: Option<&Bound<'py, PyAny>>,
+        step: Option<f64>,
+        orientation: Option<&Bound<'py, PyAny>>,
+        tilt: Option<f64>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let m = self.m();
+        let base = match orientation {
+            Some(o) => {
+                let (x, one) = rows(o, m.coordinates().len(), "orientation")?;
+                if !one {
+                    return Err(invalid("orientation", "expected one pose"));
+                }
+                x
+            }
+            None => m.home(),
+        };
+        // The grid's axes, to convert bounds and step to the library's user units.
+        let axes = pkm::workspace::default_grid(m, &base, None, None).map_err(to_py)?;
+        let quantity = |i: usize| m.coordinates()[axes[i].coordinate].quantity;
+        let bounds = match bounds {
+            Some(b) => {
+                let (v, _) = convert::array(b, "bounds")?;
+                if v.len() != 2 * axes.len() || v.iter().any(|x| !x.is_finite()) {
+                    return Err(invalid(
+                        "bounds",
+                        format!(
+                            "expected {} finite [min, max] pairs (axes {}), got {} values",
+                            axes.len(),
+                            axes.iter()
+                                .map(|a| m.coordinates()[a.coordinate].name.as_str())
+                                .collect::<Vec<_>>()
+                                .join(", "),
+                            v.len()
+                        ),
+                    ));
+                }
+                Some(
+                    v.iter()
+                        .enumerate()
+                        .map(|(k, x)| quantity(k / 2).to_user(*x))
+                        .collect::<Vec<_>>(),
+                )
+            }
+            None => None,
+        };
+        let step = match positive("step", step)? {
+            Some(s) => {
+                let q0 = quantity(0);
+                if (1..axes.len()).any(|i| quantity(i) != q0) {
+                    return Err(invalid(
+                        "step",
+                        "one step for axes of different units (mm and rad): leave it out \
+                         (1/40 of each range)",
+                    ));
+                }
+                Some(q0.to_user(s))
+            }
+            None => None,
+        };
+        let orientations = match positive("tilt", tilt)? {
+            Some(t) => pkm::workspace::tilt_orientations(t),
+            None => Vec::new(),
+        };
+        let inner = self.inner.clone();
+        let (wm, how) = py
+            .detach(|| {
+                pkm::analysis::workspace::map(
+                    &inner,
+                    &base,
+                    bounds.as_deref(),
+                    step,
+                    &orientations,
+                    &|_| {},
+                )
+            })
+            .map_err(to_py)?;
+        let summary = wm.summary_of(m.coordinates());
+        let n = wm.points.len();
+        let na = wm.axes.len();
+        let mut points = Vec::with_capacity(n * na);
+        let mut binding_names: Vec<String> = Vec::new();
+        let mut binding_index: BTreeMap<String, i32> = BTreeMap::new();
+        let mut status_names: Vec<String> = Vec::new();
+        let mut binding = Vec::with_capacity(n);
+        let mut status = Vec::with_capacity(n);
+        for (k, p) in wm.points.iter().enumerate() {
+            let x = wm.coords(k);
+            points.extend(wm.axes.iter().map(|a| x[a.coordinate]));
+            binding.push(match &p.binding {
+                Some(b) => *binding_index.entry(b.clone()).or_insert_with(|| {
+                    binding_names.push(b.clone());
+                    binding_names.len() as i32 - 1
+                }),
+                None => -1,
+            });
+            let s = serde_json::to_value(p.status)
+                .ok()
+                .and_then(|v| v.as_str().map(str::to_string))
+                .unwrap_or_default();
+            let code = match status_names.iter().position(|x| *x == s) {
+                Some(i) => i,
+                None => {
+                    status_names.push(s);
+                    status_names.len() - 1
+                }
+            };
+            status.push(code as i32);
+        }
+        let d = PyDict::new(py);
+        let axes_list = wm
+            .axes
+            .iter()
+            .map(|a| {
+                let c = &m.coordinates()[a.coordinate];
+                let e = PyDict::new(py);
+                e.set_item("name", &c.name)?;
+                e.set_item("unit", internal_unit(c.quantity))?;
+                e.set_item("min", a.min)?;
+                e.set_item("max", a.max)?;
+                e.set_item("step", a.step)?;
+                e.set_item("count", a.count())?;
+                Ok(e)
+            })
+            .collect::<PyResult<Vec<_>>>()?;
+        d.set_item("axes", axes_list)?;
+        d.set_item("points", vec2(py, points, na)?)?;
+        d.set_item(
+            "reachable",
+            vec1(py, wm.points.iter().map(|p| p.reachable).collect()),
+        )?;
+        d.set_item(
+            "condition",
+            vec1(
+                py,
+                wm.points
+                    .iter()
+                    .map(|p| if p.reachable { p.condition } else { f64::NAN })
+                    .collect(),
+            ),
+        )?;
+        d.set_item("status", vec1(py, status))?;
+        d.set_item("status_names", status_names)?;
+        d.set_item("binding", vec1(py, binding))?;
+        d.set_item("binding_names", binding_names)?;
+        d.set_item("summary", convert::to_py(py, &summary)?)?;
+        d.set_item("grid", how)?;
+        Ok(d)
+    }
+
+    /// Runs a G-code program or a path through the mechanism (pkm motion): actuator
+    /// position, velocity and acceleration over time, limits along the way, and the
+    /// same path on a serial machine.
+    ///
+    /// Give `gcode` (the program's text, or a `pathlib.Path` to it) or `path` (an
+    /// (N, P) array of waypoints in the machine's coordinates, mm and rad, run as
+    /// straight moves at `feed`). `feed` (mm/s) replaces the program's F words;
+    /// `profile`: `constant`, `trapezoid` or `scurve` with `acceleration` (mm/s^2)
+    /// and `jerk` (mm/s^3); `rapid` (mm/s) for G0; `start`: the pose the program
+    /// starts from (default home); `tool_length` (mm) for G43 without a table.
+    /// Sampling: `rate` (Hz, default 1000) or `points` per move. At most
+    /// `max_samples` samples are kept (refused beyond, before they are computed
+    /// where the library can tell).
+    ///
+    /// Returns a dict: `t` (N,), `line` (N,) (-1: no line), `x` (N, P), `q`, `qd`,
+    /// `qdd` (N, A) arrays (mm, rad, s), `columns` (their names), `summary` (as
+    /// `pkm motion` writes it: per actuator and serial axis statistics in mm and deg,
+    /// ratios, violations, feed override, singular passages) and `notes`.
+    #[pyo3(signature = (gcode = None, path = None, *, feed = None, profile = "constant",
+        acceleration = None, jerk = None, rapid = None, rate = None, points = None,
+        start = None, tool_length = None, max_samples = 2_000_000))]
+    #[allow(clippy::too_many_arguments)]
+    fn motion<'py>(
+        &self,
+        py: Python<'py>,
+        gcode: Option<&Bound<'py, PyAny>>,
+        path: Option<&Bound<'py, PyAny>>,
+        feed: Option<f64>,
+        profile: &str,
+        acceleration: Option<f64>,
+        jerk: Option<f64>,
+        rapid: Option<f64>,
+        rate: Option<f64>,
+        points: Option<usize>,
+        start: Option<&Bound<'py, PyAny>>,
+        tool_length: Option<f64>,
+        max_samples: usize,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        use pkm::analysis::motion::{MotionSource, ProgramSetup};
+        let m = self.m();
+        let (p, a) = (m.coordinates().len(), m.actuators().len());
+        let mut opts = pkm::analysis::motion::feed_options(&self.inner);
+        opts.profile = profile_kind(profile)?;
+        if let Some(x) = positive("acceleration", acceleration)? {
+            opts.acceleration = x;
+        }
+        if let Some(x) = positive("jerk", jerk)? {
+            opts.jerk = x;
+        }
+        if let Some(x) = positive("rapid", rapid)? {
+            opts.rapid = x;
+        }
+        opts.feed = positive("feed", feed)?;
+        opts.max_samples = max_samples as u64;
+        let sampling = match (positive("rate", rate)?, points) {
+            (Some(_), Some(_)) => return Err(invalid("rate", "give rate or points, not both")),
+            (_, Some(n)) if n < 2 => return Err(invalid("points", "expected at least 2")),
+            (_, Some(n)) => pkm::motion::Sampling::Points(n),
+            (Some(r), None) => pkm::motion::Sampling::Rate(r),
+            (None, None) => pkm::motion::Sampling::Rate(1000.0),
+        };
+        let from = match start {
+            Some(s) => {
+                let (x, one) = rows(s, p, "start")?;
+                if !one {
+                    return Err(invalid("start", "expected one pose"));
+                }
+                Some(x)
+            }
+            None => None,
+        };
+        // The program's text or the waypoints; the library's source is built on the
+        // worker side of `detach` (a boxed reader is not Send).
+        enum Src {
+            Program(String),
+            Waypoints(Vec<Vec<f64>>),
+        }
+        let src = match (gcode, path) {
+            (Some(g), None) => Src::Program(if let Ok(s) = g.extract::<String>() {
+                s
+            } else {
+                let f: std::path::PathBuf = g
+                    .extract()
+                    .map_err(|_| invalid("gcode", "expected the program's text or a path"))?;
+                std::fs::read_to_string(&f)
+                    .map_err(|e| invalid("gcode", format!("cannot read {}: {e}", f.display())))?
+            }),
+            (None, Some(w)) => {
+                let (v, _) = rows(w, p, "path")?;
+                Src::Waypoints(v.chunks_exact(p).map(<[f64]>::to_vec).collect())
+            }
+            _ => return Err(invalid("motion", "give either gcode or path")),
+        };
+        let mut cols = Columns {
+            max: max_samples,
+            ..Default::default()
+        };
+        let inner = self.inner.clone();
+        let run = py
+            .detach(|| {
+                let source = match src {
+                    Src::Program(text) => MotionSource::Gcode {
+                        reader: Box::new(std::io::Cursor::new(text.into_bytes())),
+                        from,
+                        setup: Box::new(ProgramSetup {
+                            tool_length,
+                            ..Default::default()
+                        }),
+                    },
+                    Src::Waypoints(points) => MotionSource::Polyline { points },
+                };
+                pkm::analysis::motion::run_motion(&inner, source, &opts, sampling, &mut cols)
+            })
+            .map_err(to_py)?;
+        let d = PyDict::new(py);
+        d.set_item("t", vec1(py, cols.t))?;
+        d.set_item("line", vec1(py, cols.line))?;
+        d.set_item("x", vec2(py, cols.x, p)?)?;
+        d.set_item("q", vec2(py, cols.q, a)?)?;
+        d.set_item("qd", vec2(py, cols.qd, a)?)?;
+        d.set_item("qdd", vec2(py, cols.qdd, a)?)?;
+        d.set_item(
+            "columns",
+            (
+                m.coordinates()
+                    .iter()
+                    .map(|c| c.name.clone())
+                    .collect::<Vec<_>>(),
+                m.actuators()
+                    .iter()
+                    .map(|c| c.name.clone())
+                    .collect::<Vec<_>>(),
+            ),
+        )?;
+        // Per-axis statistics as {name: stats}, as `pkm motion` writes them.
+        let summary = convert::to_py(py, &run.summary)?.cast_into::<PyDict>()?;
+        for key in ["actuators", "serial"] {
+            if let Some(list) = summary.get_item(key)? {
+                let named = PyDict::new(py);
+                for item in list.try_iter()? {
+                    let item = item?;
+                    named.set_item(item.get_item(0)?, item.get_item(1)?)?;
+                }
+                summary.set_item(key, named)?;
+            }
+        }
+        d.set_item("summary", summary)?;
+        d.set_item("notes", run.notes)?;
+        Ok(d)
+    }
+
+    /// The accuracy at a pose (pkm errors): the tool-pose error of given parameter
+    /// deviations, the sensitivity to every parameter, the error budget of the
+    /// tolerances and optionally a Monte Carlo.
+    ///
+    /// `pose`: pose coordinates (mm, rad; default home). `tolerances`: None (the
+    /// machine file's, else one per kind), a dict of one tolerance per kind
+    /// (`joint`, `length`, `zero` in mm, `angle` in rad, `distribution`: `uniform` or
+    /// `normal`), or the text of a tolerances file (`[[tolerance]]` entries, mm and
+    /// deg, as `pkm errors --tolerances` reads). `deviations`: `{parameter name:
+    /// value}` (mm, rad) whose exact pose error is wanted. `monte_carlo`: machines
+    /// drawn from the tolerances (`seed`).
+    ///
+    /// Returns a dict (mm, rad): `parameters`, `sensitivities`, `budget`,
+    /// `pose_error`, `tolerances`, `monte_carlo`, `violations`, ...
+    #[pyo3(signature = (pose = None, *, tolerances = None, deviations = None,
+        monte_carlo = None, seed = 1))]
+    fn errors<'py>(
+        &self,
+        py: Python<'py>,
+        pose: Option<&Bound<'py, PyAny>>,
+        tolerances: Option<&Bound<'py, PyAny>>,
+        deviations: Option<BTreeMap<String, f64>>,
+        monte_carlo: Option<usize>,
+        seed: u64,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        use pkm::analysis::accuracy::{AccuracyOptions, KindTolerances, Tolerances};
+        let m = self.m();
+        let pose = match pose {
+            Some(x) => {
+                let (x, one) = rows(x, m.coordinates().len(), "pose")?;
+                if !one {
+                    return Err(invalid("pose", "expected one pose"));
+                }
+                Some(x)
+            }
+            None => None,
+        };
+        let params = self.inner.parameters();
+        let tolerances = match tolerances {
+            None => Tolerances::Default,
+            Some(t) if t.extract::<String>().is_ok() => {
+                let text: String = t.extract()?;
+                Tolerances::Given(
+                    pkm::machine::read_tolerances(&params, &text, "<tolerances>").map_err(to_py)?,
+                )
+            }
+            Some(t) => {
+                let d: BTreeMap<String, Bound<'py, PyAny>> = t.extract().map_err(|_| {
+                    invalid(
+                        "tolerances",
+                        "expected a dict of kinds or a tolerances file's text",
+                    )
+                })?;
+                let mut k = KindTolerances::default();
+                for (key, v) in d {
+                    let num = || -> PyResult<f64> {
+                        v.extract::<f64>()
+                            .map_err(|_| invalid(&format!("tolerances.{key}"), "expected a number"))
+                    };
+                    match key.as_str() {
+                        "joint" => k.joint = num()?,
+                        "length" => k.length = num()?,
+                        "zero" => k.zero = num()?,
+                        "angle" => k.angle = num()?,
+                        "distribution" => {
+                            let s: String = v.extract()?;
+                            k.distribution = s.parse().map_err(to_py)?;
+                        }
+                        other => {
+                            return Err(invalid(
+                                "tolerances",
+                                format!(
+                                    "unknown kind `{other}` (expected joint, length, zero, angle, \
+                                     distribution)"
+                                ),
+                            ))
+                        }
+                    }
+                }
+                Tolerances::ByKind(k)
+            }
+        };
+        let deviations = deviations
+            .unwrap_or_default()
+            .into_iter()
+            .map(|(name, v)| {
+                let i = params.iter().position(|p| p.name == name).ok_or_else(|| {
+                    invalid(
+                        "deviations",
+                        format!("`{name}` is not a parameter of {}", m.name()),
+                    )
+                })?;
+                if !v.is_finite() {
+                    return Err(invalid(
+                        &format!("deviations.{name}"),
+                        "not a finite number",
+                    ));
+                }
+                Ok((i, v))
+            })
+            .collect::<PyResult<Vec<_>>>()?;
+        let opt = AccuracyOptions {
+            pose,
+            deviations,
+            tolerances,
+            monte_carlo,
+            seed,
+            ..Default::default()
+        };
+        let inner = self.inner.clone();
+        let r = py
+            .detach(|| pkm::analysis::accuracy::accuracy(&inner, &opt))
+            .map_err(to_py)?;
+        convert::to_py(py, &r)
+    }
+
+    /// The geometric parameters (name, quantity, kind) whose deviations the accuracy
+    /// analyses take (`errors(deviations=...)`, tolerances).
+    #[getter]
+    fn parameters<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        convert::to_py(py, &self.inner.parameters())
+    }
+}

@@ -1,0 +1,161 @@
+//! Between Python values and pkm's: a `Serialize` result as plain Python objects, a
+//! dict as the TOML text of a machine file, numpy arrays as row-major slices.
+
+use numpy::{PyArray1, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
+use pyo3::prelude::*;
+use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
+
+use crate::errors::invalid;
+
+/// A JSON value as Python objects (dicts, lists, floats, ints, str, None).
+pub fn json_to_py<'py>(py: Python<'py>, v: &serde_json::Value) -> PyResult<Bound<'py, PyAny>> {
+    use serde_json::Value;
+    Ok(match v {
+        Value::Null => py.None().into_bound(py),
+        Value::Bool(b) => PyBool::new(py, *b).to_owned().into_any(),
+        Value::Number(n) => match (n.as_i64(), n.as_f64()) {
+            (Some(i), _) => i.into_pyobject(py)?.into_any(),
+            (None, Some(f)) => PyFloat::new(py, f).into_any(),
+            _ => py.None().into_bound(py),
+        },
+        Value::String(s) => PyString::new(py, s).into_any(),
+        Value::Array(a) => {
+            let items = a
+                .iter()
+                .map(|x| json_to_py(py, x))
+                .collect::<PyResult<Vec<_>>>()?;
+            PyList::new(py, items)?.into_any()
+        }
+        Value::Object(o) => {
+            let d = PyDict::new(py);
+            for (k, x) in o {
+                d.set_item(k, json_to_py(py, x)?)?;
+            }
+            d.into_any()
+        }
+    })
+}
+
+/// A `Serialize` value as Python objects. serde_json writes non-finite floats as
+/// null: they come back as None.
+pub fn to_py<'py, T: serde::Serialize>(py: Python<'py>, v: &T) -> PyResult<Bound<'py, PyAny>> {
+    let j = serde_json::to_value(v).map_err(|e| invalid("result", e.to_string()))?;
+    json_to_py(py, &j)
+}
+
+/// A Python value (dict, list, str, number, bool) as a TOML value; `path` names it
+/// in errors (`struts[2].length`).
+pub fn py_to_toml(v: &Bound<'_, PyAny>, path: &str) -> PyResult<toml::Value> {
+    if v.is_instance_of::<PyBool>() {
+        return Ok(toml::Value::Boolean(v.extract()?));
+    }
+    if v.is_instance_of::<PyInt>() {
+        return match v.extract::<i64>() {
+            Ok(i) => Ok(toml::Value::Integer(i)),
+            Err(_) => Err(invalid(path, "integer beyond 64 bits")),
+        };
+    }
+    if v.is_instance_of::<PyString>() {
+        return Ok(toml::Value::String(v.extract()?));
+    }
+    if let Ok(d) = v.cast::<PyDict>() {
+        let mut t = toml::map::Map::new();
+        for (k, x) in d.iter() {
+            let k: String = k
+                .extract()
+                .map_err(|_| invalid(path, "dict keys must be strings"))?;
+            let p = if path.is_empty() {
+                k.clone()
+            } else {
+                format!("{path}.{k}")
+            };
+            t.insert(k, py_to_toml(&x, &p)?);
+        }
+        return Ok(toml::Value::Table(t));
+    }
+    if v.is_instance_of::<PyList>() || v.is_instance_of::<PyTuple>() {
+        let mut a = Vec::new();
+        for (i, x) in v.try_iter()?.enumerate() {
+            a.push(py_to_toml(&x?, &format!("{path}[{i}]"))?);
+        }
+        return Ok(toml::Value::Array(a));
+    }
+    // numpy arrays and scalars, anything with a float value.
+    if let Ok(l) = v.call_method0("tolist") {
+        if !l.is(v) && (l.is_instance_of::<PyList>() || !l.hasattr("tolist")?) {
+            return py_to_toml(&l, path);
+        }
+    }
+    match v.extract::<f64>() {
+        Ok(f) => Ok(toml::Value::Float(f)),
+        Err(_) => Err(invalid(
+            path,
+            format!(
+                "expected a dict, list, string, number or bool, got {}",
+                v.get_type().name()?
+            ),
+        )),
+    }
+}
+
+/// A float64 array (any shape, any strides) as a row-major vector with its shape;
+/// other dtypes are converted by numpy first (`numpy.asarray(x, dtype=float)`).
+pub fn array(v: &Bound<'_, PyAny>, what: &str) -> PyResult<(Vec<f64>, Vec<usize>)> {
+    let py = v.py();
+    let arr: PyReadonlyArrayDyn<f64> = match v.extract() {
+        Ok(a) => a,
+        Err(_) => {
+            let np = py.import("numpy")?;
+            let c = np
+                .call_method1("asarray", (v, np.getattr("float64")?))
+                .map_err(|e| invalid(what, format!("expected an array of numbers: {e}")))?;
+            c.extract()
+                .map_err(|e| invalid(what, format!("expected an array of numbers: {e}")))?
+        }
+    };
+    let shape = arr.shape().to_vec();
+    let data = match arr.as_slice() {
+        Ok(s) => s.to_vec(),
+        Err(_) => arr.as_array().iter().copied().collect(),
+    };
+    Ok((data, shape))
+}
+
+/// Rows of `width` from an array of shape `(n, width)` or `(width,)`; whether it was
+/// one row. Every value must be finite.
+pub fn rows(v: &Bound<'_, PyAny>, width: usize, what: &str) -> PyResult<(Vec<f64>, bool)> {
+    let (data, shape) = array(v, what)?;
+    let single = match shape.as_slice() {
+        [w] if *w == width => true,
+        [_, w] if *w == width => false,
+        _ => {
+            return Err(invalid(
+                what,
+                format!("expected shape (N, {width}) or ({width},), got {shape:?}"),
+            ))
+        }
+    };
+    if let Some(i) = data.iter().position(|x| !x.is_finite()) {
+        return Err(invalid(
+            what,
+            format!(
+                "row {}, column {}: {} is not a finite number",
+                i / width,
+                i % width,
+                data[i]
+            ),
+        ));
+    }
+    Ok((data, single))
+}
+
+/// A vector as a 1-D numpy array (no copy).
+pub fn vec1<'py, T: numpy::Element>(py: Python<'py>, v: Vec<T>) -> Bound<'py, PyArray1<T>> {
+    PyArray1::from_vec(py, v)
+}
+
+/// A row-major vector as an `(n, width)` numpy array (no copy).
+pub fn vec2<'py>(py: Python<'py>, v: Vec<f64>, width: usize) -> PyResult<Bound<'py, PyAny>> {
+    let n = v.len().checked_div(width).unwrap_or(0);
+    Ok(PyArray1::from_vec(py, v).reshape([n, width])?.into_any())
+}

@@ -1,0 +1,162 @@
+"""The analyses from Python equal the pkm command's results on the example machines;
+identification recovers a simulated machine."""
+
+import csv
+import json
+import math
+import pathlib
+
+import numpy as np
+import pytest
+
+import pkm
+from conftest import ROOT, cli, example
+
+TRIPOD = example("tripod-seed000.toml")
+HEX = example("hexapod-seed001.toml")
+ARC = str(ROOT / "examples" / "paths" / "seed000-arc.ngc")
+
+
+def test_workspace_equals_the_command(tmp_path):
+    w = pkm.load(TRIPOD).workspace()
+    cli("workspace", TRIPOD, "--out", str(tmp_path))
+    s = json.loads((tmp_path / "summary.json").read_text())
+    assert w["summary"]["reachable"] == s["reachable"]
+    assert w["summary"]["points"] == s["points"]
+    assert w["summary"]["volume_mm3"] == pytest.approx(s["volume_mm3"], rel=1e-12)
+    assert w["grid"] == s["grid_bounds"]
+    n = s["points"]
+    assert w["points"].shape == (n, 3) and w["reachable"].sum() == s["reachable"]
+    assert np.isnan(w["condition"][~w["reachable"]]).all()
+    assert (w["condition"][w["reachable"]] >= 1).all()
+    # Every unreachable point names its binding limit, every reachable one none.
+    assert ((w["binding"] >= 0) == ~w["reachable"]).all()
+    counts = {}
+    for b in w["binding"][w["binding"] >= 0]:
+        counts[w["binding_names"][b]] = counts.get(w["binding_names"][b], 0) + 1
+    assert counts == s["binding"]
+
+
+def test_workspace_with_bounds_and_step_in_mm():
+    m = pkm.load(TRIPOD)
+    w = m.workspace(bounds=[[-40, 40], [-40, 40], [-300, -280]], step=10.0)
+    assert [a["count"] for a in w["axes"]] == [9, 9, 3]
+    assert w["points"][:, 0].min() == -40 and w["points"][:, 2].max() == -280
+    # Each point's reachability is the inverse kinematics' with its limits.
+    x = np.tile(m.home, (len(w["points"]), 1))
+    x[:, :3] = w["points"]
+    assert np.array_equal(m.ik(x).reachable, w["reachable"])
+
+
+def test_motion_of_a_program_equals_the_command(tmp_path):
+    m = pkm.load(TRIPOD)
+    r = m.motion(gcode=pathlib.Path(ARC), start=[32, -32, -290, 0, 0, 0], feed=10000 / 60, points=101)
+    cli("motion", TRIPOD, "--gcode", ARC, "--from", "32,-32,-290", "--feed", "10000",
+        "--points", "101", "--out", str(tmp_path))
+    s = json.loads((tmp_path / "summary.json").read_text())
+    assert r["summary"]["samples"] == s["samples"] == len(r["t"])
+    for name, st in s["actuators"].items():
+        assert r["summary"]["actuators"][name]["peak_velocity"] == pytest.approx(
+            st["peak_velocity"], rel=1e-12)
+    with open(tmp_path / "actuators.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert len(rows) == len(r["t"])
+    for i in (0, 50, 100):
+        assert float(rows[i]["t_s"]) == pytest.approx(r["t"][i], abs=1e-6)
+        for k, a in enumerate(r["columns"][1]):
+            assert float(rows[i][f"{a}_mm"]) == pytest.approx(r["q"][i, k], abs=1e-6)
+            assert float(rows[i][f"{a}_mm_per_s"]) == pytest.approx(r["qd"][i, k], abs=1e-6)
+    # The samples are the inverse kinematics of the poses.
+    assert np.allclose(m.ik(r["x"]).actuators, r["q"], atol=1e-9)
+
+
+def test_motion_along_a_path_of_waypoints():
+    m = pkm.load(TRIPOD)
+    a = m.home.copy()
+    b = a.copy()
+    b[0] += 20
+    c = b.copy()
+    c[1] += 20
+    r = m.motion(path=np.array([a, b, c]), feed=50.0, profile="trapezoid", rate=500)
+    assert set(r["line"]) == {1, 2}
+    assert np.allclose(r["x"][0], a) and np.allclose(r["x"][-1], c)
+    # Velocities are the time derivative of the positions (central differences).
+    dt = np.diff(r["t"])
+    mid = (r["q"][2:] - r["q"][:-2]) / (dt[1:] + dt[:-1])[:, None]
+    err = np.abs(mid - r["qd"][1:-1])
+    # Equal but at the profile's corners (acceleration steps) and the move boundary.
+    assert (err < 1e-3).mean() > 0.97, np.sort(err.ravel())[-10:]
+
+
+def test_errors_equal_the_command(tmp_path):
+    m = pkm.load(HEX)
+    e = m.errors()
+    j = cli("errors", HEX, "--json", "--out", str(tmp_path))
+    assert e["budget"]["worst_case"] == pytest.approx(j["budget_worst_case"], rel=1e-12)
+    assert e["budget"]["rss"] == pytest.approx(j["budget_rss"], rel=1e-12)
+    # One tolerance per kind: the worst case scales with the tolerances.
+    e2 = m.errors(tolerances={"joint": 0.02, "length": 0.02, "zero": 0.02, "angle": 2e-5})
+    assert e2["budget"]["worst_case"] == pytest.approx(2 * e["budget"]["worst_case"], rel=1e-9)
+    # A deviation's exact error is about its first-order sensitivity.
+    name = m.parameters[0]["name"]
+    d = m.errors(deviations={name: 0.01})
+    pos = np.array(d["pose_error"]["position"])
+    sens = np.array(d["sensitivities"][0]["position"])
+    assert np.allclose(pos, 0.01 * sens, atol=1e-6)
+    mc = m.errors(monte_carlo=2000, seed=3)["monte_carlo"]
+    assert mc["samples"] == 2000 and 0 < mc["max"] <= e["budget"]["worst_case"] * 1.0001
+
+
+def test_simulated_campaign_is_identified():
+    m = pkm.load(HEX)
+    s = pkm.simulate_measurements(m, states=40, holdout=10, deviation=0.5, seed=4)
+    assert s["true_poses"].shape == (50, 6)
+    c = pkm.calibrate(m, s["measurements"], validation=s["validation"])
+    truth = s["true_parameters"]
+    nominal = pkm.simulate_measurements(m, states=1, deviation=0.0, point_noise=0.0,
+                                        length_noise=0.0)["true_parameters"]
+    before = np.sqrt(np.mean((nominal - truth) ** 2))
+    after = np.sqrt(np.mean((np.array(c["values"]) - truth) ** 2))
+    assert after < before / 5, (before, after)
+    v = c["validation"]
+    assert v["identified"]["rms"] < v["nominal"]["rms"] / 10
+    ident = c["machine"]
+    assert isinstance(ident, pkm.Machine) and "identified" in c["identified_toml"]
+    # The identified machine is the identified file's, and differs from the nominal.
+    x = s["true_poses"][0]
+    again = pkm.Machine.from_toml(c["identified_toml"])
+    assert np.array_equal(ident.ik(x)[0], again.ik(x)[0])
+    assert not np.allclose(ident.ik(x)[0], m.ik(x)[0], atol=1e-3)
+    assert pkm.Machine.from_toml(s["true_machine"]).kind == "hexapod"
+
+
+def test_errors_are_raised_with_pkm_messages(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text(open(HEX).read().replace("type = \"hexapod\"", "type = \"hexapod\"\nbogus = [1,"))
+    with pytest.raises(pkm.MachineFileError) as e:
+        pkm.load(bad)
+    assert str(bad) in str(e.value) and e.value.line is not None
+    with pytest.raises(pkm.MachineFileError):
+        pkm.load(tmp_path / "missing.toml")
+    m = pkm.load(HEX)
+    with pytest.raises(pkm.InvalidInputError, match="shape"):
+        m.ik(np.zeros((3, 5)))
+    with pytest.raises(pkm.InvalidInputError, match="not a finite number"):
+        m.ik([0, 0, float("nan"), 0, 0, 0])
+    with pytest.raises(pkm.InvalidInputError):
+        m.ik("not numbers")
+    with pytest.raises(pkm.InvalidInputError, match="G-code"):
+        pkm.load(TRIPOD.replace("tripod-seed000", "p3rp-seed004")).motion(gcode="G1 X1 F100")
+    with pytest.raises(pkm.InvalidInputError, match="max.samples"):
+        pkm.load(TRIPOD).motion(gcode=pathlib.Path(ARC), start=[32, -32, -290, 0, 0, 0], max_samples=10)
+    with pytest.raises(pkm.InvalidInputError, match="deviations"):
+        m.errors(deviations={"no such parameter": 1.0})
+    with pytest.raises(pkm.InvalidInputError):
+        m.errors(tolerances={"joint": 1e300})
+    with pytest.raises(pkm.UnsupportedError) as u:
+        pkm.simulate_measurements(pkm.load(example("mc300.toml")))
+    assert u.value.analysis == "identification"
+    assert issubclass(pkm.UnsupportedError, pkm.Error) and issubclass(pkm.Error, Exception)
+    with pytest.raises(pkm.MachineFileError) as e:
+        pkm.Machine.from_dict({"type": "hexapod", "name": 3})
+    assert e.value.field
