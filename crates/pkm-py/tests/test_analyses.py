@@ -160,3 +160,11 @@ def test_errors_are_raised_with_pkm_messages(tmp_path):
     with pytest.raises(pkm.MachineFileError) as e:
         pkm.Machine.from_dict({"type": "hexapod", "name": 3})
     assert e.value.field
+
+
+def test_the_tour_runs(capsys):
+    import runpy
+
+    runpy.run_path(str(ROOT / "examples" / "python" / "tour.py"), run_name="__main__")
+    out = capsys.readouterr().out
+    assert "reachable" in out and "identified" in out
