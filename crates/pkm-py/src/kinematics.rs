@@ -179,10 +179,24 @@ impl Machine {
     /// reachable). Many give an `IkBatch` (`actuators, reachable, limit = ...`),
     /// solved on all cores with the GIL released. Raises `pkm.InvalidInputError` for
     /// a wrong shape or a value that is not finite; a pose without solution is a row
-    /// with NaN actuators (batch) or `pkm.NotAttainableError` (one pose).
-    fn ik<'py>(&self, py: Python<'py>, poses: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+    /// with NaN actuators (batch) or `pkm.NotAttainableError` (one pose). With
+    /// `check=False` the limits are not checked: `reachable` then says the pose has a
+    /// geometric solution (the inverse kinematics alone, fastest).
+    #[pyo3(signature = (poses, check = true))]
+    fn ik<'py>(
+        &self,
+        py: Python<'py>,
+        poses: &Bound<'py, PyAny>,
+        check: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
         let p = self.m().coordinates().len();
         let (x, single) = rows(poses, p, "poses")?;
+        if single && !check {
+            let q = self.m().inverse(&x).map_err(to_py)?;
+            return Ok((vec1(py, q), true, None::<String>)
+                .into_pyobject(py)?
+                .into_any());
+        }
         if single {
             let s = pkm::analysis::kinematics::inverse(&self.inner, &x).map_err(to_py)?;
             let msg = s.violations.first().map(|v| v.to_string());
@@ -192,7 +206,7 @@ impl Machine {
         }
         let inner = self.inner.clone();
         let b = py
-            .detach(move || pkm::analysis::batch::inverse_batch(&inner, &x))
+            .detach(move || pkm::analysis::batch::inverse_batch_with(&inner, &x, check))
             .map_err(to_py)?;
         let width = self.m().actuators().len();
         Ok(Bound::new(py, IkBatch { width, inner: b })?.into_any())

@@ -179,3 +179,16 @@ def test_single_pose_has_little_overhead_and_releases_the_gil():
         outs = list(ex.map(lambda s: m.ik(x[s::4]).actuators, range(4)))
     for s, o in enumerate(outs):
         assert np.array_equal(o, ref[s::4])
+
+
+def test_ik_without_the_limit_check():
+    m = pkm.load(HEX)
+    x = random_poses(m, 2000, 8, spread=0.3)
+    full = m.ik(x)
+    raw = m.ik(x, check=False)
+    assert np.array_equal(raw.actuators, full.actuators, equal_nan=True)
+    solved = ~np.isnan(full.actuators).any(axis=1)
+    assert np.array_equal(raw.reachable, solved)
+    assert (full.reachable <= raw.reachable).all() and full.reachable.sum() < raw.reachable.sum()
+    q, ok, msg = m.ik(x[0], check=False)
+    assert np.array_equal(q, full.actuators[0]) and ok and msg is None

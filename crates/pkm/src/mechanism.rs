@@ -289,6 +289,22 @@ pub trait Mechanism<const P: usize, const A: usize>: Send + Sync {
     /// Pushes every violated limit at pose `x` with actuators `q` onto `out`.
     fn check_limits(&self, x: &SVector<f64, P>, q: &SVector<f64, A>, out: &mut Vec<Violation>);
 
+    /// Inverse kinematics of `x` and the first limit it violates in the order of
+    /// [`Mechanism::check_limits`] (`None`: within every limit): what a batch of poses
+    /// needs. Equal to [`Mechanism::inverse`] then the first of
+    /// [`Mechanism::check_limits`]; a type may share work between the two and stop at
+    /// the first violation.
+    fn inverse_first_violation(
+        &self,
+        x: &SVector<f64, P>,
+        buf: &mut Vec<Violation>,
+    ) -> Result<(SVector<f64, A>, Option<Violation>)> {
+        let q = self.inverse(x)?;
+        buf.clear();
+        self.check_limits(x, &q, buf);
+        Ok((q, buf.drain(..).next()))
+    }
+
     /// Points and links of the mechanism at `x`, for drawings and joint reports.
     fn skeleton(&self, x: &SVector<f64, P>) -> Result<Skeleton>;
 

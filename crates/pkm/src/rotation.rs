@@ -132,15 +132,16 @@ impl FromStr for Convention {
 }
 
 /// `Rz(c) Ry(b) Rx(a)` written out (the default A, B, C convention), without matrix
-/// products: on the hot path of every spatial pose.
+/// products: on the hot path of every spatial pose. The three sines and cosines come
+/// from one vectorised pass ([`crate::trig::sin_cos_array`], within 2 units in the
+/// last place of libm's): libm's `sin_cos`, three calls per pose, was the largest cost
+/// of a hexapod's inverse kinematics on random poses.
 #[inline]
 pub fn rpy_matrix(a: f64, b: f64, c: f64) -> Matrix3<f64> {
     if a == 0.0 && b == 0.0 && c == 0.0 {
         return Matrix3::identity();
     }
-    let (sa, ca) = a.sin_cos();
-    let (sb, cb) = b.sin_cos();
-    let (sc, cc) = c.sin_cos();
+    let ([sa, sb, sc], [ca, cb, cc]) = crate::trig::sin_cos_array(&[a, b, c]);
     Matrix3::new(
         cc * cb,
         cc * sb * sa - sc * ca,

@@ -133,11 +133,36 @@ pub struct BatchForward {
     pub causes: Causes,
 }
 
+/// The hash of the interner's short keys (limit names): multiply-rotate over 8-byte
+/// words (as rustc's FxHash); SipHash's resistance to chosen keys is not needed for
+/// the limit names of one machine, and it was a tenth of a batch's time.
+#[derive(Default)]
+struct WordHash(u64);
+
+impl std::hash::Hasher for WordHash {
+    fn write(&mut self, bytes: &[u8]) {
+        for chunk in bytes.chunks(8) {
+            let mut word = [0u8; 8];
+            word[..chunk.len()].copy_from_slice(chunk);
+            self.0 = (self.0.rotate_left(5) ^ u64::from_le_bytes(word))
+                .wrapping_mul(0x517c_c1b7_2722_0a95);
+        }
+    }
+
+    fn finish(&self) -> u64 {
+        self.0
+    }
+}
+
 /// One chunk's distinct causes and the map from them to their indices.
 #[derive(Default)]
 struct Interner {
     reasons: Vec<BatchReason>,
-    index: std::collections::HashMap<(String, Option<LimitKind>), i32>,
+    index: std::collections::HashMap<
+        (String, Option<LimitKind>),
+        i32,
+        std::hash::BuildHasherDefault<WordHash>,
+    >,
 }
 
 impl Interner {
@@ -280,7 +305,14 @@ where
 /// distinct causes with its value and bound ([`Causes`]), so a row's message is only
 /// formatted when asked for ([`Causes::message`]).
 pub fn inverse_batch(machine: &Machine, poses: &[f64]) -> Result<BatchInverse> {
-    struct Job<'a>(&'a [f64]);
+    inverse_batch_with(machine, poses, true)
+}
+
+/// [`inverse_batch`], with the limit check only when `check` is set: without it a
+/// pose counts as reachable when it has a geometric solution (the inverse kinematics
+/// alone, for callers that check limits of their own).
+pub fn inverse_batch_with(machine: &Machine, poses: &[f64], check: bool) -> Result<BatchInverse> {
+    struct Job<'a>(&'a [f64], bool);
     impl Visitor for Job<'_> {
         type Output = Result<BatchInverse>;
         fn visit<M: Analysable<P, A>, const P: usize, const A: usize>(self, m: &M) -> Self::Output {
@@ -302,12 +334,15 @@ pub fn inverse_batch(machine: &Machine, poses: &[f64]) -> Result<BatchInverse> {
                     let mut buf = Vec::new();
                     for (i, x) in xs.chunks_exact(P).enumerate() {
                         let x = nalgebra::SVector::<f64, P>::from_column_slice(x);
-                        match m.inverse(&x) {
-                            Ok(q) => {
+                        let solved = if self.1 {
+                            m.inverse_first_violation(&x, &mut buf)
+                        } else {
+                            m.inverse(&x).map(|q| (q, None))
+                        };
+                        match solved {
+                            Ok((q, v)) => {
                                 qs[i * A..(i + 1) * A].copy_from_slice(q.as_slice());
-                                buf.clear();
-                                m.check_limits(&x, &q, &mut buf);
-                                match buf.drain(..).next() {
+                                match v {
                                     None => ok[i] = true,
                                     Some(v) => why.violation(i, v),
                                 }
@@ -324,7 +359,7 @@ pub fn inverse_batch(machine: &Machine, poses: &[f64]) -> Result<BatchInverse> {
             })
         }
     }
-    machine.visit(Job(poses))
+    machine.visit(Job(poses, check))
 }
 
 /// Forward kinematics with the limit check of every actuator set in `actuators`

@@ -9,6 +9,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod forward;
+mod interference;
 mod simd;
 
 use nalgebra::{Matrix3, SMatrix, Vector3, Vector6};
@@ -25,6 +26,8 @@ use crate::rotation::Convention;
 use crate::units::Quantity;
 
 pub use forward::{FkOptions, FkReport, FkTracker};
+pub use interference::segment_distance;
+pub(crate) use interference::strut_interference;
 
 /// A joint's allowed cone: the strut must stay within `max_angle` of `axis`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -120,89 +123,76 @@ fn derived(
     (set, characteristic_length, soa, lanes)
 }
 
-/// Distance between segments `p0-p1` and `q0-q1`.
-pub fn segment_distance(
-    p0: &Vector3<f64>,
-    p1: &Vector3<f64>,
-    q0: &Vector3<f64>,
-    q1: &Vector3<f64>,
-) -> f64 {
-    let d1 = p1 - p0;
-    let d2 = q1 - q0;
-    let r = p0 - q0;
-    let a = d1.dot(&d1);
-    let e = d2.dot(&d2);
-    let f = d2.dot(&r);
-    let (s, t);
-    if a <= 1e-300 && e <= 1e-300 {
-        return r.norm();
-    }
-    if a <= 1e-300 {
-        s = 0.0;
-        t = (f / e).clamp(0.0, 1.0);
-    } else {
-        let c = d1.dot(&r);
-        if e <= 1e-300 {
-            t = 0.0;
-            s = (-c / a).clamp(0.0, 1.0);
-        } else {
-            let b = d1.dot(&d2);
-            let denom = a * e - b * b;
-            let mut s0 = if denom > 1e-300 {
-                ((b * f - c * e) / denom).clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
-            let mut t0 = (b * s0 + f) / e;
-            if t0 < 0.0 {
-                t0 = 0.0;
-                s0 = (-c / a).clamp(0.0, 1.0);
-            } else if t0 > 1.0 {
-                t0 = 1.0;
-                s0 = ((b - c) / a).clamp(0.0, 1.0);
-            }
-            s = s0;
-            t = t0;
-        }
-    }
-    ((p0 + d1 * s) - (q0 + d2 * t)).norm()
-}
-
-/// Pushes a violation for every pair of struts (base joint `base[i]` to moving joint
-/// `joints[i]`) whose axes come closer than `dia`, except pairs `skip(i, k)` (struts
-/// that share a joint touch there by construction).
-pub(crate) fn strut_interference<const N: usize>(
-    names: &[&str; N],
-    base: &[Vector3<f64>; N],
-    joints: &[Vector3<f64>; N],
-    skip: impl Fn(usize, usize) -> bool,
-    dia: f64,
-    out: &mut Vec<Violation>,
-) {
-    for i in 0..N {
-        for k in i + 1..N {
-            if skip(i, k) {
-                continue;
-            }
-            let d = segment_distance(&base[i], &joints[i], &base[k], &joints[k]);
-            if d < dia {
-                out.push(Violation::new(
-                    format!(
-                        "struts {}/{} interference (axis distance)",
-                        names[i], names[k]
-                    ),
-                    LimitKind::StrutInterference,
-                    Side::Min,
-                    Quantity::Length,
-                    d,
-                    dia,
-                ));
-            }
-        }
-    }
-}
-
 impl Hexapod {
+    /// The limit check of [`Mechanism::check_limits`] at pose `x` (position `p`,
+    /// rotation `r`) with actuators `q`; with `first`, it stops at the first violation.
+    fn limits(
+        &self,
+        x: &Vector6<f64>,
+        q: &Vector6<f64>,
+        p: &Vector3<f64>,
+        r: &Matrix3<f64>,
+        out: &mut Vec<Violation>,
+        first: bool,
+    ) {
+        self.axes.check(&self.coordinates, x, out);
+        if first && !out.is_empty() {
+            return;
+        }
+        let joints = self.set.platform_joints(p, r);
+        for i in 0..6 {
+            let s = &self.struts[i];
+            s.actuator.range.check(
+                || format!("strut {} length", s.actuator.name),
+                LimitKind::ActuatorPosition,
+                Quantity::Length,
+                q[i],
+                out,
+            );
+            let n = (joints[i] - s.base) / q[i];
+            if let Some(c) = &s.base_cone {
+                let cos = n.dot(&c.axis);
+                if cos < c.cos_max() {
+                    out.push(Violation::new(
+                        format!(
+                            "base joint {} angle (strut {})",
+                            s.base_name, s.actuator.name
+                        ),
+                        LimitKind::JointAngle,
+                        Side::Max,
+                        Quantity::Angle,
+                        cos.clamp(-1.0, 1.0).acos(),
+                        c.max_angle,
+                    ));
+                }
+            }
+            if let Some(c) = &s.platform_cone {
+                let cos = (-n).dot(&(r * c.axis));
+                if cos < c.cos_max() {
+                    out.push(Violation::new(
+                        format!(
+                            "platform joint {} angle (strut {})",
+                            s.platform_name, s.actuator.name
+                        ),
+                        LimitKind::JointAngle,
+                        Side::Max,
+                        Quantity::Angle,
+                        cos.clamp(-1.0, 1.0).acos(),
+                        c.max_angle,
+                    ));
+                }
+            }
+            if first && !out.is_empty() {
+                return;
+            }
+        }
+        if let Some(dia) = self.strut_diameter {
+            let base: [Vector3<f64>; 6] = std::array::from_fn(|i| self.struts[i].base);
+            let names: [&str; 6] = std::array::from_fn(|i| self.struts[i].actuator.name.as_str());
+            strut_interference(&names, &base, &joints, |i, k| self.shares[i][k], dia, out);
+        }
+    }
+
     /// Assembles a hexapod.
     pub fn new(
         name: String,
@@ -385,57 +375,22 @@ impl Mechanism<6, 6> for Hexapod {
     }
 
     fn check_limits(&self, x: &Vector6<f64>, q: &Vector6<f64>, out: &mut Vec<Violation>) {
-        self.axes.check(&self.coordinates, x, out);
         let (p, r) = split_pose(x);
-        let joints = self.set.platform_joints(&p, &r);
-        for i in 0..6 {
-            let s = &self.struts[i];
-            s.actuator.range.check(
-                || format!("strut {} length", s.actuator.name),
-                LimitKind::ActuatorPosition,
-                Quantity::Length,
-                q[i],
-                out,
-            );
-            let n = (joints[i] - s.base) / q[i];
-            if let Some(c) = &s.base_cone {
-                let cos = n.dot(&c.axis);
-                if cos < c.cos_max() {
-                    out.push(Violation::new(
-                        format!(
-                            "base joint {} angle (strut {})",
-                            s.base_name, s.actuator.name
-                        ),
-                        LimitKind::JointAngle,
-                        Side::Max,
-                        Quantity::Angle,
-                        cos.clamp(-1.0, 1.0).acos(),
-                        c.max_angle,
-                    ));
-                }
-            }
-            if let Some(c) = &s.platform_cone {
-                let cos = (-n).dot(&(r * c.axis));
-                if cos < c.cos_max() {
-                    out.push(Violation::new(
-                        format!(
-                            "platform joint {} angle (strut {})",
-                            s.platform_name, s.actuator.name
-                        ),
-                        LimitKind::JointAngle,
-                        Side::Max,
-                        Quantity::Angle,
-                        cos.clamp(-1.0, 1.0).acos(),
-                        c.max_angle,
-                    ));
-                }
-            }
-        }
-        if let Some(dia) = self.strut_diameter {
-            let base: [Vector3<f64>; 6] = std::array::from_fn(|i| self.struts[i].base);
-            let names: [&str; 6] = std::array::from_fn(|i| self.struts[i].actuator.name.as_str());
-            strut_interference(&names, &base, &joints, |i, k| self.shares[i][k], dia, out);
-        }
+        self.limits(x, q, &p, &r, out, false);
+    }
+
+    /// One rotation and one set of joints for both, and the check stops at the first
+    /// violation.
+    fn inverse_first_violation(
+        &self,
+        x: &Vector6<f64>,
+        buf: &mut Vec<Violation>,
+    ) -> Result<(Vector6<f64>, Option<Violation>)> {
+        let (p, r) = split_pose(x);
+        let q = self.lengths(&p, &r);
+        buf.clear();
+        self.limits(x, &q, &p, &r, buf, true);
+        Ok((q, buf.drain(..).next()))
     }
 
     fn skeleton(&self, x: &Vector6<f64>) -> Result<Skeleton> {
