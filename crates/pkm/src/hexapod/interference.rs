@@ -125,7 +125,7 @@ mod tests {
                 joints[1] = base[1] + (joints[0] - base[0]) * 1.000001;
             }
             let dia = 10.0 + 100.0 * rnd().abs();
-            let skip = |i: usize, k: usize| (i + k) % 7 == 0;
+            let skip = |i: usize, k: usize| (i + k).is_multiple_of(7);
             let mut fast = Vec::new();
             strut_interference(&names, &base, &joints, skip, dia, &mut fast);
             let mut plain = Vec::new();
