@@ -2,7 +2,7 @@
 //! `tool_pose`, `check_limits`. Batches release the GIL and run on all cores
 //! (`pkm::analysis::batch`); one row is solved on the calling thread.
 
-use numpy::{PyArray1, PyArray2};
+use numpy::PyArray2;
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
@@ -16,78 +16,89 @@ fn messages(c: &pkm::analysis::batch::Causes) -> Vec<Option<String>> {
 }
 
 /// Inverse kinematics of many poses (`Machine.ik` on an (N, P) array). Unpacks as
-/// `actuators, reachable, limit = m.ik(poses)`.
+/// `actuators, reachable, limit = m.ik(poses)`. The arrays are made once (the
+/// library's vectors handed to numpy, no copy) and shared by every access.
 #[pyclass(module = "pkm", frozen)]
 pub struct IkBatch {
-    width: usize,
-    inner: pkm::analysis::batch::BatchInverse,
+    actuators: Py<PyAny>,
+    reachable: Py<PyAny>,
+    limit: Py<PyAny>,
+    excess: Py<PyAny>,
+    causes: pkm::analysis::batch::Causes,
+}
+
+impl IkBatch {
+    fn new(py: Python<'_>, b: pkm::analysis::batch::BatchInverse, width: usize) -> PyResult<Self> {
+        let c = &b.causes;
+        let excess: Vec<f64> = (0..c.reason.len()).map(|i| c.excess(i)).collect();
+        let reason = c.reason.clone();
+        Ok(IkBatch {
+            actuators: vec2(py, b.actuators, width)?.unbind(),
+            reachable: vec1(py, b.reachable).into_any().unbind(),
+            limit: vec1(py, reason).into_any().unbind(),
+            excess: vec1(py, excess).into_any().unbind(),
+            causes: b.causes,
+        })
+    }
 }
 
 #[pymethods]
 impl IkBatch {
     /// Actuator values, shape (N, A), mm or rad; NaN where the pose has no solution.
     #[getter]
-    fn actuators<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        vec2(py, self.inner.actuators.clone(), self.width)
+    fn actuators(&self, py: Python<'_>) -> Py<PyAny> {
+        self.actuators.clone_ref(py)
     }
     /// Per pose: a solution within every limit, shape (N,), bool.
     #[getter]
-    fn reachable<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<bool>> {
-        vec1(py, self.inner.reachable.clone())
+    fn reachable(&self, py: Python<'_>) -> Py<PyAny> {
+        self.reachable.clone_ref(py)
     }
     /// Per pose: index into `limit_names` of the first violated limit (or of why the
     /// pose has no solution); -1 where reachable. Shape (N,), int32.
     #[getter]
-    fn limit<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i32>> {
-        vec1(py, self.inner.causes.reason.clone())
+    fn limit(&self, py: Python<'_>) -> Py<PyAny> {
+        self.limit.clone_ref(py)
     }
     /// The distinct violated limits (`strut 3 length`) and solver messages the rows
     /// point to.
     #[getter]
     fn limit_names(&self) -> Vec<String> {
-        self.inner
-            .causes
-            .reasons
-            .iter()
-            .map(|r| r.text.clone())
-            .collect()
+        self.causes.reasons.iter().map(|r| r.text.clone()).collect()
     }
     /// Per pose: by how much the first violated limit is crossed, in that limit's
     /// unit (`limit_units`: mm, deg); NaN where reachable or without solution.
     #[getter]
-    fn excess<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        let c = &self.inner.causes;
-        vec1(py, (0..c.reason.len()).map(|i| c.excess(i)).collect())
+    fn excess(&self, py: Python<'_>) -> Py<PyAny> {
+        self.excess.clone_ref(py)
     }
     /// Unit of each entry of `limit_names` ("" for a solver message).
     #[getter]
     fn limit_units(&self) -> Vec<&'static str> {
-        self.inner.causes.reasons.iter().map(|r| r.unit).collect()
+        self.causes.reasons.iter().map(|r| r.unit).collect()
     }
     /// Per pose: pkm's message (as `pkm ik` prints it), None where reachable.
     fn messages(&self) -> Vec<Option<String>> {
-        messages(&self.inner.causes)
+        messages(&self.causes)
     }
     fn __len__(&self) -> usize {
-        self.inner.len()
+        self.causes.reason.len()
     }
-    fn __iter__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyAny>> {
-        let py = slf.py();
-        let me = slf.get();
+    fn __iter__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let t = PyTuple::new(
             py,
             [
-                me.actuators(py)?,
-                me.reachable(py).into_any(),
-                me.limit(py).into_any(),
+                self.actuators.clone_ref(py),
+                self.reachable.clone_ref(py),
+                self.limit.clone_ref(py),
             ],
         )?;
         t.try_iter().map(|i| i.into_any())
     }
-    fn __repr__(&self) -> String {
-        let n = self.inner.len();
-        let ok = self.inner.reachable.iter().filter(|r| **r).count();
-        format!("<pkm.IkBatch: {n} poses, {ok} reachable>")
+    fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
+        let n = self.causes.reason.len();
+        let ok: usize = self.reachable.bind(py).call_method0("sum")?.extract()?;
+        Ok(format!("<pkm.IkBatch: {n} poses, {ok} reachable>"))
     }
 }
 
@@ -95,77 +106,90 @@ impl IkBatch {
 /// Unpacks as `poses, solved, reachable = m.fk(q)`.
 #[pyclass(module = "pkm", frozen)]
 pub struct FkBatch {
-    width: usize,
-    inner: pkm::analysis::batch::BatchForward,
+    poses: Py<PyAny>,
+    solved: Py<PyAny>,
+    reachable: Py<PyAny>,
+    iterations: Py<PyAny>,
+    residual: Py<PyAny>,
+    limit: Py<PyAny>,
+    causes: pkm::analysis::batch::Causes,
+}
+
+impl FkBatch {
+    fn new(py: Python<'_>, b: pkm::analysis::batch::BatchForward, width: usize) -> PyResult<Self> {
+        let reason = b.causes.reason.clone();
+        Ok(FkBatch {
+            poses: vec2(py, b.poses, width)?.unbind(),
+            solved: vec1(py, b.solved).into_any().unbind(),
+            reachable: vec1(py, b.reachable).into_any().unbind(),
+            iterations: vec1(py, b.iterations).into_any().unbind(),
+            residual: vec1(py, b.residual).into_any().unbind(),
+            limit: vec1(py, reason).into_any().unbind(),
+            causes: b.causes,
+        })
+    }
 }
 
 #[pymethods]
 impl FkBatch {
     /// Poses, shape (N, P), mm or rad; NaN where the solver failed.
     #[getter]
-    fn poses<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        vec2(py, self.inner.poses.clone(), self.width)
+    fn poses(&self, py: Python<'_>) -> Py<PyAny> {
+        self.poses.clone_ref(py)
     }
     /// Per set: the solver found a pose.
     #[getter]
-    fn solved<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<bool>> {
-        vec1(py, self.inner.solved.clone())
+    fn solved(&self, py: Python<'_>) -> Py<PyAny> {
+        self.solved.clone_ref(py)
     }
     /// Per set: a pose found within every limit.
     #[getter]
-    fn reachable<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<bool>> {
-        vec1(py, self.inner.reachable.clone())
+    fn reachable(&self, py: Python<'_>) -> Py<PyAny> {
+        self.reachable.clone_ref(py)
     }
     /// Per set: solver iterations (0: closed form or failure).
     #[getter]
-    fn iterations<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<u32>> {
-        vec1(py, self.inner.iterations.clone())
+    fn iterations(&self, py: Python<'_>) -> Py<PyAny> {
+        self.iterations.clone_ref(py)
     }
     /// Per set: largest actuator residual |IK(pose) - q| (mm or rad).
     #[getter]
-    fn residual<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        vec1(py, self.inner.residual.clone())
+    fn residual(&self, py: Python<'_>) -> Py<PyAny> {
+        self.residual.clone_ref(py)
     }
     /// Per set: index into `limit_names` of the first violated limit or the solver's
     /// failure; -1 where reachable.
     #[getter]
-    fn limit<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i32>> {
-        vec1(py, self.inner.causes.reason.clone())
+    fn limit(&self, py: Python<'_>) -> Py<PyAny> {
+        self.limit.clone_ref(py)
     }
     /// The distinct violated limits and solver messages the rows point to.
     #[getter]
     fn limit_names(&self) -> Vec<String> {
-        self.inner
-            .causes
-            .reasons
-            .iter()
-            .map(|r| r.text.clone())
-            .collect()
+        self.causes.reasons.iter().map(|r| r.text.clone()).collect()
     }
     /// Per set: pkm's message, None where reachable.
     fn messages(&self) -> Vec<Option<String>> {
-        messages(&self.inner.causes)
+        messages(&self.causes)
     }
     fn __len__(&self) -> usize {
-        self.inner.solved.len()
+        self.causes.reason.len()
     }
-    fn __iter__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyAny>> {
-        let py = slf.py();
-        let me = slf.get();
+    fn __iter__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let t = PyTuple::new(
             py,
             [
-                me.poses(py)?,
-                me.solved(py).into_any(),
-                me.reachable(py).into_any(),
+                self.poses.clone_ref(py),
+                self.solved.clone_ref(py),
+                self.reachable.clone_ref(py),
             ],
         )?;
         t.try_iter().map(|i| i.into_any())
     }
-    fn __repr__(&self) -> String {
-        let n = self.inner.solved.len();
-        let ok = self.inner.reachable.iter().filter(|r| **r).count();
-        format!("<pkm.FkBatch: {n} actuator sets, {ok} reachable>")
+    fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
+        let n = self.causes.reason.len();
+        let ok: usize = self.reachable.bind(py).call_method0("sum")?.extract()?;
+        Ok(format!("<pkm.FkBatch: {n} actuator sets, {ok} reachable>"))
     }
 }
 
@@ -209,7 +233,7 @@ impl Machine {
             .detach(move || pkm::analysis::batch::inverse_batch_with(&inner, &x, check))
             .map_err(to_py)?;
         let width = self.m().actuators().len();
-        Ok(Bound::new(py, IkBatch { width, inner: b })?.into_any())
+        Ok(Bound::new(py, IkBatch::new(py, b, width)?)?.into_any())
     }
 
     /// Forward kinematics with every limit checked, each actuator set solved from
@@ -217,7 +241,7 @@ impl Machine {
     ///
     /// `q`: one set, shape (A,), or many, shape (N, A) (mm, rad). One set gives
     /// `(pose, info)` with `info` a dict (`iterations`, `residual`, `closed_form`,
-    /// `condition`, `near_singular`, `reachable`, `violations`), and raises
+    /// `reachable`, `violations`; the conditioning is `condition(pose)`), and raises
     /// `pkm.NotConvergedError` when the solver fails. Many give an `FkBatch` (`poses,
     /// solved, reachable = ...`) with a status per row, on all cores.
     #[pyo3(signature = (q, start = None))]
@@ -241,23 +265,25 @@ impl Machine {
             None => None,
         };
         if single {
-            let st = start.unwrap_or_else(|| self.m().home());
-            let f = pkm::analysis::kinematics::forward(&self.inner, &q, &st).map_err(to_py)?;
+            // The solve and the limit check (the condition number is `condition`'s:
+            // a robot's takes an inverse kinematics solve, 30 times the forward one).
+            let m = self.m();
+            let st = start.unwrap_or_else(|| m.home());
+            let f = m.forward(&q, &st).map_err(to_py)?;
+            let violations = m.check_limits(&f.pose, &q).map_err(to_py)?;
             let info = pyo3::types::PyDict::new(py);
             info.set_item("iterations", f.iterations)?;
             info.set_item("residual", f.residual)?;
-            info.set_item("closed_form", f.closed_form)?;
-            info.set_item("condition", f.condition)?;
-            info.set_item("near_singular", f.near_singular)?;
-            info.set_item("reachable", f.violations.is_empty())?;
-            info.set_item("violations", convert::to_py(py, &f.violations)?)?;
+            info.set_item("closed_form", m.forward_closed_form())?;
+            info.set_item("reachable", violations.is_empty())?;
+            info.set_item("violations", convert::to_py(py, &violations)?)?;
             return Ok((vec1(py, f.pose), info).into_pyobject(py)?.into_any());
         }
         let inner = self.inner.clone();
         let b = py
             .detach(move || pkm::analysis::batch::forward_batch(&inner, &q, start.as_deref()))
             .map_err(to_py)?;
-        Ok(Bound::new(py, FkBatch { width: p, inner: b })?.into_any())
+        Ok(Bound::new(py, FkBatch::new(py, b, p)?)?.into_any())
     }
 
     /// The Jacobian at a pose (shape (A, P)): actuator rates per pose-coordinate rate
