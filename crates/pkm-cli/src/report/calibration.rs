@@ -5,25 +5,15 @@
 
 use anyhow::Result;
 use pkm::analysis::identification::calibration_study;
-use pkm::identify::simulate::{triangle, Design, Experiment};
+use pkm::identify::simulate::Experiment;
 use pkm::Machine;
 
 use super::html::{esc, Html};
 use crate::commands::calibrate::plot_svgs;
 
 pub fn section(h: &mut Html, machine: &Machine, _ctx: &super::Context) -> Result<()> {
-    let e = Experiment {
-        deviation: 1.0,
-        point_noise: 0.005,
-        length_noise: 0.001,
-        states: 50,
-        design: Design::Random,
-        translation: 100.0,
-        rotation: 10f64.to_radians(),
-        step: 40.0,
-        fixture: triangle(200.0, 0.0),
-        seed: 1,
-    };
+    // The campaign `pkm simulate-measurements` simulates by default.
+    let e = Experiment::default();
     let st = calibration_study(machine, &e, 20)?;
     let id = &st.identification;
     let n = id.names.len();

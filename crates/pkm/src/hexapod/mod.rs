@@ -57,6 +57,22 @@ impl JointCone {
     pub fn cos_max(&self) -> f64 {
         self.cos_max
     }
+
+    /// Pushes a joint-angle violation (named by `name`, built only then) when `cos`,
+    /// the cosine of the strut's angle from the axis, is below [`JointCone::cos_max`].
+    #[inline]
+    pub fn check(&self, cos: f64, name: impl FnOnce() -> String, out: &mut Vec<Violation>) {
+        if cos < self.cos_max {
+            out.push(Violation::new(
+                name(),
+                LimitKind::JointAngle,
+                Side::Max,
+                Quantity::Angle,
+                cos.clamp(-1.0, 1.0).acos(),
+                self.max_angle,
+            ));
+        }
+    }
 }
 
 /// One strut of a hexapod.
@@ -152,35 +168,29 @@ impl Hexapod {
             let n = (joints[i] - s.base) / q[i];
             if let Some(c) = &s.base_cone {
                 let cos = n.dot(&c.axis);
-                if cos < c.cos_max() {
-                    out.push(Violation::new(
+                c.check(
+                    cos,
+                    || {
                         format!(
                             "base joint {} angle (strut {})",
                             s.base_name, s.actuator.name
-                        ),
-                        LimitKind::JointAngle,
-                        Side::Max,
-                        Quantity::Angle,
-                        cos.clamp(-1.0, 1.0).acos(),
-                        c.max_angle,
-                    ));
-                }
+                        )
+                    },
+                    out,
+                );
             }
             if let Some(c) = &s.platform_cone {
                 let cos = (-n).dot(&(r * c.axis));
-                if cos < c.cos_max() {
-                    out.push(Violation::new(
+                c.check(
+                    cos,
+                    || {
                         format!(
                             "platform joint {} angle (strut {})",
                             s.platform_name, s.actuator.name
-                        ),
-                        LimitKind::JointAngle,
-                        Side::Max,
-                        Quantity::Angle,
-                        cos.clamp(-1.0, 1.0).acos(),
-                        c.max_angle,
-                    ));
-                }
+                        )
+                    },
+                    out,
+                );
             }
             if first && !out.is_empty() {
                 return;

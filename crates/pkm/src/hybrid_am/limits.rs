@@ -4,7 +4,7 @@
 use nalgebra::{SVector, Vector3, Vector6};
 
 use super::HybridAm;
-use crate::hexapod::{segment_distance, JointCone};
+use crate::hexapod::segment_distance;
 use crate::limits::{LimitKind, Range, Side, Violation};
 use crate::units::Quantity;
 
@@ -47,20 +47,28 @@ pub(super) fn check(m: &HybridAm, x: &Vector6<f64>, q: &SVector<f64, 5>, out: &m
     for (leg, si) in m.legs.iter().zip(&s) {
         let n = si / si.norm().max(1e-300);
         if let Some(cn) = &m.carriage_cone {
-            cone_check(cn, n.dot(&cn.axis), out, || {
-                format!(
-                    "carriage joint {} angle (strut {})",
-                    leg.carriage_name, leg.actuator.name
-                )
-            });
+            cn.check(
+                n.dot(&cn.axis),
+                || {
+                    format!(
+                        "carriage joint {} angle (strut {})",
+                        leg.carriage_name, leg.actuator.name
+                    )
+                },
+                out,
+            );
         }
         if let Some(cn) = &m.platform_cone {
-            cone_check(cn, -n.dot(&(pl.rotation * cn.axis)), out, || {
-                format!(
-                    "platform joint {} angle (strut {})",
-                    leg.platform_name, leg.actuator.name
-                )
-            });
+            cn.check(
+                -n.dot(&(pl.rotation * cn.axis)),
+                || {
+                    format!(
+                        "platform joint {} angle (strut {})",
+                        leg.platform_name, leg.actuator.name
+                    )
+                },
+                out,
+            );
         }
     }
     if let Some(dia) = m.strut_diameter {
@@ -82,20 +90,5 @@ pub(super) fn check(m: &HybridAm, x: &Vector6<f64>, q: &SVector<f64, 5>, out: &m
                 }
             }
         }
-    }
-}
-
-/// Pushes a joint-angle violation when `cos`, the cosine of the strut's angle from the
-/// cone's axis, is below the cone's.
-fn cone_check(cn: &JointCone, cos: f64, out: &mut Vec<Violation>, name: impl FnOnce() -> String) {
-    if cos < cn.cos_max() {
-        out.push(Violation::new(
-            name(),
-            LimitKind::JointAngle,
-            Side::Max,
-            Quantity::Angle,
-            cos.clamp(-1.0, 1.0).acos(),
-            cn.max_angle,
-        ));
     }
 }

@@ -27,7 +27,7 @@ use nalgebra::{Matrix3, SMatrix, SVector, Vector3, Vector6};
 use crate::error::{Error, Result};
 use crate::hexapod::{strut_interference, JointCone};
 use crate::legs::split_pose;
-use crate::limits::{AxisLimits, LimitKind, Side, Violation};
+use crate::limits::{AxisLimits, LimitKind, Violation};
 use crate::mechanism::{
     spatial_coordinates, Actuator, ActuatorMotion, Coordinate, LinkKind, Mechanism, PointRole,
     PoseSpace, Skeleton,
@@ -336,19 +336,16 @@ impl Mechanism<6, 5> for Pentapod {
                 } else {
                     1.0
                 };
-                if cos < c.cos_max() {
-                    out.push(Violation::new(
+                c.check(
+                    cos,
+                    || {
                         format!(
                             "base joint {} angle (strut {})",
                             s.base_name, s.actuator.name
-                        ),
-                        LimitKind::JointAngle,
-                        Side::Max,
-                        Quantity::Angle,
-                        cos.clamp(-1.0, 1.0).acos(),
-                        c.max_angle,
-                    ));
-                }
+                        )
+                    },
+                    out,
+                );
             }
         }
         if let Some(dia) = self.strut_diameter {
