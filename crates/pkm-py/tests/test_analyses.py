@@ -168,3 +168,38 @@ def test_the_tour_runs(capsys):
     runpy.run_path(str(ROOT / "examples" / "python" / "tour.py"), run_name="__main__")
     out = capsys.readouterr().out
     assert "reachable" in out and "identified" in out
+
+
+def test_garbage_input_raises_never_crashes():
+    """Random shapes, dtypes and values into every call: a pkm.Error (or TypeError
+    for a wrong Python type), never a crash, a hang or another exception."""
+    rng = np.random.default_rng(11)
+    m = pkm.load(HEX)
+    values = [
+        np.zeros((0, 6)), np.zeros((2, 7)), np.zeros((3, 6, 1)), np.full(6, np.inf),
+        np.full((4, 6), np.nan), np.full(6, 1e300), np.array(["a"] * 6), [None] * 6,
+        "text", {"a": 1}, 3.0, np.zeros(6, dtype=np.int64), np.zeros(6, dtype=np.float32),
+        rng.normal(0, 1e6, (5, 6)), np.asfortranarray(rng.normal(0, 1, (5, 6))),
+        rng.normal(0, 1, (10, 6))[::2], [[1, 2, 3]], [],
+    ]
+    calls = [
+        lambda v: m.ik(v), lambda v: m.ik(v, check=False), lambda v: m.fk(v),
+        lambda v: m.fk(m.ik(m.home)[0], start=v), lambda v: m.jacobian(v),
+        lambda v: m.condition(v), lambda v: m.tool_pose(v), lambda v: m.check_limits(v),
+        lambda v: m.workspace(bounds=v), lambda v: m.workspace(orientation=v),
+        lambda v: m.motion(path=v, feed=10.0), lambda v: m.motion(gcode=v),
+        lambda v: m.errors(v), lambda v: m.errors(tolerances=v),
+        lambda v: pkm.Machine.from_dict(v) if isinstance(v, dict) else pkm.Machine.from_toml(str(v)),
+        lambda v: pkm.calibrate(m, v),
+    ]
+    for call in calls:
+        for v in values:
+            try:
+                call(v)
+            except (pkm.Error, TypeError):
+                pass
+    # Absurd sizes are refused before any work.
+    with pytest.raises(pkm.InvalidInputError):
+        m.workspace(bounds=[[-1e6, 1e6]] * 3, step=1e-3)
+    with pytest.raises(pkm.InvalidInputError):
+        m.motion(gcode="G1 X10 F0.000001\n", max_samples=1000)
