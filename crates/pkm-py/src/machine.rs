@@ -179,6 +179,18 @@ impl Machine {
         Ok(d)
     }
 
+    /// Pickling (Dask ships machines to workers this way): rebuilt from its TOML text.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (String, String))> {
+        let text = self.text.clone().ok_or_else(|| {
+            pyo3::exceptions::PyTypeError::new_err(
+                "a machine loaded from a URDF file cannot be pickled: load it from its path \
+                 where it is needed",
+            )
+        })?;
+        let from_toml = py.get_type::<Machine>().getattr("from_toml")?;
+        Ok((from_toml, (text, self.inner.source.clone())))
+    }
+
     fn __repr__(&self) -> String {
         let m = self.m();
         format!(

@@ -192,3 +192,15 @@ def test_ik_without_the_limit_check():
     assert (full.reachable <= raw.reachable).all() and full.reachable.sum() < raw.reachable.sum()
     q, ok, msg = m.ik(x[0], check=False)
     assert np.array_equal(q, full.actuators[0]) and ok and msg is None
+
+
+def test_machines_pickle_from_their_text():
+    import pickle
+
+    m = pkm.load(HEX)
+    back = pickle.loads(pickle.dumps(m))
+    x = random_poses(m, 100, 9)
+    assert np.array_equal(back.ik(x).actuators, m.ik(x).actuators)
+    assert back.name == m.name and back.toml == m.toml
+    with pytest.raises(TypeError, match="URDF"):
+        pickle.dumps(pkm.load(str(HEX).replace("machines/hexapod-linuxcnc.toml", "robots/ur5-like.urdf")))

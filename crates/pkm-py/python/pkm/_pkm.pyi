@@ -167,6 +167,7 @@ class Machine:
         tool_length: Optional[float] = None,
         max_samples: int = 2_000_000,
     ) -> dict[str, Any]: ...
+    def __reduce__(self) -> tuple[Any, tuple[str, str]]: ...
     def errors(
         self,
         pose: Optional[ArrayLike] = None,
