@@ -237,7 +237,8 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
                 what: "motion".into(),
                 message: format!(
                     "{}the move takes {dur:.6e} s and would make {total:.3e} samples, beyond \
-                     the limit of {:.3e} (raise it with --max-samples, or sample less densely)",
+                     the limit of {:.3e} (raise the work limit: `pkm motion --max-samples`, \
+                     `max_samples=` in Python; or sample less densely)",
                     mv.line.map(|l| format!("line {l}: ")).unwrap_or_default(),
                     self.max_samples as f64
                 ),
