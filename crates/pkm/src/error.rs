@@ -88,6 +88,25 @@ pub enum Error {
     },
 }
 
+impl Error {
+    /// The failure without its numbers: one key per kind of failure, for tables that
+    /// count failures over many poses (a workspace map's binding limits, a batch's
+    /// causes). `no solution` for a pose the mechanism cannot attain, `no solution
+    /// found (<solver> did not converge)`, `singular`, `unreachable`; other errors are
+    /// their message.
+    pub fn category(&self) -> String {
+        match self {
+            Error::NotAttainable { .. } => "no solution".into(),
+            Error::NotConverged { solver, .. } => {
+                format!("no solution found ({solver} did not converge)")
+            }
+            Error::Singular { .. } => "singular".into(),
+            Error::Unreachable { .. } => "unreachable".into(),
+            other => other.to_string(),
+        }
+    }
+}
+
 fn format_file_error(
     file: &str,
     line: &Option<usize>,

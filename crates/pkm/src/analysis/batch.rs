@@ -1,7 +1,8 @@
 //! Kinematics of many poses or actuator sets at once (a design sweep's, a notebook's
 //! arrays): columns in, columns out, on all cores (rayon, chunks of
 //! [`BATCH_CHUNK`] rows), fixed-size types per row, and why a row failed kept as a
-//! code into a table of distinct causes rather than a message per row.
+//! code into a table of distinct causes (violated limits by name, solver failures by
+//! [`Error::category`]) rather than a message per row.
 
 use rayon::prelude::*;
 use serde::Serialize;
@@ -22,8 +23,9 @@ pub const MAX_BATCH: usize = 100_000_000;
 /// million strings).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct BatchReason {
-    /// The violated limit's name (`strut L2 length`), or the solver's message where
-    /// the row has no solution.
+    /// The violated limit's name (`strut L2 length`), or the kind of solver failure
+    /// ([`Error::category`]: `no solution`, `no solution found (... did not
+    /// converge)`) where the row has no solution.
     pub text: String,
     /// Family of the limit; `None` where the row has no solution.
     pub kind: Option<LimitKind>,
@@ -45,6 +47,9 @@ pub struct Causes {
     pub bound: Vec<f64>,
     /// The distinct causes the rows point to.
     pub reasons: Vec<BatchReason>,
+    /// The solver's own message (with its numbers: residual, distances) of every row
+    /// without a solution, by row, ascending.
+    pub errors: Vec<(usize, String)>,
 }
 
 impl Causes {
@@ -54,6 +59,7 @@ impl Causes {
             value: vec![f64::NAN; n],
             bound: vec![f64::NAN; n],
             reasons: Vec::new(),
+            errors: Vec::new(),
         }
     }
 
@@ -86,7 +92,10 @@ impl Causes {
         let r = &self.reasons[usize::try_from(self.reason[i]).ok()?];
         Some(match self.violation(i) {
             Some(v) => v.to_string(),
-            None => r.text.clone(),
+            None => match self.errors.binary_search_by_key(&i, |e| e.0) {
+                Ok(k) => self.errors[k].1.clone(),
+                Err(_) => r.text.clone(),
+            },
         })
     }
 }
@@ -135,7 +144,8 @@ pub struct BatchForward {
 
 /// The hash of the interner's short keys (limit names): multiply-rotate over 8-byte
 /// words (as rustc's FxHash); SipHash's resistance to chosen keys is not needed for
-/// the limit names of one machine, and it was a tenth of a batch's time.
+/// the limit names of one machine, and it took 5 % of a batch of random hexapod poses
+/// (callgrind).
 #[derive(Default)]
 struct WordHash(u64);
 
@@ -182,12 +192,14 @@ impl Interner {
     }
 }
 
-/// The rows of one chunk of [`Causes`], written by one task.
+/// The rows of one chunk of [`Causes`], written by one task; `errors` by row within
+/// the chunk.
 struct CauseRows<'a> {
     reason: &'a mut [i32],
     value: &'a mut [f64],
     bound: &'a mut [f64],
     table: Interner,
+    errors: Vec<(usize, String)>,
 }
 
 impl CauseRows<'_> {
@@ -198,7 +210,8 @@ impl CauseRows<'_> {
     }
 
     fn error(&mut self, i: usize, e: &Error) {
-        self.reason[i] = self.table.code(e.to_string(), None, "");
+        self.reason[i] = self.table.code(e.category(), None, "");
+        self.errors.push((i, e.to_string()));
     }
 }
 
@@ -217,9 +230,8 @@ fn rows(values: &[f64], width: usize, what: &str) -> Result<usize> {
     Ok(values.len() / width)
 }
 
-/// Runs `work(input rows, value rows, flags, records, cause rows)` over chunks of
-/// [`BATCH_CHUNK`] rows (on the calling thread for one chunk), then merges the
-/// chunks' cause tables into `causes`.
+/// One chunk's slices: input rows, value rows, flags, records, and the three cause
+/// columns (as rayon's zipped chunk iterators give them).
 type Task<'a, E> = (
     (
         (
@@ -240,6 +252,9 @@ struct Outputs<'a, E> {
     records: &'a mut [E],
 }
 
+/// Runs `work(input rows, value rows, flags, records, cause rows)` over chunks of
+/// [`BATCH_CHUNK`] rows (on the calling thread for one chunk), then merges the
+/// chunks' cause tables and solver messages into `causes`.
 fn chunked<E, F>(input: &[f64], width_in: usize, out: Outputs<E>, causes: &mut Causes, work: F)
 where
     E: Send,
@@ -252,11 +267,12 @@ where
             value,
             bound,
             table: Interner::default(),
+            errors: Vec::new(),
         };
         work(xs, vals, ok, rec, &mut rows);
-        rows.table.reasons
+        (rows.table.reasons, rows.errors)
     };
-    let tables: Vec<Vec<BatchReason>> = if n <= BATCH_CHUNK {
+    let tables: Vec<(Vec<BatchReason>, Vec<(usize, String)>)> = if n <= BATCH_CHUNK {
         vec![task((
             (
                 (
@@ -281,10 +297,15 @@ where
     };
     // One table for the batch: the chunks' codes renumbered into it.
     let mut all = Interner::default();
-    for (c, reasons) in tables.into_iter().enumerate() {
+    for (c, (reasons, errors)) in tables.into_iter().enumerate() {
         if reasons.is_empty() {
             continue;
         }
+        causes.errors.extend(
+            errors
+                .into_iter()
+                .map(|(i, text)| (c * BATCH_CHUNK + i, text)),
+        );
         let map: Vec<i32> = reasons
             .into_iter()
             .map(|r| all.code(r.text, r.kind, r.unit))

@@ -166,18 +166,15 @@ pub fn flat_index(axes: &[GridAxis], idx: &[usize]) -> usize {
     k
 }
 
-/// The category and the text of an inverse-kinematics failure.
+/// The category and the text ([`Error::category`]: one key per kind, not one per
+/// residual) of an inverse-kinematics failure.
 pub(crate) fn classify(e: &Error) -> (PointStatus, String) {
-    match e {
-        Error::NotAttainable { .. } => (PointStatus::NoSolution, "no solution".into()),
-        // Numeric inverse kinematics (serial robots): one key, not one per residual.
-        Error::NotConverged { .. } => (
-            PointStatus::SolverFailed,
-            "no solution found (inverse kinematics did not converge)".into(),
-        ),
-        Error::Singular { .. } => (PointStatus::Singular, "singular".into()),
-        other => (PointStatus::NoSolution, other.to_string()),
-    }
+    let status = match e {
+        Error::NotConverged { .. } => PointStatus::SolverFailed,
+        Error::Singular { .. } => PointStatus::Singular,
+        _ => PointStatus::NoSolution,
+    };
+    (status, e.category())
 }
 
 /// Inverse kinematics and every limit at `x`: the actuator values when the pose is

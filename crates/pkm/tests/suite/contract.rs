@@ -515,12 +515,22 @@ fn batch_kinematics_equal_single_calls_on_every_example() {
                 Err(e) => {
                     assert!(!b.reachable[r]);
                     assert_eq!(b.causes.message(r), Some(e.to_string()));
+                    // The table keeps the kind of failure, not one entry per residual.
+                    let code = usize::try_from(b.causes.reason[r]).unwrap();
+                    assert_eq!(b.causes.reasons[code].text, e.category());
                     assert!(b.causes.violation(r).is_none() && b.causes.value[r].is_nan());
                     assert!(b.actuators[r * a].is_nan());
                 }
             }
         }
         assert!(reachable > 0, "{path:?}: no reachable pose drawn");
+        // Limit names and kinds of failure: a few dozen causes at most, however many
+        // rows fail (solver messages with their numbers stay per row).
+        assert!(
+            b.causes.reasons.len() <= 64,
+            "{path:?}: {} causes",
+            b.causes.reasons.len()
+        );
         assert!(inverse_batch(&machine, &poses[..p + 1]).is_err());
         // Forward kinematics of the batch's actuators from home: row by row the
         // single-set call's pose, iterations, residual and limit check.
