@@ -230,6 +230,9 @@ fn rows(values: &[f64], width: usize, what: &str) -> Result<usize> {
     Ok(values.len() / width)
 }
 
+/// One chunk's distinct causes and its solver messages by row within the chunk.
+type ChunkCauses = (Vec<BatchReason>, Vec<(usize, String)>);
+
 /// One chunk's slices: input rows, value rows, flags, records, and the three cause
 /// columns (as rayon's zipped chunk iterators give them).
 type Task<'a, E> = (
@@ -272,7 +275,7 @@ where
         work(xs, vals, ok, rec, &mut rows);
         (rows.table.reasons, rows.errors)
     };
-    let tables: Vec<(Vec<BatchReason>, Vec<(usize, String)>)> = if n <= BATCH_CHUNK {
+    let tables: Vec<ChunkCauses> = if n <= BATCH_CHUNK {
         vec![task((
             (
                 (
