@@ -11,10 +11,13 @@ use crate::convert::{self, rows, vec1, vec2};
 use crate::errors::{invalid, to_py};
 use crate::machine::{internal_unit, Machine};
 
-/// Collects a run's samples in columns (mm, rad, s).
+/// Collects a run's samples in columns (mm, rad, s); with `keep` false, nothing
+/// (the summary only). The number of samples is bounded by the library's work limit
+/// ([`pkm::motion::program::FeedOptions::max_samples`]), checked before a move is
+/// sampled.
 #[derive(Default)]
 struct Columns {
-    max: usize,
+    keep: bool,
     t: Vec<f64>,
     line: Vec<i64>,
     x: Vec<f64>,
@@ -25,23 +28,74 @@ struct Columns {
 
 impl pkm::analysis::motion::SampleSink for Columns {
     fn sample(&mut self, s: &pkm::analysis::motion::SampleRow) -> pkm::Result<()> {
-        if self.t.len() >= self.max {
-            return Err(pkm::Error::InvalidInput {
-                what: "max_samples".into(),
-                message: format!(
-                    "the run makes more than {} samples; raise max_samples or sample less \
-                     densely (rate, points)",
-                    self.max
-                ),
+        if self.keep {
+            self.t.push(s.t);
+            self.line.push(s.line.map_or(-1, |l| l as i64));
+            self.x.extend_from_slice(s.x);
+            self.q.extend_from_slice(s.q);
+            self.qd.extend_from_slice(s.qd);
+            self.qdd.extend_from_slice(s.qdd);
+        }
+        Ok(())
+    }
+}
+
+/// A workspace map's points in columns: the grid axes' values (mm, rad), the
+/// reachability, the condition number (NaN where unreachable), and the status and
+/// binding limit as codes into their names.
+struct MapColumns {
+    points: Vec<f64>,
+    reachable: Vec<bool>,
+    condition: Vec<f64>,
+    status: Vec<i32>,
+    status_names: Vec<String>,
+    binding: Vec<i32>,
+    binding_names: Vec<String>,
+}
+
+impl MapColumns {
+    fn of(wm: &pkm::workspace::WorkspaceMap) -> Self {
+        let n = wm.points.len();
+        let mut c = MapColumns {
+            points: Vec::with_capacity(n * wm.axes.len()),
+            reachable: Vec::with_capacity(n),
+            condition: Vec::with_capacity(n),
+            status: Vec::with_capacity(n),
+            status_names: Vec::new(),
+            binding: Vec::with_capacity(n),
+            binding_names: Vec::new(),
+        };
+        let mut statuses: Vec<pkm::workspace::PointStatus> = Vec::new();
+        let mut bindings: std::collections::HashMap<&str, i32> = Default::default();
+        for (k, p) in wm.points.iter().enumerate() {
+            let x = wm.coords(k);
+            c.points.extend(wm.axes.iter().map(|a| x[a.coordinate]));
+            c.reachable.push(p.reachable);
+            c.condition
+                .push(if p.reachable { p.condition } else { f64::NAN });
+            let s = match statuses.iter().position(|s| *s == p.status) {
+                Some(i) => i,
+                None => {
+                    statuses.push(p.status);
+                    c.status_names.push(
+                        serde_json::to_value(p.status)
+                            .ok()
+                            .and_then(|v| v.as_str().map(str::to_string))
+                            .unwrap_or_default(),
+                    );
+                    statuses.len() - 1
+                }
+            };
+            c.status.push(s as i32);
+            c.binding.push(match &p.binding {
+                Some(b) => *bindings.entry(b.as_str()).or_insert_with(|| {
+                    c.binding_names.push(b.clone());
+                    c.binding_names.len() as i32 - 1
+                }),
+                None => -1,
             });
         }
-        self.t.push(s.t);
-        self.line.push(s.line.map_or(-1, |l| l as i64));
-        self.x.extend_from_slice(s.x);
-        self.q.extend_from_slice(s.q);
-        self.qd.extend_from_slice(s.qd);
-        self.qdd.extend_from_slice(s.qdd);
-        Ok(())
+        c
     }
 }
 
@@ -112,11 +166,13 @@ impl Machine {
         let bounds = match bounds {
             Some(b) => {
                 let (v, _) = convert::array(b, "bounds")?;
-                if v.len() != 2 * axes.len() || v.iter().any(|x| !x.is_finite()) {
+                let max = pkm::machine::MAX_MAGNITUDE;
+                if v.len() != 2 * axes.len() || v.iter().any(|x| !(x.abs() <= max)) {
                     return Err(invalid(
                         "bounds",
                         format!(
-                            "expected {} finite [min, max] pairs (axes {}), got {} values",
+                            "expected {} [min, max] pairs of finite numbers up to {max:.0e} \
+                             (axes {}), got {} values",
                             axes.len(),
                             axes.iter()
                                 .map(|a| m.coordinates()[a.coordinate].name.as_str())
@@ -154,50 +210,21 @@ impl Machine {
             None => Vec::new(),
         };
         let inner = self.inner.clone();
-        let (wm, how) = py
+        let (wm, how, cols) = py
             .detach(|| {
-                pkm::analysis::workspace::map(
+                let (wm, how) = pkm::analysis::workspace::map(
                     &inner,
                     &base,
                     bounds.as_deref(),
                     step,
                     &orientations,
                     &|_| {},
-                )
+                )?;
+                let cols = MapColumns::of(&wm);
+                Ok((wm, how, cols))
             })
             .map_err(to_py)?;
         let summary = wm.summary_of(m.coordinates());
-        let n = wm.points.len();
-        let na = wm.axes.len();
-        let mut points = Vec::with_capacity(n * na);
-        let mut binding_names: Vec<String> = Vec::new();
-        let mut binding_index: BTreeMap<String, i32> = BTreeMap::new();
-        let mut status_names: Vec<String> = Vec::new();
-        let mut binding = Vec::with_capacity(n);
-        let mut status = Vec::with_capacity(n);
-        for (k, p) in wm.points.iter().enumerate() {
-            let x = wm.coords(k);
-            points.extend(wm.axes.iter().map(|a| x[a.coordinate]));
-            binding.push(match &p.binding {
-                Some(b) => *binding_index.entry(b.clone()).or_insert_with(|| {
-                    binding_names.push(b.clone());
-                    binding_names.len() as i32 - 1
-                }),
-                None => -1,
-            });
-            let s = serde_json::to_value(p.status)
-                .ok()
-                .and_then(|v| v.as_str().map(str::to_string))
-                .unwrap_or_default();
-            let code = match status_names.iter().position(|x| *x == s) {
-                Some(i) => i,
-                None => {
-                    status_names.push(s);
-                    status_names.len() - 1
-                }
-            };
-            status.push(code as i32);
-        }
         let d = PyDict::new(py);
         let axes_list = wm
             .axes
@@ -215,25 +242,13 @@ impl Machine {
             })
             .collect::<PyResult<Vec<_>>>()?;
         d.set_item("axes", axes_list)?;
-        d.set_item("points", vec2(py, points, na)?)?;
-        d.set_item(
-            "reachable",
-            vec1(py, wm.points.iter().map(|p| p.reachable).collect()),
-        )?;
-        d.set_item(
-            "condition",
-            vec1(
-                py,
-                wm.points
-                    .iter()
-                    .map(|p| if p.reachable { p.condition } else { f64::NAN })
-                    .collect(),
-            ),
-        )?;
-        d.set_item("status", vec1(py, status))?;
-        d.set_item("status_names", status_names)?;
-        d.set_item("binding", vec1(py, binding))?;
-        d.set_item("binding_names", binding_names)?;
+        d.set_item("points", vec2(py, cols.points, wm.axes.len())?)?;
+        d.set_item("reachable", vec1(py, cols.reachable))?;
+        d.set_item("condition", vec1(py, cols.condition))?;
+        d.set_item("status", vec1(py, cols.status))?;
+        d.set_item("status_names", cols.status_names)?;
+        d.set_item("binding", vec1(py, cols.binding))?;
+        d.set_item("binding_names", cols.binding_names)?;
         d.set_item("summary", convert::to_py(py, &summary)?)?;
         d.set_item("grid", how)?;
         Ok(d)
@@ -245,21 +260,24 @@ impl Machine {
     ///
     /// Give `gcode` (the program's text, or a `pathlib.Path` to it) or `path` (an
     /// (N, P) array of waypoints in the machine's coordinates, mm and rad, run as
-    /// straight moves at `feed`). `feed` (mm/s) replaces the program's F words;
+    /// straight moves at `feed`). `feed` replaces the program's F words: mm/s along
+    /// the path (as `pkm motion` measures it: deg/s for a move of angles alone);
     /// `profile`: `constant`, `trapezoid` or `scurve` with `acceleration` (mm/s^2)
     /// and `jerk` (mm/s^3); `rapid` (mm/s) for G0; `start`: the pose the program
     /// starts from (default home); `tool_length` (mm) for G43 without a table.
-    /// Sampling: `rate` (Hz, default 1000) or `points` per move. At most
-    /// `max_samples` samples are kept (refused beyond, before they are computed
-    /// where the library can tell).
+    /// Sampling: `rate` (Hz, default 1000) or `points` per move. A run beyond
+    /// `max_samples` samples is refused before the move that would cross it is
+    /// sampled. `samples=False` keeps no sample (the summary only: a long program
+    /// in constant memory).
     ///
     /// Returns a dict: `t` (N,), `line` (N,) (-1: no line), `x` (N, P), `q`, `qd`,
-    /// `qdd` (N, A) arrays (mm, rad, s), `columns` (their names), `summary` (as
-    /// `pkm motion` writes it: per actuator and serial axis statistics in mm and deg,
-    /// ratios, violations, feed override, singular passages) and `notes`.
+    /// `qdd` (N, A) arrays (mm, rad, s; empty with `samples=False`), `columns` (their
+    /// names), `summary` (as `pkm motion` writes it: per actuator and serial axis
+    /// statistics in mm and deg, ratios, violations, feed override, singular
+    /// passages) and `notes`.
     #[pyo3(signature = (gcode = None, path = None, *, feed = None, profile = "constant",
         acceleration = None, jerk = None, rapid = None, rate = None, points = None,
-        start = None, tool_length = None, max_samples = 2_000_000))]
+        start = None, tool_length = None, max_samples = 2_000_000, samples = true))]
     #[allow(clippy::too_many_arguments)]
     fn motion<'py>(
         &self,
@@ -276,6 +294,7 @@ impl Machine {
         start: Option<&Bound<'py, PyAny>>,
         tool_length: Option<f64>,
         max_samples: usize,
+        samples: bool,
     ) -> PyResult<Bound<'py, PyDict>> {
         use pkm::analysis::motion::{MotionSource, ProgramSetup};
         let m = self.m();
@@ -333,7 +352,7 @@ impl Machine {
             _ => return Err(invalid("motion", "give either gcode or path")),
         };
         let mut cols = Columns {
-            max: max_samples,
+            keep: samples,
             ..Default::default()
         };
         let inner = self.inner.clone();
@@ -403,7 +422,8 @@ impl Machine {
     /// drawn from the tolerances (`seed`).
     ///
     /// Returns a dict (mm, rad): `parameters`, `sensitivities`, `budget`,
-    /// `pose_error`, `tolerances`, `monte_carlo`, `violations`, ...
+    /// `pose_error`, `tolerances`, `monte_carlo`, and the `violations` of the pose
+    /// (each in its own unit, as pkm prints them).
     #[pyo3(signature = (pose = None, *, tolerances = None, deviations = None,
         monte_carlo = None, seed = 1))]
     fn errors<'py>(

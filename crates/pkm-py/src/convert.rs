@@ -122,7 +122,9 @@ pub fn array(v: &Bound<'_, PyAny>, what: &str) -> PyResult<(Vec<f64>, Vec<usize>
 }
 
 /// Rows of `width` from an array of shape `(n, width)` or `(width,)`; whether it was
-/// one row. Every value must be finite.
+/// one row. Every value must be finite and at most
+/// [`pkm::machine::MAX_MAGNITUDE`] (1e6 mm or rad) in size, as the `pkm` command
+/// takes its values: beyond, the kinematics compute with numbers that mean nothing.
 pub fn rows(v: &Bound<'_, PyAny>, width: usize, what: &str) -> PyResult<(Vec<f64>, bool)> {
     let (data, shape) = array(v, what)?;
     let single = match shape.as_slice() {
@@ -135,11 +137,17 @@ pub fn rows(v: &Bound<'_, PyAny>, width: usize, what: &str) -> PyResult<(Vec<f64
             ))
         }
     };
-    if let Some(i) = data.iter().position(|x| !x.is_finite()) {
+    let max = pkm::machine::MAX_MAGNITUDE;
+    if let Some(i) = data.iter().position(|x| !(x.abs() <= max)) {
+        let what_is = if data[i].is_finite() {
+            format!("beyond the largest magnitude pkm takes ({max:.0e} mm or rad)")
+        } else {
+            "not a finite number".into()
+        };
         return Err(invalid(
             what,
             format!(
-                "row {}, column {}: {} is not a finite number",
+                "row {}, column {}: {:e} is {what_is}",
                 i / width,
                 i % width,
                 data[i]

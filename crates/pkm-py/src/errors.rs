@@ -7,56 +7,56 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 pyo3::create_exception!(
-    _pkm,
+    pkm,
     Error,
     PyException,
     "Base of every pkm error; the message is pkm's, `details` its structured fields."
 );
 pyo3::create_exception!(
-    _pkm,
+    pkm,
     MachineFileError,
     Error,
     "A machine file (or dict) that cannot be read or describes no valid machine: \
      `file`, `line`, `column`, `field` say where."
 );
 pyo3::create_exception!(
-    _pkm,
+    pkm,
     InvalidInputError,
     Error,
     "A value that is not acceptable (wrong shape, not finite, out of range): `what` names it."
 );
 pyo3::create_exception!(
-    _pkm,
+    pkm,
     UnreachableError,
     Error,
     "A pose or actuator set beyond the machine's limits: `violations` lists them."
 );
 pyo3::create_exception!(
-    _pkm,
+    pkm,
     NotAttainableError,
     Error,
     "A pose the mechanism cannot produce at all: `reason` says why."
 );
 pyo3::create_exception!(
-    _pkm,
+    pkm,
     NotConvergedError,
     Error,
     "An iterative solver that did not converge: `solver`, `iterations`, `residual`."
 );
 pyo3::create_exception!(
-    _pkm,
+    pkm,
     NotIdentifiableError,
     Error,
     "Measurements that cannot determine a combination of parameters: `combination`."
 );
 pyo3::create_exception!(
-    _pkm,
+    pkm,
     SingularError,
     Error,
     "A singular configuration for the requested operation: `what`, `rcond`."
 );
 pyo3::create_exception!(
-    _pkm,
+    pkm,
     UnsupportedError,
     Error,
     "An analysis this machine type cannot run: `analysis`, `kind`, `reason`."

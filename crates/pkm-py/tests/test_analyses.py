@@ -68,6 +68,10 @@ def test_motion_of_a_program_equals_the_command(tmp_path):
             assert float(rows[i][f"{a}_mm_per_s"]) == pytest.approx(r["qd"][i, k], abs=1e-6)
     # The samples are the inverse kinematics of the poses.
     assert np.allclose(m.ik(r["x"]).actuators, r["q"], atol=1e-9)
+    # The summary alone: the same summary, no samples kept.
+    s2 = m.motion(gcode=pathlib.Path(ARC), start=[32, -32, -290, 0, 0, 0], feed=10000 / 60,
+                  points=101, samples=False)
+    assert s2["summary"] == r["summary"] and len(s2["t"]) == 0 and s2["q"].shape == (0, 3)
 
 
 def test_motion_along_a_path_of_waypoints():

@@ -51,17 +51,30 @@ def test_objectives_equal_direct_calls():
     run = m.motion(gcode=EX.PROGRAM, rate=obj.rate)
     assert r["peak_actuator_speed"] == pytest.approx(
         max(s["peak_velocity"] for s in run["summary"]["actuators"].values()), rel=1e-12)
-    centre = region[0].copy()
-    centre[:3] = [0, 0, 650]
-    e = m.errors(centre, tolerances=obj.tolerances)
-    assert r["accuracy_worst_mm"] >= e["budget"]["worst_case"]
+    worst = 0.0
+    for corner in [(0, 0, 650)] + [(sx * 200, sy * 200, z) for sx in (-1, 1) for sy in (-1, 1)
+                                   for z in (550, 750)]:
+        p = region[0].copy()
+        p[:3] = corner
+        worst = max(worst, m.errors(p, tolerances=obj.tolerances)["budget"]["worst_case"])
+    assert r["accuracy_worst_mm"] == worst
 
 
-def test_cylinder_region():
-    obj = sweep.Objectives(cylinder=(0.0, 0.0, 100.0, 600.0, 700.0), step=20.0)
+def test_regions_reach_their_faces():
     m = pkm.load(str(ROOT / "examples" / "machines" / "hexapod-linuxcnc.toml"))
+    # A step that does not divide the box: both faces still sampled, no gap wider
+    # than the step.
+    box = sweep.Objectives(box=((-200, 200), (-100, 100), (500, 560)), step=30.0).region(m)
+    assert box[:, :3].min(axis=0).tolist() == [-200, -100, 500]
+    assert box[:, :3].max(axis=0).tolist() == [200, 100, 560]
+    xs = np.unique(box[:, 0])
+    assert len(xs) == 15 and np.diff(xs).max() <= 30.0
+    assert np.allclose(box[:, 3:], m.home[3:])
+    obj = sweep.Objectives(cylinder=(0.0, 0.0, 100.0, 600.0, 700.0), step=20.0)
     x = obj.region(m)
-    assert (np.hypot(x[:, 0], x[:, 1]) <= 100 + 1e-9).all()
+    r = np.hypot(x[:, 0], x[:, 1])
+    assert (r <= 100 + 1e-9).all() and r.max() == pytest.approx(100)
+    assert x[:, 2].min() == 600 and x[:, 2].max() == 700
     assert obj.volume() == pytest.approx(math.pi * 100 ** 2 * 100)
 
 
@@ -108,8 +121,13 @@ def test_local_cluster_gives_the_serial_table():
     space = sweep.latin_hypercube(EX.SPACE, 10, seed=7)
     obj = EX.objectives(quick=True)
     serial = sweep.run(EX.hexapod, space, obj)
+    import os
+
+    before = os.environ.get("RAYON_NUM_THREADS")
     client = sweep.local_cluster(2)
+    assert os.environ.get("RAYON_NUM_THREADS") == before  # the workers' alone
     try:
+        assert set(client.run(lambda: os.environ["RAYON_NUM_THREADS"]).values()) == {"1"}
         assert len(client.scheduler_info()["workers"]) == 2
         seen = []
         dist = sweep.run(EX.hexapod, space, obj, client=client, batch_size=3,

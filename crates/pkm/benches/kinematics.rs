@@ -53,23 +53,16 @@ fn tripod(c: &mut Criterion) {
 }
 
 fn identification(c: &mut Criterion) {
-    use pkm::identify::simulate::{simulate, triangle, Design, Experiment};
+    use pkm::identify::simulate::{simulate, Experiment};
     use pkm::identify::{identify, MeasurementModel as Measured, Options};
     let Model::Hexapod(h) = machine("hexapod-seed001.toml").model else {
         panic!()
     };
     let zero = pkm::identify::Identifiable::zero_readings(h.as_ref()).unwrap();
+    // The command's default campaign with 100 states.
     let e = Experiment {
-        deviation: 1.0,
-        point_noise: 0.005,
-        length_noise: 0.001,
         states: 100,
-        design: Design::Random,
-        translation: 100.0,
-        rotation: 10f64.to_radians(),
-        step: 40.0,
-        fixture: triangle(200.0, 0.0),
-        seed: 1,
+        ..Experiment::default()
     };
     let s = simulate(h.as_ref(), &zero, &e).unwrap();
     let mut g = c.benchmark_group("identification");

@@ -166,6 +166,7 @@ class Machine:
         start: Optional[ArrayLike] = None,
         tool_length: Optional[float] = None,
         max_samples: int = 2_000_000,
+        samples: bool = True,
     ) -> dict[str, Any]: ...
     def __reduce__(self) -> tuple[Any, tuple[str, str]]: ...
     def errors(

@@ -22,7 +22,8 @@ batch's work; without one they run in this process. Both give the same table.
 :func:`pareto_front` marks the non-dominated candidates and :func:`plot_pareto` draws
 them; :func:`write_parquet` writes the table whole (temporary file, then rename).
 
-Units: mm, rad, s (speeds mm/s or rad/s), as everywhere in pkm's Python API.
+Units: mm, rad, s, as everywhere in pkm's Python API; the objectives taken from
+summaries keep the summaries' units (a revolute actuator's speed in deg/s).
 """
 
 from __future__ import annotations
@@ -96,10 +97,12 @@ class Objectives:
     """What each candidate is judged by (every field optional).
 
     Required region, at ``orientation`` (pose angles, rad; default the machine's home
-    orientation), sampled every ``step`` mm:
+    orientation):
 
     * ``box``: ``((xmin, xmax), (ymin, ymax), (zmin, zmax))`` (mm), or
-    * ``cylinder``: ``(x, y, radius, zmin, zmax)`` (mm), axis along Z.
+    * ``cylinder``: ``(x, y, radius, zmin, zmax)`` (mm), axis along Z,
+
+    on a grid from face to face (both included), points at most ``step`` apart,
 
     gives ``reachable_fraction`` (share of its points within every limit),
     ``reachable_volume_mm3`` (that share of its volume) and ``worst_condition`` (the
@@ -107,7 +110,8 @@ class Objectives:
 
     ``gcode`` (program text) run at ``feed`` (mm/s; None: the program's F words)
     from ``start`` (default home), sampled at ``rate`` Hz, gives
-    ``peak_actuator_speed`` (the largest actuator speed, mm/s or rad/s),
+    ``peak_actuator_speed`` (the largest actuator speed as ``pkm motion``'s summary
+    gives it: mm/s, deg/s for revolute actuators),
     ``program_violations`` (limit violations along it) and
     ``feed_override_max``.
 
@@ -133,17 +137,21 @@ class Objectives:
             return None
         if not (self.step > 0 and math.isfinite(self.step)):
             raise pkm.InvalidInputError("step: expected a positive number of mm")
+        def axis(a, b):
+            # From face to face, both included, at most `step` apart.
+            if not (math.isfinite(a) and math.isfinite(b) and b >= a):
+                raise pkm.InvalidInputError(f"region: expected min <= max, got {a}, {b}")
+            return np.linspace(a, b, max(2, math.ceil((b - a) / self.step - 1e-9) + 1))
+
         if self.box is not None:
             (x0, x1), (y0, y1), (z0, z1) = self.box
-            axes = [np.arange(a, b + 1e-9, self.step) for a, b in ((x0, x1), (y0, y1), (z0, z1))]
+            axes = [axis(a, b) for a, b in ((x0, x1), (y0, y1), (z0, z1))]
             pts = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
         else:
             cx, cy, r, z0, z1 = self.cylinder
-            xs = np.arange(cx - r, cx + r + 1e-9, self.step)
-            ys = np.arange(cy - r, cy + r + 1e-9, self.step)
-            zs = np.arange(z0, z1 + 1e-9, self.step)
-            pts = np.stack(np.meshgrid(xs, ys, zs, indexing="ij"), axis=-1).reshape(-1, 3)
-            pts = pts[(pts[:, 0] - cx) ** 2 + (pts[:, 1] - cy) ** 2 <= r * r + 1e-9]
+            grid = [axis(cx - r, cx + r), axis(cy - r, cy + r), axis(z0, z1)]
+            pts = np.stack(np.meshgrid(*grid, indexing="ij"), axis=-1).reshape(-1, 3)
+            pts = pts[(pts[:, 0] - cx) ** 2 + (pts[:, 1] - cy) ** 2 <= r * r * (1 + 1e-12)]
         if len(pts) > 5_000_000:
             raise pkm.InvalidInputError(
                 f"region: {len(pts)} points at step {self.step} mm; at most 5e6 (raise the step)")
@@ -197,11 +205,11 @@ def evaluate(m: "pkm.Machine", objectives: Objectives) -> dict[str, Any]:
         out["reachable_volume_mm3"] = share * objectives.volume()
         out["worst_condition"] = float(m.condition(region[ok]).max()) if ok.any() else float("nan")
     if objectives.gcode is not None:
-        r = m.motion(gcode=objectives.gcode, feed=objectives.feed, rate=objectives.rate,
-                     start=objectives.start, max_samples=20_000_000)
-        s = r["summary"]
-        # Per actuator peak speeds are in the summary's user units; the arrays are mm, rad.
-        out["peak_actuator_speed"] = float(np.abs(r["qd"]).max()) if len(r["qd"]) else 0.0
+        # The summary alone: constant memory whatever the program's length.
+        s = m.motion(gcode=objectives.gcode, feed=objectives.feed, rate=objectives.rate,
+                     start=objectives.start, samples=False)["summary"]
+        peaks = [a["peak_velocity"] for a in s["actuators"].values()]
+        out["peak_actuator_speed"] = float(max(peaks)) if peaks else 0.0
         out["program_violations"] = len(s["violations"]) + int(s["violations_not_listed"])
         f = s.get("feed_override_max")
         out["feed_override_max"] = float(f) if f is not None else float("nan")
@@ -305,9 +313,10 @@ def local_cluster(workers: int, threads_per_worker: int = 1):
     (RAYON_NUM_THREADS), so candidates, not poses, share the cores."""
     from dask.distributed import Client, LocalCluster
 
-    os.environ["RAYON_NUM_THREADS"] = str(threads_per_worker)
+    # Set in the workers' environment only: this process keeps all its cores.
     cluster = LocalCluster(n_workers=workers, threads_per_worker=threads_per_worker,
-                           processes=True, dashboard_address=None)
+                           processes=True, dashboard_address=None,
+                           env={"RAYON_NUM_THREADS": str(threads_per_worker)})
     return Client(cluster)
 
 
