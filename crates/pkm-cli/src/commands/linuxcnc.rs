@@ -17,7 +17,8 @@ pub enum ImportFrom {
     #[command(after_help = "Examples:\n  \
         pkm import linuxcnc ../shared/linuxcnc/hexapod-sim/hexapod.ini --out hexapod.toml\n  \
         pkm import linuxcnc my-machine/pentapod.ini --hal my-machine/calibrated.hal --out pentapod.toml\n\n\
-        Reads [KINS] KINEMATICS (genhexkins: a hexapod; pentakins: a pentapod), the setp lines\n\
+        Reads [KINS] KINEMATICS (genhexkins: a hexapod; pentakins: a pentapod; tripodkins: a\n\
+        tripod whose struts meet in one point; xyzbc-/xyzac-trt-kins: a 5-axis mill), the setp lines\n\
         of the HAL files the INI names (module defaults for what they leave unset), [TRAJ]\n\
         units and HOME, [JOINT_n] limits, rates, HOME and HOME_OFFSET, [AXIS_L] travel. Lengths\n\
         become mm, angles deg; the file written says where every value came from.")]
@@ -31,7 +32,7 @@ pub enum ExportTo {
     #[command(after_help = "Examples:\n  \
         pkm export linuxcnc examples/machines/hexapod-linuxcnc.toml --units inch --out lcnc\n  \
         pkm export linuxcnc cal/identified.toml --out lcnc       # a calibrated machine back to the controller\n\n\
-        Writes DIR/kinematics.hal (setp lines of genhexkins or pentakins) and DIR/pkm.ini\n\
+        Writes DIR/kinematics.hal (setp lines of genhexkins, pentakins or tripodkins) and DIR/pkm.ini\n\
         ([KINS], [HAL] HALFILE, [TRAJ], [AXIS_L], [JOINT_n] to merge into the machine's INI).\n\
         Joint HOME is the struts at the home pose, HOME_OFFSET the calibrated zero lengths.\n\
         `pkm import linuxcnc DIR/pkm.ini` gives the same machine back.")]

@@ -343,6 +343,7 @@ impl Rebuild<3, 3> for crate::tripod::CentreLegTripod {
             old.min_strut_spindle_angle,
         );
         geometry.zero_lengths = old.zero_lengths;
+        geometry.axes = old.axes.clone();
         let mut leg = self.leg.clone();
         leg.base = Vector3::from_column_slice(&v[18..21]);
         Ok(crate::tripod::CentreLegTripod::new(

@@ -43,6 +43,7 @@ impl StrutMachine<3> for TranslationalTripod {
             old.min_strut_spindle_angle,
         );
         geometry.zero_lengths = old.zero_lengths;
+        geometry.axes = old.axes.clone();
         TranslationalTripod::new(geometry, self.home)
     }
 

@@ -36,7 +36,7 @@ impl LengthUnit {
 /// The files of an export.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Exported {
-    /// The kinematics module (`genhexkins`, `pentakins`).
+    /// The kinematics module (`genhexkins`, `pentakins`, `tripodkins`).
     pub kinematics: &'static str,
     /// `kinematics.hal`: the module's `setp` lines.
     pub hal: String,
@@ -67,15 +67,26 @@ pub fn export(machine: &Machine, unit: LengthUnit) -> Result<Exported> {
         "# Written by `pkm export linuxcnc` from {} ({}), lengths in {u}.",
         name, machine.source
     );
-    let (base, control) = match &model.geometry {
-        Geometry::Genhex { base, .. } => (&base[..], "platform frame's origin"),
-        Geometry::Penta { base, .. } => (&base[..], "effector frame's origin"),
+    let control = match &model.geometry {
+        Geometry::Genhex { .. } => {
+            "platform frame's origin: pkm's tool tip, so the moving\n\
+                                   # joints are given relative to it."
+        }
+        Geometry::Penta { .. } => {
+            "effector frame's origin: pkm's tool tip, so the moving\n\
+                                  # joints are given relative to it."
+        }
+        Geometry::Tripod { .. } => "point D, where the struts meet: pkm's tool tip.",
     };
-    let _ = writeln!(
-        hal,
-        "# {module} controls its {control}: pkm's tool tip, so the moving joints are\n\
-         # given relative to it.\n\n# Base joints in base (world) coordinates"
-    );
+    let _ = writeln!(hal, "# {module} controls its {control}\n");
+    let base = match &model.geometry {
+        Geometry::Genhex { base, .. } => &base[..],
+        Geometry::Penta { base, .. } => &base[..],
+        Geometry::Tripod { .. } => &[],
+    };
+    if !base.is_empty() {
+        let _ = writeln!(hal, "# Base joints in base (world) coordinates");
+    }
     for (i, b) in base.iter().enumerate() {
         for (a, c) in ["x", "y", "z"].iter().zip(b.iter()) {
             let _ = writeln!(hal, "setp {module}.base.{i}.{a} {}", len(*c));
@@ -99,6 +110,15 @@ pub fn export(machine: &Machine, unit: LengthUnit) -> Result<Exported> {
                 let _ = writeln!(hal, "setp {module}.effector.{i}.r {}", len(radius[i]));
                 let _ = writeln!(hal, "setp {module}.effector.{i}.z {}", len(height[i]));
             }
+        }
+        Geometry::Tripod { bx, cx, cy } => {
+            let _ = writeln!(
+                hal,
+                "# Base joints A = (0, 0, 0), B = (Bx, 0, 0), C = (Cx, Cy, 0); joint n is strut n"
+            );
+            let _ = writeln!(hal, "setp {module}.Bx {}", len(*bx));
+            let _ = writeln!(hal, "setp {module}.Cx {}", len(*cx));
+            let _ = writeln!(hal, "setp {module}.Cy {}", len(*cy));
         }
     }
     let coords = kins.coordinates();

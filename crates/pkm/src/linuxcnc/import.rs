@@ -27,7 +27,7 @@ use crate::Machine;
 pub struct Imported {
     /// The machine file (TOML, commented).
     pub toml: String,
-    /// The kinematics module (`genhexkins`, `pentakins`).
+    /// The kinematics module (`genhexkins`, `pentakins`, `tripodkins`, ...).
     pub kinematics: &'static str,
     /// What the user should know: values that were adjusted, HOME values that do not
     /// match the geometry, parameters that follow run-time signals.
@@ -85,7 +85,7 @@ pub fn import_with(
             ini_file,
             None,
             "[KINS] KINEMATICS",
-            "no kinematics module named: expected `[KINS] KINEMATICS = genhexkins`, `pentakins`, `xyzbc-trt-kins` or `xyzac-trt-kins`",
+            "no kinematics module named: expected `[KINS] KINEMATICS = genhexkins`, `pentakins`, `tripodkins`, `xyzbc-trt-kins` or `xyzac-trt-kins`",
         )
     })?;
     let module = kins_entry.value.split_whitespace().next().unwrap_or("");
@@ -94,7 +94,8 @@ pub fn import_with(
             kins_entry,
             format!(
                 "unsupported kinematics `{module}`: pkm imports genhexkins (hexapod), \
-                 pentakins (pentapod), xyzbc-trt-kins and xyzac-trt-kins (5-axis mills)"
+                 pentakins (pentapod), tripodkins (tripod), xyzbc-trt-kins and \
+                 xyzac-trt-kins (5-axis mills)"
             ),
         )
     })?;
@@ -131,6 +132,7 @@ pub fn import_with(
     match kins {
         Kinematics::Genhex => w.genhex()?,
         Kinematics::Penta => w.penta()?,
+        Kinematics::Tripod => w.tripod()?,
         Kinematics::XyzbcTrt | Kinematics::XyzacTrt => {
             w.trt()?;
             return w.trt_finish();
@@ -435,6 +437,67 @@ impl Writer<'_> {
         Ok(())
     }
 
+    /// tripodkins: base joints A = (0, 0, 0), B = (Bx, 0, 0), C = (Cx, Cy, 0) and the
+    /// controlled point D, where the three struts meet: a translational tripod with one
+    /// platform joint shared by the struts and the tool tip in it.
+    fn tripod(&mut self) -> Result<()> {
+        let k = self.units.mm;
+        let u = self.units.linear;
+        let mut v = Vec::new();
+        for name in ["Bx", "Cx", "Cy"] {
+            let p = self.param(&format!("tripodkins.{name}"), super::TRIPOD_DEFAULT)?;
+            if p.origin.ends_with(" default") {
+                self.warnings.push(format!(
+                    "tripodkins.{name} is not set by the HAL: tripodkins' default {} {u} is \
+                     used, as in LinuxCNC",
+                    fmt_num(p.value)
+                ));
+            }
+            v.push(p);
+        }
+        let [bx, cx, cy] = [0, 1, 2].map(|i| v[i].value);
+        self.line("# tripodkins' struts meet in the controlled point D; nothing turns it, so");
+        self.line(
+            "# the tripod is translational with one platform joint D and the tool tip in it.",
+        );
+        self.line("constraint = \"translational\"");
+        self.line("");
+        self.line("[base_joints]");
+        self.line("A = [0.0, 0.0, 0.0]  # tripodkins' origin");
+        self.line(format!(
+            "B = [{}, 0.0, 0.0]  # tripodkins.Bx = {} {u}: {}",
+            fmt_num(bx * k),
+            fmt_num(bx),
+            v[0].origin
+        ));
+        self.line(format!(
+            "C = [{}, {}, 0.0]  # tripodkins.Cx = {} {u}: {}; tripodkins.Cy = {} {u}: {}",
+            fmt_num(cx * k),
+            fmt_num(cy * k),
+            fmt_num(cx),
+            v[1].origin,
+            fmt_num(cy),
+            v[2].origin
+        ));
+        self.line("");
+        self.line("[platform_joints]");
+        self.line("D = [0.0, 0.0, 0.0]  # the controlled point, where the struts meet");
+        for (i, base) in ["A", "B", "C"].iter().enumerate() {
+            self.line("");
+            self.line("[[struts]]");
+            self.line(format!("name = \"{i}\"  # joint {i}: strut {base}D"));
+            self.line(format!("base = \"{base}\""));
+            self.line("platform = \"D\"");
+            self.joint(i)?;
+        }
+        self.line("");
+        self.line("[tool]");
+        self.line("tip = [0.0, 0.0, 0.0]  # tripodkins controls D itself");
+        self.limits()?;
+        self.home()?;
+        Ok(())
+    }
+
     /// Writes joints `[table]`, one per distinct point (struts sharing a point share
     /// the joint, named after the first: `B0`, `B1`, `B3`); returns each strut's joint.
     fn joint_table(
@@ -681,8 +744,10 @@ impl Writer<'_> {
             fmt_num(v[1]),
             fmt_num(v[2])
         ));
-        let angles: Vec<String> = v[3..].iter().map(|a| fmt_num(*a)).collect();
-        self.line(format!("angles = [{}]", angles.join(", ")));
+        if v.len() > 3 {
+            let angles: Vec<String> = v[3..].iter().map(|a| fmt_num(*a)).collect();
+            self.line(format!("angles = [{}]", angles.join(", ")));
+        }
         Ok(())
     }
 
@@ -761,7 +826,7 @@ impl Writer<'_> {
                 tail.push_str(&format!("\n# Note: {msg}.\n"));
             }
         }
-        if let (Some(off), Kinematics::Genhex) = (&joint_offset, self.kins) {
+        if let (Some(off), Kinematics::Genhex | Kinematics::Tripod) = (&joint_offset, self.kins) {
             if off.iter().all(|(v, _)| *v > 0.0) {
                 let vals: Vec<String> = off.iter().map(|(v, _)| fmt_num(*v)).collect();
                 let _ = writeln!(tail, "\n[calibration]");

@@ -306,13 +306,19 @@ impl Machine {
                 axes: p.axes.clone(),
                 zero_lengths: None,
             }),
+            Model::TranslationalTripod(t) => Ok(ControllerModel {
+                geometry: crate::linuxcnc::tripod_geometry(t)?,
+                axes: t.geometry.axes.clone(),
+                zero_lengths: t.geometry.zero_lengths.map(|z| z.iter().copied().collect()),
+            }),
             _ => {
                 let m = self.mechanism();
                 Err(Error::Unsupported {
                     machine: m.name().to_string(),
                     kind: m.kind().to_string(),
                     analysis: "LinuxCNC export",
-                    reason: "LinuxCNC configurations are written for hexapods (genhexkins) and                              pentapods (pentakins)"
+                    reason: "LinuxCNC configurations are written for hexapods (genhexkins), \
+                             pentapods (pentakins) and translational tripods (tripodkins)"
                         .into(),
                 })
             }

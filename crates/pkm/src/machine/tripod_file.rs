@@ -9,6 +9,7 @@ use super::reference::Reference;
 use super::source::{Exact, Seg, Source};
 use super::{length_range, v3, Model};
 use crate::error::Error;
+use crate::mechanism::Mechanism;
 use crate::rotation::Convention;
 use crate::tripod::{CentreLeg, CentreLegTripod, Strut, TranslationalTripod, TripodGeometry};
 
@@ -72,6 +73,8 @@ struct LimitsFile {
     max_tilt: Option<f64>,
     #[serde(default)]
     min_strut_spindle_angle: Option<f64>,
+    #[serde(default)]
+    axes: BTreeMap<String, Exact<2>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -110,7 +113,16 @@ fn check_triangle(
     if !(scale > 1e-3 && area2 >= 1e-9 * scale * scale) {
         return Err(src.error(
             path,
-            format!("the three {what} joints are collinear or coincide; they must span a triangle"),
+            if what == "platform" {
+                "the three platform joints are collinear or coincide; they must span a \
+                 triangle (struts meeting in one point, as in LinuxCNC's tripodkins, share one \
+                 platform joint)"
+                    .to_string()
+            } else {
+                format!(
+                    "the three {what} joints are collinear or coincide; they must span a triangle"
+                )
+            },
         ));
     }
     Ok(())
@@ -130,6 +142,8 @@ pub(super) fn build(src: &Source, f: TripodFile) -> Result<super::Parts, Error> 
         &[]
     };
     super::distinct_joint_names(src, &f.base_joints, &f.platform_joints, reserved)?;
+    let point_platform = f.constraint == Constraint::Translational
+        && f.struts.iter().all(|s| s.platform == f.struts[0].platform);
     let mut struts = Vec::with_capacity(3);
     for (i, s) in f.struts.iter().enumerate() {
         let p = |k: &str| vec![key("struts"), Seg::Index(i), key(k)];
@@ -142,11 +156,15 @@ pub(super) fn build(src: &Source, f: TripodFile) -> Result<super::Parts, Error> 
                 format!("base joint `{}` already used by another strut", s.base),
             ));
         }
-        if f.struts[..i].iter().any(|o| o.platform == s.platform) {
+        // A point platform (LinuxCNC's tripodkins): the three struts of a translational
+        // tripod meet in one platform joint. Any other sharing is refused.
+        if f.struts[..i].iter().any(|o| o.platform == s.platform) && !point_platform {
             return Err(src.error(
                 &p("platform"),
                 format!(
-                    "platform joint `{}` already used by another strut",
+                    "platform joint `{}` already used by another strut: each strut has its \
+                     own platform joint, or (constraint = \"translational\" only) all three \
+                     meet in one, a point platform",
                     s.platform
                 ),
             ));
@@ -166,12 +184,14 @@ pub(super) fn build(src: &Source, f: TripodFile) -> Result<super::Parts, Error> 
         [0, 1, 2].map(|i| struts[i].base),
         "base",
     )?;
-    check_triangle(
-        src,
-        &[key("platform_joints")],
-        [0, 1, 2].map(|i| struts[i].platform),
-        "platform",
-    )?;
+    if !point_platform {
+        check_triangle(
+            src,
+            &[key("platform_joints")],
+            [0, 1, 2].map(|i| struts[i].platform),
+            "platform",
+        )?;
+    }
     let lim = &f.limits;
     if let Some(t) = lim.max_tilt {
         if !(t > 0.0 && t <= 180.0) {
@@ -219,6 +239,8 @@ pub(super) fn build(src: &Source, f: TripodFile) -> Result<super::Parts, Error> 
             // Home angles are in the default convention; normalise through the matrix so
             // that the stored angles are canonical.
             let a = Convention::Rpy.from_matrix(&Convention::Rpy.to_matrix(a));
+            geometry.axes =
+                super::axis_limits(src, &lim.axes, &crate::mechanism::spatial_coordinates())?;
             Model::TranslationalTripod(TranslationalTripod::new(
                 geometry,
                 Vector6::new(p[0], p[1], p[2], a[0], a[1], a[2]),
@@ -241,7 +263,7 @@ pub(super) fn build(src: &Source, f: TripodFile) -> Result<super::Parts, Error> 
                 Some(r) => Some(length_range(src, &[key("centre_leg"), key("length")], r)?),
                 None => None,
             };
-            let t = CentreLegTripod::new(
+            let mut t = CentreLegTripod::new(
                 geometry,
                 CentreLeg {
                     base: v3(leg.base),
@@ -249,6 +271,7 @@ pub(super) fn build(src: &Source, f: TripodFile) -> Result<super::Parts, Error> 
                 },
                 v3(f.home.position),
             );
+            t.geometry.axes = super::axis_limits(src, &lim.axes, t.coordinates())?;
             if let Err(e) = t.leg_state(&t.home) {
                 return Err(src.error(
                     &[key("home"), key("position")],

@@ -238,6 +238,7 @@ impl Mechanism<3, 3> for CentreLegTripod {
     }
 
     fn check_limits(&self, x: &Vector3<f64>, q: &Vector3<f64>, out: &mut Vec<Violation>) {
+        self.geometry.axes.check(&self.coordinates, x, out);
         let Ok(st) = self.leg_state(x) else {
             return;
         };

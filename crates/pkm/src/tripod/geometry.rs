@@ -1,6 +1,6 @@
 use nalgebra::{Matrix3, SMatrix, Vector3};
 
-use crate::limits::{LimitKind, Side, Violation};
+use crate::limits::{AxisLimits, LimitKind, Side, Violation};
 use crate::mechanism::{Actuator, LinkKind, PointRole, Skeleton};
 use crate::units::Quantity;
 
@@ -41,6 +41,9 @@ pub struct TripodGeometry {
     /// Strut lengths at the control's zero readings (from a calibration); `None`: the
     /// lengths at home.
     pub zero_lengths: Option<Vector3<f64>>,
+    /// Travel of the pose coordinates (`[limits] axes`, LinuxCNC's `[AXIS_L]`), checked
+    /// by both tripods against their own coordinates.
+    pub axes: AxisLimits,
     /// Cached: the actuators of the three struts.
     actuators: [Actuator; 3],
     /// Cached: base joints and arms (`c_i - t`) for the shared strut computations.
@@ -69,6 +72,7 @@ impl TripodGeometry {
             max_tilt,
             min_strut_spindle_angle,
             zero_lengths: None,
+            axes: AxisLimits::default(),
             actuators,
             set,
         }

@@ -179,6 +179,7 @@ impl Mechanism<6, 3> for TranslationalTripod {
     fn check_limits(&self, x: &Vector6<f64>, q: &Vector3<f64>, out: &mut Vec<Violation>) {
         let (p, r) = Self::split(x);
         self.geometry.check_limits(&p, &r, q, out);
+        self.geometry.axes.check(&self.coordinates, x, out);
     }
 
     fn actuator_motion(

@@ -10,13 +10,13 @@ use pkm::linuxcnc::{export, import, import_with, LengthUnit};
 use pkm::{Error, Machine};
 use rand::{Rng, SeedableRng};
 
-fn shared(rel: &str) -> PathBuf {
+pub(super) fn shared(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../../tests/fixtures/linuxcnc")
         .join(rel)
 }
 
-fn example(name: &str) -> Machine {
+pub(super) fn example(name: &str) -> Machine {
     Machine::from_path(format!(
         "{}/../../examples/machines/{name}",
         env!("CARGO_MANIFEST_DIR")
@@ -24,7 +24,7 @@ fn example(name: &str) -> Machine {
     .unwrap()
 }
 
-fn imported(rel: &str) -> (Machine, Vec<String>, String) {
+pub(super) fn imported(rel: &str) -> (Machine, Vec<String>, String) {
     let imp = import(&shared(rel), &[]).unwrap();
     let m = Machine::from_toml_str(&imp.toml, "imported.toml").unwrap();
     (m, imp.warnings, imp.toml)
@@ -174,7 +174,7 @@ fn the_pentapod_sim_agrees_with_pentakins_and_its_home_joints_are_flagged() {
 }
 
 /// Export in `unit`, import the export, compare.
-fn round_trip(m: &Machine, unit: LengthUnit) -> Machine {
+pub(super) fn round_trip(m: &Machine, unit: LengthUnit) -> Machine {
     let exp = export(m, unit).unwrap();
     let hal = exp.hal.clone();
     let imp = import_with(

@@ -15,6 +15,7 @@ mod hexapod;
 mod hybrid_am;
 mod identify;
 mod linuxcnc;
+mod linuxcnc_tripod;
 mod machine_file;
 mod motion;
 mod p3rp;
