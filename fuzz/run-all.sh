@@ -9,10 +9,11 @@ cd "$(dirname "$0")"
 secs=${1:-600}
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(machine_toml urdf gcode measurement_csv tolerance_file)
+[ ${#targets[@]} -gt 0 ] || targets=(machine_toml urdf gcode measurement_csv tolerance_file tool_table linuxcnc_config)
 dict_of() {
   case $1 in
     machine_toml|tolerance_file) echo dict/toml.dict ;;
+    linuxcnc_config) echo dict/linuxcnc.dict ;;
     urdf) echo dict/urdf.dict ;;
     gcode) echo dict/gcode.dict ;;
     *) echo "" ;;

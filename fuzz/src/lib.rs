@@ -104,6 +104,51 @@ pub fn machine_toml(data: &[u8]) {
     }
 }
 
+/// A LinuxCNC configuration: the INI, then after the first NUL byte the text every
+/// HAL file it names reads as. An import that succeeds must give a machine file that
+/// loads; a machine the export takes must come back from its own export with the
+/// same actuators at home (`docs/linuxcnc.md`: importing an export gives the same
+/// machine).
+pub fn linuxcnc_config(data: &[u8]) {
+    let (ini, hal) = match data.iter().position(|b| *b == 0) {
+        Some(k) => (&data[..k], &data[k + 1..]),
+        None => (data, &[][..]),
+    };
+    let (Ok(ini), Ok(hal)) = (std::str::from_utf8(ini), std::str::from_utf8(hal)) else {
+        return;
+    };
+    let Ok(imp) =
+        pkm::linuxcnc::import_with("fuzz.ini", ini, &mut |_f: &str| Ok(hal.to_string()), &[])
+    else {
+        return;
+    };
+    let machine = Machine::from_toml_str(&imp.toml, "imported.toml")
+        .expect("an import that succeeds writes a machine file that loads");
+    exercise(&machine);
+    let Ok(exp) = pkm::linuxcnc::export(&machine, pkm::linuxcnc::LengthUnit::Mm) else {
+        return;
+    };
+    let back = pkm::linuxcnc::import_with(
+        "pkm.ini",
+        &exp.ini,
+        &mut |_f: &str| Ok(exp.hal.clone()),
+        &[],
+    )
+    .expect("an export imports");
+    let back = Machine::from_toml_str(&back.toml, "back.toml").expect("its import loads");
+    let (a, b) = (machine.mechanism(), back.mechanism());
+    let home = a.home();
+    if let (Ok(qa), Ok(qb)) = (a.inverse(&home), b.inverse(&home)) {
+        let scale = qa.iter().fold(1.0f64, |s, v| s.max(v.abs()));
+        for (x, y) in qa.iter().zip(&qb) {
+            assert!(
+                (x - y).abs() <= 1e-6 * scale,
+                "the export's import differs at home: {qa:?} vs {qb:?}"
+            );
+        }
+    }
+}
+
 /// A LinuxCNC tool table: parsed lengths are finite and within the magnitude bound.
 pub fn tool_table(data: &[u8]) {
     let Ok(text) = std::str::from_utf8(data) else {

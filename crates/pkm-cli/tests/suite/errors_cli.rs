@@ -555,7 +555,7 @@ fn per_kind_tolerances_are_checked_and_the_distribution_alone_selects_them() {
         .unwrap();
     assert_eq!(o.status.code(), Some(1));
     assert!(
-        String::from_utf8_lossy(&o.stderr).contains("expected a value from 0 to 1e6 mm, found -1"),
+        String::from_utf8_lossy(&o.stderr).contains("expected a value from 0 to 100 mm, found -1"),
         "{}",
         String::from_utf8_lossy(&o.stderr)
     );

@@ -42,6 +42,42 @@ use crate::pose::Pose;
 use crate::units::Quantity;
 
 pub use budget::{budget, Budget, BudgetItem, Distribution, Tolerance};
+
+/// The largest tolerance or deviation of a length pkm takes (mm). A tolerance is a small
+/// departure from the nominal geometry and pkm propagates it to first order: 100 mm is
+/// beyond any machine's tolerances, and a value there is a typing error (a tolerance of
+/// 1e5 mm printed a budget of 1e5 mm that meant nothing).
+pub const MAX_TOLERANCE_LENGTH: f64 = 100.0;
+
+/// The largest tolerance or deviation of an angle pkm takes (rad): 10 deg, where the
+/// first-order model is already off by 1.5 % (`sin x / x`).
+pub const MAX_TOLERANCE_ANGLE: f64 = 10.0 * std::f64::consts::PI / 180.0;
+
+/// Checks a tolerance or deviation of quantity `q` (internal units: mm, rad) against
+/// [`MAX_TOLERANCE_LENGTH`] / [`MAX_TOLERANCE_ANGLE`] by magnitude; the message says the
+/// range in the user's unit (mm, deg).
+pub fn check_tolerance_magnitude(q: Quantity, v: f64) -> std::result::Result<(), String> {
+    let max = match q {
+        Quantity::Length => MAX_TOLERANCE_LENGTH,
+        Quantity::Angle => MAX_TOLERANCE_ANGLE,
+    };
+    if v.abs() <= max {
+        return Ok(());
+    }
+    let u = q.to_user(v);
+    Err(format!(
+        "{} {} is not a tolerance or deviation: pkm takes at most {} {} (first-order error \
+         propagation of small departures from the nominal geometry)",
+        if u.is_finite() && u.abs() < 1e6 {
+            format!("{u}")
+        } else {
+            format!("{u:e}")
+        },
+        q.unit(),
+        q.to_user(max).round(),
+        q.unit()
+    ))
+}
 pub use map::{error_map, ErrorMap};
 pub use monte_carlo::{monte_carlo, monte_carlo_with_progress, statistics, MonteCarlo};
 pub use rebuild::Rebuild;

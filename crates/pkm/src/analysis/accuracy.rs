@@ -45,23 +45,40 @@ impl Default for KindTolerances {
 }
 
 impl KindTolerances {
-    /// Checks the values: `>= 0` and at most 1e6 mm (lengths) or 1e4 rad (angles),
-    /// the sane magnitudes of machine files
-    /// ([`crate::machine::MAX_MAGNITUDE`]): a tolerance of 1e300 would print a
-    /// 300-digit budget that means nothing.
+    /// Checks the values: `>= 0` and at most [`crate::accuracy::MAX_TOLERANCE_LENGTH`]
+    /// (100 mm) for lengths, [`crate::accuracy::MAX_TOLERANCE_ANGLE`] (10 deg) for
+    /// angles: a tolerance of 1e300 printed a 300-digit budget, one of 1e5 mm a budget
+    /// that meant nothing.
     pub fn validate(&self) -> Result<()> {
+        use crate::accuracy::{MAX_TOLERANCE_ANGLE, MAX_TOLERANCE_LENGTH};
         for (v, what, max, unit) in [
-            (self.joint, "joint-centre tolerance", 1e6, "mm"),
-            (self.length, "link tolerance", 1e6, "mm"),
-            (self.zero, "zero-length / drive tolerance", 1e6, "mm"),
-            (self.angle, "angle tolerance", 1e4, "rad"),
+            (
+                self.joint,
+                "joint-centre tolerance",
+                MAX_TOLERANCE_LENGTH,
+                "mm",
+            ),
+            (self.length, "link tolerance", MAX_TOLERANCE_LENGTH, "mm"),
+            (
+                self.zero,
+                "zero-length / drive tolerance",
+                MAX_TOLERANCE_LENGTH,
+                "mm",
+            ),
+            (self.angle, "angle tolerance", MAX_TOLERANCE_ANGLE, "rad"),
         ] {
             if !(v >= 0.0 && v <= max) {
                 return Err(Error::InvalidInput {
                     what: what.into(),
                     message: format!(
-                        "expected a value from 0 to {max:e} {unit}, found {}",
-                        if v.abs() > max {
+                        "expected a value from 0 to {} {unit}{}, found {}",
+                        if unit == "rad" {
+                            format!("{max:.4}")
+                        } else {
+                            format!("{max}")
+                        },
+                        if unit == "rad" { " (10 deg)" } else { "" },
+                        if v.abs() > 1e6 {
                             format!("{v:e}")
                         } else {
                             format!("{v}")
@@ -330,6 +347,20 @@ impl Visitor for AccuracyJob<'_> {
             self.opt
                 .tolerances
                 .resolve(&params, &m.tolerable(), self.file)?;
+        // Deviations in range of their kind, whichever front end gave them (the file
+        // reader checks its own with file and line).
+        for (k, v) in &self.opt.deviations {
+            let p = params.get(*k).ok_or_else(|| Error::InvalidInput {
+                what: "deviations".into(),
+                message: format!("no parameter {k}: the machine has {}", params.len()),
+            })?;
+            accuracy::check_tolerance_magnitude(p.quantity, *v).map_err(|message| {
+                Error::InvalidInput {
+                    what: format!("deviation of {}", p.name),
+                    message,
+                }
+            })?;
+        }
         // The machine prepared for what is given (a serial machine completes the
         // angular deviations of a link from the ones given, and refuses what means
         // nothing alone).

@@ -57,6 +57,9 @@ pub(crate) fn tolerances(
                 format!("expected a tolerance > 0, found {}", t.value),
             ));
         }
+        let value = params[k].quantity.from_user(t.value);
+        crate::accuracy::check_tolerance_magnitude(params[k].quantity, value)
+            .map_err(|m| src.error(&at("value"), m))?;
         let distribution = match t.distribution.as_deref() {
             None => Distribution::Uniform,
             Some(d) => d
@@ -65,7 +68,7 @@ pub(crate) fn tolerances(
         };
         out.push(Tolerance {
             parameter: k,
-            value: params[k].quantity.from_user(t.value),
+            value,
             distribution,
         });
     }
@@ -99,7 +102,10 @@ pub fn read_deviations(params: &[Parameter], text: &str, file: &str) -> Result<V
         .iter()
         .map(|(name, v)| {
             let k = lookup(params, name).map_err(|m| src.error(&[key(name)], m))?;
-            Ok((k, params[k].quantity.from_user(*v)))
+            let v = params[k].quantity.from_user(*v);
+            crate::accuracy::check_tolerance_magnitude(params[k].quantity, v)
+                .map_err(|m| src.error(&[key(name)], m))?;
+            Ok((k, v))
         })
         .collect::<Result<Vec<_>, Error>>()
 }

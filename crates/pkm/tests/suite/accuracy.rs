@@ -313,14 +313,51 @@ fn tolerances_from_a_file_by_name() {
     );
 }
 
+/// Issue 17: a tolerance of 1e5 mm was taken. Tolerances and deviations in files are
+/// held to a range per kind of quantity (100 mm, 10 deg), with file, line and field;
+/// the largest of each kind is taken.
+#[test]
+fn tolerances_and_deviations_beyond_their_kinds_range_are_refused() {
+    let m = load("p3rp-seed004.toml");
+    let params = m.parameters();
+    for (text, line, field) in [
+        ("[[tolerance]]\ndeviation = \"l2\"\nvalue = 1e5\n", 3, "value"),
+        (
+            "[[tolerance]]\ndeviation = \"l2\"\nvalue = 1\n\n[[tolerance]]\ndeviation = \"delta\"\nvalue = 10.5\n",
+            7,
+            "value",
+        ),
+    ] {
+        let e = pkm::machine::read_tolerances(&params, text, "t.toml").unwrap_err();
+        let s = e.to_string();
+        assert!(s.contains(&format!("t.toml:{line}")), "{s}");
+        assert!(s.contains(field) && s.contains("is not a tolerance"), "{s}");
+    }
+    let ok = pkm::machine::read_tolerances(
+        &params,
+        "[[tolerance]]\ndeviation = \"l2\"\nvalue = 100\n[[tolerance]]\ndeviation = \"delta\"\nvalue = 10\n",
+        "t.toml",
+    )
+    .unwrap();
+    assert_eq!(ok.len(), 2);
+    for (text, what) in [("l2 = -250.0\n", "-250 mm"), ("delta = 45\n", "45 deg")] {
+        let s = pkm::machine::read_deviations(&params, text, "d.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(s.contains("d.toml:1") && s.contains(what), "{s}");
+    }
+    let ok = pkm::machine::read_deviations(&params, "l2 = -100.0\ndelta = -10\n", "d.toml");
+    assert_eq!(ok.unwrap().len(), 2);
+}
+
 /// A tolerance of 1e300 (issue 17: it printed a 300-digit budget, exit 0) is refused
 /// with its name; the largest sane one is accepted.
 #[test]
 fn absurd_kind_tolerances_are_refused() {
     use pkm::analysis::KindTolerances;
     let ok = KindTolerances {
-        joint: 1e6,
-        angle: 1e4,
+        joint: 100.0,
+        angle: 10f64.to_radians(),
         ..Default::default()
     };
     assert!(ok.validate().is_ok());
@@ -331,6 +368,19 @@ fn absurd_kind_tolerances_are_refused() {
         },
         KindTolerances {
             length: 2e6,
+            ..Default::default()
+        },
+        // Issue 17: a tolerance of 1e5 mm was still taken.
+        KindTolerances {
+            length: 1e5,
+            ..Default::default()
+        },
+        KindTolerances {
+            zero: 100.01,
+            ..Default::default()
+        },
+        KindTolerances {
+            angle: 11f64.to_radians(),
             ..Default::default()
         },
         KindTolerances {

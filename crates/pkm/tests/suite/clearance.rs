@@ -334,7 +334,17 @@ fn clearance_entries_are_checked_with_file_line_and_field() {
             "axis",
             "needs its `axis`",
         ),
-        ("joints = [\"A1\"]\ndiametral = -0.01", "diametral", ">= 0"),
+        (
+            "joints = [\"A1\"]\ndiametral = -0.01",
+            "diametral",
+            "from 0 to 100 mm",
+        ),
+        // Issue 17: a gap of a kilometre was taken (a range per kind of quantity).
+        (
+            "joints = [\"A1\"]\ndiametral = 1e5",
+            "diametral",
+            "from 0 to 100 mm",
+        ),
         (
             "joints = [\"A1\"]\ntype = \"ball\"\ndiametral = 0.01",
             "type",

@@ -57,3 +57,8 @@ fn tolerance_files() {
 fn tool_tables() {
     replay("tool_table", targets::tool_table);
 }
+
+#[test]
+fn linuxcnc_configurations() {
+    replay("linuxcnc_config", targets::linuxcnc_config);
+}

@@ -126,11 +126,13 @@ impl JointClearance {
     /// [`JointClearance::validate`] naming the field at fault (`diametral`,
     /// `bearing_length`, `lever`, `axis`) with the message, for file readers.
     pub fn check(&self) -> std::result::Result<(), (&'static str, String)> {
-        if !(self.diametral >= 0.0 && self.diametral.is_finite()) {
+        if !(self.diametral >= 0.0 && self.diametral <= crate::accuracy::MAX_TOLERANCE_LENGTH) {
             return Err((
                 "diametral",
                 format!(
-                    "expected a diametral clearance >= 0 mm, found {}",
+                    "expected a diametral clearance from 0 to {} mm (a gap in a joint, \
+                     propagated to first order), found {}",
+                    crate::accuracy::MAX_TOLERANCE_LENGTH,
                     self.diametral
                 ),
             ));
