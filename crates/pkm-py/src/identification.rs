@@ -30,8 +30,9 @@ fn csv_text(v: &Bound<'_, PyAny>, what: &str) -> PyResult<(String, String)> {
 /// and zero reading; `point_noise`, `length_noise` (mm): standard deviations of the
 /// measured points and readings; `design`: `random` (poses within `translation` mm
 /// and `rotation` rad of home, within every limit) or `one-strut` (seed 001: one more
-/// strut changed by `step` mm per state); `fixture_radius` (mm): the triangular
-/// fixture's circumradius; `holdout`: further states for validation.
+/// strut changed by `step` mm per state); `fixture_radius` (mm): the fixture's size
+/// (a strut machine's triangle's circumradius, a pentapod's two points on its axis
+/// apart); `holdout`: further states for validation.
 ///
 /// Returns a dict: `measurements` and `validation` (CSV text for `calibrate`),
 /// `names` and `true_parameters` (array), `true_poses` ((states, 6) array, mm and
@@ -77,7 +78,9 @@ pub fn simulate_measurements<'py>(
     if !(fixture_radius > 0.0 && fixture_radius.is_finite()) {
         return Err(invalid("fixture_radius", "expected a positive number"));
     }
-    e.fixture = pkm::identify::simulate::triangle(fixture_radius, 0.0);
+    e.fixture = pkm::analysis::identification::fixture(&machine.inner, fixture_radius)
+        .map_err(to_py)?
+        .points;
     e.states = states.unwrap_or(e.states);
     e.design = parse_design(design).map_err(to_py)?;
     e.seed = seed;
@@ -116,9 +119,9 @@ pub fn simulate_measurements<'py>(
 ///
 /// `measurements`, `validation`: a measurement CSV's text or path (as
 /// `simulate_measurements` returns and `pkm calibrate` reads); `model`: `pose` (full
-/// pose per state from >= 3 fixture points) or `points`; `fix`: parameter names held
-/// at nominal (`*` matches any run of characters: `A1.z`, `B*.z`);
-/// `seed_procedure`: take seed 001's procedure's solution.
+/// pose per state from the fixture points: 3 on a platform, 2 on a pentapod's axis)
+/// or `points`; `fix`: parameter names held at nominal (`*` matches any run of
+/// characters: `A1.z`, `B*.z`); `seed_procedure`: take seed 001's procedure's solution.
 ///
 /// Returns a dict: `identification` (names, values, standard errors, residuals,
 /// identifiability), `values`, `validation`, `seed_procedure`, `identified_toml`

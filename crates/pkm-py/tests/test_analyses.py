@@ -134,6 +134,19 @@ def test_simulated_campaign_is_identified():
     assert pkm.Machine.from_toml(s["true_machine"]).kind == "hexapod"
 
 
+def test_a_pentapod_is_identified_from_points_on_its_tool_axis():
+    m = pkm.load(example("pentapod-linuxcnc.toml"))
+    s = pkm.simulate_measurements(m, states=40, holdout=10, fixture_radius=150.0, seed=2)
+    # The library's fixture for a pentapod: the tool tip and a point 150 mm up its axis.
+    assert "# fixture P2 = 0, 0, 150" in s["measurements"]
+    c = pkm.calibrate(m, s["measurements"], validation=s["validation"])
+    names = c["identification"]["names"]
+    assert len(names) == 30 and "tool.z" not in names
+    v = c["validation"]
+    assert v["identified"]["rms"] < v["nominal"]["rms"] / 10
+    assert pkm.Machine.from_toml(c["identified_toml"]).kind == "pentapod"
+
+
 def test_errors_are_raised_with_pkm_messages(tmp_path):
     bad = tmp_path / "bad.toml"
     bad.write_text(open(HEX).read().replace("type = \"hexapod\"", "type = \"hexapod\"\nbogus = [1,"))

@@ -8,11 +8,12 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use pkm::analysis::identification::{
-    calibrate, identified_machine_file, parse_design, parse_measurements, simulate_measurements,
-    write_measurements, CalibrateOptions, Calibration, SimulateOptions, Validation,
+    self, calibrate, identified_machine_file, parse_design, parse_measurements,
+    simulate_measurements, write_measurements, CalibrateOptions, Calibration, SimulateOptions,
+    Validation,
 };
 use pkm::identify::hexapod::SeedProcedure;
-use pkm::identify::simulate::{triangle, Experiment};
+use pkm::identify::simulate::Experiment;
 use pkm::identify::{self, Identification, Measurements};
 use serde_json::json;
 
@@ -53,7 +54,8 @@ pub struct SimulateArgs {
     /// Strut change per state of the one-strut design (mm).
     #[arg(long, default_value_t = 40.0)]
     pub step: f64,
-    /// Circumradius of the triangular fixture (mm).
+    /// Size of the fixture (mm): the circumradius of a strut machine's triangle, the
+    /// spacing of a pentapod's two points on its tool axis.
     #[arg(long, default_value_t = 200.0)]
     pub fixture_radius: f64,
     /// Random seed.
@@ -103,17 +105,17 @@ fn read(path: &Path) -> Result<String> {
 
 pub fn simulate_run(a: &SimulateArgs) -> Result<u8> {
     let machine = load(&a.machine)?;
+    let fixture = identification::fixture(&machine, a.fixture_radius)?;
     let comment = format!(
         "simulated by pkm simulate-measurements on {} (seed {}): deviations +-{} mm, point \
-         noise {} mm, reading noise {} mm, {} design\nthe fixture is an equilateral triangle of \
-         circumradius {} mm on the platform",
+         noise {} mm, reading noise {} mm, {} design\nthe fixture is {}",
         a.machine.display(),
         a.seed,
         a.deviation,
         a.point_noise,
         a.length_noise,
         a.design,
-        a.fixture_radius
+        fixture.description
     );
     let opt = SimulateOptions {
         experiment: Experiment {
@@ -125,7 +127,7 @@ pub fn simulate_run(a: &SimulateArgs) -> Result<u8> {
             translation: a.translation,
             rotation: a.rotation.to_radians(),
             step: a.step,
-            fixture: triangle(a.fixture_radius, 0.0),
+            fixture: fixture.points,
             seed: a.seed,
         },
         holdout: a.holdout,
@@ -406,9 +408,11 @@ fn print_text(
             .abs()
             .total_cmp(&(id.values[a] - id.start[a]).abs())
     });
-    for &i in order.iter().take(6) {
+    let shown = &order[..order.len().min(6)];
+    let w = shown.iter().map(|&i| id.names[i].len()).max().unwrap_or(0);
+    for &i in shown {
         println!(
-            "  largest change {:<12} {:+.4} mm  (standard error {:.4} mm)",
+            "  largest change {:<w$} {:+.4} mm  (standard error {:.4} mm)",
             id.names[i],
             id.values[i] - id.start[i],
             id.standard_errors[i]
@@ -442,8 +446,8 @@ fn print_text(
         );
         if let (Some(pb), Some(pa)) = (b.pose, a.pose) {
             println!(
-                "                 tool pose: position max {:.4} / RMS {:.4} mm, orientation max {:.2e} rad (nominal) -> position max {:.4} / RMS {:.4} mm, orientation max {:.2e} rad (identified)",
-                pb.position_max, pb.position_rms, pb.orientation_max, pa.position_max, pa.position_rms, pa.orientation_max
+                "                 tool pose: position max {:.4} / RMS {:.4} mm, orientation max {:.2e} deg (nominal) -> position max {:.4} / RMS {:.4} mm, orientation max {:.2e} deg (identified)",
+                pb.position_max, pb.position_rms, pb.orientation_max.to_degrees(), pa.position_max, pa.position_rms, pa.orientation_max.to_degrees()
             );
         }
     }

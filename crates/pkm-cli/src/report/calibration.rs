@@ -4,7 +4,7 @@
 //! design beside it (`pkm::analysis::identification::calibration_study`).
 
 use anyhow::Result;
-use pkm::analysis::identification::calibration_study;
+use pkm::analysis::identification::{self, calibration_study};
 use pkm::identify::simulate::Experiment;
 use pkm::Machine;
 
@@ -13,7 +13,11 @@ use crate::commands::calibrate::plot_svgs;
 
 pub fn section(h: &mut Html, machine: &Machine, _ctx: &super::Context) -> Result<()> {
     // The campaign `pkm simulate-measurements` simulates by default.
-    let e = Experiment::default();
+    let fixture = identification::fixture(machine, 200.0)?;
+    let e = Experiment {
+        fixture: fixture.points,
+        ..Experiment::default()
+    };
     let st = calibration_study(machine, &e, 20)?;
     let id = &st.identification;
     let n = id.names.len();
@@ -31,20 +35,23 @@ pub fn section(h: &mut Html, machine: &Machine, _ctx: &super::Context) -> Result
             esc(&st.held.join(", "))
         )
     };
-    let worst_seven = st
-        .one_strut_condition
-        .map(|c| format!("{c:.2e} (exactly determined)"))
-        .unwrap_or_else(|| "singular (the design cannot determine the parameters)".into());
+    let worst_seven = match (&st.one_strut_condition, &st.one_strut_note) {
+        (Some(c), _) => format!("{c:.2e} (exactly determined)"),
+        (None, Some(why)) => format!("not applicable: {why}"),
+        (None, None) => "singular (the design cannot determine the parameters)".into(),
+    };
     h.p(&format!(
         "A simulated campaign (<code>pkm simulate-measurements</code> + <code>pkm \
              calibrate</code> do the same from files): a true machine whose joint coordinates \
-             and zero lengths ({n} parameters) deviate uniformly by up to ±1 mm, a triangular \
-             fixture of circumradius 200 mm measured with 5 µm noise per coordinate, strut \
+             and zero lengths ({n} parameters) deviate uniformly by up to ±1 mm, {} \
+             measured with 5 µm noise per coordinate, strut \
              readings with 1 µm noise, {} random states (±100 mm, ±10°). Levenberg-Marquardt \
              on the actuator equations with the measured poses; the pose error is the tool \
              tip's, at {} held-out states, when the control's readings are put through each \
              model's forward kinematics.{held} docs/identification.md explains the method.",
-        st.experiment_states, st.holdout
+        esc(&fixture.description),
+        st.experiment_states,
+        st.holdout
     ));
     h.table(
         &["quantity", "nominal model", "identified model"],

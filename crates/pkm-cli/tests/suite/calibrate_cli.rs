@@ -270,3 +270,69 @@ fn tripod_calibrates_with_its_platform_joints_held() {
         .unwrap();
     assert!(String::from_utf8_lossy(&o.stderr).contains("no parameter matches `Q.*`"));
 }
+
+/// Issue 18: a pentapod is identified from points on its tool axis, and its identified
+/// file goes back to LinuxCNC with the zero lengths as HOME_OFFSET.
+#[test]
+fn a_pentapod_calibrates_and_goes_back_to_linuxcnc() {
+    let dir = tempfile::tempdir().unwrap();
+    let pen = path("examples/machines/pentapod-linuxcnc.toml");
+    let sim = dir.path().join("sim");
+    ok(&pkm()
+        .args([
+            "simulate-measurements",
+            &pen,
+            "--states",
+            "40",
+            "--holdout",
+            "10",
+        ])
+        .arg("--out")
+        .arg(&sim)
+        .output()
+        .unwrap());
+    let csv = std::fs::read_to_string(sim.join("measurements.csv")).unwrap();
+    assert!(csv.contains("two points on the tool axis"), "{csv}");
+    assert!(csv.contains("# fixture P2 = 0, 0, 200"), "{csv}");
+    let cal = dir.path().join("cal");
+    let o = pkm()
+        .args(["calibrate", &pen, "--json", "--measurements"])
+        .arg(sim.join("measurements.csv"))
+        .arg("--validation")
+        .arg(sim.join("validation.csv"))
+        .arg("--out")
+        .arg(&cal)
+        .output()
+        .unwrap();
+    ok(&o);
+    let r: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(r["parameters"].as_array().unwrap().len(), 30);
+    let v = &r["validation"];
+    assert!(v["identified"]["rms"].as_f64().unwrap() < 0.05, "{v}");
+    let lc = dir.path().join("lc");
+    ok(&pkm()
+        .args(["export", "linuxcnc"])
+        .arg(cal.join("identified.toml"))
+        .arg("--out")
+        .arg(&lc)
+        .output()
+        .unwrap());
+    let ini = std::fs::read_to_string(lc.join("pkm.ini")).unwrap();
+    let text = std::fs::read_to_string(cal.join("identified.toml")).unwrap();
+    assert!(text.contains("zero_lengths"), "{text}");
+    assert_eq!(ini.matches("HOME_OFFSET = ").count(), 5, "{ini}");
+    // The seed 001 procedure does not apply to it: a clear error, not a crash.
+    let o = pkm()
+        .args(["calibrate", &pen, "--seed-procedure", "--measurements"])
+        .arg(sim.join("measurements.csv"))
+        .arg("--out")
+        .arg(dir.path().join("sp"))
+        .output()
+        .unwrap();
+    assert_ne!(o.status.code(), Some(0));
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("least squares"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+}

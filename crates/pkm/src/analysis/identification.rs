@@ -7,11 +7,10 @@ use nalgebra::SVector;
 use serde::Serialize;
 
 use crate::error::{Error, Result};
-use crate::identify::hexapod::{seed_procedure, SeedProcedure};
+use crate::identify::hexapod::SeedProcedure;
 use crate::identify::simulate::{simulate, Design, Experiment};
-use crate::identify::struts::StrutMachine;
-use crate::identify::{self, Identifiable, Identification, Measurements, PointErrors};
-use crate::machine::{Analysable, Machine, StrutVisitor};
+use crate::identify::{self, Calibratable, Fixture, Identification, Measurements, PointErrors};
+use crate::machine::{Analysable, CalibratableVisitor, Machine};
 
 /// Settings of [`simulate_measurements`]: the experiment and how many of its states
 /// are held out for validation.
@@ -56,7 +55,7 @@ pub fn simulate_measurements(
             message: "expected at least one state".into(),
         });
     }
-    machine.visit_struts(SimulateJob {
+    machine.visit_calibratable(SimulateJob {
         machine,
         source,
         opt,
@@ -69,9 +68,9 @@ struct SimulateJob<'a> {
     opt: &'a SimulateOptions,
 }
 
-impl StrutVisitor for SimulateJob<'_> {
+impl CalibratableVisitor for SimulateJob<'_> {
     type Output = Result<SimulatedCampaign>;
-    fn visit<M: StrutMachine<A> + Analysable<6, A>, const A: usize>(self, h: &M) -> Self::Output {
+    fn visit<M: Calibratable<A> + Analysable<6, A>, const A: usize>(self, h: &M) -> Self::Output {
         let zero = h.zero_readings()?;
         let mut e = self.opt.experiment.clone();
         e.states += self.opt.holdout;
@@ -84,10 +83,9 @@ impl StrutVisitor for SimulateJob<'_> {
         let mut theta = s.truth.geometry();
         theta.extend(s.true_zero.iter());
         let true_machine_file = match self.source {
-            Some(text) => Some(crate::machine::with_strut_geometry(
+            Some(text) => Some(s.truth.rewrite_file(
                 text,
                 &self.machine.source,
-                &s.truth.struts(),
                 Some(s.true_zero.as_slice()),
                 &format!(
                     "The TRUE machine of a simulated experiment ({})",
@@ -105,6 +103,26 @@ impl StrutVisitor for SimulateJob<'_> {
             true_machine_file,
         })
     }
+}
+
+/// The fixture a simulated campaign on `machine` measures, of size `size` (mm):
+/// [`Calibratable::fixture`] (a triangle on a strut machine's platform, points on a
+/// pentapod's tool axis).
+pub fn fixture(machine: &Machine, size: f64) -> Result<Fixture> {
+    if !(size > 0.0 && size <= crate::machine::MAX_MAGNITUDE) {
+        return Err(Error::InvalidInput {
+            what: "fixture size".into(),
+            message: format!("expected a size in (0, 1e6] mm, found {size}"),
+        });
+    }
+    struct Job(f64);
+    impl CalibratableVisitor for Job {
+        type Output = Fixture;
+        fn visit<M: Calibratable<A> + Analysable<6, A>, const A: usize>(self, h: &M) -> Fixture {
+            h.fixture(self.0)
+        }
+    }
+    machine.visit_calibratable(Job(size))
 }
 
 /// Reads a measurement CSV for `machine` (its actuators name the reading columns).
@@ -196,7 +214,7 @@ pub fn calibrate(
     validation: Option<&Measurements>,
     opt: &CalibrateOptions,
 ) -> Result<Calibration> {
-    machine.visit_struts(CalibrateJob {
+    machine.visit_calibratable(CalibrateJob {
         meas: measurements,
         validation,
         opt,
@@ -217,9 +235,9 @@ pub fn identified_machine_file(
         values: &'a [f64],
         comment: &'a str,
     }
-    impl StrutVisitor for Write<'_> {
+    impl CalibratableVisitor for Write<'_> {
         type Output = Result<String>;
-        fn visit<M: StrutMachine<A> + Analysable<6, A>, const A: usize>(
+        fn visit<M: Calibratable<A> + Analysable<6, A>, const A: usize>(
             self,
             h: &M,
         ) -> Self::Output {
@@ -231,16 +249,15 @@ pub fn identified_machine_file(
                 });
             }
             let identified = h.with_geometry(&self.values[..ng])?;
-            crate::machine::with_strut_geometry(
+            identified.rewrite_file(
                 self.source,
                 self.file,
-                &identified.struts(),
                 Some(&self.values[ng..]),
                 self.comment,
             )
         }
     }
-    machine.visit_struts(Write {
+    machine.visit_calibratable(Write {
         file: &machine.source,
         source,
         values: &c.values,
@@ -254,9 +271,9 @@ struct CalibrateJob<'a> {
     opt: &'a CalibrateOptions,
 }
 
-impl StrutVisitor for CalibrateJob<'_> {
+impl CalibratableVisitor for CalibrateJob<'_> {
     type Output = Result<Calibration>;
-    fn visit<M: StrutMachine<A> + Analysable<6, A>, const A: usize>(self, h: &M) -> Self::Output {
+    fn visit<M: Calibratable<A> + Analysable<6, A>, const A: usize>(self, h: &M) -> Self::Output {
         let zero = h.zero_readings()?;
         let names = identify::parameter_names(h);
         let mut fixed = Vec::new();
@@ -286,7 +303,7 @@ impl StrutVisitor for CalibrateJob<'_> {
         };
         let id = identify::identify(h, &zero, self.meas, &o)?;
         let seed = if self.opt.seed_procedure {
-            Some(seed_procedure(h, &zero, self.meas)?)
+            Some(h.seed_procedure(&zero, self.meas)?)
         } else {
             None
         };
@@ -332,7 +349,7 @@ pub struct CalibrationStudy {
     pub experiment_states: usize,
     /// Held-out states.
     pub holdout: usize,
-    /// Parameters held (the machine's trading pairs, [`StrutMachine::must_hold`]).
+    /// Parameters held (the machine's trading pairs, [`Calibratable::must_hold`]).
     pub held: Vec<String>,
     /// The identification.
     pub identification: Identification,
@@ -343,6 +360,9 @@ pub struct CalibrationStudy {
     /// Worst per-actuator condition number of seed 001's one-strut design with
     /// `A + 1` noise-free states (`None` when it does not solve).
     pub one_strut_condition: Option<f64>,
+    /// Why the machine has no such design (seed 001's procedure does not apply to it),
+    /// `None` where it has one.
+    pub one_strut_note: Option<String>,
 }
 
 /// Runs [`CalibrationStudy`] with experiment `e` and `holdout` held-out states (seed
@@ -353,9 +373,9 @@ pub fn calibration_study(
     holdout: usize,
 ) -> Result<CalibrationStudy> {
     struct Job<'a>(&'a Experiment, usize);
-    impl StrutVisitor for Job<'_> {
+    impl CalibratableVisitor for Job<'_> {
         type Output = Result<CalibrationStudy>;
-        fn visit<M: StrutMachine<A> + Analysable<6, A>, const A: usize>(
+        fn visit<M: Calibratable<A> + Analysable<6, A>, const A: usize>(
             self,
             h: &M,
         ) -> Self::Output {
@@ -398,10 +418,16 @@ pub fn calibration_study(
                     length_noise: 0.0,
                     ..e.clone()
                 },
-            )?;
-            let one_strut_condition = seed_procedure(h, &zero, &seven.measurements)
-                .ok()
-                .map(|sp| sp.conditions.iter().copied().fold(0.0, f64::max));
+            );
+            let (one_strut_condition, one_strut_note) =
+                match seven.and_then(|s| h.seed_procedure(&zero, &s.measurements)) {
+                    Ok(sp) => (
+                        Some(sp.conditions.iter().copied().fold(0.0, f64::max)),
+                        None,
+                    ),
+                    Err(Error::Unsupported { reason, .. }) => (None, Some(reason)),
+                    Err(_) => (None, None),
+                };
             Ok(CalibrationStudy {
                 experiment_states: e.states,
                 holdout,
@@ -410,8 +436,9 @@ pub fn calibration_study(
                 nominal,
                 identified,
                 one_strut_condition,
+                one_strut_note,
             })
         }
     }
-    machine.visit_struts(Job(e, holdout))?
+    machine.visit_calibratable(Job(e, holdout))?
 }

@@ -27,10 +27,12 @@
 //! condition number, the combinations of parameters in near-null directions named, and
 //! standard errors `s sqrt(diag (J^T J)^-1)` with `s` the residual RMS.
 
+mod calibratable;
 pub mod csv;
 pub mod fit;
 pub mod hexapod;
 mod identifiability;
+mod pentapod;
 mod problem;
 pub mod simulate;
 mod solve;
@@ -82,6 +84,31 @@ pub trait Identifiable<const P: usize, const A: usize>: Mechanism<P, A> + Sized 
     /// when it has none.
     fn explain(&self, _terms: &[(usize, f64)]) -> Option<String> {
         None
+    }
+
+    /// Fixture points per state the pose model needs: 3 for a rigid platform (the
+    /// best-fit transform), fewer for a machine whose platform has a free spin (a
+    /// pentapod's tool axis: 2 points on it).
+    fn pose_points(&self) -> usize {
+        3
+    }
+
+    /// Refuses a fixture this machine cannot be measured with (default: any will do;
+    /// a pentapod's points must lie on its tool axis, since the spin about it is free).
+    fn check_fixture(&self, _fixture: &[Vector3<f64>]) -> Result<()> {
+        Ok(())
+    }
+
+    /// The pose of a state from its measured fixture points (default: the best-fit
+    /// rigid transform, [`fit::rigid_transform`], then
+    /// [`Identifiable::coords_from_platform_frame`]).
+    fn measured_pose(
+        &self,
+        fixture: &[Vector3<f64>],
+        points: &[Vector3<f64>],
+    ) -> Result<SVector<f64, P>> {
+        let (c, r, _) = fit::rigid_transform(fixture, points)?;
+        Ok(self.coords_from_platform_frame(&c, &r))
     }
 
     /// The actuators' zero readings of the machine as described (a calibrated value
@@ -235,6 +262,7 @@ pub fn parameter_names<M: Identifiable<P, A>, const P: usize, const A: usize>(
     names
 }
 
+pub use calibratable::{Calibratable, Fixture};
 pub use problem::{measured_poses, residuals};
 pub use solve::identify;
 pub use validation::{point_errors, PointErrors};

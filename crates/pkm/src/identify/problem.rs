@@ -69,14 +69,11 @@ impl<M: Identifiable<P, A>, const P: usize, const A: usize> Problem<'_, M, P, A>
                     let x = f.pose;
                     m.inverse_with_geometry_jacobian(&x, &mut jg)?;
                     let jx = m.jacobian(&x)?;
-                    if P != A {
-                        return Err(Error::InvalidInput {
-                            what: "point identification".into(),
-                            message: "needs as many actuators as pose coordinates".into(),
-                        });
-                    }
-                    let lu = DMatrix::from_fn(A, P, |r, c| jx[(r, c)]).lu();
-                    // dx/dtheta = -J_x^-1 [dq/dg, -I]
+                    // The driven coordinates move with the parameters; the held ones (a
+                    // pentapod's C) stay.
+                    let driven = m.driven();
+                    let lu = DMatrix::from_fn(A, A, |r, c| jx[(r, driven[c])]).lu();
+                    // dx/dtheta = -J_x^-1 [dq/dg, -I] (over the driven coordinates)
                     let mut dq = DMatrix::zeros(A, n);
                     dq.view_mut((0, 0), (A, ng)).copy_from(&jg);
                     for j in 0..A {
@@ -96,8 +93,8 @@ impl<M: Identifiable<P, A>, const P: usize, const A: usize> Problem<'_, M, P, A>
                         for c in 0..n {
                             for a in 0..3 {
                                 let mut v = 0.0;
-                                for k2 in 0..P {
-                                    v += dp[(a, k2)] * dx[(k2, c)];
+                                for (k2, &d) in driven.iter().enumerate() {
+                                    v += dp[(a, d)] * dx[(k2, c)];
                                 }
                                 jac[(base + 3 * k + a, c)] = -v;
                             }
@@ -141,7 +138,7 @@ impl<M: Identifiable<P, A>, const P: usize, const A: usize> LeastSquaresProblem<
     }
 }
 
-/// Poses of every state from the fixture's measured points (best-fit rigid transform).
+/// Poses of every state from the fixture's measured points ([`Identifiable::measured_pose`]).
 pub fn measured_poses<M: Identifiable<P, A>, const P: usize, const A: usize>(
     m: &M,
     meas: &Measurements,
@@ -150,13 +147,11 @@ pub fn measured_poses<M: Identifiable<P, A>, const P: usize, const A: usize>(
         .iter()
         .enumerate()
         .map(|(i, st)| {
-            let (c, r, _) = fit::rigid_transform(&meas.fixture, &st.points).map_err(|e| {
-                Error::InvalidInput {
+            m.measured_pose(&meas.fixture, &st.points)
+                .map_err(|e| Error::InvalidInput {
                     what: format!("measured state {}", i + 1),
                     message: e.to_string(),
-                }
-            })?;
-            Ok(m.coords_from_platform_frame(&c, &r))
+                })
         })
         .collect()
 }

@@ -125,6 +125,7 @@ pub fn simulate_on<M: Identifiable<P, A>, const P: usize, const A: usize>(
     true_zero: SVector<f64, A>,
     e: &Experiment,
 ) -> Result<Simulated<M, P, A>> {
+    truth.check_fixture(&e.fixture)?;
     let mut rng = rand::rngs::StdRng::seed_from_u64(e.seed ^ 0x5EED_0001);
     let unit = Normal::new(0.0, 1.0).expect("unit normal");
     let mut poses = Vec::with_capacity(e.states);

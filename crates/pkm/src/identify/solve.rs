@@ -192,8 +192,9 @@ fn validate<M: Identifiable<P, A>, const P: usize, const A: usize>(
             "fixed parameter {i} does not exist ({n} parameters)"
         )));
     }
+    m.check_fixture(&meas.fixture)?;
     let need = match o.model {
-        MeasurementModel::Pose => 3,
+        MeasurementModel::Pose => m.pose_points(),
         MeasurementModel::Points => 1,
     };
     if meas.fixture.len() < need {

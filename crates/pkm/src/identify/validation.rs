@@ -13,8 +13,8 @@ pub struct PointErrors {
     pub max: f64,
     /// RMS distance (mm).
     pub rms: f64,
-    /// With three or more fixture points: the tool pose predicted against the pose
-    /// measured by the best-fit transform (position and orientation, max and RMS).
+    /// With enough fixture points for a pose ([`Identifiable::pose_points`]): the tool
+    /// pose predicted against the pose measured ([`Identifiable::measured_pose`]) (position and orientation, max and RMS).
     pub pose: Option<simulate::PoseErrors>,
     /// States whose readings the model cannot reach (forward kinematics failed).
     pub failed: usize,
@@ -34,7 +34,7 @@ pub fn point_errors<M: Identifiable<P, A>, const P: usize, const A: usize>(
     let mut count = 0usize;
     let mut failed = 0;
     let mut start = m.home();
-    let measured = if meas.fixture.len() >= 3 {
+    let measured = if meas.fixture.len() >= m.pose_points() {
         measured_poses(m, meas).ok()
     } else {
         None

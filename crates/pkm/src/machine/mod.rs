@@ -26,10 +26,10 @@ use crate::mechanism::Mechanism;
 use source::Exact;
 
 pub use reference::Reference;
-pub use registry::{Analysis, FileType, Model, StrutVisitor, FILE_TYPES};
+pub use registry::{Analysis, CalibratableVisitor, FileType, Model, FILE_TYPES};
 pub use report_file::{Comparison, ReportSettings, REPORT_SECTIONS};
 pub use source::{line_col, MAX_MAGNITUDE};
-pub use strut_writer::{with_strut_geometry, StrutGeometry};
+pub use strut_writer::{with_pentapod_geometry, with_strut_geometry, StrutGeometry};
 pub use tolerance_file::{read_deviations, read_tolerances};
 
 pub(crate) fn v3(a: impl Into<[f64; 3]>) -> nalgebra::Vector3<f64> {

@@ -34,9 +34,18 @@ pub(super) struct PentapodFile {
     limits: LimitsFile,
     home: HomeFile,
     #[serde(default)]
+    calibration: Option<CalibrationFile>,
+    #[serde(default)]
     reference: Vec<Reference>,
     #[serde(default)]
     motion: Option<super::MotionFile>,
+}
+
+/// Result of an identification (`pkm calibrate`).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CalibrationFile {
+    zero_lengths: Exact<5>,
 }
 
 /// One `[[struts]]` entry: a base joint and the ring of the effector joint.
@@ -166,7 +175,7 @@ pub(super) fn build(src: &Source, f: PentapodFile) -> Result<super::Parts, Error
             "a pentapod holds C (the spin about the tool axis is free): limit X, Y, Z, A, B",
         ));
     }
-    let m = Pentapod::new(
+    let mut m = Pentapod::new(
         f.name.clone().unwrap_or_else(|| "pentapod".into()),
         struts,
         tip[2],
@@ -174,6 +183,15 @@ pub(super) fn build(src: &Source, f: PentapodFile) -> Result<super::Parts, Error
         axes,
         Vector6::new(hp[0], hp[1], hp[2], a[0], a[1], 0.0),
     );
+    if let Some(c) = &f.calibration {
+        if c.zero_lengths.iter().any(|l| !(*l > 0.0)) {
+            return Err(src.error(
+                &[key("calibration"), key("zero_lengths")],
+                "expected five positive strut lengths (mm)",
+            ));
+        }
+        m.zero_lengths = Some(nalgebra::SVector::<f64, 5>::from(c.zero_lengths.0));
+    }
     // The five struts must fix the tool axis: a regular driven Jacobian at home.
     let rc = match crate::mechanism::scaled_driven_jacobian(&m, &m.home()) {
         Ok(j) => crate::linalg::rcond1(&j),

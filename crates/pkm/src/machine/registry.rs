@@ -12,7 +12,7 @@ use serde::Serialize;
 use super::source::Source;
 use super::{Analysable, Machine, Parts, Visitor};
 use crate::error::{Error, Result};
-use crate::identify::struts::StrutMachine;
+use crate::identify::Calibratable;
 use crate::tripod::{CentreLegTripod, TranslationalTripod};
 
 /// One machine type as written in a file's `type` field.
@@ -145,13 +145,13 @@ crate::impl_dyn_mechanism!(crate::serial::arm::SerialArm, 6, 6);
 crate::impl_dyn_mechanism!(crate::serial::tcp::TcpMachine<4>, 4, 4);
 crate::impl_dyn_mechanism!(crate::serial::tcp::TcpMachine<5>, 5, 5);
 
-/// Code generic over strut machines (hexapods, translational tripods: the machines
-/// [`crate::identify`] identifies), run by [`Machine::visit_struts`].
-pub trait StrutVisitor {
+/// Code generic over the machines [`crate::identify`] identifies (hexapods, translational
+/// tripods, pentapods: [`Calibratable`]), run by [`Machine::visit_calibratable`].
+pub trait CalibratableVisitor {
     /// What the visit returns.
     type Output;
-    /// Called with the concrete strut machine.
-    fn visit<M: StrutMachine<A> + Analysable<6, A>, const A: usize>(self, m: &M) -> Self::Output;
+    /// Called with the concrete machine.
+    fn visit<M: Calibratable<A> + Analysable<6, A>, const A: usize>(self, m: &M) -> Self::Output;
 }
 
 /// The analyses that only some machine types can run (every machine runs the
@@ -205,11 +205,13 @@ impl Machine {
         dispatch!(&self.model, m => v.visit(m))
     }
 
-    /// Runs code generic over strut machines, or says why this machine is not one.
-    pub fn visit_struts<V: StrutVisitor>(&self, v: V) -> Result<V::Output> {
+    /// Runs code generic over the machines pkm identifies, or says why this machine is
+    /// not one.
+    pub fn visit_calibratable<V: CalibratableVisitor>(&self, v: V) -> Result<V::Output> {
         match &self.model {
             Model::Hexapod(h) => Ok(v.visit(h.as_ref())),
             Model::TranslationalTripod(t) => Ok(v.visit(t)),
+            Model::Pentapod(p) => Ok(v.visit(p.as_ref())),
             _ => Err(self.unsupported(Analysis::Identification)),
         }
     }
@@ -220,7 +222,7 @@ impl Machine {
         let ok = match analysis {
             Analysis::Identification => matches!(
                 self.model,
-                Model::Hexapod(_) | Model::TranslationalTripod(_)
+                Model::Hexapod(_) | Model::TranslationalTripod(_) | Model::Pentapod(_)
             ),
             Analysis::InverseSolutions => self.robot_arm().is_ok(),
             Analysis::ForwardWorkspace => self.mechanism().actuators().len() <= 3,
@@ -245,8 +247,8 @@ impl Machine {
     fn unsupported(&self, analysis: Analysis) -> Error {
         let reason = match analysis {
             Analysis::Identification => {
-                "identification is implemented for strut machines (hexapods: the 42 parameters \
-                 of seed 001; translational tripods)"
+                "identification is implemented for hexapods (the 42 parameters of seed 001), \
+                 translational tripods and pentapods"
                     .to_string()
             }
             Analysis::InverseSolutions => {
@@ -304,7 +306,7 @@ impl Machine {
                     height: std::array::from_fn(|i| p.struts[i].ring_height - p.tool),
                 },
                 axes: p.axes.clone(),
-                zero_lengths: None,
+                zero_lengths: p.zero_lengths.map(|z| z.iter().copied().collect()),
             }),
             Model::TranslationalTripod(t) => Ok(ControllerModel {
                 geometry: crate::linuxcnc::tripod_geometry(t)?,

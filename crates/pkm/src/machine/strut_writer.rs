@@ -95,6 +95,16 @@ pub fn with_strut_geometry(
             }
         }
     }
+    finish(&src, doc, zero_lengths, comment)
+}
+
+/// `[calibration] zero_lengths`, the comment on top, the text.
+fn finish(
+    src: &Source,
+    mut doc: toml::Table,
+    zero_lengths: Option<&[f64]>,
+    comment: &str,
+) -> Result<String, Error> {
     if let Some(z) = zero_lengths {
         let mut c = toml::Table::new();
         c.insert(
@@ -112,4 +122,52 @@ pub fn with_strut_geometry(
     }
     out.push_str(&body);
     Ok(out)
+}
+
+/// The pentapod file `text` rewritten with the geometry of `m` (base joints, ring radii
+/// and heights, tool tip) and the zero lengths, everything else kept; `comment` lines go
+/// on top. Struts that shared a base joint get a joint each (`B0_L1`, ...), as
+/// [`with_strut_geometry`] does.
+pub fn with_pentapod_geometry(
+    text: &str,
+    file: &str,
+    m: &crate::pentapod::Pentapod,
+    zero_lengths: Option<&[f64]>,
+    comment: &str,
+) -> Result<String, Error> {
+    let src = Source::parse(file, text)?;
+    let mut doc: toml::Table = toml::from_str(text).map_err(|e| src.error(&[], e.to_string()))?;
+    let f = |v: f64| toml::Value::Float(v);
+    let names: Vec<&str> = m.struts.iter().map(|s| s.base_name.as_str()).collect();
+    let mut joints = toml::Table::new();
+    let list = doc
+        .get_mut("struts")
+        .and_then(|v| v.as_array_mut())
+        .filter(|l| l.len() == m.struts.len())
+        .ok_or_else(|| src.error(&[Seg::Key("struts".into())], "expected 5 tables"))?;
+    for (j, s) in m.struts.iter().enumerate() {
+        let shared = names.iter().filter(|n| **n == names[j]).count() > 1;
+        let name = if shared {
+            format!("{}_{}", names[j], s.actuator.name)
+        } else {
+            names[j].to_string()
+        };
+        joints.insert(
+            name.clone(),
+            toml::Value::Array(s.base.iter().map(|c| f(*c)).collect()),
+        );
+        if let Some(t) = list[j].as_table_mut() {
+            t.insert("base".into(), toml::Value::String(name));
+            t.insert("ring_radius".into(), f(s.ring_radius));
+            t.insert("ring_height".into(), f(s.ring_height));
+        }
+    }
+    doc.insert("base_joints".into(), toml::Value::Table(joints));
+    let mut tool = toml::Table::new();
+    tool.insert(
+        "tip".into(),
+        toml::Value::Array(vec![f(0.0), f(0.0), f(m.tool)]),
+    );
+    doc.insert("tool".into(), toml::Value::Table(tool));
+    finish(&src, doc, zero_lengths, comment)
 }

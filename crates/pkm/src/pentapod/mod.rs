@@ -68,6 +68,9 @@ pub struct Pentapod {
     pub axes: AxisLimits,
     /// Home pose (X, Y, Z mm; A, B, C rad).
     pub home: Vector6<f64>,
+    /// Strut lengths at the control's zero readings (`[calibration] zero_lengths`,
+    /// written by `pkm calibrate`); `None`: the lengths at home.
+    pub zero_lengths: Option<SVector<f64, 5>>,
     /// Length that scales rotations against translations in conditioning (mm): the
     /// mean distance of the ring joints from the tool tip.
     pub characteristic_length: f64,
@@ -123,6 +126,7 @@ impl Pentapod {
             strut_diameter,
             axes,
             home,
+            zero_lengths: None,
             characteristic_length,
             actuators,
             coordinates: spatial_coordinates(),

@@ -4,12 +4,12 @@
 //! invariants checked, and every other analysis answers `Error::Unsupported`.
 
 use pkm::analysis::identification::{
-    calibrate, simulate_measurements, CalibrateOptions, SimulateOptions,
+    calibrate, fixture, simulate_measurements, CalibrateOptions, SimulateOptions,
 };
 use pkm::analysis::kinematics::{inverse, inverse_solutions, transmission, ForwardStream};
 use pkm::analysis::motion::{run_motion, MotionSource, NoSink};
 use pkm::analysis::{accuracy, workspace, AccuracyOptions, KindTolerances, Tolerances};
-use pkm::identify::simulate::{triangle, Design, Experiment};
+use pkm::identify::simulate::{Design, Experiment};
 use pkm::machine::Analysis;
 use pkm::motion::program::{FeedOptions, ProfileKind};
 use pkm::motion::Sampling;
@@ -312,7 +312,9 @@ fn identification(name: &str, machine: &Machine) {
         translation: 30.0,
         rotation: 5f64.to_radians(),
         step: 20.0,
-        fixture: triangle(100.0, 0.0),
+        // The machine's own fixture: a triangle on a platform, points on a pentapod's
+        // tool axis.
+        fixture: fixture(machine, 100.0).unwrap().points,
         seed: 3,
     };
     let s = simulate_measurements(

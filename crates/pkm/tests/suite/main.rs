@@ -14,6 +14,7 @@ mod gcode;
 mod hexapod;
 mod hybrid_am;
 mod identify;
+mod identify_pentapod;
 mod linuxcnc;
 mod linuxcnc_tripod;
 mod machine_file;
