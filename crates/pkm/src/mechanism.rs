@@ -272,6 +272,14 @@ pub trait Mechanism<const P: usize, const A: usize>: Send + Sync {
         newton_forward(self, q, start, &NewtonOptions::default())
     }
 
+    /// Whether the mechanism leaves the tool free to spin about its own axis (a
+    /// pentapod's ring joints turn): a rotation about the tool axis is then no error of
+    /// the machine, and the accuracy engine keeps only the tilt of the tool axis
+    /// ([`crate::accuracy::PoseError::without_spin`]). Default: no.
+    fn free_spin(&self) -> bool {
+        false
+    }
+
     /// Whether [`Mechanism::forward`] is a closed-form solution: then its
     /// [`Forward::iterations`] is 0 by construction, not a count of iterations.
     fn forward_closed_form(&self) -> bool {

@@ -164,6 +164,16 @@ impl PoseError {
             orientation: (actual.rotation * nominal.rotation.inverse()).scaled_axis(),
         }
     }
+
+    /// The error without its rotation about the unit tool axis `k`: `w - (w . k) k`, the
+    /// part that tilts the axis (`dk = w x k` is unchanged). For a mechanism that leaves
+    /// the tool free to spin ([`crate::mechanism::Mechanism::free_spin`]).
+    pub fn without_spin(self, k: &Vector3<f64>) -> Self {
+        PoseError {
+            position: self.position,
+            orientation: self.orientation - k * self.orientation.dot(k),
+        }
+    }
 }
 
 /// Exact evaluation of the tool-pose error at one prepared machine state.

@@ -97,7 +97,12 @@ impl<M: Rebuild<P, A>, const P: usize, const A: usize> Evaluate for RebuildEvalu
             let f = self.m.forward(&(self.q + dq), &self.x)?;
             self.m.tool_pose(&f.pose)?
         };
-        Ok(PoseError::between(&self.nominal, &actual))
+        let e = PoseError::between(&self.nominal, &actual);
+        Ok(if self.m.free_spin() {
+            e.without_spin(&(self.nominal.rotation * Vector3::z()))
+        } else {
+            e
+        })
     }
 }
 
@@ -281,15 +286,25 @@ pub(crate) fn implicit_sensitivities<M: Mechanism<6, A>, const A: usize>(
         rcond: 0.0,
     })?;
     let e = crate::rotation::rpy_rate_matrix([x[3], x[4], x[5]]);
+    // A tool free to spin: only the tilt of its axis is an error.
+    let axis = if m.free_spin() {
+        Some(m.tool_pose(x)?.rotation * Vector3::z())
+    } else {
+        None
+    };
     Ok((0..n)
         .map(|c| {
             let mut dx = SVector::<f64, 6>::zeros();
             for (k, &d) in driven.iter().enumerate() {
                 dx[d] = dxd[(k, c)];
             }
-            PoseError {
+            let err = PoseError {
                 position: Vector3::new(dx[0], dx[1], dx[2]),
                 orientation: e * Vector3::new(dx[3], dx[4], dx[5]),
+            };
+            match &axis {
+                Some(k) => err.without_spin(k),
+                None => err,
             }
         })
         .collect())

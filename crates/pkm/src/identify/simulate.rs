@@ -218,7 +218,8 @@ pub struct PoseErrors {
     pub position_max: f64,
     /// RMS tool-point position error (mm).
     pub position_rms: f64,
-    /// Largest orientation error (rad).
+    /// Largest orientation error (rad; the angle between tool axes where the spin is
+    /// free, [`crate::mechanism::Mechanism::free_spin`]).
     pub orientation_max: f64,
     /// RMS orientation error (rad).
     pub orientation_rms: f64,
@@ -235,10 +236,17 @@ pub(crate) struct PoseStats {
 }
 
 impl PoseStats {
-    /// Adds the difference between two tool poses.
-    pub(crate) fn add(&mut self, a: &crate::pose::Pose, b: &crate::pose::Pose) {
+    /// Adds the difference between two tool poses; `free_spin`: the tool's spin about
+    /// its axis is free ([`crate::mechanism::Mechanism::free_spin`]), so the orientation
+    /// error is the angle between the tool axes.
+    pub(crate) fn add(&mut self, a: &crate::pose::Pose, b: &crate::pose::Pose, free_spin: bool) {
         let dp = (a.translation.vector - b.translation.vector).norm();
-        let dw = a.rotation.angle_to(&b.rotation);
+        let dw = if free_spin {
+            let z = nalgebra::Vector3::z();
+            (a.rotation * z).angle(&(b.rotation * z))
+        } else {
+            a.rotation.angle_to(&b.rotation)
+        };
         self.pm = self.pm.max(dp);
         self.om = self.om.max(dw);
         self.ps += dp * dp;
@@ -271,7 +279,7 @@ pub fn pose_errors<M: Identifiable<P, A>, const P: usize, const A: usize>(
     for (r, x) in readings.iter().zip(poses) {
         let q = SVector::<f64, A>::from_fn(|j, _| zero[j] + r[j]);
         let f = m.forward(&q, x)?;
-        stats.add(&m.tool_pose(x)?, &m.tool_pose(&f.pose)?);
+        stats.add(&m.tool_pose(x)?, &m.tool_pose(&f.pose)?, m.free_spin());
     }
     Ok(stats.finish())
 }

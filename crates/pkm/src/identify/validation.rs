@@ -48,7 +48,7 @@ pub fn point_errors<M: Identifiable<P, A>, const P: usize, const A: usize>(
                 start = f.pose;
                 if let Some(x) = measured.as_ref().map(|v| v[i]) {
                     if let (Ok(a), Ok(b)) = (m.tool_pose(&x), m.tool_pose(&f.pose)) {
-                        stats.add(&a, &b);
+                        stats.add(&a, &b, m.free_spin());
                     }
                 }
                 for (s, p) in meas.fixture.iter().zip(&st.points) {

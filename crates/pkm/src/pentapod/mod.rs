@@ -243,6 +243,11 @@ impl Mechanism<6, 5> for Pentapod {
         [0, 1, 2, 3, 4]
     }
 
+    /// The rings turn: the spin about the tool axis is free.
+    fn free_spin(&self) -> bool {
+        true
+    }
+
     fn pose_space(&self) -> PoseSpace {
         PoseSpace::Spatial
     }

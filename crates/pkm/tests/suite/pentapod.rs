@@ -255,6 +255,54 @@ fn geometry_sensitivities_match_finite_differences() {
     }
 }
 
+/// Issue 18: the spin about the tool axis is free (the rings turn), so it is no error of
+/// the pentapod. Orientation errors keep only the tilt of the tool axis: none along the
+/// axis, and `w x k` equals the change of the deviated machine's tool axis (central
+/// differences of exact forward kinematics), both analytic and exact.
+#[test]
+fn orientation_errors_are_the_tool_axis_tilt_without_the_free_spin() {
+    use pkm::accuracy::Evaluate;
+    let m = example();
+    assert!(m.free_spin());
+    let mut rng = rand::rngs::StdRng::seed_from_u64(12);
+    let n = m.parameters().len();
+    for _ in 0..10 {
+        let x = random_pose(&mut rng);
+        let k = m.tool_pose(&x).unwrap().rotation * Vector3::z();
+        let analytic = m.analytic_sensitivities(&x).unwrap().unwrap();
+        let mut ev = m.evaluator(&x).unwrap();
+        let q = m.inverse(&x).unwrap();
+        let g0 = m.geometry_values();
+        for p in 0..n {
+            let w = analytic[p].orientation;
+            assert!(w.dot(&k).abs() < 1e-12 * w.norm().max(1e-9), "{p}: {w:?}");
+            let exact = ev.pose_error(&[(p, 1e-4)]).unwrap().orientation;
+            assert!(exact.dot(&k).abs() < 1e-12, "{p}: {exact:?}");
+            // The tool axis of the deviated machines, at the same readings.
+            let axis = |h: f64| {
+                let (mm, dq) = if p < g0.len() {
+                    let mut g = g0.clone();
+                    g[p] += h;
+                    (
+                        m.with_geometry_values(&g).unwrap(),
+                        SVector::<f64, 5>::zeros(),
+                    )
+                } else {
+                    let mut dq = SVector::<f64, 5>::zeros();
+                    dq[p - g0.len()] = h;
+                    (m.clone(), dq)
+                };
+                let f = mm.forward(&(q + dq), &x).unwrap();
+                mm.tool_pose(&f.pose).unwrap().rotation * Vector3::z()
+            };
+            let h = 1e-4;
+            let dk = (axis(h) - axis(-h)) / (2.0 * h);
+            let d = (w.cross(&k) - dk).amax();
+            assert!(d < 1e-7 + 1e-5 * dk.amax(), "{p}: {d:.3e} ({dk:?})");
+        }
+    }
+}
+
 #[test]
 fn axis_travel_names_the_axis_and_the_excess() {
     let m = example();
