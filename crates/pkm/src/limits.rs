@@ -111,6 +111,35 @@ impl fmt::Display for Violation {
     }
 }
 
+/// A violated limit as a number in the mechanism's own list of its limits, with the
+/// value and bound in internal units (mm, rad): what a batch of a million poses keeps
+/// instead of a named [`Violation`] per row
+/// ([`crate::mechanism::Mechanism::inverse_first_limit`]); the mechanism turns it into
+/// the violation ([`crate::mechanism::Mechanism::limit_violation`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LimitCode {
+    /// The limit's number (the mechanism's own numbering).
+    pub id: u32,
+    /// Minimum or maximum.
+    pub side: Side,
+    /// Quantity of value and bound.
+    pub quantity: Quantity,
+    /// Value found (internal units).
+    pub value: f64,
+    /// The bound it crossed (internal units).
+    pub bound: f64,
+}
+
+/// The first violated limit of a pose: a [`LimitCode`] where the mechanism numbers its
+/// limits, otherwise the [`Violation`] itself.
+#[derive(Debug, Clone, PartialEq)]
+pub enum FirstLimit {
+    /// A code of the mechanism's own numbering.
+    Code(LimitCode),
+    /// The violation.
+    Violation(Violation),
+}
+
 /// A closed interval `[min, max]` in internal units, with optional rate limits.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Range {

@@ -313,6 +313,33 @@ pub trait Mechanism<const P: usize, const A: usize>: Send + Sync {
         Ok((q, buf.drain(..).next()))
     }
 
+    /// [`Mechanism::inverse_first_violation`] for batches: a type that numbers its
+    /// limits returns the first violated one as a [`crate::limits::LimitCode`] (no name
+    /// formatted per row), turned into the violation by [`Mechanism::limit_violation`]
+    /// once per distinct limit; the default returns the violation itself.
+    fn inverse_first_limit(
+        &self,
+        x: &SVector<f64, P>,
+        buf: &mut Vec<Violation>,
+    ) -> Result<(SVector<f64, A>, Option<crate::limits::FirstLimit>)> {
+        let (q, v) = self.inverse_first_violation(x, buf)?;
+        Ok((q, v.map(crate::limits::FirstLimit::Violation)))
+    }
+
+    /// The violation a code of [`Mechanism::inverse_first_limit`] stands for (equal to
+    /// the one [`Mechanism::check_limits`] reports). The default, for types that never
+    /// return codes, names the limit by its number.
+    fn limit_violation(&self, code: &crate::limits::LimitCode) -> Violation {
+        Violation::new(
+            format!("limit {}", code.id),
+            crate::limits::LimitKind::ActuatorPosition,
+            code.side,
+            code.quantity,
+            code.value,
+            code.bound,
+        )
+    }
+
     /// Points and links of the mechanism at `x`, for drawings and joint reports.
     fn skeleton(&self, x: &SVector<f64, P>) -> Result<Skeleton>;
 

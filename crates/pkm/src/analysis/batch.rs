@@ -8,7 +8,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::error::{Error, Result};
-use crate::limits::{LimitKind, Side, Violation};
+use crate::limits::{FirstLimit, LimitCode, LimitKind, Side, Violation};
 use crate::machine::{Analysable, Machine, Visitor};
 
 /// Rows per rayon task (per-task overhead small against the work: a hexapod solves
@@ -200,9 +200,38 @@ struct CauseRows<'a> {
     bound: &'a mut [f64],
     table: Interner,
     errors: Vec<(usize, String)>,
+    /// The table's index of each limit code met so far (-1: not yet).
+    codes: Vec<i32>,
 }
 
+/// Limit codes above this are interned by name each time (a mechanism's own numbering
+/// stays far below).
+const MAX_CACHED_CODE: usize = 4096;
+
 impl CauseRows<'_> {
+    /// Row `i` stopped at the limit of `code`; `describe` names it, called once per
+    /// distinct code in the chunk.
+    fn coded(&mut self, i: usize, code: &LimitCode, describe: impl FnOnce() -> Violation) {
+        let id = code.id as usize;
+        let known = self.codes.get(id).copied().filter(|c| *c >= 0);
+        self.reason[i] = match known {
+            Some(c) => c,
+            None => {
+                let v = describe();
+                let c = self.table.code(v.limit, Some(v.kind), v.unit);
+                if id < MAX_CACHED_CODE {
+                    if id >= self.codes.len() {
+                        self.codes.resize(id + 1, -1);
+                    }
+                    self.codes[id] = c;
+                }
+                c
+            }
+        };
+        self.value[i] = code.quantity.to_user(code.value);
+        self.bound[i] = code.quantity.to_user(code.bound);
+    }
+
     fn violation(&mut self, i: usize, v: Violation) {
         self.reason[i] = self.table.code(v.limit, Some(v.kind), v.unit);
         self.value[i] = v.value;
@@ -271,6 +300,7 @@ where
             bound,
             table: Interner::default(),
             errors: Vec::new(),
+            codes: Vec::new(),
         };
         work(xs, vals, ok, rec, &mut rows);
         (rows.table.reasons, rows.errors)
@@ -359,7 +389,7 @@ pub fn inverse_batch_with(machine: &Machine, poses: &[f64], check: bool) -> Resu
                     for (i, x) in xs.chunks_exact(P).enumerate() {
                         let x = nalgebra::SVector::<f64, P>::from_column_slice(x);
                         let solved = if self.1 {
-                            m.inverse_first_violation(&x, &mut buf)
+                            m.inverse_first_limit(&x, &mut buf)
                         } else {
                             m.inverse(&x).map(|q| (q, None))
                         };
@@ -368,7 +398,10 @@ pub fn inverse_batch_with(machine: &Machine, poses: &[f64], check: bool) -> Resu
                                 qs[i * A..(i + 1) * A].copy_from_slice(q.as_slice());
                                 match v {
                                     None => ok[i] = true,
-                                    Some(v) => why.violation(i, v),
+                                    Some(FirstLimit::Violation(v)) => why.violation(i, v),
+                                    Some(FirstLimit::Code(c)) => {
+                                        why.coded(i, &c, || m.limit_violation(&c))
+                                    }
                                 }
                             }
                             Err(e) => why.error(i, &e),

@@ -67,9 +67,35 @@ pub(crate) fn strut_interference<const N: usize>(
     dia: f64,
     out: &mut Vec<Violation>,
 ) {
-    // Each strut's axis-aligned box; two struts whose boxes are more than `dia`
-    // apart along an axis are more than `dia` apart (exact: no pair it skips could
-    // interfere). On a hexapod's random poses it settles nearly every pair.
+    interference_scan(base, joints, skip, dia, |i, k, d| {
+        out.push(interference_violation(names[i], names[k], d, dia));
+        false
+    });
+}
+
+/// The violation of struts `a` and `b` whose axes are `d` apart, closer than `dia`.
+pub(crate) fn interference_violation(a: &str, b: &str, d: f64, dia: f64) -> Violation {
+    Violation::new(
+        format!("struts {a}/{b} interference (axis distance)"),
+        LimitKind::StrutInterference,
+        Side::Min,
+        Quantity::Length,
+        d,
+        dia,
+    )
+}
+
+/// Calls `found(i, k, distance)` for every pair of struts (base joint `base[i]` to
+/// `joints[i]`) whose axes come closer than `dia`, in the order of
+/// [`strut_interference`], except pairs `skip(i, k)`; stops when `found` returns true.
+/// An exact bounding-box test skips the pairs whose boxes are more than `dia` apart.
+pub(crate) fn interference_scan<const N: usize>(
+    base: &[Vector3<f64>; N],
+    joints: &[Vector3<f64>; N],
+    skip: impl Fn(usize, usize) -> bool,
+    dia: f64,
+    mut found: impl FnMut(usize, usize, f64) -> bool,
+) {
     let lo: [Vector3<f64>; N] = std::array::from_fn(|i| base[i].inf(&joints[i]));
     let hi: [Vector3<f64>; N] = std::array::from_fn(|i| base[i].sup(&joints[i]));
     for i in 0..N {
@@ -82,18 +108,8 @@ pub(crate) fn strut_interference<const N: usize>(
                 continue;
             }
             let d = segment_distance(&base[i], &joints[i], &base[k], &joints[k]);
-            if d < dia {
-                out.push(Violation::new(
-                    format!(
-                        "struts {}/{} interference (axis distance)",
-                        names[i], names[k]
-                    ),
-                    LimitKind::StrutInterference,
-                    Side::Min,
-                    Quantity::Length,
-                    d,
-                    dia,
-                ));
+            if d < dia && found(i, k, d) {
+                return;
             }
         }
     }

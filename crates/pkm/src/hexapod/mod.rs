@@ -16,7 +16,7 @@ use nalgebra::{Matrix3, SMatrix, Vector3, Vector6};
 
 use crate::error::Result;
 use crate::legs::{split_pose, StrutSet};
-use crate::limits::{LimitKind, Side, Violation};
+use crate::limits::{FirstLimit, LimitCode, LimitKind, Side, Violation};
 use crate::mechanism::{
     spatial_coordinates, Actuator, ActuatorMotion, Coordinate, Forward, LinkKind, Mechanism,
     PointRole, PoseSpace, Skeleton,
@@ -27,6 +27,14 @@ use crate::units::Quantity;
 
 pub use forward::{FkOptions, FkReport, FkTracker};
 pub use interference::segment_distance;
+use interference::{interference_scan, interference_violation};
+
+/// First codes of [`Hexapod::scan`]'s families: axis travel from 0, strut lengths,
+/// base cones, platform cones, strut pairs.
+const RANGE: usize = 6;
+const BASE_CONE: usize = 12;
+const PLATFORM_CONE: usize = 18;
+const PAIR: usize = 24;
 pub(crate) use interference::strut_interference;
 
 /// A joint's allowed cone: the strut must stay within `max_angle` of `axis`.
@@ -141,66 +149,138 @@ fn derived(
 
 impl Hexapod {
     /// The limit check of [`Mechanism::check_limits`] at pose `x` (position `p`,
-    /// rotation `r`) with actuators `q`; with `first`, it stops at the first violation.
-    fn limits(
+    /// rotation `r`) with actuators `q`, in its order: `found` is called with every
+    /// violated limit as a code ([`Hexapod::violation_of`] names it) and the scan stops
+    /// when it returns true. One scan serves the full check and the batch's first
+    /// violation. Codes: axis travel `0..6` (by coordinate), strut lengths `6..12`,
+    /// base cones `12..18`, platform cones `18..24`, interference `24 + 6 i + k`.
+    fn scan(
         &self,
         x: &Vector6<f64>,
         q: &Vector6<f64>,
         p: &Vector3<f64>,
         r: &Matrix3<f64>,
-        out: &mut Vec<Violation>,
-        first: bool,
+        mut found: impl FnMut(LimitCode) -> bool,
     ) {
-        self.axes.check(&self.coordinates, x, out);
-        if first && !out.is_empty() {
-            return;
+        for (k, range) in &self.axes.ranges {
+            if let Some((side, bound)) = range.crossed(x[*k]) {
+                let quantity = self.coordinates[*k].quantity;
+                let (id, value) = (*k as u32, x[*k]);
+                if found(LimitCode {
+                    id,
+                    side,
+                    quantity,
+                    value,
+                    bound,
+                }) {
+                    return;
+                }
+            }
         }
         let joints = self.set.platform_joints(p, r);
+        let cone = |id: usize, c: &JointCone, cos: f64| {
+            (cos < c.cos_max()).then(|| LimitCode {
+                id: id as u32,
+                side: Side::Max,
+                quantity: Quantity::Angle,
+                value: cos.clamp(-1.0, 1.0).acos(),
+                bound: c.max_angle,
+            })
+        };
         for i in 0..6 {
             let s = &self.struts[i];
-            s.actuator.range.check(
-                || format!("strut {} length", s.actuator.name),
-                LimitKind::ActuatorPosition,
-                Quantity::Length,
-                q[i],
-                out,
-            );
+            if let Some((side, bound)) = s.actuator.range.crossed(q[i]) {
+                if found(LimitCode {
+                    id: (RANGE + i) as u32,
+                    side,
+                    quantity: Quantity::Length,
+                    value: q[i],
+                    bound,
+                }) {
+                    return;
+                }
+            }
             let n = (joints[i] - s.base) / q[i];
             if let Some(c) = &s.base_cone {
-                let cos = n.dot(&c.axis);
-                c.check(
-                    cos,
-                    || {
-                        format!(
-                            "base joint {} angle (strut {})",
-                            s.base_name, s.actuator.name
-                        )
-                    },
-                    out,
-                );
+                if let Some(code) = cone(BASE_CONE + i, c, n.dot(&c.axis)) {
+                    if found(code) {
+                        return;
+                    }
+                }
             }
             if let Some(c) = &s.platform_cone {
-                let cos = (-n).dot(&(r * c.axis));
-                c.check(
-                    cos,
-                    || {
-                        format!(
-                            "platform joint {} angle (strut {})",
-                            s.platform_name, s.actuator.name
-                        )
-                    },
-                    out,
-                );
-            }
-            if first && !out.is_empty() {
-                return;
+                if let Some(code) = cone(PLATFORM_CONE + i, c, (-n).dot(&(r * c.axis))) {
+                    if found(code) {
+                        return;
+                    }
+                }
             }
         }
         if let Some(dia) = self.strut_diameter {
             let base: [Vector3<f64>; 6] = std::array::from_fn(|i| self.struts[i].base);
-            let names: [&str; 6] = std::array::from_fn(|i| self.struts[i].actuator.name.as_str());
-            strut_interference(&names, &base, &joints, |i, k| self.shares[i][k], dia, out);
+            interference_scan(
+                &base,
+                &joints,
+                |i, k| self.shares[i][k],
+                dia,
+                |i, k, d| {
+                    found(LimitCode {
+                        id: (PAIR + 6 * i + k) as u32,
+                        side: Side::Min,
+                        quantity: Quantity::Length,
+                        value: d,
+                        bound: dia,
+                    })
+                },
+            );
         }
+    }
+
+    /// The violation a code of [`Hexapod::scan`] stands for, named as
+    /// [`Mechanism::check_limits`] names it.
+    fn violation_of(&self, c: &LimitCode) -> Violation {
+        let id = c.id as usize;
+        let strut = |i: usize| &self.struts[i % 6];
+        let (name, kind) = match id {
+            0..RANGE => (
+                format!("axis {} travel", self.coordinates[id].name),
+                LimitKind::AxisTravel,
+            ),
+            RANGE..BASE_CONE => (
+                format!("strut {} length", strut(id - RANGE).actuator.name),
+                LimitKind::ActuatorPosition,
+            ),
+            BASE_CONE..PLATFORM_CONE => {
+                let s = strut(id - BASE_CONE);
+                (
+                    format!(
+                        "base joint {} angle (strut {})",
+                        s.base_name, s.actuator.name
+                    ),
+                    LimitKind::JointAngle,
+                )
+            }
+            PLATFORM_CONE..PAIR => {
+                let s = strut(id - PLATFORM_CONE);
+                (
+                    format!(
+                        "platform joint {} angle (strut {})",
+                        s.platform_name, s.actuator.name
+                    ),
+                    LimitKind::JointAngle,
+                )
+            }
+            _ => {
+                let (i, k) = ((id - PAIR) / 6 % 6, (id - PAIR) % 6);
+                return interference_violation(
+                    &strut(i).actuator.name,
+                    &strut(k).actuator.name,
+                    c.value,
+                    c.bound,
+                );
+            }
+        };
+        Violation::new(name, kind, c.side, c.quantity, c.value, c.bound)
     }
 
     /// Assembles a hexapod.
@@ -386,7 +466,10 @@ impl Mechanism<6, 6> for Hexapod {
 
     fn check_limits(&self, x: &Vector6<f64>, q: &Vector6<f64>, out: &mut Vec<Violation>) {
         let (p, r) = split_pose(x);
-        self.limits(x, q, &p, &r, out, false);
+        self.scan(x, q, &p, &r, |c| {
+            out.push(self.violation_of(&c));
+            false
+        });
     }
 
     /// One rotation and one set of joints for both, and the check stops at the first
@@ -396,11 +479,32 @@ impl Mechanism<6, 6> for Hexapod {
         x: &Vector6<f64>,
         buf: &mut Vec<Violation>,
     ) -> Result<(Vector6<f64>, Option<Violation>)> {
+        let (q, first) = self.inverse_first_limit(x, buf)?;
+        let v = first.map(|f| match f {
+            FirstLimit::Code(c) => self.violation_of(&c),
+            FirstLimit::Violation(v) => v,
+        });
+        Ok((q, v))
+    }
+
+    /// The first violated limit as a code ([`Hexapod::scan`]): no name is formatted.
+    fn inverse_first_limit(
+        &self,
+        x: &Vector6<f64>,
+        _buf: &mut Vec<Violation>,
+    ) -> Result<(Vector6<f64>, Option<FirstLimit>)> {
         let (p, r) = split_pose(x);
         let q = self.lengths(&p, &r);
-        buf.clear();
-        self.limits(x, &q, &p, &r, buf, true);
-        Ok((q, buf.drain(..).next()))
+        let mut first = None;
+        self.scan(x, &q, &p, &r, |c| {
+            first = Some(c);
+            true
+        });
+        Ok((q, first.map(FirstLimit::Code)))
+    }
+
+    fn limit_violation(&self, code: &LimitCode) -> Violation {
+        self.violation_of(code)
     }
 
     fn skeleton(&self, x: &Vector6<f64>) -> Result<Skeleton> {

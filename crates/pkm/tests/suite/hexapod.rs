@@ -556,3 +556,77 @@ fn axis_travel_is_checked_and_kept_by_a_rebuilt_hexapod() {
         );
     }
 }
+
+/// The batch's first violated limit comes as a code, named once per distinct limit
+/// (issue 15's speed): code and name must be the first violation `check_limits`
+/// reports, for every family of limit (axis travel, strut lengths, both cones,
+/// interference), over poses that hit each of them.
+#[test]
+fn coded_first_limits_are_the_first_checked_violation() {
+    use pkm::limits::FirstLimit;
+    let mut hits = std::collections::BTreeMap::new();
+    for (name, open) in [
+        ("hexapod-linuxcnc.toml", false),
+        ("hexapod-seed001.toml", false),
+        ("hexapod-seed001.toml", true),
+    ] {
+        let mut h = load(name);
+        if open {
+            // Nothing but thick struts: interference comes first.
+            for s in &mut h.struts {
+                s.actuator.range = pkm::limits::Range { min: 0.0, max: 1e5 };
+                s.base_cone = None;
+                s.platform_cone = None;
+            }
+            h.strut_diameter = Some(150.0);
+        } else {
+            // Travel on two axes, so that the family is hit too.
+            h.axes.ranges.push((
+                0,
+                pkm::limits::Range {
+                    min: -60.0,
+                    max: 60.0,
+                },
+            ));
+            h.axes.ranges.push((
+                4,
+                pkm::limits::Range {
+                    min: -0.3,
+                    max: 0.3,
+                },
+            ));
+        }
+        let home = h.home();
+        let centre = Vector3::new(home[0], home[1], home[2]);
+        let mut rng = rand::rngs::StdRng::seed_from_u64(21);
+        let mut buf = Vec::new();
+        for _ in 0..40_000 {
+            let x = random_pose(&mut rng, &centre, 200.0, 200.0, 0.9);
+            let q = h.inverse(&x).unwrap();
+            let mut all = Vec::new();
+            h.check_limits(&x, &q, &mut all);
+            let (q2, first) = h.inverse_first_limit(&x, &mut buf).unwrap();
+            assert_eq!(q, q2);
+            let coded = first.map(|f| match f {
+                FirstLimit::Code(c) => h.limit_violation(&c),
+                FirstLimit::Violation(_) => panic!("the hexapod codes its limits"),
+            });
+            assert_eq!(coded.as_ref(), all.first(), "{name} {x:?}");
+            assert_eq!(h.inverse_first_violation(&x, &mut buf).unwrap().1, coded);
+            if let Some(v) = coded {
+                *hits.entry(format!("{:?}", v.kind)).or_insert(0) += 1;
+            }
+        }
+    }
+    for family in [
+        "AxisTravel",
+        "ActuatorPosition",
+        "JointAngle",
+        "StrutInterference",
+    ] {
+        assert!(
+            hits.get(family).copied().unwrap_or(0) > 10,
+            "{family}: {hits:?}"
+        );
+    }
+}
