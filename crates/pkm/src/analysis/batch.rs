@@ -55,9 +55,9 @@ pub struct Causes {
 impl Causes {
     fn new(n: usize) -> Self {
         Causes {
-            reason: vec![-1; n],
-            value: vec![f64::NAN; n],
-            bound: vec![f64::NAN; n],
+            reason: filled(n, -1),
+            value: filled(n, f64::NAN),
+            bound: filled(n, f64::NAN),
             reasons: Vec::new(),
             errors: Vec::new(),
         }
@@ -244,6 +244,17 @@ impl CauseRows<'_> {
     }
 }
 
+/// `n` copies of `v`, written on all cores when `n` is large: a million rows' columns
+/// are tens of megabytes, and filling them on the calling thread (its page faults
+/// included) was a sequential tenth of a batch.
+fn filled<T: Copy + Send + Sync>(n: usize, v: T) -> Vec<T> {
+    if n <= BATCH_CHUNK {
+        vec![v; n]
+    } else {
+        (0..n).into_par_iter().map(|_| v).collect()
+    }
+}
+
 /// Checks a batch's shape: `values` holds whole rows of `width` and at most
 /// [`MAX_BATCH`] of them; the row count.
 fn rows(values: &[f64], width: usize, what: &str) -> Result<usize> {
@@ -371,8 +382,8 @@ pub fn inverse_batch_with(machine: &Machine, poses: &[f64], check: bool) -> Resu
         type Output = Result<BatchInverse>;
         fn visit<M: Analysable<P, A>, const P: usize, const A: usize>(self, m: &M) -> Self::Output {
             let n = rows(self.0, P, "poses")?;
-            let mut actuators = vec![f64::NAN; n * A];
-            let mut reachable = vec![false; n];
+            let mut actuators = filled(n * A, f64::NAN);
+            let mut reachable = filled(n, false);
             let mut causes = Causes::new(n);
             chunked(
                 self.0,
@@ -439,10 +450,10 @@ pub fn forward_batch(
                 Some(x) => crate::dynamic::fixed::<P>("start pose", x)?,
                 None => m.home(),
             };
-            let mut poses = vec![f64::NAN; n * P];
+            let mut poses = filled(n * P, f64::NAN);
             let mut reachable = vec![false; n];
             // Per row: solved, iterations, residual.
-            let mut solver = vec![(false, 0u32, f64::NAN); n];
+            let mut solver = filled(n, (false, 0u32, f64::NAN));
             let mut causes = Causes::new(n);
             chunked(
                 self.0,
@@ -500,7 +511,7 @@ pub fn condition_batch(machine: &Machine, poses: &[f64]) -> Result<Vec<f64>> {
         type Output = Result<Vec<f64>>;
         fn visit<M: Analysable<P, A>, const P: usize, const A: usize>(self, m: &M) -> Self::Output {
             let n = rows(self.0, P, "poses")?;
-            let mut out = vec![f64::NAN; n];
+            let mut out = filled(n, f64::NAN);
             let work = |(xs, c): (&[f64], &mut [f64])| {
                 for (x, c) in xs.chunks_exact(P).zip(c.iter_mut()) {
                     let x = nalgebra::SVector::<f64, P>::from_column_slice(x);
