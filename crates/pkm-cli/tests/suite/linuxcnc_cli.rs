@@ -201,3 +201,71 @@ fn the_xyzbc_sim_imported_its_joints_and_the_boat_program() {
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert!(s["duration_s"].as_f64().unwrap() > 300.0);
 }
+
+/// A tripodkins configuration: imported, checked (its [JOINT_n] HOME reproduced), run
+/// through a program, its report written, exported in inches and imported again.
+#[test]
+fn a_tripodkins_machine_goes_through_import_check_motion_report_and_export() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = dir.path().join("tripod.toml");
+    ok(&pkm()
+        .args([
+            "import",
+            "linuxcnc",
+            &path("tests/fixtures/linuxcnc/tripod/tripod.ini"),
+        ])
+        .arg("--out")
+        .arg(&m)
+        .output()
+        .unwrap());
+    let o = pkm().arg("check").arg(&m).output().unwrap();
+    ok(&o);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("valid tripod/translational machine"), "{out}");
+    assert!(out.contains("reproduced"), "{out}");
+    let prog = dir.path().join("p.ngc");
+    std::fs::write(
+        &prog,
+        "G21 G90\nG0 X254 Y146.6469 Z381\nG1 X354 F3000\nG2 X254 Y246.6469 I-100 J0\nM2\n",
+    )
+    .unwrap();
+    let o = pkm()
+        .arg("motion")
+        .arg(&m)
+        .arg("--gcode")
+        .arg(&prog)
+        .args(["--from", "254,146.6469,381", "--json", "--out"])
+        .arg(dir.path().join("run"))
+        .output()
+        .unwrap();
+    ok(&o);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(v["samples"].as_u64().unwrap() > 10, "{v}");
+    ok(&pkm()
+        .arg("report")
+        .arg(&m)
+        .arg("--out")
+        .arg(dir.path().join("rep"))
+        .output()
+        .unwrap());
+    let lc = dir.path().join("lc");
+    ok(&pkm()
+        .args(["export", "linuxcnc"])
+        .arg(&m)
+        .args(["--units", "inch", "--out"])
+        .arg(&lc)
+        .output()
+        .unwrap());
+    let hal = std::fs::read_to_string(lc.join("kinematics.hal")).unwrap();
+    assert!(hal.contains("setp tripodkins.Bx 20.0\n"), "{hal}");
+    let again = dir.path().join("again.toml");
+    ok(&pkm()
+        .args(["import", "linuxcnc"])
+        .arg(lc.join("pkm.ini"))
+        .arg("--out")
+        .arg(&again)
+        .output()
+        .unwrap());
+    let o = pkm().arg("check").arg(&again).output().unwrap();
+    ok(&o);
+}
