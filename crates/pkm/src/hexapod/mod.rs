@@ -487,7 +487,8 @@ impl Mechanism<6, 6> for Hexapod {
         Ok((q, v))
     }
 
-    /// The first violated limit as a code ([`Hexapod::scan`]): no name is formatted.
+    /// The first violated limit as a code (the limit scan's numbering: axis travel, strut
+    /// lengths, base and platform cones, strut pairs): no name is formatted.
     fn inverse_first_limit(
         &self,
         x: &Vector6<f64>,
