@@ -23,9 +23,10 @@ pub struct StrutGeometry {
 
 /// The machine file `text` rewritten with the joints of `struts` and the zero lengths
 /// (`[calibration] zero_lengths`), everything else kept; `comment` lines go on top.
-/// Struts that shared a joint get a joint each (`A1_L1`, ...: identification gives
-/// each strut its own), per-joint cone axes following. The file's own comments are not
-/// kept.
+/// Struts that shared a joint get a joint each where identification moved it per strut
+/// (`A1_L1`, ...), per-joint cone axes following; where their centres still agree
+/// (held parameters, a point platform) the joint stays shared. The file's own comments
+/// are not kept.
 pub fn with_strut_geometry(
     text: &str,
     file: &str,
@@ -51,10 +52,16 @@ pub fn with_strut_geometry(
                 }
             })
             .collect();
+        let centre = |s: &StrutGeometry| if role == "base" { s.base } else { s.platform };
         let mut joints = toml::Table::new();
         let mut renamed: Vec<(String, String)> = Vec::new();
         for (j, s) in struts.iter().enumerate() {
-            let shared = names.iter().filter(|n| **n == names[j]).count() > 1;
+            // A joint the struts share stays one where they still agree on its centre
+            // (held, or a point platform), and splits where identification moved it
+            // per strut.
+            let sharing = || (0..struts.len()).filter(|&k| names[k] == names[j]);
+            let shared =
+                sharing().count() > 1 && sharing().any(|k| centre(&struts[k]) != centre(s));
             let name = if shared {
                 let n = format!("{}_{}", names[j], s.name);
                 renamed.push((names[j].to_string(), n.clone()));
@@ -126,8 +133,8 @@ fn finish(
 
 /// The pentapod file `text` rewritten with the geometry of `m` (base joints, ring radii
 /// and heights, tool tip) and the zero lengths, everything else kept; `comment` lines go
-/// on top. Struts that shared a base joint get a joint each (`B0_L1`, ...), as
-/// [`with_strut_geometry`] does.
+/// on top. Struts that shared a base joint get a joint each (`B0_L1`, ...) where their
+/// centres differ, as [`with_strut_geometry`] does.
 pub fn with_pentapod_geometry(
     text: &str,
     file: &str,
@@ -146,7 +153,8 @@ pub fn with_pentapod_geometry(
         .filter(|l| l.len() == m.struts.len())
         .ok_or_else(|| src.error(&[Seg::Key("struts".into())], "expected 5 tables"))?;
     for (j, s) in m.struts.iter().enumerate() {
-        let shared = names.iter().filter(|n| **n == names[j]).count() > 1;
+        let sharing = || (0..names.len()).filter(|&k| names[k] == names[j]);
+        let shared = sharing().count() > 1 && sharing().any(|k| m.struts[k].base != s.base);
         let name = if shared {
             format!("{}_{}", names[j], s.actuator.name)
         } else {

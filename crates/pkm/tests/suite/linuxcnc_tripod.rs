@@ -261,3 +261,50 @@ fn struts_share_a_platform_joint_only_all_three_on_a_translational_tripod() {
         .to_string();
     assert!(e.contains("already used by another strut"), "{e}");
 }
+
+/// A tripodkins machine identified with its platform joint held (it trades against the
+/// base joints: the platform never turns) keeps its point platform: the identified file
+/// loads and goes back to the controller.
+#[test]
+fn an_identified_point_tripod_keeps_its_point_platform() {
+    use pkm::analysis::identification::{
+        calibrate, fixture, identified_machine_file, simulate_measurements, CalibrateOptions,
+        SimulateOptions,
+    };
+    use pkm::identify::simulate::Experiment;
+    let (m, _, text) = imported("tripod/tripod.ini");
+    let opt = SimulateOptions {
+        experiment: Experiment {
+            fixture: fixture(&m, 40.0).unwrap().points,
+            translation: 50.0,
+            states: 30,
+            ..Experiment::default()
+        },
+        holdout: 0,
+        comment: "test".into(),
+    };
+    let s = simulate_measurements(&m, Some(&text), &opt).unwrap();
+    let c = calibrate(
+        &m,
+        &s.measurements,
+        None,
+        &CalibrateOptions {
+            fix: vec!["D*".into()],
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let out = identified_machine_file(&m, &text, &c, "identified").unwrap();
+    let back = Machine::from_toml_str(&out, "identified.toml").unwrap();
+    assert!(out.contains("platform = \"D\""), "{out}");
+    assert!(back.mechanism().inverse(&back.mechanism().home()).is_ok());
+    // tripodkins has three numbers for the base (Bx, Cx, Cy) and its world frame is the
+    // base triangle's: an identified base that moved in the world cannot be written
+    // without moving the world frame, and the export says by how much instead.
+    match export(&back, LengthUnit::Inch) {
+        Err(Error::Unsupported { reason, .. }) => {
+            assert!(reason.contains("tripodkins' origin A is"), "{reason}")
+        }
+        other => panic!("{other:?}"),
+    }
+}
