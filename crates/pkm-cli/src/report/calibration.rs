@@ -23,7 +23,15 @@ pub fn section(h: &mut Html, machine: &Machine, _ctx: &super::Context) -> Result
     let n = id.names.len();
     h.h2_id(
         "calibration",
-        &format!("Calibration: identification of the {n} parameters (seed 001)"),
+        &format!(
+            "Calibration: identification of the {n} parameters{}",
+            // Seed 001's name where its method (and one-strut design) applies.
+            if st.one_strut_note.is_none() {
+                " (seed 001)"
+            } else {
+                ""
+            }
+        ),
     );
     let before = st.nominal;
     let after = st.identified;

@@ -408,25 +408,30 @@ pub fn calibration_study(
             let model = h.with_geometry(&id.values[..ng])?;
             let z = SVector::<f64, A>::from_column_slice(&id.values[ng..]);
             let identified = identify::simulate::pose_errors(&model, &z, &readings, &test.poses)?;
-            let seven = simulate(
-                h,
-                &zero,
-                &Experiment {
-                    states: A + 1,
-                    design: Design::OneActuator,
-                    point_noise: 0.0,
-                    length_noise: 0.0,
-                    ..e.clone()
-                },
-            );
+            // Whether seed 001's procedure applies at all (a machine without it says why
+            // whatever the states), then its design's conditioning.
             let (one_strut_condition, one_strut_note) =
-                match seven.and_then(|s| h.seed_procedure(&zero, &s.measurements)) {
-                    Ok(sp) => (
-                        Some(sp.conditions.iter().copied().fold(0.0, f64::max)),
-                        None,
-                    ),
+                match h.seed_procedure(&zero, &Measurements::default()) {
                     Err(Error::Unsupported { reason, .. }) => (None, Some(reason)),
-                    Err(_) => (None, None),
+                    _ => {
+                        let seven = simulate(
+                            h,
+                            &zero,
+                            &Experiment {
+                                states: A + 1,
+                                design: Design::OneActuator,
+                                point_noise: 0.0,
+                                length_noise: 0.0,
+                                ..e.clone()
+                            },
+                        );
+                        let c = seven.and_then(|s| h.seed_procedure(&zero, &s.measurements));
+                        (
+                            c.ok()
+                                .map(|sp| sp.conditions.iter().copied().fold(0.0, f64::max)),
+                            None,
+                        )
+                    }
                 };
             Ok(CalibrationStudy {
                 experiment_states: e.states,

@@ -18,23 +18,12 @@ use crate::error::{Error, Result};
 use crate::mechanism::Mechanism;
 use crate::pentapod::Pentapod;
 
-/// Index of `tool.z` in the pentapod's geometry ([`Rebuild::geometry_parameters`]): the
-/// identified geometry is the 25 before it.
-const TOOL: usize = 25;
+use crate::pentapod::TOOL;
 
 impl Pentapod {
     /// The tool tip in the effector frame.
     fn tip(&self) -> Vector3<f64> {
         Vector3::new(0.0, 0.0, self.tool)
-    }
-
-    /// Pose coordinates of the tool axis `k` (unit) through the tool tip `p`: `k = R
-    /// e_z` with `R = Ry(B) Rx(A)` (C = 0, the pentapod's held spin), so `k = (cos A sin
-    /// B, -sin A, cos A cos B)`: `A = atan2(-k_y, |(k_x, k_z)|)`, `B = atan2(k_x, k_z)`.
-    pub fn coords_from_axis(p: &Vector3<f64>, k: &Vector3<f64>) -> Vector6<f64> {
-        let a = (-k.y).atan2(k.x.hypot(k.z));
-        let b = k.x.atan2(k.z);
-        Vector6::new(p.x, p.y, p.z, a, b, 0.0)
     }
 }
 
@@ -94,7 +83,7 @@ impl Identifiable<6, 5> for Pentapod {
     /// The tool axis of `r` (its spin about the axis is dropped), through `c + t k`.
     fn coords_from_platform_frame(&self, c: &Vector3<f64>, r: &Matrix3<f64>) -> Vector6<f64> {
         let k = r.column(2).into_owned();
-        Self::coords_from_axis(&(c + k * self.tool), &k)
+        self.coords_from_axis(&(c + k * self.tool), &k)
     }
 
     fn pose_points(&self) -> usize {
@@ -165,7 +154,7 @@ impl Identifiable<6, 5> for Pentapod {
         }
         let k = d / len;
         let origin = m0 - k * h0;
-        Ok(Self::coords_from_axis(&(origin + k * self.tool), &k))
+        Ok(self.coords_from_axis(&(origin + k * self.tool), &k))
     }
 
     fn zero_readings(&self) -> Result<SVector<f64, 5>> {

@@ -18,7 +18,9 @@ use crate::units::Quantity;
 const GEOMETRY: usize = 26;
 const RADIUS: usize = 15;
 const HEIGHT: usize = 20;
-const TOOL: usize = 25;
+/// Index of `tool.z` in [`Rebuild::geometry_parameters`] (identification leaves it
+/// out: it trades against every ring height).
+pub(crate) const TOOL: usize = 25;
 
 impl Pentapod {
     /// `dL/dg` at pose `x` (`5 x 26`, the order of [`Rebuild::geometry_parameters`]):

@@ -21,6 +21,7 @@
 #![allow(clippy::needless_range_loop)]
 
 mod accuracy;
+pub(crate) use accuracy::TOOL;
 
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3, Vector6};
 
@@ -131,6 +132,16 @@ impl Pentapod {
             actuators,
             coordinates: spatial_coordinates(),
         }
+    }
+
+    /// Pose coordinates of the tool tip `p` on the unit tool axis `k`, with the held C
+    /// of home: `Rz(C) Ry(B) Rx(A) e_z = k` gives, with `k' = Rz(-C) k`,
+    /// `A = atan2(-k'_y, sqrt(k'_x^2 + k'_z^2))`, `B = atan2(k'_x, k'_z)`.
+    pub fn coords_from_axis(&self, p: &Vector3<f64>, k: &Vector3<f64>) -> Vector6<f64> {
+        let c = self.home[5];
+        let kk = crate::rotation::rz(-c) * k;
+        let (a, b) = ((-kk.y).atan2(kk.x.hypot(kk.z)), kk.x.atan2(kk.z));
+        Vector6::new(p.x, p.y, p.z, a, b, c)
     }
 
     /// Effector origin `O = p - t k` and rotation of pose coordinates.
@@ -309,21 +320,23 @@ impl Mechanism<6, 5> for Pentapod {
         Ok(crate::legs::spatial_tool_pose(x))
     }
 
-    /// The tool tip, and the tool axis of a given orientation expressed with the held
-    /// C of home: `Rz(C) Ry(B) Rx(A) e_z = k` gives, with `k' = Rz(-C) k`,
-    /// `A = atan2(-k'_y, sqrt(k'_x^2 + k'_z^2))`, `B = atan2(k'_x, k'_z)`. The spin of
-    /// the given frame about its axis is not the machine's to set and is dropped.
+    /// The tool tip, and the tool axis of a given orientation with the held C of home
+    /// ([`Pentapod::coords_from_axis`]). The spin of the given frame about its axis is
+    /// not the machine's to set and is dropped.
     fn coords_from_pose(&self, pose: &Pose, orientation_given: bool) -> Result<Vector6<f64>> {
         let p = pose.translation.vector;
-        let c = self.home[5];
-        let (a, b) = if orientation_given {
+        if orientation_given {
             let k = crate::pose::rotation_matrix(pose).column(2).into_owned();
-            let kk = crate::rotation::rz(-c) * k;
-            ((-kk.y).atan2(kk.x.hypot(kk.z)), kk.x.atan2(kk.z))
-        } else {
-            (self.home[3], self.home[4])
-        };
-        Ok(Vector6::new(p.x, p.y, p.z, a, b, c))
+            return Ok(self.coords_from_axis(&p, &k));
+        }
+        Ok(Vector6::new(
+            p.x,
+            p.y,
+            p.z,
+            self.home[3],
+            self.home[4],
+            self.home[5],
+        ))
     }
 
     fn check_limits(&self, x: &Vector6<f64>, q: &SVector<f64, 5>, out: &mut Vec<Violation>) {

@@ -255,3 +255,33 @@ fn experiment_base(states: usize, seed: u64) -> Experiment {
         ..Experiment::default()
     }
 }
+
+/// The report's study on a pentapod (a user's, with a tool below the effector) says
+/// why seed 001's one-strut design does not apply, whether or not that design's states
+/// could be simulated (with a 120 mm tool they cannot: the study called it "singular").
+#[test]
+fn the_calibration_study_says_seed_001_does_not_apply_to_a_pentapod() {
+    use pkm::analysis::identification::{calibration_study, fixture};
+    let text = std::fs::read_to_string(path())
+        .unwrap()
+        .replace("tip = [0.0, 0.0, 0.0]", "tip = [0.0, 0.0, -120.0]");
+    let text = match text.find("[[reference]]") {
+        Some(i) => text[..i].to_string(),
+        None => text,
+    };
+    let m = Machine::from_toml_str(&text, "mine.toml").unwrap();
+    let e = Experiment {
+        fixture: fixture(&m, 200.0).unwrap().points,
+        ..Experiment::default()
+    };
+    let st = calibration_study(&m, &e, 5).unwrap();
+    assert!(st.one_strut_condition.is_none());
+    assert!(
+        st.one_strut_note
+            .as_deref()
+            .unwrap_or("")
+            .contains("least squares"),
+        "{:?}",
+        st.one_strut_note
+    );
+}
