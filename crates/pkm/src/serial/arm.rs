@@ -178,6 +178,19 @@ impl SerialArm {
     /// [`Error::NotConverged`] and the smallest residual found (mm, rad times the
     /// characteristic length) when the pose is out of reach.
     pub fn inverse_from(&self, x: &Vector6<f64>, start: &Vector6<f64>) -> Result<Vector6<f64>> {
+        // A NaN target would reach the SVD of the singular descent, which never
+        // returns on NaN (nalgebra iterates until convergence).
+        if let Some(k) = x.iter().chain(start.iter()).position(|v| !v.is_finite()) {
+            let (what, k) = if k < 6 {
+                ("pose", k)
+            } else {
+                ("start joints", k - 6)
+            };
+            return Err(Error::InvalidInput {
+                what: what.into(),
+                message: format!("value {k} is not a finite number"),
+            });
+        }
         let target_p = Vector3::new(x[0], x[1], x[2]);
         let distance = (target_p - self.base_origin).norm();
         if distance > self.reach * (1.0 + 1e-12) {
@@ -404,7 +417,11 @@ impl SerialArm {
             js.row_mut(k).scale_mut(lc);
             es[k] *= lc;
         }
-        let svd = js.svd(true, true);
+        if !js.iter().chain(es.iter()).all(|v| v.is_finite()) {
+            return None;
+        }
+        // Bounded iterations: never more than a few dozen on a finite 6x6.
+        let svd = js.try_svd(true, true, f64::EPSILON, 10_000)?;
         svd.solve(&es, 1e-10 * svd.singular_values.max()).ok()
     }
 
