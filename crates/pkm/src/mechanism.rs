@@ -326,6 +326,25 @@ pub trait Mechanism<const P: usize, const A: usize>: Send + Sync {
         Ok((q, v.map(crate::limits::FirstLimit::Violation)))
     }
 
+    /// Inverse kinematics of many poses with a conservative limit screen, for batches:
+    /// `xs` holds whole rows of `P` pose coordinates, `qs` receives `A` actuators per
+    /// row (equal to [`Mechanism::inverse`]'s to rounding), and `clear[i]` is set where
+    /// row `i` is certainly within every limit (with `check`; without it, where the
+    /// row certainly has a solution). A row left uncleared is solved again by
+    /// [`Mechanism::inverse_first_limit`], which decides it. Returns `false` (nothing
+    /// written) for a type without such a kernel, the default; the hexapod's runs
+    /// eight poses at a time across SIMD lanes.
+    fn inverse_screened(
+        &self,
+        xs: &[f64],
+        qs: &mut [f64],
+        clear: &mut [bool],
+        check: bool,
+    ) -> bool {
+        let _ = (xs, qs, clear, check);
+        false
+    }
+
     /// The violation a code of [`Mechanism::inverse_first_limit`] stands for (equal to
     /// the one [`Mechanism::check_limits`] reports). The default, for types that never
     /// return codes, names the limit by its number.

@@ -8,13 +8,13 @@
 
 /// `pi/2` split so that `k * PIO2_HI` is exact for `|k| < 2^20`: its first 33 bits
 /// (1.5707963267341256) and the rest (6.077100506506192e-11).
-const PIO2_HI: f64 = f64::from_bits(0x3FF9_21FB_5440_0000);
-const PIO2_LO: f64 = f64::from_bits(0x3DD0_B461_1A62_6331);
-const TWO_OVER_PI: f64 = std::f64::consts::FRAC_2_PI;
-const MAGIC: f64 = 6_755_399_441_055_744.0;
+pub(crate) const PIO2_HI: f64 = f64::from_bits(0x3FF9_21FB_5440_0000);
+pub(crate) const PIO2_LO: f64 = f64::from_bits(0x3DD0_B461_1A62_6331);
+pub(crate) const TWO_OVER_PI: f64 = std::f64::consts::FRAC_2_PI;
+pub(crate) const MAGIC: f64 = 6_755_399_441_055_744.0;
 
 /// Taylor coefficients `(-1)^k / (2k+1)!` and `(-1)^k / (2k)!`.
-const S: [f64; 7] = [
+pub(crate) const SIN_TAYLOR: [f64; 7] = [
     -1.0 / 6.0,
     1.0 / 120.0,
     -1.0 / 5_040.0,
@@ -23,7 +23,7 @@ const S: [f64; 7] = [
     1.0 / 6_227_020_800.0,
     -1.0 / 1_307_674_368_000.0,
 ];
-const C: [f64; 8] = [
+pub(crate) const COS_TAYLOR: [f64; 8] = [
     -0.5,
     1.0 / 24.0,
     -1.0 / 720.0,
@@ -69,10 +69,18 @@ fn kernel(x: f64) -> (f64, f64) {
     let k = y - MAGIC;
     let r = (x - k * PIO2_HI) - k * PIO2_LO;
     let z = r * r;
-    let ps = S[0] + z * (S[1] + z * (S[2] + z * (S[3] + z * (S[4] + z * (S[5] + z * S[6])))));
+    let ps = SIN_TAYLOR[0]
+        + z * (SIN_TAYLOR[1]
+            + z * (SIN_TAYLOR[2]
+                + z * (SIN_TAYLOR[3]
+                    + z * (SIN_TAYLOR[4] + z * (SIN_TAYLOR[5] + z * SIN_TAYLOR[6])))));
     let s = r + r * z * ps;
-    let pc = C[1] + z * (C[2] + z * (C[3] + z * (C[4] + z * (C[5] + z * (C[6] + z * C[7])))));
-    let c = 1.0 + z * (C[0] + z * pc);
+    let pc = COS_TAYLOR[1]
+        + z * (COS_TAYLOR[2]
+            + z * (COS_TAYLOR[3]
+                + z * (COS_TAYLOR[4]
+                    + z * (COS_TAYLOR[5] + z * (COS_TAYLOR[6] + z * COS_TAYLOR[7])))));
+    let c = 1.0 + z * (COS_TAYLOR[0] + z * pc);
     // Quadrant q mod 4: (s, c), (c, -s), (-s, -c), (-c, s), without branches: swap by
     // a select, signs by flipping the sign bit.
     let swap = q & 1 == 1;

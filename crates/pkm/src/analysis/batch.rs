@@ -397,7 +397,13 @@ pub fn inverse_batch_with(machine: &Machine, poses: &[f64], check: bool) -> Resu
                 &mut causes,
                 |xs, qs, ok, _, why| {
                     let mut buf = Vec::new();
+                    // The mechanism's block kernel, where it has one, settles the rows
+                    // it clears; the rest go through the per-pose path.
+                    let screened = m.inverse_screened(xs, qs, ok, self.1);
                     for (i, x) in xs.chunks_exact(P).enumerate() {
+                        if screened && ok[i] {
+                            continue;
+                        }
                         let x = nalgebra::SVector::<f64, P>::from_column_slice(x);
                         let solved = if self.1 {
                             m.inverse_first_limit(&x, &mut buf)
@@ -415,7 +421,10 @@ pub fn inverse_batch_with(machine: &Machine, poses: &[f64], check: bool) -> Resu
                                     }
                                 }
                             }
-                            Err(e) => why.error(i, &e),
+                            Err(e) => {
+                                qs[i * A..(i + 1) * A].fill(f64::NAN);
+                                why.error(i, &e)
+                            }
                         }
                     }
                 },

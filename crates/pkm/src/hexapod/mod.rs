@@ -8,6 +8,7 @@
 // Struts, joints and sample vectors are indexed together.
 #![allow(clippy::needless_range_loop)]
 
+mod block;
 pub mod forward;
 mod interference;
 mod simd;
@@ -502,6 +503,21 @@ impl Mechanism<6, 6> for Hexapod {
             true
         });
         Ok((q, first.map(FirstLimit::Code)))
+    }
+
+    /// Eight poses at a time: [`block`]'s kernel and limit screen.
+    fn inverse_screened(
+        &self,
+        xs: &[f64],
+        qs: &mut [f64],
+        clear: &mut [bool],
+        check: bool,
+    ) -> bool {
+        let n = clear.len();
+        if xs.len() != 6 * n || qs.len() != 6 * n {
+            return false;
+        }
+        block::screen_rows(&block::Screen::new(self), xs, qs, clear, check)
     }
 
     fn limit_violation(&self, code: &LimitCode) -> Violation {

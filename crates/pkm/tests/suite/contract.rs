@@ -575,3 +575,56 @@ fn batch_kinematics_equal_single_calls_on_every_example() {
         }
     }
 }
+
+/// Batches take any value without panicking (front ends validate their input, but the
+/// Python binding reads numpy arrays in place while another thread could write to
+/// them): NaN, infinities and absurd magnitudes give rows without solution or out of
+/// limits, and the rows around them are unaffected.
+#[test]
+fn batches_take_any_value_without_panicking() {
+    use pkm::analysis::batch::{condition_batch, forward_batch, inverse_batch_with};
+    for path in examples() {
+        let machine = Machine::from_path(&path).unwrap();
+        let m = machine.mechanism();
+        let (p, a) = (m.coordinates().len(), m.actuators().len());
+        let home = m.home();
+        let bad = [
+            f64::NAN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            1e300,
+            -1e300,
+            0.0,
+        ];
+        let mut poses = Vec::new();
+        for (r, v) in bad.iter().enumerate() {
+            for (k, h) in home.iter().enumerate() {
+                poses.push(if k == r % p { *v } else { *h });
+            }
+        }
+        // Whole blocks of eight and a ragged tail, home rows between.
+        for _ in 0..10 {
+            poses.extend(home.iter());
+        }
+        for check in [true, false] {
+            let b = inverse_batch_with(&machine, &poses, check).unwrap();
+            let rows = poses.len() / p;
+            assert_eq!(b.reachable.len(), rows);
+            let q_home = m.inverse(&home).unwrap();
+            for r in bad.len()..rows {
+                assert!(b.reachable[r], "{path:?} row {r}");
+                for (u, v) in b.actuators[r * a..(r + 1) * a].iter().zip(q_home.iter()) {
+                    assert!((u - v).abs() <= 1e-9 * (1.0 + v.abs()), "{path:?} row {r}");
+                }
+            }
+        }
+        let qs: Vec<f64> = bad
+            .iter()
+            .flat_map(|v| std::iter::repeat_n(*v, a))
+            .collect();
+        let f = forward_batch(&machine, &qs, None).unwrap();
+        assert_eq!(f.solved.len(), bad.len());
+        let c = condition_batch(&machine, &poses).unwrap();
+        assert_eq!(c.len(), poses.len() / p);
+    }
+}

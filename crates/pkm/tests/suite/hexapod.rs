@@ -557,6 +557,35 @@ fn axis_travel_is_checked_and_kept_by_a_rebuilt_hexapod() {
     }
 }
 
+/// Limits that random poses hit in every family: with `open`, nothing but thick struts
+/// (interference comes first); else travel on two axes besides the file's limits.
+fn limits_to_hit(h: &mut Hexapod, open: bool) {
+    use pkm::limits::Range;
+    if open {
+        for s in &mut h.struts {
+            s.actuator.range = Range { min: 0.0, max: 1e5 };
+            s.base_cone = None;
+            s.platform_cone = None;
+        }
+        h.strut_diameter = Some(150.0);
+    } else {
+        h.axes.ranges.push((
+            0,
+            Range {
+                min: -60.0,
+                max: 60.0,
+            },
+        ));
+        h.axes.ranges.push((
+            4,
+            Range {
+                min: -0.3,
+                max: 0.3,
+            },
+        ));
+    }
+}
+
 /// The batch's first violated limit comes as a code, named once per distinct limit
 /// (issue 15's speed): code and name must be the first violation `check_limits`
 /// reports, for every family of limit (axis travel, strut lengths, both cones,
@@ -571,31 +600,7 @@ fn coded_first_limits_are_the_first_checked_violation() {
         ("hexapod-seed001.toml", true),
     ] {
         let mut h = load(name);
-        if open {
-            // Nothing but thick struts: interference comes first.
-            for s in &mut h.struts {
-                s.actuator.range = pkm::limits::Range { min: 0.0, max: 1e5 };
-                s.base_cone = None;
-                s.platform_cone = None;
-            }
-            h.strut_diameter = Some(150.0);
-        } else {
-            // Travel on two axes, so that the family is hit too.
-            h.axes.ranges.push((
-                0,
-                pkm::limits::Range {
-                    min: -60.0,
-                    max: 60.0,
-                },
-            ));
-            h.axes.ranges.push((
-                4,
-                pkm::limits::Range {
-                    min: -0.3,
-                    max: 0.3,
-                },
-            ));
-        }
+        limits_to_hit(&mut h, open);
         let home = h.home();
         let centre = Vector3::new(home[0], home[1], home[2]);
         let mut rng = rand::rngs::StdRng::seed_from_u64(21);
@@ -628,5 +633,134 @@ fn coded_first_limits_are_the_first_checked_violation() {
             hits.get(family).copied().unwrap_or(0) > 10,
             "{family}: {hits:?}"
         );
+    }
+}
+
+/// The block kernel's screen changes no result (issue 15's speed): over random poses,
+/// poses bisected onto the boundary of the limits to 1e-13 of the step (whichever
+/// limit binds), exact axis bounds, NaN and angles beyond the fast sine's range, a
+/// cleared row is one the exact scan finds within every limit, its lengths are the
+/// single call's to 1e-12 relative, and the batch equals the single calls row by row.
+/// The screen must also clear most rows that are within limits (else it is no
+/// faster).
+#[test]
+fn screened_batch_equals_the_exact_path_on_and_near_every_limit() {
+    use pkm::limits::FirstLimit;
+    for (name, open) in [
+        ("hexapod-linuxcnc.toml", false),
+        ("hexapod-seed001.toml", false),
+        ("hexapod-seed001.toml", true),
+    ] {
+        let mut machine = Machine::from_path(format!(
+            "{}/../../examples/machines/{name}",
+            env!("CARGO_MANIFEST_DIR")
+        ))
+        .unwrap();
+        let Model::Hexapod(h) = &mut machine.model else {
+            panic!()
+        };
+        limits_to_hit(h, open);
+        let Model::Hexapod(h) = &machine.model else {
+            panic!()
+        };
+        let h: &Hexapod = h;
+        let home = h.home();
+        let centre = Vector3::new(home[0], home[1], home[2]);
+        let mut rng = rand::rngs::StdRng::seed_from_u64(33);
+        let mut buf = Vec::new();
+        let fine =
+            |x: &Vector6<f64>, buf: &mut Vec<_>| h.inverse_first_limit(x, buf).unwrap().1.is_none();
+        let mut poses: Vec<Vector6<f64>> = Vec::new();
+        // Rows drawn at random (not on a boundary by construction).
+        let mut random = Vec::new();
+        for k in 0..6000 {
+            let x = random_pose(&mut rng, &centre, 200.0, 200.0, 0.9);
+            if k % 2 == 0 || !fine(&home, &mut buf) {
+                random.push(poses.len());
+                poses.push(x);
+                continue;
+            }
+            // Bisect home -> x onto the first limit met, and keep both sides.
+            let (mut lo, mut hi) = (0.0, 1.0);
+            if fine(&x, &mut buf) {
+                poses.push(x);
+                continue;
+            }
+            for _ in 0..60 {
+                let mid = 0.5 * (lo + hi);
+                if fine(&(home + (x - home) * mid), &mut buf) {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            poses.push(home + (x - home) * lo);
+            poses.push(home + (x - home) * hi);
+        }
+        // Exactly on an axis bound, NaN, angles beyond 1e4 rad.
+        let mut on = home;
+        on[0] = 60.0;
+        poses.push(on);
+        on[4] = -0.3;
+        poses.push(on);
+        let mut nan = home;
+        nan[3] = f64::NAN;
+        poses.push(nan);
+        let mut far = home;
+        far[5] = 2e4 * std::f64::consts::TAU;
+        poses.push(far);
+        let n = poses.len() - poses.len() % 8 + 8;
+        while poses.len() < n {
+            poses.push(home);
+        }
+        let flat: Vec<f64> = poses.iter().flat_map(|x| x.iter().copied()).collect();
+        let mut qs = vec![0.0; 6 * n];
+        let mut clear = vec![false; n];
+        if !h.inverse_screened(&flat, &mut qs, &mut clear, true) {
+            eprintln!("no AVX-512 on this CPU: the per-pose path only");
+            clear.fill(false);
+            qs.clear();
+        }
+        let batch = pkm::analysis::batch::inverse_batch(&machine, &flat).unwrap();
+        let (mut within, mut cleared) = (0, 0);
+        for (r, x) in poses.iter().enumerate() {
+            let (q, first) = h.inverse_first_limit(x, &mut buf).unwrap();
+            let ok = first.is_none();
+            if x.iter().all(|v| v.is_finite()) && !qs.is_empty() {
+                for i in 0..6 {
+                    let (a, b) = (qs[6 * r + i], q[i]);
+                    assert!((a - b).abs() <= 1e-12 * b.abs(), "{name} row {r}: {a} {b}");
+                    assert_eq!(batch.actuators[6 * r + i], if clear[r] { a } else { b });
+                }
+            }
+            assert!(!clear[r] || ok, "{name} row {r}: cleared but {first:?}");
+            assert_eq!(batch.reachable[r], ok, "{name} row {r}");
+            let v = first.map(|f| match f {
+                FirstLimit::Code(c) => h.limit_violation(&c),
+                FirstLimit::Violation(v) => v,
+            });
+            assert_eq!(batch.causes.violation(r), v, "{name} row {r}");
+        }
+        for &r in &random {
+            let ok = batch.reachable[r];
+            within += usize::from(ok);
+            cleared += usize::from(clear[r] && ok);
+        }
+        assert!(
+            within >= 100 && cleared as f64 > 0.99 * within as f64,
+            "{name}: {within} of {} random rows within limits, {cleared} cleared",
+            random.len()
+        );
+        // Without the check the screen settles every row but the NaN one and the one
+        // with an angle beyond the fast sine's range (on a CPU with AVX-512; without
+        // it there is no block kernel).
+        if h.inverse_screened(&flat, &mut qs, &mut clear, false) {
+            for (r, x) in poses.iter().enumerate() {
+                let fast = x.iter().all(|v| v.abs() <= 1e4);
+                assert_eq!(clear[r], fast, "{name} row {r}");
+            }
+            let b = pkm::analysis::batch::inverse_batch_with(&machine, &flat, false).unwrap();
+            assert!(b.reachable.iter().all(|r| *r));
+        }
     }
 }

@@ -1,0 +1,445 @@
+//! Inverse kinematics of many poses eight at a time, with a conservative limit screen
+//! (what [`crate::mechanism::Mechanism::inverse_screened`] asks of a hexapod).
+//!
+//! The poses of a block are transposed into lanes, so everything vectorises over
+//! poses: the sines and cosines of A, B, C ([`crate::trig::sin_cos_array`], the same
+//! kernel as [`crate::rotation::rpy_matrix`]), the rotation, the six strut vectors
+//! `d_i = p + R arm_i - a_i` and lengths `L_i = |d_i|` (seed 001 eq. 1, the arithmetic
+//! of the portable [`crate::legs::StrutSoa::lengths`], so equal to it bit for bit), and
+//! every limit of [`super::Hexapod::scan`] as a comparison without division:
+//!
+//! - axis travel `lo_k <= x_k <= hi_k`;
+//! - strut length `lo_i <= L_i <= hi_i`;
+//! - base cone `d_i . w_i >= cos(max) L_i` (`w_i` the cone's axis);
+//! - platform cone `-d_i . (R w'_i) >= cos(max) L_i`;
+//! - strut pairs: the distance of the segments `a_i -> a_i + d_i` (the closest points
+//!   by the clamped parameters of [`super::segment_distance`], with selects instead of
+//!   branches) at least the strut diameter.
+//!
+//! A pose is *cleared* only when every test holds with a relative margin of
+//! [`MARGIN`], so a pose the screen clears is within every limit by the exact scan as
+//! well; the others (outside, at a boundary, nearly parallel struts, angles beyond the
+//! fast sine's range, NaN) are left to the exact per-pose path, which names the first
+//! violated limit. The screen changes no result, only which code computes it (tested
+//! row by row against the per-pose path).
+
+// Struts, pairs and lanes are indexed together.
+#![allow(clippy::needless_range_loop)]
+
+use super::Hexapod;
+
+/// Poses per block (one AVX-512 register of doubles, two AVX2 ones).
+pub(crate) const LANES: usize = 8;
+
+/// Relative margin of every screened test: far above the rounding differences between
+/// the screen's arithmetic and the exact scan's (a few units in the last place), far
+/// below any tolerance a user states.
+pub(crate) const MARGIN: f64 = 1e-9;
+
+/// Segments closer to parallel than this (`1 - cos^2` of their angle) are left to the
+/// exact path: the closest points of nearly parallel segments are ill-conditioned.
+const PARALLEL: f64 = 1e-6;
+
+/// The limits of one hexapod laid out for the screen (built per call from the
+/// machine's public fields, so it cannot go stale when a caller edits them).
+pub(crate) struct Screen {
+    /// Arms `R`-free: `b'_i - t` (platform frame) and base joints `a_i`, by component.
+    arm: [[f64; 6]; 3],
+    base: [[f64; 6]; 3],
+    /// Axis travel by pose coordinate (infinite where unlimited).
+    axis: [(f64, f64); 6],
+    /// Strut length range by strut.
+    length: [(f64, f64); 6],
+    /// Base cone axis and `cos(max)` by strut (`cos = -inf`: no cone).
+    base_cone: [([f64; 3], f64); 6],
+    /// Platform cone axis (platform frame) and `cos(max)` by strut.
+    platform_cone: [([f64; 3], f64); 6],
+    /// Strut pairs checked for interference, and the strut diameter.
+    pairs: Vec<(usize, usize)>,
+    diameter: f64,
+}
+
+impl Screen {
+    pub(crate) fn new(h: &Hexapod) -> Self {
+        let set = &h.set;
+        let mut axis = [(f64::NEG_INFINITY, f64::INFINITY); 6];
+        for (k, r) in &h.axes.ranges {
+            if let Some(a) = axis.get_mut(*k) {
+                // Two ranges on one coordinate: both apply.
+                *a = (a.0.max(r.min), a.1.min(r.max));
+            }
+        }
+        let cone = |c: &Option<super::JointCone>| match c {
+            Some(c) => ([c.axis.x, c.axis.y, c.axis.z], c.cos_max()),
+            None => ([0.0; 3], f64::NEG_INFINITY),
+        };
+        let pairs = match h.strut_diameter {
+            Some(_) => (0..6)
+                .flat_map(|i| (i + 1..6).map(move |k| (i, k)))
+                .filter(|&(i, k)| !h.shares[i][k])
+                .collect(),
+            None => Vec::new(),
+        };
+        Screen {
+            arm: std::array::from_fn(|c| std::array::from_fn(|i| set.arms[i][c])),
+            base: std::array::from_fn(|c| std::array::from_fn(|i| set.base[i][c])),
+            axis,
+            length: std::array::from_fn(|i| {
+                let r = &h.struts[i].actuator.range;
+                (r.min, r.max)
+            }),
+            base_cone: std::array::from_fn(|i| cone(&h.struts[i].base_cone)),
+            platform_cone: std::array::from_fn(|i| cone(&h.struts[i].platform_cone)),
+            pairs,
+            diameter: h.strut_diameter.unwrap_or(0.0),
+        }
+    }
+}
+
+/// Lengths of the rows of `xs` (row-major X, Y, Z, A, B, C) into `qs` (row-major, six
+/// per row), and `clear[i]` set where row `i` is certainly within every limit (with
+/// `check`; without it, where its angles are within the fast sine's range, so its
+/// lengths are the single call's). Rows past the last whole block are not cleared.
+/// Returns `false` (nothing written) on a CPU without AVX-512F, whose callers take the
+/// per-pose path.
+pub(crate) fn screen_rows(
+    s: &Screen,
+    xs: &[f64],
+    qs: &mut [f64],
+    clear: &mut [bool],
+    check: bool,
+) -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            let n = clear.len();
+            for b in 0..n / LANES {
+                let (r0, r1) = (b * LANES, (b + 1) * LANES);
+                let x: &[f64; 6 * LANES] = xs[6 * r0..6 * r1].try_into().expect("whole block");
+                let q: &mut [f64; 6 * LANES] =
+                    (&mut qs[6 * r0..6 * r1]).try_into().expect("whole block");
+                // SAFETY: the CPU reported AVX-512F, the one feature the kernel enables.
+                let mask = unsafe { avx512::block(s, x, q, check) };
+                for (l, c) in clear[r0..r1].iter_mut().enumerate() {
+                    *c = mask & (1 << l) != 0;
+                }
+            }
+            clear[n / LANES * LANES..].fill(false);
+            return true;
+        }
+    }
+    let _ = (s, xs, qs, clear, check);
+    false
+}
+
+#[cfg(target_arch = "x86_64")]
+mod avx512 {
+    use std::arch::x86_64::*;
+
+    use super::{Screen, LANES, MARGIN, PARALLEL};
+
+    /// The in-register transposes of a block (48 doubles, row-major, six per row, in
+    /// six vectors `v_0..v_5` of eight). Column `k` (coordinate or strut `k` of every
+    /// row) takes element `e = 6 l + k` into lane `l`: from the pair `(v_0, v_1)`,
+    /// `(v_2, v_3)` or `(v_4, v_5)` holding it, at index `e mod 16` of the pair.
+    const fn column_index(k: usize) -> [i64; LANES] {
+        let mut idx = [0; LANES];
+        let mut l = 0;
+        while l < LANES {
+            idx[l] = ((6 * l + k) % 16) as i64;
+            l += 1;
+        }
+        idx
+    }
+
+    /// Lanes of column `k` whose element lies at or past `from`.
+    const fn column_mask(k: usize, from: usize) -> u8 {
+        let mut m = 0;
+        let mut l = 0;
+        while l < LANES {
+            if 6 * l + k >= from {
+                m |= 1 << l;
+            }
+            l += 1;
+        }
+        m
+    }
+
+    /// The way back: lane `m` of row-major vector `j` is element `e = 8 j + m`, strut
+    /// `e mod 6` of row `e / 6`, found in the column pair `(e mod 6) / 2` at index
+    /// `8 ((e mod 6) mod 2) + e / 6`.
+    const fn row_index(j: usize) -> [i64; LANES] {
+        let mut idx = [0; LANES];
+        let mut m = 0;
+        while m < LANES {
+            let e = 8 * j + m;
+            idx[m] = (8 * (e % 6 % 2) + e / 6) as i64;
+            m += 1;
+        }
+        idx
+    }
+
+    /// Lanes of row-major vector `j` taken from column pair `pair`.
+    const fn row_mask(j: usize, pair: usize) -> u8 {
+        let mut mask = 0;
+        let mut m = 0;
+        while m < LANES {
+            if (8 * j + m) % 6 / 2 == pair {
+                mask |= 1 << m;
+            }
+            m += 1;
+        }
+        mask
+    }
+
+    const COLUMN_INDEX: [[i64; LANES]; 6] = [
+        column_index(0),
+        column_index(1),
+        column_index(2),
+        column_index(3),
+        column_index(4),
+        column_index(5),
+    ];
+    const COLUMN_MASK: [[u8; 2]; 6] = [
+        [column_mask(0, 16), column_mask(0, 32)],
+        [column_mask(1, 16), column_mask(1, 32)],
+        [column_mask(2, 16), column_mask(2, 32)],
+        [column_mask(3, 16), column_mask(3, 32)],
+        [column_mask(4, 16), column_mask(4, 32)],
+        [column_mask(5, 16), column_mask(5, 32)],
+    ];
+    const ROW_INDEX: [[i64; LANES]; 6] = [
+        row_index(0),
+        row_index(1),
+        row_index(2),
+        row_index(3),
+        row_index(4),
+        row_index(5),
+    ];
+    const ROW_MASK: [[u8; 2]; 6] = [
+        [row_mask(0, 1), row_mask(0, 2)],
+        [row_mask(1, 1), row_mask(1, 2)],
+        [row_mask(2, 1), row_mask(2, 2)],
+        [row_mask(3, 1), row_mask(3, 2)],
+        [row_mask(4, 1), row_mask(4, 2)],
+        [row_mask(5, 1), row_mask(5, 2)],
+    ];
+
+    /// One block: lengths into `qs`, the mask of cleared lanes returned.
+    #[target_feature(enable = "avx512f")]
+    pub(super) unsafe fn block(
+        s: &Screen,
+        xs: &[f64; 6 * LANES],
+        qs: &mut [f64; 6 * LANES],
+        check: bool,
+    ) -> u8 {
+        let c = |v: f64| _mm512_set1_pd(v);
+        let add = |a: __m512d, b: __m512d| _mm512_add_pd(a, b);
+        let sub = |a: __m512d, b: __m512d| _mm512_sub_pd(a, b);
+        let mul = |a: __m512d, b: __m512d| _mm512_mul_pd(a, b);
+        let ge = |a: __m512d, b: __m512d| _mm512_cmp_pd_mask::<_CMP_GE_OQ>(a, b);
+        let le = |a: __m512d, b: __m512d| _mm512_cmp_pd_mask::<_CMP_LE_OQ>(a, b);
+        // SAFETY: unaligned loads of 8 f64 at offsets 0..40 step 8 of the 48 of `xs`,
+        // and of the 8 i64 of an index table.
+        let v: [__m512d; 6] =
+            std::array::from_fn(|j| unsafe { _mm512_loadu_pd(xs.as_ptr().add(8 * j)) });
+        let index = |t: &[i64; LANES]| unsafe { _mm512_loadu_si512(t.as_ptr().cast()) };
+        let col = |k: usize| {
+            let idx = index(&COLUMN_INDEX[k]);
+            let [m16, m32] = COLUMN_MASK[k];
+            let lo = _mm512_permutex2var_pd(v[0], idx, v[1]);
+            let mid = _mm512_permutex2var_pd(v[2], idx, v[3]);
+            let hi = _mm512_permutex2var_pd(v[4], idx, v[5]);
+            _mm512_mask_blend_pd(m32, _mm512_mask_blend_pd(m16, lo, mid), hi)
+        };
+        let (px, py, pz) = (col(0), col(1), col(2));
+        let (a, b, cc_) = (col(3), col(4), col(5));
+        let ((sa, ca), in_a) = sin_cos(a);
+        let ((sb, cb), in_b) = sin_cos(b);
+        let ((sc, cc), in_c) = sin_cos(cc_);
+        let mut ok: u8 = in_a & in_b & in_c;
+        // R = Rz(C) Ry(B) Rx(A), as rotation::rpy_matrix (same operations, same order).
+        let r = [
+            mul(cc, cb),
+            sub(mul(mul(cc, sb), sa), mul(sc, ca)),
+            add(mul(mul(cc, sb), ca), mul(sc, sa)),
+            mul(sc, cb),
+            add(mul(mul(sc, sb), sa), mul(cc, ca)),
+            sub(mul(mul(sc, sb), ca), mul(cc, sa)),
+            sub(c(0.0), sb),
+            mul(cb, sa),
+            mul(cb, ca),
+        ];
+        // Strut vectors and lengths, as legs::StrutSoa::lengths.
+        let mut d = [[c(0.0); 3]; 6];
+        let mut len = [c(0.0); 6];
+        for i in 0..6 {
+            let (x, y, z) = (c(s.arm[0][i]), c(s.arm[1][i]), c(s.arm[2][i]));
+            let row = |k: usize, p: __m512d, base: f64| {
+                add(
+                    add(
+                        add(mul(r[3 * k], x), mul(r[3 * k + 1], y)),
+                        mul(r[3 * k + 2], z),
+                    ),
+                    sub(p, c(base)),
+                )
+            };
+            let v = [
+                row(0, px, s.base[0][i]),
+                row(1, py, s.base[1][i]),
+                row(2, pz, s.base[2][i]),
+            ];
+            len[i] = _mm512_sqrt_pd(add(add(mul(v[0], v[0]), mul(v[1], v[1])), mul(v[2], v[2])));
+            d[i] = v;
+        }
+        for j in 0..6 {
+            let idx = index(&ROW_INDEX[j]);
+            let [m1, m2] = ROW_MASK[j];
+            let p0 = _mm512_permutex2var_pd(len[0], idx, len[1]);
+            let p1 = _mm512_permutex2var_pd(len[2], idx, len[3]);
+            let p2 = _mm512_permutex2var_pd(len[4], idx, len[5]);
+            let row = _mm512_mask_blend_pd(m2, _mm512_mask_blend_pd(m1, p0, p1), p2);
+            // SAFETY: 8 f64 at offset 8 j < 48 of the 48 of `qs`.
+            unsafe { _mm512_storeu_pd(qs.as_mut_ptr().add(8 * j), row) };
+        }
+        if !check || ok == 0 {
+            return ok;
+        }
+        for (k, v) in [px, py, pz, a, b, cc_].into_iter().enumerate() {
+            let (lo, hi) = s.axis[k];
+            if lo.is_finite() || hi.is_finite() {
+                ok &= ge(v, c(lo)) & le(v, c(hi));
+            }
+        }
+        let dot = |u: &[__m512d; 3], w: [__m512d; 3]| {
+            add(add(mul(u[0], w[0]), mul(u[1], w[1])), mul(u[2], w[2]))
+        };
+        for i in 0..6 {
+            let q = len[i];
+            let m = mul(c(MARGIN), q);
+            let (lo, hi) = s.length[i];
+            ok &= _mm512_cmp_pd_mask::<_CMP_GT_OQ>(q, c(0.0))
+                & ge(sub(q, c(lo)), m)
+                & ge(sub(c(hi), q), m);
+            let (w, cos_max) = s.base_cone[i];
+            if cos_max > f64::NEG_INFINITY {
+                let along = dot(&d[i], [c(w[0]), c(w[1]), c(w[2])]);
+                ok &= ge(along, add(mul(c(cos_max), q), m));
+            }
+            let (w, cos_max) = s.platform_cone[i];
+            if cos_max > f64::NEG_INFINITY {
+                // R w' in the base frame.
+                let u = [0, 1, 2].map(|k| {
+                    add(
+                        add(mul(r[3 * k], c(w[0])), mul(r[3 * k + 1], c(w[1]))),
+                        mul(r[3 * k + 2], c(w[2])),
+                    )
+                });
+                let along = sub(c(0.0), dot(&d[i], u));
+                ok &= ge(along, add(mul(c(cos_max), q), m));
+            }
+        }
+        if ok == 0 || s.pairs.is_empty() {
+            return ok;
+        }
+        let need = s.diameter * (1.0 + MARGIN);
+        let need2 = c(need * need);
+        let one = c(1.0);
+        let zero = c(0.0);
+        let clamp01 = |v: __m512d| _mm512_min_pd(_mm512_max_pd(v, zero), one);
+        // 1 / L_i^2, once per strut, when a pair first needs it.
+        let mut inv_a: [Option<__m512d>; 6] = [None; 6];
+        for &(i, k) in &s.pairs {
+            // r = a_i - a_k is the same in every lane.
+            let rv = [0, 1, 2].map(|j| c(s.base[j][i] - s.base[j][k]));
+            let (u, w) = (&d[i], &d[k]);
+            let a2 = dot(u, *u);
+            let e2 = dot(w, *w);
+            // The lines' distance, a lower bound of the segments': (r . n)^2 >= need^2
+            // |n|^2, n = d_i x d_k, |n|^2 = |d_i|^2 |d_k|^2 sin^2 (nearly parallel
+            // lines are not judged).
+            let n = [
+                sub(mul(u[1], w[2]), mul(u[2], w[1])),
+                sub(mul(u[2], w[0]), mul(u[0], w[2])),
+                sub(mul(u[0], w[1]), mul(u[1], w[0])),
+            ];
+            let rn = dot(&rv, n);
+            let nn = dot(&n, n);
+            let not_parallel = _mm512_cmp_pd_mask::<_CMP_GT_OQ>(nn, mul(c(PARALLEL), mul(a2, e2)));
+            let lines = ge(mul(rn, rn), mul(need2, nn)) & not_parallel;
+            if lines & ok == ok {
+                continue;
+            }
+            // The segments' distance, by the clamped parameters of segment_distance.
+            let inv = |j: usize, cache: &mut [Option<__m512d>; 6]| {
+                *cache[j].get_or_insert_with(|| _mm512_div_pd(one, mul(len[j], len[j])))
+            };
+            let (inv_i, inv_k) = (inv(i, &mut inv_a), inv(k, &mut inv_a));
+            let f = dot(w, rv);
+            let cr = dot(u, rv);
+            let bb = dot(u, *w);
+            let denom = sub(mul(a2, e2), mul(bb, bb));
+            let s0 = clamp01(_mm512_div_pd(sub(mul(bb, f), mul(cr, e2)), denom));
+            let t0 = mul(add(mul(bb, s0), f), inv_k);
+            let below = _mm512_cmp_pd_mask::<_CMP_LT_OQ>(t0, zero);
+            let above = _mm512_cmp_pd_mask::<_CMP_GT_OQ>(t0, one);
+            let t = _mm512_mask_blend_pd(above, _mm512_mask_blend_pd(below, t0, zero), one);
+            let s_below = clamp01(mul(sub(zero, cr), inv_i));
+            let s_above = clamp01(mul(sub(bb, cr), inv_i));
+            let s1 = _mm512_mask_blend_pd(above, _mm512_mask_blend_pd(below, s0, s_below), s_above);
+            let g = [0, 1, 2].map(|j| sub(add(rv[j], mul(u[j], s1)), mul(w[j], t)));
+            let far = ge(dot(&g, g), need2)
+                & _mm512_cmp_pd_mask::<_CMP_GT_OQ>(denom, mul(c(PARALLEL), mul(a2, e2)));
+            ok &= lines | far;
+            if ok == 0 {
+                return 0;
+            }
+        }
+        ok
+    }
+
+    /// `((sin x, cos x), in range)` by lane: [`crate::trig`]'s kernel, the same
+    /// operations in the same order (so equal to it bit for bit), and the mask of lanes
+    /// within its range `|x| <= 1e4` (the others, NaN included, are not cleared).
+    #[target_feature(enable = "avx512f")]
+    fn sin_cos(x: __m512d) -> ((__m512d, __m512d), u8) {
+        use crate::trig::{COS_TAYLOR as C, MAGIC, PIO2_HI, PIO2_LO, SIN_TAYLOR as S, TWO_OVER_PI};
+        let c = |v: f64| _mm512_set1_pd(v);
+        let add = |a: __m512d, b: __m512d| _mm512_add_pd(a, b);
+        let mul = |a: __m512d, b: __m512d| _mm512_mul_pd(a, b);
+        let sub = |a: __m512d, b: __m512d| _mm512_sub_pd(a, b);
+        let in_range = _mm512_cmp_pd_mask::<_CMP_LE_OQ>(_mm512_abs_pd(x), c(1e4));
+        let y = add(mul(x, c(TWO_OVER_PI)), c(MAGIC));
+        let q = _mm512_castpd_si512(y);
+        let k = sub(y, c(MAGIC));
+        let r = sub(sub(x, mul(k, c(PIO2_HI))), mul(k, c(PIO2_LO)));
+        let z = mul(r, r);
+        let horner = |coef: &[f64]| {
+            let last = coef.len() - 1;
+            let mut t = c(coef[last]);
+            for j in (0..last).rev() {
+                t = add(c(coef[j]), mul(z, t));
+            }
+            t
+        };
+        let ps = horner(&S);
+        let sn = add(r, mul(mul(r, z), ps));
+        let pc = horner(&C[1..]);
+        let cs = add(c(1.0), mul(z, add(c(C[0]), mul(z, pc))));
+        let swap = _mm512_test_epi64_mask(q, _mm512_set1_epi64(1));
+        let (a, b) = (
+            _mm512_mask_blend_pd(swap, sn, cs),
+            _mm512_mask_blend_pd(swap, cs, sn),
+        );
+        let two = _mm512_set1_epi64(2);
+        let sa = _mm512_slli_epi64::<62>(_mm512_and_si512(q, two));
+        let sb = _mm512_slli_epi64::<62>(_mm512_and_si512(
+            _mm512_add_epi64(q, _mm512_set1_epi64(1)),
+            two,
+        ));
+        let flip = |v: __m512d, sign: __m512i| {
+            _mm512_castsi512_pd(_mm512_xor_si512(_mm512_castpd_si512(v), sign))
+        };
+        ((flip(a, sa), flip(b, sb)), in_range)
+    }
+}
