@@ -4,6 +4,7 @@
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
+use rayon::prelude::*;
 
 use crate::errors::invalid;
 
@@ -121,38 +122,110 @@ pub fn array(v: &Bound<'_, PyAny>, what: &str) -> PyResult<(Vec<f64>, Vec<usize>
     Ok((data, shape))
 }
 
+/// Rows of `width` read from a numpy array: borrowed where the array is C-contiguous
+/// float64 (a million poses are 48 MB: copying them, page faults included, took a
+/// third of a batch), copied otherwise.
+pub struct RowsRef<'py> {
+    borrowed: Option<numpy::PyReadonlyArrayDyn<'py, f64>>,
+    owned: Vec<f64>,
+    /// The array was one row, shape `(width,)`.
+    pub single: bool,
+}
+
+impl RowsRef<'_> {
+    /// The values, row-major.
+    pub fn values(&self) -> &[f64] {
+        match &self.borrowed {
+            Some(a) => a.as_slice().unwrap_or(&[]),
+            None => &self.owned,
+        }
+    }
+}
+
+/// [`rows`] without copying a C-contiguous float64 array; the values are checked on
+/// all cores.
+pub fn rows_ref<'py>(v: &Bound<'py, PyAny>, width: usize, what: &str) -> PyResult<RowsRef<'py>> {
+    let borrowed = v
+        .extract::<numpy::PyReadonlyArrayDyn<'py, f64>>()
+        .ok()
+        .filter(|a| a.as_slice().is_ok());
+    let Some(arr) = borrowed else {
+        let (owned, single) = rows(v, width, what)?;
+        return Ok(RowsRef {
+            borrowed: None,
+            owned,
+            single,
+        });
+    };
+    let single = shape_is_rows(arr.shape(), width, what)?;
+    let r = RowsRef {
+        borrowed: Some(arr),
+        owned: Vec::new(),
+        single,
+    };
+    let data = r.values();
+    let max = pkm::machine::MAX_MAGNITUDE;
+    // By blocks of 64 Ki values: rayon's per-element `position_first` polls a shared
+    // flag per value, and took a third of a million-pose batch.
+    const BLOCK: usize = 1 << 16;
+    let bad = v.py().detach(|| {
+        let block = data
+            .par_chunks(BLOCK)
+            .position_first(|c| c.iter().any(|x| !(x.abs() <= max)))?;
+        let start = block * BLOCK;
+        data[start..]
+            .iter()
+            .position(|x| !(x.abs() <= max))
+            .map(|i| start + i)
+    });
+    if let Some(i) = bad {
+        return Err(out_of_range(data, i, width, what));
+    }
+    Ok(r)
+}
+
+/// Whether `shape` is one row of `width` (else rows of it); an error naming `what`
+/// for any other shape.
+fn shape_is_rows(shape: &[usize], width: usize, what: &str) -> PyResult<bool> {
+    match shape {
+        [w] if *w == width => Ok(true),
+        [_, w] if *w == width => Ok(false),
+        _ => Err(invalid(
+            what,
+            format!("expected shape (N, {width}) or ({width},), got {shape:?}"),
+        )),
+    }
+}
+
+/// The error of value `i` of `data`, not finite or beyond [`pkm::machine::MAX_MAGNITUDE`].
+fn out_of_range(data: &[f64], i: usize, width: usize, what: &str) -> PyErr {
+    let max = pkm::machine::MAX_MAGNITUDE;
+    let what_is = if data[i].is_finite() {
+        format!("beyond the largest magnitude pkm takes ({max:.0e} mm or rad)")
+    } else {
+        "not a finite number".into()
+    };
+    invalid(
+        what,
+        format!(
+            "row {}, column {}: {:e} is {what_is}",
+            i / width,
+            i % width,
+            data[i]
+        ),
+    )
+}
+
 /// Rows of `width` from an array of shape `(n, width)` or `(width,)`; whether it was
 /// one row. Every value must be finite and at most
 /// [`pkm::machine::MAX_MAGNITUDE`] (1e6 mm or rad) in size, as the `pkm` command
 /// takes its values: beyond, the kinematics compute with numbers that mean nothing.
 pub fn rows(v: &Bound<'_, PyAny>, width: usize, what: &str) -> PyResult<(Vec<f64>, bool)> {
     let (data, shape) = array(v, what)?;
-    let single = match shape.as_slice() {
-        [w] if *w == width => true,
-        [_, w] if *w == width => false,
-        _ => {
-            return Err(invalid(
-                what,
-                format!("expected shape (N, {width}) or ({width},), got {shape:?}"),
-            ))
-        }
-    };
+    let single = shape_is_rows(&shape, width, what)?;
     let max = pkm::machine::MAX_MAGNITUDE;
     if let Some(i) = data.iter().position(|x| !(x.abs() <= max)) {
-        let what_is = if data[i].is_finite() {
-            format!("beyond the largest magnitude pkm takes ({max:.0e} mm or rad)")
-        } else {
-            "not a finite number".into()
-        };
-        return Err(invalid(
-            what,
-            format!(
-                "row {}, column {}: {:e} is {what_is}",
-                i / width,
-                i % width,
-                data[i]
-            ),
-        ));
+        return Err(out_of_range(&data, i, width, what));
     }
     Ok((data, single))
 }

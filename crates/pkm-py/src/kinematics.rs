@@ -23,20 +23,19 @@ pub struct IkBatch {
     actuators: Py<PyAny>,
     reachable: Py<PyAny>,
     limit: Py<PyAny>,
-    excess: Py<PyAny>,
+    /// Made on first access (most callers unpack the three arrays only).
+    excess: std::sync::OnceLock<Py<PyAny>>,
     causes: pkm::analysis::batch::Causes,
 }
 
 impl IkBatch {
     fn new(py: Python<'_>, b: pkm::analysis::batch::BatchInverse, width: usize) -> PyResult<Self> {
-        let c = &b.causes;
-        let excess: Vec<f64> = (0..c.reason.len()).map(|i| c.excess(i)).collect();
-        let reason = c.reason.clone();
+        let reason = b.causes.reason.clone();
         Ok(IkBatch {
             actuators: vec2(py, b.actuators, width)?.unbind(),
             reachable: vec1(py, b.reachable).into_any().unbind(),
             limit: vec1(py, reason).into_any().unbind(),
-            excess: vec1(py, excess).into_any().unbind(),
+            excess: std::sync::OnceLock::new(),
             causes: b.causes,
         })
     }
@@ -70,7 +69,13 @@ impl IkBatch {
     /// unit (`limit_units`: mm, deg); NaN where reachable or without solution.
     #[getter]
     fn excess(&self, py: Python<'_>) -> Py<PyAny> {
-        self.excess.clone_ref(py)
+        self.excess
+            .get_or_init(|| {
+                let c = &self.causes;
+                let excess: Vec<f64> = (0..c.reason.len()).map(|i| c.excess(i)).collect();
+                vec1(py, excess).into_any().unbind()
+            })
+            .clone_ref(py)
     }
     /// Unit of each entry of `limit_names` ("" for a solver message).
     #[getter]
@@ -214,23 +219,24 @@ impl Machine {
         check: bool,
     ) -> PyResult<Bound<'py, PyAny>> {
         let p = self.m().coordinates().len();
-        let (x, single) = rows(poses, p, "poses")?;
+        let r = convert::rows_ref(poses, p, "poses")?;
+        let (x, single) = (r.values(), r.single);
         if single && !check {
-            let q = self.m().inverse(&x).map_err(to_py)?;
+            let q = self.m().inverse(x).map_err(to_py)?;
             return Ok((vec1(py, q), true, None::<String>)
                 .into_pyobject(py)?
                 .into_any());
         }
         if single {
-            let s = pkm::analysis::kinematics::inverse(&self.inner, &x).map_err(to_py)?;
+            let s = pkm::analysis::kinematics::inverse(&self.inner, x).map_err(to_py)?;
             let msg = s.violations.first().map(|v| v.to_string());
             return Ok((vec1(py, s.actuators), s.violations.is_empty(), msg)
                 .into_pyobject(py)?
                 .into_any());
         }
-        let inner = self.inner.clone();
+        let inner = &self.inner;
         let b = py
-            .detach(move || pkm::analysis::batch::inverse_batch_with(&inner, &x, check))
+            .detach(|| pkm::analysis::batch::inverse_batch_with(inner, x, check))
             .map_err(to_py)?;
         let width = self.m().actuators().len();
         Ok(Bound::new(py, IkBatch::new(py, b, width)?)?.into_any())
