@@ -189,7 +189,10 @@ fn batch_inverse(c: &mut Criterion) {
     g.sample_size(10);
     g.throughput(criterion::Throughput::Elements(1_000_000));
     g.bench_function(
-        "hexapod 1e6 random poses with limits (rayon, all cores)",
+        format!(
+            "hexapod 1e6 random poses with limits (rayon, {} threads)",
+            rayon::current_num_threads()
+        ),
         |b| {
             b.iter(|| {
                 inverse_batch(&m, black_box(&poses))
@@ -257,6 +260,7 @@ fn hexapod(c: &mut Criterion) {
         })
     });
     g.finish();
+    random_hexapod_ik(c, &h);
     let q = Mechanism::<6, 6>::inverse(&h, &x).unwrap();
     // Previous pose of a 1 kHz trajectory at 100 mm/s and 0.5 rad/s: 0.1 mm, 0.0005 rad away.
     let prev = Vector6::new(19.9, -10.0, 540.0, 0.0495, -0.03, 0.1);
@@ -304,6 +308,76 @@ fn hexapod(c: &mut Criterion) {
     });
 }
 
+/// Issue 19's hexapod IK on random poses (uniform in +-100 mm, +-10 deg about the
+/// LinuxCNC hexapod's home, seed 1), one thread: from X, Y, Z, A, B, C one pose per
+/// call (what a controller sends), and 200 000 poses as a batch (16 MB of input, so
+/// not cache-resident), from X..C by the block kernel and from rotation matrices.
+fn random_hexapod_ik(c: &mut Criterion, h: &pkm::hexapod::Hexapod) {
+    use rand::{Rng, SeedableRng};
+    let home = Mechanism::<6, 6>::home(h);
+    let mut rng = rand::rngs::StdRng::seed_from_u64(1);
+    let mut random = |n: usize| -> Vec<f64> {
+        (0..6 * n)
+            .map(|i| {
+                let k = i % 6;
+                let s = if k < 3 { 100.0 } else { 10f64.to_radians() };
+                home[k] + rng.random_range(-s..s)
+            })
+            .collect()
+    };
+    let few = random(1024);
+    let xs: Vec<Vector6<f64>> = few
+        .chunks_exact(6)
+        .map(Vector6::from_column_slice)
+        .collect();
+    let mut g = c.benchmark_group("hexapod IK random poses");
+    g.throughput(criterion::Throughput::Elements(xs.len() as u64));
+    g.bench_function(
+        "from X..C, one pose per call (1024 poses), one thread",
+        |b| {
+            b.iter(|| {
+                let mut sum = 0.0;
+                for x in &xs {
+                    sum += Mechanism::<6, 6>::inverse(h, black_box(x)).unwrap()[0];
+                }
+                sum
+            })
+        },
+    );
+    let n = 200_000;
+    let many = random(n);
+    let mut qs = vec![0.0; 6 * n];
+    let mut clear = vec![false; n];
+    g.throughput(criterion::Throughput::Elements(n as u64));
+    g.bench_function("batch of 200k from X..C (block kernel), one thread", |b| {
+        b.iter(|| {
+            let screened = h.inverse_screened(black_box(&many), &mut qs, &mut clear, false);
+            (screened, qs[6 * n - 1])
+        })
+    });
+    g.bench_function(
+        "batch of 200k from X..C with the limit screen (block kernel), one thread",
+        |b| {
+            b.iter(|| {
+                let screened = h.inverse_screened(black_box(&many), &mut qs, &mut clear, true);
+                (screened, clear[n - 1])
+            })
+        },
+    );
+    let (ps, rs): (Vec<_>, Vec<_>) = many
+        .chunks_exact(6)
+        .map(|x| pkm::legs::split_pose(&Vector6::from_column_slice(x)))
+        .unzip();
+    let mut out = vec![Vector6::zeros(); n];
+    g.bench_function("batch of 200k from rotation matrices, one thread", |b| {
+        b.iter(|| {
+            h.lengths_batch(black_box(&ps), black_box(&rs), &mut out);
+            out[n - 1][0]
+        })
+    });
+    g.finish();
+}
+
 criterion_group!(hexapod_benches, hexapod);
 
 fn workspace(c: &mut Criterion) {
@@ -335,14 +409,20 @@ fn workspace(c: &mut Criterion) {
     ];
     let mut g = c.benchmark_group("workspace");
     g.sample_size(10);
-    g.bench_function("hexapod 1.03e6 grid points (rayon, all cores)", |b| {
-        b.iter(|| {
-            map(&h, black_box(&h.home), &axes, &[], &|_| {})
-                .unwrap()
-                .points
-                .len()
-        })
-    });
+    g.bench_function(
+        format!(
+            "hexapod 1.03e6 grid points (rayon, {} threads)",
+            rayon::current_num_threads()
+        ),
+        |b| {
+            b.iter(|| {
+                map(&h, black_box(&h.home), &axes, &[], &|_| {})
+                    .unwrap()
+                    .points
+                    .len()
+            })
+        },
+    );
     g.finish();
 }
 
@@ -426,7 +506,10 @@ fn serial(c: &mut Criterion) {
     let mut g = c.benchmark_group("serial monte carlo");
     g.sample_size(10);
     g.bench_function(
-        "MC-300 1e6 machines, its file's 39 tolerances, uncompleted (rayon, all cores)",
+        format!(
+            "MC-300 1e6 machines, its file's 39 tolerances, uncompleted (rayon, {} threads)",
+            rayon::current_num_threads()
+        ),
         |b| {
             b.iter(|| {
                 pkm::accuracy::monte_carlo(mc300, &x300, &s.tolerances, 1_000_000, 1)
@@ -502,7 +585,10 @@ fn serial(c: &mut Criterion) {
     rows_43.push(by_name("theta_z0", 0.01 * deg));
     assert_eq!(rows_43.len(), 43);
     g.bench_function(
-        "MC-300 1e6 machines, c008e08's 43 tolerances, uncompleted (rayon, all cores)",
+        format!(
+            "MC-300 1e6 machines, c008e08's 43 tolerances, uncompleted (rayon, {} threads)",
+            rayon::current_num_threads()
+        ),
         |b| {
             b.iter(|| {
                 pkm::accuracy::monte_carlo(mc300, &x300, &rows_43, 1_000_000, 1)
@@ -518,7 +604,7 @@ fn serial(c: &mut Criterion) {
         .unwrap()
         .expect("angles to complete");
     g.bench_function(
-        "MC-300 1e6 machines, its file's 39 tolerances, completed per sample (rayon, all cores)",
+        format!("MC-300 1e6 machines, its file's 39 tolerances, completed per sample (rayon, {} threads)", rayon::current_num_threads()),
         |b| {
             b.iter(|| {
                 pkm::accuracy::monte_carlo(&completed, &x300, &s.tolerances, 1_000_000, 1)

@@ -505,7 +505,7 @@ impl Mechanism<6, 6> for Hexapod {
         Ok((q, first.map(FirstLimit::Code)))
     }
 
-    /// Eight poses at a time: [`block`]'s kernel and limit screen.
+    /// Eight poses at a time: the kernel and limit screen of `hexapod/block.rs`.
     fn inverse_screened(
         &self,
         xs: &[f64],
