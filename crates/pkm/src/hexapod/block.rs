@@ -4,9 +4,9 @@
 //! The poses of a block are transposed into lanes, so everything vectorises over
 //! poses: the sines and cosines of A, B, C ([`crate::trig::sin_cos_array`], the same
 //! kernel as [`crate::rotation::rpy_matrix`]), the rotation, the six strut vectors
-//! `d_i = p + R arm_i - a_i` and lengths `L_i = |d_i|` (seed 001 eq. 1, the arithmetic
-//! of the portable [`crate::legs::StrutSoa::lengths`], so equal to it bit for bit), and
-//! every limit of [`super::Hexapod::scan`] as a comparison without division:
+//! `d_i = p + R arm_i - a_i` and lengths `L_i = |d_i|` (seed 001 eq. 1, the operations
+//! of the single pose's AVX-512 kernel, so equal to [`super::Hexapod::lengths`] bit for
+//! bit), and every limit of [`super::Hexapod::scan`] as a comparison without division:
 //!
 //! - axis travel `lo_k <= x_k <= hi_k`;
 //! - strut length `lo_i <= L_i <= hi_i`;
@@ -270,26 +270,34 @@ mod avx512 {
             mul(cb, sa),
             mul(cb, ca),
         ];
-        // Strut vectors and lengths, as legs::StrutSoa::lengths.
+        // Strut vectors and lengths by the operations of the single pose's AVX-512
+        // kernel (`simd.rs`: fused multiply-adds, the square root by the reciprocal
+        // estimate and two refinements), so a batch's lengths equal `Hexapod::lengths`
+        // bit for bit, whichever path settles a row.
+        let fma = |a: __m512d, b: __m512d, c: __m512d| _mm512_fmadd_pd(a, b, c);
         let mut d = [[c(0.0); 3]; 6];
         let mut len = [c(0.0); 6];
         for i in 0..6 {
             let (x, y, z) = (c(s.arm[0][i]), c(s.arm[1][i]), c(s.arm[2][i]));
             let row = |k: usize, p: __m512d, base: f64| {
-                add(
-                    add(
-                        add(mul(r[3 * k], x), mul(r[3 * k + 1], y)),
-                        mul(r[3 * k + 2], z),
-                    ),
-                    sub(p, c(base)),
-                )
+                let t = sub(p, c(base));
+                let t = fma(r[3 * k + 2], z, t);
+                let t = fma(r[3 * k + 1], y, t);
+                fma(r[3 * k], x, t)
             };
             let v = [
                 row(0, px, s.base[0][i]),
                 row(1, py, s.base[1][i]),
                 row(2, pz, s.base[2][i]),
             ];
-            len[i] = _mm512_sqrt_pd(add(add(mul(v[0], v[0]), mul(v[1], v[1])), mul(v[2], v[2])));
+            let d2 = fma(v[2], v[2], fma(v[1], v[1], mul(v[0], v[0])));
+            let half = mul(d2, c(0.5));
+            let y0 = _mm512_rsqrt14_pd(d2);
+            let yy = mul(y0, y0);
+            let y = mul(y0, _mm512_fnmadd_pd(half, yy, c(1.5)));
+            let l = mul(d2, y);
+            let e = _mm512_fnmadd_pd(l, l, d2);
+            len[i] = fma(e, mul(y, c(0.5)), l);
             d[i] = v;
         }
         for j in 0..6 {

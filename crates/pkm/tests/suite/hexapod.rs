@@ -640,7 +640,7 @@ fn coded_first_limits_are_the_first_checked_violation() {
 /// poses bisected onto the boundary of the limits to 1e-13 of the step (whichever
 /// limit binds), exact axis bounds, NaN and angles beyond the fast sine's range, a
 /// cleared row is one the exact scan finds within every limit, its lengths are the
-/// single call's to 1e-12 relative, and the batch equals the single calls row by row.
+/// single call's bit for bit, and the batch equals the single calls row by row.
 /// The screen must also clear most rows that are within limits (else it is no
 /// faster).
 #[test]
@@ -727,10 +727,10 @@ fn screened_batch_equals_the_exact_path_on_and_near_every_limit() {
             let (q, first) = h.inverse_first_limit(x, &mut buf).unwrap();
             let ok = first.is_none();
             if x.iter().all(|v| v.is_finite()) && !qs.is_empty() {
+                // The kernel's lengths are the single call's, bit for bit.
                 for i in 0..6 {
-                    let (a, b) = (qs[6 * r + i], q[i]);
-                    assert!((a - b).abs() <= 1e-12 * b.abs(), "{name} row {r}: {a} {b}");
-                    assert_eq!(batch.actuators[6 * r + i], if clear[r] { a } else { b });
+                    assert_eq!(qs[6 * r + i].to_bits(), q[i].to_bits(), "{name} row {r}");
+                    assert_eq!(batch.actuators[6 * r + i].to_bits(), q[i].to_bits());
                 }
             }
             assert!(!clear[r] || ok, "{name} row {r}: cleared but {first:?}");
@@ -761,6 +761,10 @@ fn screened_batch_equals_the_exact_path_on_and_near_every_limit() {
             }
             let b = pkm::analysis::batch::inverse_batch_with(&machine, &flat, false).unwrap();
             assert!(b.reachable.iter().all(|r| *r));
+            // The same lengths with and without the check.
+            for (u, v) in b.actuators.iter().zip(&batch.actuators) {
+                assert!(u.to_bits() == v.to_bits() || (u.is_nan() && v.is_nan()));
+            }
         }
     }
 }
