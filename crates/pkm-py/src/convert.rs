@@ -115,9 +115,12 @@ pub fn array(v: &Bound<'_, PyAny>, what: &str) -> PyResult<(Vec<f64>, Vec<usize>
         }
     };
     let shape = arr.shape().to_vec();
+    // `as_slice` also accepts a Fortran-ordered array, whose memory is column-major:
+    // only a C-contiguous one is copied as it lies (reading a Fortran array's memory
+    // as rows gave wrong poses).
     let data = match arr.as_slice() {
-        Ok(s) => s.to_vec(),
-        Err(_) => arr.as_array().iter().copied().collect(),
+        Ok(s) if arr.is_c_contiguous() => s.to_vec(),
+        _ => arr.as_array().iter().copied().collect(),
     };
     Ok((data, shape))
 }
@@ -148,7 +151,7 @@ pub fn rows_ref<'py>(v: &Bound<'py, PyAny>, width: usize, what: &str) -> PyResul
     let borrowed = v
         .extract::<numpy::PyReadonlyArrayDyn<'py, f64>>()
         .ok()
-        .filter(|a| a.as_slice().is_ok());
+        .filter(|a| a.is_c_contiguous() && a.as_slice().is_ok());
     let Some(arr) = borrowed else {
         let (owned, single) = rows(v, width, what)?;
         return Ok(RowsRef {

@@ -243,3 +243,24 @@ def test_machines_pickle_from_their_text():
     assert back.name == m.name and back.toml == m.toml
     with pytest.raises(TypeError, match="URDF"):
         pickle.dumps(pkm.load(str(HEX).replace("machines/hexapod-linuxcnc.toml", "robots/ur5-like.urdf")))
+
+
+def test_batches_read_any_layout_and_name_the_first_bad_value():
+    """A C-contiguous float64 array is read in place (checked by blocks on all cores);
+    other layouts are copied: both give the same rows, and a bad value far into a
+    large array is named by its own row and column, the first one when there are two."""
+    m = pkm.load(HEX)
+    x = random_poses(m, 100_000, 12, spread=0.1)
+    c = m.ik(x)
+    for other in (np.asfortranarray(x), np.repeat(x, 2, axis=0)[::2]):
+        assert np.array_equal(other, x)
+        o = m.ik(other)
+        assert np.array_equal(o.actuators, c.actuators, equal_nan=True)
+        assert np.array_equal(o.reachable, c.reachable)
+    bad = x.copy()
+    bad[70_001, 4] = np.nan
+    bad[99_000, 0] = np.inf
+    with pytest.raises(pkm.InvalidInputError, match="row 70001, column 4: NaN is not a finite number"):
+        m.ik(bad)
+    with pytest.raises(pkm.InvalidInputError, match="row 70001, column 4"):
+        m.ik(np.asfortranarray(bad))
