@@ -8,13 +8,13 @@
 
 /// `pi/2` split so that `k * PIO2_HI` is exact for `|k| < 2^20`: its first 33 bits
 /// (1.5707963267341256) and the rest (6.077100506506192e-11).
-pub(crate) const PIO2_HI: f64 = f64::from_bits(0x3FF9_21FB_5440_0000);
-pub(crate) const PIO2_LO: f64 = f64::from_bits(0x3DD0_B461_1A62_6331);
-pub(crate) const TWO_OVER_PI: f64 = std::f64::consts::FRAC_2_PI;
-pub(crate) const MAGIC: f64 = 6_755_399_441_055_744.0;
+const PIO2_HI: f64 = f64::from_bits(0x3FF9_21FB_5440_0000);
+const PIO2_LO: f64 = f64::from_bits(0x3DD0_B461_1A62_6331);
+const TWO_OVER_PI: f64 = std::f64::consts::FRAC_2_PI;
+const MAGIC: f64 = 6_755_399_441_055_744.0;
 
 /// Taylor coefficients `(-1)^k / (2k+1)!` and `(-1)^k / (2k)!`.
-pub(crate) const SIN_TAYLOR: [f64; 7] = [
+const S: [f64; 7] = [
     -1.0 / 6.0,
     1.0 / 120.0,
     -1.0 / 5_040.0,
@@ -23,7 +23,7 @@ pub(crate) const SIN_TAYLOR: [f64; 7] = [
     1.0 / 6_227_020_800.0,
     -1.0 / 1_307_674_368_000.0,
 ];
-pub(crate) const COS_TAYLOR: [f64; 8] = [
+const C: [f64; 8] = [
     -0.5,
     1.0 / 24.0,
     -1.0 / 720.0,
@@ -69,18 +69,10 @@ fn kernel(x: f64) -> (f64, f64) {
     let k = y - MAGIC;
     let r = (x - k * PIO2_HI) - k * PIO2_LO;
     let z = r * r;
-    let ps = SIN_TAYLOR[0]
-        + z * (SIN_TAYLOR[1]
-            + z * (SIN_TAYLOR[2]
-                + z * (SIN_TAYLOR[3]
-                    + z * (SIN_TAYLOR[4] + z * (SIN_TAYLOR[5] + z * SIN_TAYLOR[6])))));
+    let ps = S[0] + z * (S[1] + z * (S[2] + z * (S[3] + z * (S[4] + z * (S[5] + z * S[6])))));
     let s = r + r * z * ps;
-    let pc = COS_TAYLOR[1]
-        + z * (COS_TAYLOR[2]
-            + z * (COS_TAYLOR[3]
-                + z * (COS_TAYLOR[4]
-                    + z * (COS_TAYLOR[5] + z * (COS_TAYLOR[6] + z * COS_TAYLOR[7])))));
-    let c = 1.0 + z * (COS_TAYLOR[0] + z * pc);
+    let pc = C[1] + z * (C[2] + z * (C[3] + z * (C[4] + z * (C[5] + z * (C[6] + z * C[7])))));
+    let c = 1.0 + z * (C[0] + z * pc);
     // Quadrant q mod 4: (s, c), (c, -s), (-s, -c), (-c, s), without branches: swap by
     // a select, signs by flipping the sign bit.
     let swap = q & 1 == 1;
@@ -91,6 +83,59 @@ fn kernel(x: f64) -> (f64, f64) {
         f64::from_bits(a.to_bits() ^ sa),
         f64::from_bits(b.to_bits() ^ sb),
     )
+}
+
+/// The kernel on eight lanes of AVX-512 (the hexapod's block kernel calls it from its
+/// own AVX-512 code).
+#[cfg(target_arch = "x86_64")]
+pub(crate) mod avx512 {
+    use std::arch::x86_64::*;
+
+    use super::{C, MAGIC, PIO2_HI, PIO2_LO, S, TWO_OVER_PI};
+
+    /// `((sin x, cos x), in range)` by lane: [`super::sin_cos`]'s kernel, the same
+    /// operations in the same order (so equal to it bit for bit), and the mask of lanes
+    /// within its range `|x| <= 1e4` (the others, NaN included, are not cleared).
+    #[target_feature(enable = "avx512f")]
+    pub(crate) fn sin_cos(x: __m512d) -> ((__m512d, __m512d), u8) {
+        let c = |v: f64| _mm512_set1_pd(v);
+        let add = |a: __m512d, b: __m512d| _mm512_add_pd(a, b);
+        let mul = |a: __m512d, b: __m512d| _mm512_mul_pd(a, b);
+        let sub = |a: __m512d, b: __m512d| _mm512_sub_pd(a, b);
+        let in_range = _mm512_cmp_pd_mask::<_CMP_LE_OQ>(_mm512_abs_pd(x), c(1e4));
+        let y = add(mul(x, c(TWO_OVER_PI)), c(MAGIC));
+        let q = _mm512_castpd_si512(y);
+        let k = sub(y, c(MAGIC));
+        let r = sub(sub(x, mul(k, c(PIO2_HI))), mul(k, c(PIO2_LO)));
+        let z = mul(r, r);
+        let horner = |coef: &[f64]| {
+            let last = coef.len() - 1;
+            let mut t = c(coef[last]);
+            for j in (0..last).rev() {
+                t = add(c(coef[j]), mul(z, t));
+            }
+            t
+        };
+        let ps = horner(&S);
+        let sn = add(r, mul(mul(r, z), ps));
+        let pc = horner(&C[1..]);
+        let cs = add(c(1.0), mul(z, add(c(C[0]), mul(z, pc))));
+        let swap = _mm512_test_epi64_mask(q, _mm512_set1_epi64(1));
+        let (a, b) = (
+            _mm512_mask_blend_pd(swap, sn, cs),
+            _mm512_mask_blend_pd(swap, cs, sn),
+        );
+        let two = _mm512_set1_epi64(2);
+        let sa = _mm512_slli_epi64::<62>(_mm512_and_si512(q, two));
+        let sb = _mm512_slli_epi64::<62>(_mm512_and_si512(
+            _mm512_add_epi64(q, _mm512_set1_epi64(1)),
+            two,
+        ));
+        let flip = |v: __m512d, sign: __m512i| {
+            _mm512_castsi512_pd(_mm512_xor_si512(_mm512_castpd_si512(v), sign))
+        };
+        ((flip(a, sa), flip(b, sb)), in_range)
+    }
 }
 
 #[cfg(test)]
@@ -128,5 +173,59 @@ mod tests {
         }
         let (s, c) = super::sin_cos(f64::NAN);
         assert!(s.is_nan() && c.is_nan());
+    }
+
+    /// The AVX-512 lanes equal the scalar kernel bit for bit over 2e4 rad (both signs,
+    /// the quadrant boundaries, zero), and flag what is out of its range (NaN, beyond
+    /// 1e4 rad, infinities).
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn avx512_lanes_equal_the_scalar_kernel() {
+        use std::arch::x86_64::*;
+        if !std::arch::is_x86_feature_detected!("avx512f") {
+            return;
+        }
+        #[target_feature(enable = "avx512f")]
+        fn lanes(x: &[f64; 8]) -> ([f64; 8], [f64; 8], u8) {
+            // SAFETY: 8 f64 loaded from and stored to arrays of 8.
+            unsafe {
+                let ((s, c), m) = super::avx512::sin_cos(_mm512_loadu_pd(x.as_ptr()));
+                let (mut so, mut co) = ([0.0; 8], [0.0; 8]);
+                _mm512_storeu_pd(so.as_mut_ptr(), s);
+                _mm512_storeu_pd(co.as_mut_ptr(), c);
+                (so, co, m)
+            }
+        }
+        let pio2 = std::f64::consts::FRAC_PI_2;
+        let mut xs: Vec<f64> = (0..200_000).map(|i| -1e4 + 0.1 * i as f64 + 1e-3).collect();
+        xs.extend((-40..40).flat_map(|k| {
+            [
+                k as f64 * pio2,
+                f64::from_bits((k as f64 * pio2).to_bits() + 1),
+            ]
+        }));
+        xs.extend([0.0, -0.0, 1e4, -1e4]);
+        while !xs.len().is_multiple_of(8) {
+            xs.push(0.5);
+        }
+        for x in xs.chunks_exact(8) {
+            let x: &[f64; 8] = x.try_into().unwrap();
+            // SAFETY: the CPU has AVX-512F (checked above).
+            let (s, c, m) = unsafe { lanes(x) };
+            assert_eq!(m, 0xff);
+            for l in 0..8 {
+                let (s0, c0) = super::kernel(x[l]);
+                assert_eq!(
+                    (s[l].to_bits(), c[l].to_bits()),
+                    (s0.to_bits(), c0.to_bits()),
+                    "{}",
+                    x[l]
+                );
+            }
+        }
+        let odd = [f64::NAN, 1.0001e4, -2e4, f64::INFINITY, 0.3, 1.0, 2.0, 3.0];
+        // SAFETY: as above.
+        let (_, _, m) = unsafe { lanes(&odd) };
+        assert_eq!(m, 0b1111_0000);
     }
 }

@@ -57,11 +57,14 @@ pub(crate) struct Screen {
     /// Strut pairs checked for interference, and the strut diameter.
     pairs: Vec<(usize, usize)>,
     diameter: f64,
+    /// The CPU has AVX-512F (the hexapod's one detection, `simd.rs`).
+    avx512: bool,
 }
 
 impl Screen {
     pub(crate) fn new(h: &Hexapod) -> Self {
         let set = &h.set;
+        let avx512 = h.simd_lengths();
         let mut axis = [(f64::NEG_INFINITY, f64::INFINITY); 6];
         for (k, r) in &h.axes.ranges {
             if let Some(a) = axis.get_mut(*k) {
@@ -92,6 +95,7 @@ impl Screen {
             platform_cone: std::array::from_fn(|i| cone(&h.struts[i].platform_cone)),
             pairs,
             diameter: h.strut_diameter.unwrap_or(0.0),
+            avx512,
         }
     }
 }
@@ -111,14 +115,15 @@ pub(crate) fn screen_rows(
 ) -> bool {
     #[cfg(target_arch = "x86_64")]
     {
-        if std::arch::is_x86_feature_detected!("avx512f") {
+        if s.avx512 {
             let n = clear.len();
             for b in 0..n / LANES {
                 let (r0, r1) = (b * LANES, (b + 1) * LANES);
                 let x: &[f64; 6 * LANES] = xs[6 * r0..6 * r1].try_into().expect("whole block");
                 let q: &mut [f64; 6 * LANES] =
                     (&mut qs[6 * r0..6 * r1]).try_into().expect("whole block");
-                // SAFETY: the CPU reported AVX-512F, the one feature the kernel enables.
+                // SAFETY: `avx512` is the hexapod's detection of AVX-512F, the one
+                // feature the kernel enables.
                 let mask = unsafe { avx512::block(s, x, q, check) };
                 for (l, c) in clear[r0..r1].iter_mut().enumerate() {
                     *c = mask & (1 << l) != 0;
@@ -136,6 +141,7 @@ pub(crate) fn screen_rows(
 mod avx512 {
     use std::arch::x86_64::*;
 
+    use super::super::simd::{strut_component, strut_length};
     use super::{Screen, LANES, MARGIN, PARALLEL};
 
     /// The in-register transposes of a block (48 doubles, row-major, six per row, in
@@ -254,6 +260,7 @@ mod avx512 {
         };
         let (px, py, pz) = (col(0), col(1), col(2));
         let (a, b, cc_) = (col(3), col(4), col(5));
+        use crate::trig::avx512::sin_cos;
         let ((sa, ca), in_a) = sin_cos(a);
         let ((sb, cb), in_b) = sin_cos(b);
         let ((sc, cc), in_c) = sin_cos(cc_);
@@ -270,34 +277,26 @@ mod avx512 {
             mul(cb, sa),
             mul(cb, ca),
         ];
-        // Strut vectors and lengths by the operations of the single pose's AVX-512
-        // kernel (`simd.rs`: fused multiply-adds, the square root by the reciprocal
-        // estimate and two refinements), so a batch's lengths equal `Hexapod::lengths`
-        // bit for bit, whichever path settles a row.
-        let fma = |a: __m512d, b: __m512d, c: __m512d| _mm512_fmadd_pd(a, b, c);
+        // Strut vectors and lengths by the single pose's AVX-512 steps (`simd.rs`), so
+        // a batch's lengths equal `Hexapod::lengths` bit for bit, whichever path
+        // settles a row.
         let mut d = [[c(0.0); 3]; 6];
         let mut len = [c(0.0); 6];
         for i in 0..6 {
             let (x, y, z) = (c(s.arm[0][i]), c(s.arm[1][i]), c(s.arm[2][i]));
             let row = |k: usize, p: __m512d, base: f64| {
-                let t = sub(p, c(base));
-                let t = fma(r[3 * k + 2], z, t);
-                let t = fma(r[3 * k + 1], y, t);
-                fma(r[3 * k], x, t)
+                strut_component(
+                    [r[3 * k], r[3 * k + 1], r[3 * k + 2]],
+                    [x, y, z],
+                    sub(p, c(base)),
+                )
             };
             let v = [
                 row(0, px, s.base[0][i]),
                 row(1, py, s.base[1][i]),
                 row(2, pz, s.base[2][i]),
             ];
-            let d2 = fma(v[2], v[2], fma(v[1], v[1], mul(v[0], v[0])));
-            let half = mul(d2, c(0.5));
-            let y0 = _mm512_rsqrt14_pd(d2);
-            let yy = mul(y0, y0);
-            let y = mul(y0, _mm512_fnmadd_pd(half, yy, c(1.5)));
-            let l = mul(d2, y);
-            let e = _mm512_fnmadd_pd(l, l, d2);
-            len[i] = fma(e, mul(y, c(0.5)), l);
+            len[i] = strut_length(v);
             d[i] = v;
         }
         for j in 0..6 {
@@ -404,50 +403,5 @@ mod avx512 {
             }
         }
         ok
-    }
-
-    /// `((sin x, cos x), in range)` by lane: [`crate::trig`]'s kernel, the same
-    /// operations in the same order (so equal to it bit for bit), and the mask of lanes
-    /// within its range `|x| <= 1e4` (the others, NaN included, are not cleared).
-    #[target_feature(enable = "avx512f")]
-    fn sin_cos(x: __m512d) -> ((__m512d, __m512d), u8) {
-        use crate::trig::{COS_TAYLOR as C, MAGIC, PIO2_HI, PIO2_LO, SIN_TAYLOR as S, TWO_OVER_PI};
-        let c = |v: f64| _mm512_set1_pd(v);
-        let add = |a: __m512d, b: __m512d| _mm512_add_pd(a, b);
-        let mul = |a: __m512d, b: __m512d| _mm512_mul_pd(a, b);
-        let sub = |a: __m512d, b: __m512d| _mm512_sub_pd(a, b);
-        let in_range = _mm512_cmp_pd_mask::<_CMP_LE_OQ>(_mm512_abs_pd(x), c(1e4));
-        let y = add(mul(x, c(TWO_OVER_PI)), c(MAGIC));
-        let q = _mm512_castpd_si512(y);
-        let k = sub(y, c(MAGIC));
-        let r = sub(sub(x, mul(k, c(PIO2_HI))), mul(k, c(PIO2_LO)));
-        let z = mul(r, r);
-        let horner = |coef: &[f64]| {
-            let last = coef.len() - 1;
-            let mut t = c(coef[last]);
-            for j in (0..last).rev() {
-                t = add(c(coef[j]), mul(z, t));
-            }
-            t
-        };
-        let ps = horner(&S);
-        let sn = add(r, mul(mul(r, z), ps));
-        let pc = horner(&C[1..]);
-        let cs = add(c(1.0), mul(z, add(c(C[0]), mul(z, pc))));
-        let swap = _mm512_test_epi64_mask(q, _mm512_set1_epi64(1));
-        let (a, b) = (
-            _mm512_mask_blend_pd(swap, sn, cs),
-            _mm512_mask_blend_pd(swap, cs, sn),
-        );
-        let two = _mm512_set1_epi64(2);
-        let sa = _mm512_slli_epi64::<62>(_mm512_and_si512(q, two));
-        let sb = _mm512_slli_epi64::<62>(_mm512_and_si512(
-            _mm512_add_epi64(q, _mm512_set1_epi64(1)),
-            two,
-        ));
-        let flip = |v: __m512d, sign: __m512i| {
-            _mm512_castsi512_pd(_mm512_xor_si512(_mm512_castpd_si512(v), sign))
-        };
-        ((flip(a, sa), flip(b, sb)), in_range)
     }
 }

@@ -134,25 +134,47 @@ unsafe fn lengths_zmm(s: &Lanes, p: &Vector3<f64>, r: &Matrix3<f64>) -> std::arc
         let (ax, ay, az) = (ld(&s.ax), ld(&s.ay), ld(&s.az));
         let b = |v: f64| _mm512_set1_pd(v);
         let row = |i: usize, base: &[f64; 8], pc: f64| {
-            // r(i,0) ax + r(i,1) ay + r(i,2) az + (p_i - base_i)
-            let t = _mm512_sub_pd(b(pc), ld(base));
-            let t = _mm512_fmadd_pd(b(r[(i, 2)]), az, t);
-            let t = _mm512_fmadd_pd(b(r[(i, 1)]), ay, t);
-            _mm512_fmadd_pd(b(r[(i, 0)]), ax, t)
+            let r = [b(r[(i, 0)]), b(r[(i, 1)]), b(r[(i, 2)])];
+            strut_component(r, [ax, ay, az], _mm512_sub_pd(b(pc), ld(base)))
         };
-        let dx = row(0, &s.bx, p.x);
-        let dy = row(1, &s.by, p.y);
-        let dz = row(2, &s.bz, p.z);
-        let d2 = _mm512_fmadd_pd(dz, dz, _mm512_fmadd_pd(dy, dy, _mm512_mul_pd(dx, dx)));
-        // y ~ 1/sqrt(d2): the 14-bit estimate, one Newton step y (1.5 - 0.5 d2 y^2)
-        // (28 bits); the Heron step below squares the error again (56 bits).
-        let half = _mm512_mul_pd(d2, b(0.5));
-        let y0 = _mm512_rsqrt14_pd(d2);
-        let yy = _mm512_mul_pd(y0, y0);
-        let y = _mm512_mul_pd(y0, _mm512_fnmadd_pd(half, yy, b(1.5)));
-        // l = d2 y, then one Heron step l <- l + (d2 - l^2) y / 2.
-        let l = _mm512_mul_pd(d2, y);
-        let e = _mm512_fnmadd_pd(l, l, d2);
-        _mm512_fmadd_pd(e, _mm512_mul_pd(y, b(0.5)), l)
+        strut_length([row(0, &s.bx, p.x), row(1, &s.by, p.y), row(2, &s.bz, p.z)])
     }
+}
+
+/// One component of a strut vector, `r_0 a_x + r_1 a_y + r_2 a_z + (p - base)`, by
+/// fused multiply-adds from the last term (`offset = p - base`): the one sequence of
+/// operations of the single pose's kernel (lanes: struts) and the block kernel's
+/// (lanes: poses), so both give the same bits.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+#[inline]
+pub(crate) fn strut_component(
+    r: [std::arch::x86_64::__m512d; 3],
+    arm: [std::arch::x86_64::__m512d; 3],
+    offset: std::arch::x86_64::__m512d,
+) -> std::arch::x86_64::__m512d {
+    use std::arch::x86_64::*;
+    let t = _mm512_fmadd_pd(r[2], arm[2], offset);
+    let t = _mm512_fmadd_pd(r[1], arm[1], t);
+    _mm512_fmadd_pd(r[0], arm[0], t)
+}
+
+/// `|d|` by lane without the square-root unit: `d2 = |d|^2`, `y ~ 1/sqrt(d2)` by the
+/// 14-bit estimate and one Newton step `y (1.5 - 0.5 d2 y^2)` (28 bits), then
+/// `l = d2 y` and one Heron step `l + (d2 - l^2) y / 2` (56 bits).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+#[inline]
+pub(crate) fn strut_length(d: [std::arch::x86_64::__m512d; 3]) -> std::arch::x86_64::__m512d {
+    use std::arch::x86_64::*;
+    let b = |v: f64| _mm512_set1_pd(v);
+    let [dx, dy, dz] = d;
+    let d2 = _mm512_fmadd_pd(dz, dz, _mm512_fmadd_pd(dy, dy, _mm512_mul_pd(dx, dx)));
+    let half = _mm512_mul_pd(d2, b(0.5));
+    let y0 = _mm512_rsqrt14_pd(d2);
+    let yy = _mm512_mul_pd(y0, y0);
+    let y = _mm512_mul_pd(y0, _mm512_fnmadd_pd(half, yy, b(1.5)));
+    let l = _mm512_mul_pd(d2, y);
+    let e = _mm512_fnmadd_pd(l, l, d2);
+    _mm512_fmadd_pd(e, _mm512_mul_pd(y, b(0.5)), l)
 }
