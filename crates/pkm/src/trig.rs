@@ -97,6 +97,7 @@ pub(crate) mod avx512 {
     /// operations in the same order (so equal to it bit for bit), and the mask of lanes
     /// within its range `|x| <= 1e4` (the others, NaN included, are not cleared).
     #[target_feature(enable = "avx512f")]
+    #[inline]
     pub(crate) fn sin_cos(x: __m512d) -> ((__m512d, __m512d), u8) {
         let c = |v: f64| _mm512_set1_pd(v);
         let add = |a: __m512d, b: __m512d| _mm512_add_pd(a, b);
