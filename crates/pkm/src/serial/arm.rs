@@ -1,20 +1,23 @@
 //! A six-joint serial robot as a spatial [`Mechanism`]: its pose coordinates are the
 //! tool's X, Y, Z, A, B, C (the frame of link 0 of the tool chain; a workpiece chain
 //! without joints is the fixed part the tool pose is taken relative to), its actuators
-//! the six joints. Inverse kinematics is numeric (Newton on SE(3) with the geometric
-//! Jacobian, damped near singular configurations), so any geometry works, not only
-//! robots with a spherical wrist and a closed-form solution.
+//! the six joints. Inverse kinematics is in closed form for arms with a spherical wrist
+//! and parallel second and third axes (most industrial robots;
+//! [`super::spherical_wrist`]), and numeric otherwise (Newton on SE(3) with the
+//! geometric Jacobian, damped near singular configurations), so any geometry works.
 //!
-//! Which of a robot's up to 16 inverse solutions is returned: the one Newton reaches
-//! from the home joint values (or from the joint values given to
-//! [`SerialArm::inverse_from`]). Along a tool path the motion engine asks for poses close
-//! to each other, and the solution stays on the branch it started on as long as the path
-//! does not pass a singular configuration.
+//! Which of a robot's inverse solutions (up to 8 in closed form, up to 16 for a general
+//! 6R) is returned: in closed form the one nearest the home joint values (or the joint
+//! values given to [`SerialArm::inverse_from`]), numerically the one Newton reaches
+//! from them. Along a tool path the motion engine asks for poses close to each other,
+//! and the solution stays on the branch it started on as long as the path does not pass
+//! a singular configuration.
 
 use nalgebra::{Matrix3, Matrix4, Matrix6, SMatrix, Vector3, Vector6};
 
 use super::machine::SerialMachine;
 use super::mechanism::chain_skeleton;
+use super::spherical_wrist::SphericalWrist;
 use super::PreparedChain;
 use crate::error::{Error, Result};
 use crate::limits::{LimitKind, Violation};
@@ -41,6 +44,9 @@ const MAX_STEP: f64 = 0.3;
 /// of 10^5 per example robot (`examples/roundtrip_campaign.rs`). A stalled start gives
 /// up within ten iterations, so an unreachable pose costs about 33 x 10 of them.
 const RESTARTS: usize = 32;
+
+/// Up to eight postures and how many there are.
+type Postures = ([Vector6<f64>; 8], usize);
 
 /// Which iteration [`SerialArm::descend`] runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -72,6 +78,8 @@ pub struct SerialArm {
     /// out of reach without iterating.
     base_origin: Vector3<f64>,
     reach: f64,
+    /// The closed form's geometry, when it applies.
+    wrist: Option<SphericalWrist>,
 }
 
 impl SerialArm {
@@ -116,6 +124,7 @@ impl SerialArm {
             characteristic_length: 1.0,
             base_origin: Vector3::zeros(),
             reach: f64::INFINITY,
+            wrist: None,
         };
         arm.base_origin = Vector3::new(
             part_inverse[(0, 3)],
@@ -144,7 +153,44 @@ impl SerialArm {
         arm.characteristic_length = Vector3::new(t[(0, 3)], t[(1, 3)], t[(2, 3)])
             .norm()
             .max(1.0);
+        arm.wrist = SphericalWrist::detect(&arm.tool, &part_inverse, arm.characteristic_length);
         Ok(arm)
+    }
+
+    /// Whether inverse kinematics is in closed form (a spherical wrist and parallel
+    /// second and third axes; [`super::spherical_wrist`]).
+    pub fn closed_form_inverse(&self) -> bool {
+        self.wrist.is_some()
+    }
+
+    /// The closed form's solutions of the pose `(p, r)`, each polished by Newton and
+    /// wrapped to within half a turn of `near`, nearest `near` first (sum of squared
+    /// joint differences); `Ok(None)` when the closed form does not apply, `Err` with
+    /// the reason when the pose is out of reach.
+    fn closed_form(
+        &self,
+        p: &Vector3<f64>,
+        r: &Matrix3<f64>,
+        near: &Vector6<f64>,
+    ) -> std::result::Result<Option<Postures>, String> {
+        let Some(wrist) = &self.wrist else {
+            return Ok(None);
+        };
+        let (raw, n) = wrist.solve(p, r, near)?;
+        let mut sols = [Vector6::zeros(); 8];
+        let mut count = 0;
+        for q in &raw[..n] {
+            if let Ok(q) = self.newton(p, r, *q) {
+                sols[count] = self.wrap(q, near);
+                count += 1;
+            }
+        }
+        sols[..count].sort_by(|a, b| {
+            (a - near)
+                .norm_squared()
+                .total_cmp(&(b - near).norm_squared())
+        });
+        Ok(Some((sols, count)))
     }
 
     /// Tool pose relative to the part (homogeneous) and geometric Jacobian (tool-point
@@ -166,7 +212,10 @@ impl SerialArm {
         coords_of(&t)
     }
 
-    /// Inverse kinematics from joint values `start`: Newton on the pose error
+    /// Inverse kinematics from joint values `start`. In closed form
+    /// ([`super::spherical_wrist`]) where it applies: the solution nearest `start`,
+    /// polished by one Newton step; a pose out of reach fails with
+    /// [`Error::NotAttainable`] naming why. Otherwise numeric: Newton on the pose error
     /// `e = [p* - p; log(R* R^T)]` with the geometric Jacobian, `J dq = e` (seed 003's
     /// chain, differentiated), damped least squares `dq = J^T (J J^T + l^2 I)^-1 e`
     /// (angular rows weighted by the characteristic length) when `J` is close to
@@ -178,6 +227,25 @@ impl SerialArm {
     /// [`Error::NotConverged`] and the smallest residual found (mm, rad times the
     /// characteristic length) when the pose is out of reach.
     pub fn inverse_from(&self, x: &Vector6<f64>, start: &Vector6<f64>) -> Result<Vector6<f64>> {
+        self.inverse_with(x, start, true)
+    }
+
+    /// [`SerialArm::inverse_from`] by the numeric solver alone, whatever the geometry:
+    /// the closed form's independent check.
+    pub fn inverse_numeric_from(
+        &self,
+        x: &Vector6<f64>,
+        start: &Vector6<f64>,
+    ) -> Result<Vector6<f64>> {
+        self.inverse_with(x, start, false)
+    }
+
+    fn inverse_with(
+        &self,
+        x: &Vector6<f64>,
+        start: &Vector6<f64>,
+        closed_form: bool,
+    ) -> Result<Vector6<f64>> {
         // A NaN target would reach the SVD of the singular descent, which never
         // returns on NaN (nalgebra iterates until convergence).
         if let Some(k) = x.iter().chain(start.iter()).position(|v| !v.is_finite()) {
@@ -203,6 +271,15 @@ impl SerialArm {
             });
         }
         let target_r = crate::rotation::rpy_matrix(x[3], x[4], x[5]);
+        if closed_form {
+            match self.closed_form(&target_p, &target_r, start) {
+                Err(reason) => return Err(Error::NotAttainable { reason }),
+                Ok(Some((sols, n))) if n > 0 => return Ok(sols[0]),
+                // Not in closed form, or Newton could not polish a closed-form
+                // solution (a pose at a singular configuration): numerically below.
+                Ok(_) => {}
+            }
+        }
         let mut best = f64::INFINITY;
         let mut best_q = *start;
         let mut iterations = 0;
@@ -236,11 +313,12 @@ impl SerialArm {
         })
     }
 
-    /// Every inverse solution Newton finds from the home joints and `starts - 1` joint
-    /// values spread over the ranges (a 6R robot has up to 16: shoulder left/right,
-    /// elbow up/down, wrist flipped or not, and more for general geometry), distinct to
-    /// 1e-6 modulo whole turns, revolute joints shifted by whole turns into their ranges
-    /// where they fit, nearest to home first. Joint limits are not checked here.
+    /// Every inverse solution: in closed form where it applies (all of them, up to 8:
+    /// shoulder left/right, elbow up/down, wrist flipped or not; `starts` unused), else
+    /// those Newton finds from the home joints and `starts - 1` joint values spread over
+    /// the ranges (a general 6R has up to 16). Distinct to 1e-6 modulo whole turns,
+    /// revolute joints shifted by whole turns into their ranges where they fit, nearest
+    /// to home first. Joint limits are not checked here.
     pub fn inverse_solutions(&self, x: &Vector6<f64>, starts: usize) -> Vec<Vector6<f64>> {
         use std::f64::consts::TAU;
         let target_p = Vector3::new(x[0], x[1], x[2]);
@@ -248,16 +326,23 @@ impl SerialArm {
             return Vec::new();
         }
         let target_r = crate::rotation::rpy_matrix(x[3], x[4], x[5]);
+        let found: Vec<Vector6<f64>> =
+            match self.closed_form(&target_p, &target_r, &self.home_joints) {
+                Err(_) => Vec::new(),
+                Ok(Some((sols, n))) => sols[..n].to_vec(),
+                Ok(None) => (0..starts.max(1))
+                    .filter_map(|k| {
+                        let q0 = if k == 0 {
+                            self.home_joints
+                        } else {
+                            self.spread_start(k)
+                        };
+                        self.newton(&target_p, &target_r, q0).ok()
+                    })
+                    .collect(),
+            };
         let mut out: Vec<Vector6<f64>> = Vec::new();
-        for k in 0..starts.max(1) {
-            let q0 = if k == 0 {
-                self.home_joints
-            } else {
-                self.spread_start(k)
-            };
-            let Ok(q) = self.newton(&target_p, &target_r, q0) else {
-                continue;
-            };
+        for q in found {
             let mut q = self.wrap(q, &self.home_joints);
             for (i, a) in self.actuators.iter().enumerate() {
                 if a.quantity == Quantity::Angle {
@@ -538,13 +623,14 @@ impl Mechanism<6, 6> for SerialArm {
         self.inverse_from(x, &self.home_joints)
     }
 
-    /// Newton from `q_start` alone (a neighbour's solution: one descent, no restarts,
-    /// so retrying a point from several neighbours stays cheap); fails with
-    /// [`Error::NotConverged`] when it stalls.
+    /// In closed form, the solution nearest `q_start` ([`SerialArm::inverse_from`]).
+    /// Numerically, Newton from `q_start` alone (a neighbour's solution: one descent,
+    /// no restarts, so retrying a point from several neighbours stays cheap); fails
+    /// with [`Error::NotConverged`] when it stalls.
     fn inverse_near(&self, x: &Vector6<f64>, q_start: &Vector6<f64>) -> Result<Vector6<f64>> {
         let target_p = Vector3::new(x[0], x[1], x[2]);
         let distance = (target_p - self.base_origin).norm();
-        if distance > self.reach * (1.0 + 1e-12) {
+        if self.wrist.is_some() || distance > self.reach * (1.0 + 1e-12) {
             return self.inverse_from(x, q_start);
         }
         let target_r = crate::rotation::rpy_matrix(x[3], x[4], x[5]);

@@ -24,6 +24,7 @@ pub mod jacobian;
 pub mod machine;
 pub mod mechanism;
 pub mod sensitivity;
+pub mod spherical_wrist;
 pub mod tcp;
 pub mod tcp_axis;
 
@@ -274,6 +275,9 @@ pub struct PreparedChain {
     steps: Vec<(JointKind, f64, Affine)>,
 }
 
+/// A joint's axis: unit direction, a point of it, the joint's kind.
+pub type JointAxis = (Vector3<f64>, Vector3<f64>, JointKind);
+
 /// A 3 x 4 affine transform, row-major (the bottom row `0 0 0 1` implied).
 type Affine = [[f64; 4]; 3];
 
@@ -329,15 +333,11 @@ impl PreparedChain {
         PreparedChain { head, steps }
     }
 
-    /// The pose and the geometric Jacobian (`6 x N`: tool-point velocity over angular
-    /// velocity, base frame) at joint values `q`, in one pass: a revolute joint with
-    /// axis `z_i` through `o_i` contributes `[z_i x (p - o_i); z_i]`, a prismatic one
-    /// `[z_i; 0]` (allocation-free; `N` must be the joint count).
+    /// The pose and each joint's axis at joint values `q`: its unit direction `z_i`
+    /// (the frame's Z before the joint's motion), a point `o_i` of it (that frame's
+    /// origin), both in the base frame, and its kind (`N` must be the joint count).
     #[inline]
-    pub fn jacobian<const N: usize>(
-        &self,
-        q: &[f64; N],
-    ) -> (Matrix4<f64>, nalgebra::SMatrix<f64, 6, N>) {
+    pub fn axes<const N: usize>(&self, q: &[f64; N]) -> (Matrix4<f64>, [JointAxis; N]) {
         let mut axes = [(Vector3::zeros(), Vector3::zeros(), JointKind::Prismatic); N];
         let mut k = 0;
         let t = self.walk(q, |t: &Affine, kind| {
@@ -350,7 +350,20 @@ impl PreparedChain {
             }
             k += 1;
         });
-        let p = Vector3::new(t[0][3], t[1][3], t[2][3]);
+        (matrix_of(&t), axes)
+    }
+
+    /// The pose and the geometric Jacobian (`6 x N`: tool-point velocity over angular
+    /// velocity, base frame) at joint values `q`, in one pass: a revolute joint with
+    /// axis `z_i` through `o_i` contributes `[z_i x (p - o_i); z_i]`, a prismatic one
+    /// `[z_i; 0]` (allocation-free; `N` must be the joint count).
+    #[inline]
+    pub fn jacobian<const N: usize>(
+        &self,
+        q: &[f64; N],
+    ) -> (Matrix4<f64>, nalgebra::SMatrix<f64, 6, N>) {
+        let (t, axes) = self.axes(q);
+        let p = Vector3::new(t[(0, 3)], t[(1, 3)], t[(2, 3)]);
         let mut j = nalgebra::SMatrix::<f64, 6, N>::zeros();
         for (c, (z, o, kind)) in axes.iter().enumerate() {
             let (v, w) = match kind {
@@ -362,7 +375,7 @@ impl PreparedChain {
                 j[(r + 3, c)] = w[r];
             }
         }
-        (matrix_of(&t), j)
+        (t, j)
     }
 
     /// The chain's pose at joint values `q` (exactly [`Chain::pose`] with the prepared

@@ -27,6 +27,7 @@ mod rotation;
 mod seed000;
 mod serial;
 mod serial_arm;
+mod spherical_wrist;
 mod tcp;
 mod tripod;
 mod workspace;

@@ -8,7 +8,7 @@ use pkm::serial::arm::SerialArm;
 use pkm::serial::mechanism::SerialAny;
 use proptest::prelude::*;
 
-fn arm(file: &str) -> SerialArm {
+pub(crate) fn arm(file: &str) -> SerialArm {
     let m = pkm::Machine::from_path(format!(
         "{}/../../examples/{file}",
         env!("CARGO_MANIFEST_DIR")
@@ -143,9 +143,16 @@ fn unreachable_pose_reports_the_residual() {
         }
         other => panic!("{other:?}"),
     }
-    // Within the bound but out of the arm's reach: Newton fails, with its residual.
+    // Within the bound but out of the arm's reach: the closed form proves it (the
+    // elbow cannot span the distance); Newton alone fails, with its residual.
     x[0] = 2500.0;
     match a.inverse(&x) {
+        Err(pkm::Error::NotAttainable { reason }) => {
+            assert!(reason.contains("the elbow spans"), "{reason}")
+        }
+        other => panic!("{other:?}"),
+    }
+    match a.inverse_numeric_from(&x, &a.home_joints) {
         Err(pkm::Error::NotConverged { residual, .. }) => assert!(residual > 100.0, "{residual}"),
         other => panic!("{other:?}"),
     }

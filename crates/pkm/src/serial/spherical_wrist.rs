@@ -1,0 +1,282 @@
+//! Closed-form inverse kinematics of a six-revolute arm whose last three axes meet in one
+//! point (a spherical wrist) and whose second and third axes are parallel: the geometry
+//! of most industrial robots (KUKA, ABB, Fanuc, Yaskawa, Staubli, the PUMA 560), with
+//! any shoulder offset, elbow offset or tool.
+//!
+//! Pieper (1968) showed that the wrist centre `c` of such an arm depends on the first
+//! three joints only. Written as a product of exponentials (Murray, Li and Sastry, *A
+//! Mathematical Introduction to Robotic Manipulation*, 1994, ch. 3), each joint `k`
+//! turning about its axis `(w_k, p_k)` at the zero configuration, the tool pose is
+//! `T(q) = E_1(q_1) ... E_6(q_6) T_0` and the problem splits into Paden-Kahan
+//! subproblems, each `a cos t + b sin t = g` (two solutions, one, or none):
+//!
+//! 1. **Shoulder** `q_1`. The target wrist centre is `w = p* + R* c_T` (`c_T` the
+//!    centre in the tool frame). Turns about axes parallel to `n = w_2` keep the
+//!    component along `n`, so `n . E_1(q_1)^-1 w = n . c`.
+//! 2. **Elbow** `q_3`. In the plane normal to `n` the arm is planar: the distance of
+//!    `V = E_1^-1 w` from axis 2 equals that of `E_3(q_3) c`, a law of cosines in
+//!    `q_3`. Then `q_2` is the angle about `n` between the two.
+//! 3. **Wrist** `q_4, q_5, q_6`. With `M = R_123^T R* R_0^T = Rot(w_4, q_4) Rot(w_5,
+//!    q_5) Rot(w_6, q_6)`: `w_4 . M w_6 = w_4 . Rot(w_5, q_5) w_6` gives `q_5`; `q_4`
+//!    turns `Rot(w_5, q_5) w_6` onto `M w_6` about `w_4`; `q_6` is what remains.
+//!
+//! Up to eight solutions (shoulder, elbow, wrist flip). Where a subproblem has
+//! infinitely many (the wrist centre on axis 1, axes 4 and 6 aligned) the joint keeps
+//! its start value, as Newton would. Where one has none (beyond a tolerance of 1e-10
+//! relative) the pose is out of reach, proven, and the reason names the distances
+//! involved. Every solution is then polished by one Newton step of the numeric solver
+//! ([`super::arm::SerialArm`]), which also guards against the few ulps the axes of a
+//! file may be off parallel or off meeting.
+
+use nalgebra::{Matrix3, Matrix4, Rotation3, Unit, Vector3, Vector6};
+
+use super::{JointKind, PreparedChain};
+
+/// How far (relative) two axes may be off parallel, or three axes off meeting, for the
+/// closed form to apply: the rounding of a Denavit-Hartenberg table or a URDF's angles.
+const GEOMETRY_TOLERANCE: f64 = 1e-10;
+/// How far beyond 1 the cosine of a subproblem may be and still count as reached (the
+/// boundary of the workspace, computed with rounding).
+const REACH_TOLERANCE: f64 = 1e-10;
+
+/// The zero-configuration geometry of an arm the closed form applies to (part frame).
+#[derive(Debug, Clone, PartialEq)]
+pub(super) struct SphericalWrist {
+    /// Joint axes: unit directions and a point of each.
+    w: [Vector3<f64>; 6],
+    p: [Vector3<f64>; 6],
+    /// `w_3 = sigma w_2`.
+    sigma: f64,
+    /// The wrist centre (where axes 4, 5, 6 meet).
+    centre: Vector3<f64>,
+    /// The wrist centre in the tool frame.
+    centre_tool: Vector3<f64>,
+    /// The tool orientation at zero.
+    r0: Matrix3<f64>,
+    /// `(p_3 - p_2)` and `(c - p_3)` normal to `n`: the planar arm's two links.
+    e: Vector3<f64>,
+    f: Vector3<f64>,
+    /// A unit vector normal to `w_6`.
+    across6: Vector3<f64>,
+    /// Length scale (mm) of the tolerances.
+    scale: f64,
+}
+
+/// Solutions of the closed form (before polishing), or why there are none.
+pub(super) type Solutions = Result<([Vector6<f64>; 8], usize), String>;
+
+/// `Rot(w, t)`, `w` unit.
+fn rot(w: &Vector3<f64>, t: f64) -> Matrix3<f64> {
+    Rotation3::from_axis_angle(&Unit::new_unchecked(*w), t).into_inner()
+}
+
+/// The component of `v` normal to unit `n`.
+fn normal(v: &Vector3<f64>, n: &Vector3<f64>) -> Vector3<f64> {
+    v - n * n.dot(v)
+}
+
+/// The solutions of `a cos t + b sin t = g` (`(a, b)` not zero): `t = atan2(b, a) +-
+/// acos(g / hypot(a, b))`, the cosine clamped within [`REACH_TOLERANCE`]; `None`
+/// beyond it.
+fn cos_sin(a: f64, b: f64, g: f64) -> Option<[f64; 2]> {
+    let rho = a.hypot(b);
+    let ratio = g / rho;
+    if !(ratio.abs() <= 1.0 + REACH_TOLERANCE) {
+        return None;
+    }
+    let phi = b.atan2(a);
+    let delta = ratio.clamp(-1.0, 1.0).acos();
+    Some([phi + delta, phi - delta])
+}
+
+/// The angle about unit `n` that turns `a` onto `b` (both normal to `n`).
+fn angle_about(n: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>) -> f64 {
+    n.dot(&a.cross(b)).atan2(a.dot(b))
+}
+
+impl SphericalWrist {
+    /// The closed form's geometry of `chain` seen from the part (`part_inverse`), if it
+    /// applies: six revolute joints, axes 2 and 3 parallel, axis 1 not parallel to
+    /// them, axes 4, 5 and 6 meeting in one point (4 and 5, 5 and 6 not parallel), the
+    /// wrist centre off axis 3 and axis 3 apart from axis 2. `scale` is the arm's
+    /// length scale (mm).
+    pub(super) fn detect(
+        chain: &PreparedChain,
+        part_inverse: &Matrix4<f64>,
+        scale: f64,
+    ) -> Option<SphericalWrist> {
+        let (t0, axes) = chain.axes::<6>(&[0.0; 6]);
+        if axes.iter().any(|a| a.2 != JointKind::Revolute) {
+            return None;
+        }
+        let r = part_inverse.fixed_view::<3, 3>(0, 0).into_owned();
+        let o = Vector3::new(
+            part_inverse[(0, 3)],
+            part_inverse[(1, 3)],
+            part_inverse[(2, 3)],
+        );
+        let w: [Vector3<f64>; 6] = std::array::from_fn(|k| (r * axes[k].0).normalize());
+        let p: [Vector3<f64>; 6] = std::array::from_fn(|k| r * axes[k].1 + o);
+        let tool = part_inverse * t0;
+        let r0 = tool.fixed_view::<3, 3>(0, 0).into_owned();
+        let t = Vector3::new(tool[(0, 3)], tool[(1, 3)], tool[(2, 3)]);
+        let parallel = |a: &Vector3<f64>, b: &Vector3<f64>| a.cross(b).norm() <= GEOMETRY_TOLERANCE;
+        let apart = |a: &Vector3<f64>, b: &Vector3<f64>| a.cross(b).norm() >= 1e-6;
+        if !parallel(&w[1], &w[2]) || !apart(&w[0], &w[1]) {
+            return None;
+        }
+        if !apart(&w[3], &w[4]) || !apart(&w[4], &w[5]) {
+            return None;
+        }
+        // The wrist centre: the point of axis 4 closest to axis 5.
+        let (d, d5) = (p[4] - p[3], w[3].dot(&w[4]));
+        let s = (w[3].dot(&d) - d5 * w[4].dot(&d)) / (1.0 - d5 * d5);
+        let centre = p[3] + w[3] * s;
+        let tol = GEOMETRY_TOLERANCE * scale;
+        let off = |k: usize| normal(&(centre - p[k]), &w[k]).norm();
+        if off(4) > tol || off(5) > tol {
+            return None;
+        }
+        let n = w[1];
+        let e = normal(&(p[2] - p[1]), &n);
+        let f = normal(&(centre - p[2]), &n);
+        if e.norm() <= tol || f.norm() <= tol {
+            return None;
+        }
+        let pick = if w[5].x.abs() < 0.9 {
+            Vector3::x()
+        } else {
+            Vector3::y()
+        };
+        Some(SphericalWrist {
+            sigma: w[2].dot(&n).signum(),
+            centre_tool: r0.transpose() * (centre - t),
+            across6: w[5].cross(&pick).normalize(),
+            w,
+            p,
+            centre,
+            r0,
+            e,
+            f,
+            scale,
+        })
+    }
+
+    /// Every solution of the tool pose `(target_p, target_r)` (at most eight; joints
+    /// with infinitely many solutions at `start`'s values), not polished and not wrapped;
+    /// or why the pose is out of reach.
+    pub(super) fn solve(
+        &self,
+        target_p: &Vector3<f64>,
+        target_r: &Matrix3<f64>,
+        start: &Vector6<f64>,
+    ) -> Solutions {
+        let (w, p, n) = (&self.w, &self.p, self.w[1]);
+        let tol = GEOMETRY_TOLERANCE * self.scale;
+        let centre = target_p + target_r * self.centre_tool;
+        // 1. Shoulder: n . E_1(q_1)^-1 centre = n . c.
+        let x = centre - p[0];
+        let x_axial = w[0].dot(&x);
+        let x_normal = x - w[0] * x_axial;
+        let a = n.dot(&x_normal);
+        let b = -n.dot(&w[0].cross(&x));
+        let g = n.dot(&(self.centre - p[0])) - x_axial * n.dot(&w[0]);
+        let n_across = normal(&n, &w[0]).norm();
+        let shoulder = if x_normal.norm() <= tol {
+            // On axis 1: any q_1 when the arm's plane passes through it.
+            (g.abs() <= tol).then_some([start[0], start[0]])
+        } else {
+            cos_sin(a, b, g)
+        };
+        let Some(q1s) = shoulder else {
+            return Err(format!(
+                "the wrist centre would be {:.3} mm from axis 1, closer than the {:.3} mm \
+                 the arm's plane is offset from it",
+                x_normal.norm(),
+                g.abs() / n_across
+            ));
+        };
+        let mut out = [Vector6::zeros(); 8];
+        let mut count = 0;
+        let mut elbow_miss = None;
+        let mut wrist_miss = false;
+        let (e2, f2) = (self.e.norm_squared(), self.f.norm_squared());
+        for (i, &q1) in q1s.iter().enumerate() {
+            if i == 1 && q1s[1] == q1s[0] {
+                break;
+            }
+            let r1 = rot(&w[0], q1);
+            // 2. Elbow: the planar distance from axis 2.
+            let v = p[0] + r1.transpose() * x;
+            let d = normal(&(v - p[1]), &n);
+            let r2 = d.norm_squared();
+            let a3 = 2.0 * self.e.dot(&self.f);
+            let b3 = 2.0 * self.sigma * self.e.dot(&n.cross(&self.f));
+            let Some(q3s) = cos_sin(a3, b3, r2 - e2 - f2) else {
+                // Of the shoulder's two solutions, report the nearer miss.
+                let (e, f, r) = (e2.sqrt(), f2.sqrt(), r2.sqrt());
+                let miss = ((e - f).abs() - r).max(r - (e + f));
+                if elbow_miss.is_none_or(|(m, _)| miss < m) {
+                    elbow_miss = Some((miss, r));
+                }
+                continue;
+            };
+            for (j, &q3) in q3s.iter().enumerate() {
+                if j == 1 && q3s[1] == q3s[0] {
+                    break;
+                }
+                let r3 = rot(&w[2], q3);
+                let u = self.e + r3 * self.f;
+                let q2 = if u.norm() <= tol || d.norm() <= tol {
+                    start[1]
+                } else {
+                    angle_about(&n, &u, &d)
+                };
+                let r123 = r1 * rot(&n, q2) * r3;
+                // 3. Wrist.
+                let m = r123.transpose() * target_r * self.r0.transpose();
+                let (w4, w5, w6) = (&w[3], &w[4], &w[5]);
+                let (c45, c56) = (w4.dot(w5), w5.dot(w6));
+                let a5 = w4.dot(w6) - c56 * c45;
+                let b5 = w4.dot(&w5.cross(w6));
+                let z = m * w6;
+                let Some(q5s) = cos_sin(a5, b5, w4.dot(&z) - c56 * c45) else {
+                    wrist_miss = true;
+                    continue;
+                };
+                for (k, &q5) in q5s.iter().enumerate() {
+                    if k == 1 && q5s[1] == q5s[0] {
+                        break;
+                    }
+                    let r5 = rot(w5, q5);
+                    let y = r5 * w6;
+                    let (y_n, z_n) = (normal(&y, w4), normal(&z, w4));
+                    let q4 = if y_n.norm() <= 1e-9 {
+                        start[3]
+                    } else {
+                        angle_about(w4, &y_n, &z_n)
+                    };
+                    let k6 = r5.transpose() * rot(w4, q4).transpose() * m;
+                    let q6 = angle_about(w6, &self.across6, &(k6 * self.across6));
+                    out[count] = Vector6::new(q1, q2, q3, q4, q5, q6);
+                    count += 1;
+                }
+            }
+        }
+        if count > 0 {
+            return Ok((out, count));
+        }
+        Err(match elbow_miss {
+            Some((_, r)) if !wrist_miss => {
+                let (e, f) = (e2.sqrt(), f2.sqrt());
+                format!(
+                    "the wrist centre would be {r:.3} mm from axis 2, outside the {:.3} to \
+                     {:.3} mm the elbow spans",
+                    (e - f).abs(),
+                    e + f
+                )
+            }
+            _ => "the tool orientation needs a wrist bend the wrist's axes cannot make".into(),
+        })
+    }
+}
