@@ -1,6 +1,7 @@
 //! `pkm`: kinematics and accuracy of parallel, hybrid and serial machine tools.
 
 mod commands;
+mod fixed;
 mod io;
 mod poses;
 mod progress;

@@ -8,7 +8,7 @@ use crate::parse_convention;
 use clap::Args;
 use pkm::Convention;
 use std::fs::File;
-use std::io::{BufReader, BufWriter, Write};
+use std::io::{BufReader, Write};
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
@@ -23,7 +23,8 @@ use pkm::{DynMechanism, Machine};
 use serde_json::json;
 
 use super::load;
-use crate::io::{refuse_overwrite, write_atomic};
+use crate::fixed::{push_fixed6, push_u64};
+use crate::io::{write_atomic, AtomicFile};
 use crate::poses::{parse_list, pose_from_user};
 use crate::report::plot::{panels_marked, Panel, Series};
 use crate::EXIT_UNREACHABLE;
@@ -165,30 +166,25 @@ impl<'a> CsvSink<'a> {
 
 impl SampleSink for CsvSink<'_> {
     fn sample(&mut self, s: &SampleRow) -> pkm::Result<()> {
-        use std::fmt::Write as _;
         let Some(w) = self.out.as_deref_mut() else {
             return Ok(());
         };
         let b = &mut self.line;
         b.clear();
-        let _ = write!(b, "{:.6}", s.t);
-        match s.line {
-            Some(l) => {
-                let _ = write!(b, ",{l}");
-            }
-            None => b.push(','),
+        push_fixed6(b, s.t);
+        b.push(',');
+        if let Some(l) = s.line {
+            push_u64(b, l);
         }
         for (qn, x) in self.coords.iter().zip(s.x) {
-            let _ = write!(b, ",{:.6}", qn.to_user(*x));
+            b.push(',');
+            push_fixed6(b, qn.to_user(*x));
         }
         for (i, qn) in self.acts.iter().enumerate() {
-            let _ = write!(
-                b,
-                ",{:.6},{:.6},{:.6}",
-                qn.to_user(s.q[i]),
-                qn.to_user(s.qd[i]),
-                qn.to_user(s.qdd[i])
-            );
+            for v in [s.q[i], s.qd[i], s.qdd[i]] {
+                b.push(',');
+                push_fixed6(b, qn.to_user(v));
+            }
         }
         b.push('\n');
         w.write_all(b.as_bytes())
@@ -456,18 +452,10 @@ pub fn run(a: &MotionArgs) -> Result<u8> {
     }
     std::fs::create_dir_all(&a.out)
         .with_context(|| format!("cannot create {}", a.out.display()))?;
-    let csv_path = a.out.join("actuators.csv");
-    refuse_overwrite(&csv_path, &inputs)?;
-    let tmp: PathBuf = a
-        .out
-        .join(format!(".actuators.csv.tmp-{}", std::process::id()));
     let mut writer = if a.summary_only {
         None
     } else {
-        Some(BufWriter::with_capacity(
-            1 << 20,
-            File::create(&tmp).with_context(|| format!("cannot create {}", tmp.display()))?,
-        ))
+        Some(AtomicFile::create(&a.out.join("actuators.csv"), &inputs)?)
     };
     let outcome = CsvSink::new(
         &machine,
@@ -485,19 +473,9 @@ pub fn run(a: &MotionArgs) -> Result<u8> {
         );
         sink.finish();
         Ok(r?)
-    });
-    let outcome = match outcome {
-        Ok(o) => o,
-        Err(e) => {
-            let _ = std::fs::remove_file(&tmp);
-            return Err(e);
-        }
-    };
-    if let Some(mut w) = writer {
-        w.flush()?;
-        drop(w);
-        std::fs::rename(&tmp, &csv_path)
-            .with_context(|| format!("cannot write {}", csv_path.display()))?;
+    })?;
+    if let Some(w) = writer {
+        w.commit()?;
     }
     let s = &outcome.summary;
     let mut summary = summary_json(&machine, s, &feed);

@@ -7,10 +7,10 @@ use pkm::workspace::{flat_index, GridAxis, WorkspaceMap, WorkspaceSummary};
 use pkm::Convention;
 use pkm::{DynMechanism, Machine, PoseSpace};
 use serde_json::json;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use super::load;
-use crate::io::write_atomic;
+use crate::io::{write_atomic, AtomicFile};
 use crate::poses::{parse_list, pose_from_user};
 use crate::report::heatmap::{slice_svg, Cell, Scale};
 
@@ -311,16 +311,7 @@ pub fn run(a: &WorkspaceArgs) -> Result<u8> {
             &super::atlas::capacity(m, v.as_deref(), "--atlas-velocity")?,
             &super::atlas::capacity(m, acc.as_deref(), "--atlas-acceleration")?,
         )?;
-        let coords_user = |k: usize| {
-            let x = wm.coords(k);
-            axes.iter()
-                .map(|ax| {
-                    m.coordinates()[ax.coordinate]
-                        .quantity
-                        .to_user(x[ax.coordinate])
-                })
-                .collect::<Vec<f64>>()
-        };
+        let coords_user = |k: usize| user_coords(m, &wm, k);
         let o = super::atlas::atlas_outputs(m, &axes, &base, &at, &coords_user)?;
         write_atomic(&a.out.join("atlas.csv"), o.csv.as_bytes(), &inputs)?;
         for (name, svg) in o.plots {
@@ -372,53 +363,7 @@ pub fn run(a: &WorkspaceArgs) -> Result<u8> {
         serde_json::to_string_pretty(&summary)?.as_bytes(),
         &inputs,
     )?;
-    // Point cloud: CSV of every point, PLY of the reachable ones.
-    let names: Vec<String> = axes
-        .iter()
-        .map(|x| {
-            let c = &m.coordinates()[x.coordinate];
-            format!("{}_{}", c.name, c.quantity.unit())
-        })
-        .collect();
-    let mut csv = format!("{},reachable,status,condition,binding\n", names.join(","));
-    let mut ply_body = String::new();
-    let mut nply = 0usize;
-    for (k, p) in wm.points.iter().enumerate() {
-        let x = wm.coords(k);
-        let vals: Vec<f64> = axes
-            .iter()
-            .map(|ax| {
-                m.coordinates()[ax.coordinate]
-                    .quantity
-                    .to_user(x[ax.coordinate])
-            })
-            .collect();
-        let v: Vec<String> = vals.iter().map(|v| format!("{v:.6}")).collect();
-        csv.push_str(&format!(
-            "{},{},{},{},{}\n",
-            v.join(","),
-            p.reachable,
-            serde_json::to_value(p.status)?.as_str().unwrap_or(""),
-            if p.reachable {
-                format!("{:.6}", p.condition)
-            } else {
-                String::new()
-            },
-            super::ik::csv_text(p.binding.as_deref().unwrap_or(""))
-        ));
-        if p.reachable && vals.len() == 3 {
-            ply_body.push_str(&format!("{} {} {} {:.6}\n", v[0], v[1], v[2], p.condition));
-            nply += 1;
-        }
-    }
-    write_atomic(&a.out.join("points.csv"), csv.as_bytes(), &inputs)?;
-    if axes.len() == 3 {
-        let ply = format!(
-            "ply\nformat ascii 1.0\ncomment pkm workspace: reachable points of {}, mm\nelement vertex {nply}\nproperty float x\nproperty float y\nproperty float z\nproperty float condition\nend_header\n{ply_body}",
-            m.name()
-        );
-        write_atomic(&a.out.join("points.ply"), ply.as_bytes(), &inputs)?;
-    }
+    write_points(m, &wm, &a.out, &inputs)?;
     for (name, svg) in slices(m, &wm)? {
         write_atomic(&a.out.join(name), svg.as_bytes(), &inputs)?;
     }
@@ -480,4 +425,87 @@ pub fn run(a: &WorkspaceArgs) -> Result<u8> {
         println!("wrote {}", a.out.display());
     }
     Ok(0)
+}
+
+/// The point cloud: points.csv with every point (streamed, six decimals), and for a map
+/// over three axes points.ply with the reachable ones and their condition number
+/// (binary little-endian doubles: 32 bytes a point, read by MeshLab, CloudCompare,
+/// Open3D and ParaView).
+fn write_points(
+    m: &dyn DynMechanism,
+    wm: &WorkspaceMap,
+    out: &Path,
+    inputs: &[&Path],
+) -> Result<()> {
+    use crate::fixed::push_fixed6;
+    use std::io::Write as _;
+    let axes = &wm.axes;
+    let names: Vec<String> = axes
+        .iter()
+        .map(|x| {
+            let c = &m.coordinates()[x.coordinate];
+            format!("{}_{}", c.name, c.quantity.unit())
+        })
+        .collect();
+    let user = |k: usize| user_coords(m, wm, k);
+    let mut csv = AtomicFile::create(&out.join("points.csv"), inputs)?;
+    let mut row = format!("{},reachable,status,condition,binding\n", names.join(","));
+    for (k, p) in wm.points.iter().enumerate() {
+        for v in user(k) {
+            push_fixed6(&mut row, v);
+            row.push(',');
+        }
+        row.push_str(if p.reachable { "true," } else { "false," });
+        row.push_str(p.status.name());
+        row.push(',');
+        if p.reachable {
+            push_fixed6(&mut row, p.condition);
+        }
+        row.push(',');
+        row.push_str(&super::ik::csv_text(p.binding.as_deref().unwrap_or("")));
+        row.push('\n');
+        if row.len() > 1 << 16 {
+            csv.write_all(row.as_bytes())?;
+            row.clear();
+        }
+    }
+    csv.write_all(row.as_bytes())?;
+    csv.commit()?;
+    if axes.len() == 3 {
+        let reachable = wm.points.iter().filter(|p| p.reachable).count();
+        let mut ply = AtomicFile::create(&out.join("points.ply"), inputs)?;
+        write!(
+            ply,
+            "ply\nformat binary_little_endian 1.0\ncomment pkm workspace: reachable points of {}, mm\nelement vertex {reachable}\nproperty double x\nproperty double y\nproperty double z\nproperty double condition\nend_header\n",
+            m.name().replace('\n', " ")
+        )?;
+        let mut buf = Vec::with_capacity(1 << 16);
+        for (k, p) in wm.points.iter().enumerate() {
+            if p.reachable {
+                for v in user(k).into_iter().chain([p.condition]) {
+                    buf.extend_from_slice(&v.to_le_bytes());
+                }
+                if buf.len() >= 1 << 16 {
+                    ply.write_all(&buf)?;
+                    buf.clear();
+                }
+            }
+        }
+        ply.write_all(&buf)?;
+        ply.commit()?;
+    }
+    Ok(())
+}
+
+/// The map's axis coordinates of point `k`, user units.
+fn user_coords(m: &dyn DynMechanism, wm: &WorkspaceMap, k: usize) -> Vec<f64> {
+    let x = wm.coords(k);
+    wm.axes
+        .iter()
+        .map(|ax| {
+            m.coordinates()[ax.coordinate]
+                .quantity
+                .to_user(x[ax.coordinate])
+        })
+        .collect()
 }

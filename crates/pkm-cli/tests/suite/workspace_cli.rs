@@ -61,8 +61,34 @@ fn workspace_outputs() {
     }
     assert_eq!(v["cut"].as_array().unwrap().len(), 0, "{}", v["cut"]);
     assert!(v["grid_bounds"].as_str().unwrap().contains("reach"));
-    let ply = std::fs::read_to_string(out.join("points.ply")).unwrap();
-    assert!(ply.contains(&format!("element vertex {}", v["reachable"])));
+    // The PLY: binary doubles x, y, z, condition of the reachable points, the same
+    // values as the CSV's reachable rows (to its six decimals).
+    let ply = std::fs::read(out.join("points.ply")).unwrap();
+    let end = b"end_header\n";
+    let at = ply.windows(end.len()).position(|w| w == end).unwrap() + end.len();
+    let header = std::str::from_utf8(&ply[..at]).unwrap();
+    assert!(
+        header.starts_with("ply\nformat binary_little_endian 1.0\n"),
+        "{header}"
+    );
+    assert!(header.contains(&format!("element vertex {}\n", v["reachable"])));
+    let body: Vec<f64> = ply[at..]
+        .chunks_exact(8)
+        .map(|b| f64::from_le_bytes(b.try_into().unwrap()))
+        .collect();
+    assert_eq!(body.len() as u64, 4 * v["reachable"].as_u64().unwrap());
+    let rows: Vec<Vec<&str>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect::<Vec<_>>())
+        .filter(|r| r[3] == "true")
+        .collect();
+    assert_eq!(rows.len() * 4, body.len());
+    for (r, p) in rows.iter().zip(body.chunks_exact(4)) {
+        for (cell, v) in [r[0], r[1], r[2], r[5]].iter().zip(p) {
+            assert_eq!(*cell, format!("{v:.6}"));
+        }
+    }
     for f in ["slice-xy.svg", "slice-xz.svg"] {
         assert!(std::fs::read_to_string(out.join(f))
             .unwrap()

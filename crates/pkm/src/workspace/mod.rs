@@ -96,6 +96,30 @@ pub enum PointStatus {
     Separate,
 }
 
+impl PointStatus {
+    /// Every status, in the order above.
+    pub const ALL: [PointStatus; 6] = [
+        PointStatus::Reachable,
+        PointStatus::Limits,
+        PointStatus::NoSolution,
+        PointStatus::SolverFailed,
+        PointStatus::Singular,
+        PointStatus::Separate,
+    ];
+
+    /// Its name in outputs (`no_solution`), as serialised.
+    pub fn name(self) -> &'static str {
+        match self {
+            PointStatus::Reachable => "reachable",
+            PointStatus::Limits => "limits",
+            PointStatus::NoSolution => "no_solution",
+            PointStatus::SolverFailed => "solver_failed",
+            PointStatus::Singular => "singular",
+            PointStatus::Separate => "separate",
+        }
+    }
+}
+
 /// What one grid point found.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct PointResult {

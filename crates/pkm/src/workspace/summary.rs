@@ -204,16 +204,9 @@ impl WorkspaceMap {
         };
         let mut binding: Vec<(String, usize)> = binding.into_iter().collect();
         binding.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
-        let outcomes = [
-            PointStatus::Reachable,
-            PointStatus::Limits,
-            PointStatus::NoSolution,
-            PointStatus::SolverFailed,
-            PointStatus::Singular,
-            PointStatus::Separate,
-        ]
-        .map(|st| (st, self.points.iter().filter(|p| p.status == st).count()))
-        .to_vec();
+        let outcomes = PointStatus::ALL
+            .map(|st| (st, self.points.iter().filter(|p| p.status == st).count()))
+            .to_vec();
         WorkspaceSummary {
             points: self.points.len(),
             reachable: conds.len(),

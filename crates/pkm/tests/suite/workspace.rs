@@ -515,3 +515,11 @@ fn tilt_orientations_tilt_the_tool_axis_by_the_tilt_all_around() {
         assert!((az - 45.0 * k as f64).abs() < 1e-9, "{azimuths:?}");
     }
 }
+
+#[test]
+fn point_status_names_are_their_serialised_names() {
+    use pkm::workspace::PointStatus;
+    for s in PointStatus::ALL {
+        assert_eq!(serde_json::to_value(s).unwrap(), s.name());
+    }
+}
