@@ -165,31 +165,39 @@ impl SerialArm {
 
     /// The closed form's solutions of the pose `(p, r)`, each polished by Newton and
     /// wrapped to within half a turn of `near`, nearest `near` first (sum of squared
-    /// joint differences); `Ok(None)` when the closed form does not apply, `Err` with
-    /// the reason when the pose is out of reach.
+    /// joint differences); with `all` false only the nearest one Newton can polish
+    /// (one Newton step instead of eight). `Ok(None)` when the closed form does not
+    /// apply, `Err` with the reason when the pose is out of reach.
     fn closed_form(
         &self,
         p: &Vector3<f64>,
         r: &Matrix3<f64>,
         near: &Vector6<f64>,
+        all: bool,
     ) -> std::result::Result<Option<Postures>, String> {
         let Some(wrist) = &self.wrist else {
             return Ok(None);
         };
-        let (raw, n) = wrist.solve(p, r, near)?;
+        let (mut raw, n) = wrist.solve(p, r, near)?;
+        for q in &mut raw[..n] {
+            *q = self.wrap(*q, near);
+        }
+        raw[..n].sort_by(|a, b| {
+            (a - near)
+                .norm_squared()
+                .total_cmp(&(b - near).norm_squared())
+        });
         let mut sols = [Vector6::zeros(); 8];
         let mut count = 0;
         for q in &raw[..n] {
             if let Ok(q) = self.newton(p, r, *q) {
                 sols[count] = self.wrap(q, near);
                 count += 1;
+                if !all {
+                    break;
+                }
             }
         }
-        sols[..count].sort_by(|a, b| {
-            (a - near)
-                .norm_squared()
-                .total_cmp(&(b - near).norm_squared())
-        });
         Ok(Some((sols, count)))
     }
 
@@ -272,7 +280,7 @@ impl SerialArm {
         }
         let target_r = crate::rotation::rpy_matrix(x[3], x[4], x[5]);
         if closed_form {
-            match self.closed_form(&target_p, &target_r, start) {
+            match self.closed_form(&target_p, &target_r, start, false) {
                 Err(reason) => return Err(Error::NotAttainable { reason }),
                 Ok(Some((sols, n))) if n > 0 => return Ok(sols[0]),
                 // Not in closed form, or Newton could not polish a closed-form
@@ -327,7 +335,7 @@ impl SerialArm {
         }
         let target_r = crate::rotation::rpy_matrix(x[3], x[4], x[5]);
         let found: Vec<Vector6<f64>> =
-            match self.closed_form(&target_p, &target_r, &self.home_joints) {
+            match self.closed_form(&target_p, &target_r, &self.home_joints, true) {
                 Err(_) => Vec::new(),
                 Ok(Some((sols, n))) => sols[..n].to_vec(),
                 Ok(None) => (0..starts.max(1))
