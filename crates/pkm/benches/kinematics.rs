@@ -219,7 +219,75 @@ fn batch_inverse(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(motion_benches, motion, five_axis_program, batch_inverse);
+/// A wavy 5-axis raster of `lines` G1 moves about `centre` (X, Y, Z, then A about
+/// `a0`): +-40 mm in X and Y, +-5 mm in Z, +-3 deg in A and B, 0.1-0.3 mm per line at
+/// 800 mm/min (about 18 samples per line at 1 kHz), the shape of a finishing program.
+fn wave_program(lines: usize, centre: [f64; 3], a0: f64) -> String {
+    let [cx, cy, cz] = centre;
+    let mut s = format!(
+        "G21 G90 G17\nG0 X{cx:.4} Y{:.4} Z{cz:.4} A{a0:.4} B0 C0\nF800\n",
+        cy + 40.0
+    );
+    for i in 0..lines {
+        let t = i as f64 * 0.01;
+        s += &format!(
+            "G1 X{:.4} Y{:.4} Z{:.4} A{:.4} B{:.4}\n",
+            cx + 40.0 * (t * 0.7).sin(),
+            cy + 40.0 * (t * 0.53).cos(),
+            cz + 5.0 * (t * 1.3).sin(),
+            a0 + 3.0 * (t * 0.2).sin(),
+            3.0 * (t * 0.17).cos()
+        );
+    }
+    s + "M2\n"
+}
+
+/// Issue 19: programs through a hexapod and a 6R robot at 1 kHz, the whole sampler
+/// (G-code, profile, exact actuator q, q', q'', statistics, limits), one thread.
+fn program_motion(c: &mut Criterion) {
+    use pkm::analysis::motion::{feed_options, run_motion_with, MotionSource, NoSink};
+    let run = |m: &Machine, text: &str| {
+        run_motion_with(
+            m,
+            MotionSource::Gcode {
+                reader: Box::new(std::io::Cursor::new(text.as_bytes().to_vec())),
+                from: None,
+                setup: Default::default(),
+            },
+            &feed_options(m),
+            pkm::motion::Sampling::Rate(1000.0),
+            None,
+            &mut NoSink,
+        )
+        .unwrap()
+        .summary
+        .samples
+    };
+    let mut g = c.benchmark_group("program motion");
+    g.sample_size(10);
+    for (file, centre, a0) in [
+        ("hexapod-linuxcnc.toml", [0.0, 0.0, 508.0], 0.0),
+        ("kr30-dh.toml", [1170.0, 0.0, 1400.0], 180.0),
+    ] {
+        let m = machine(file);
+        let text = wave_program(10_000, centre, a0);
+        let samples = run(&m, &text);
+        g.throughput(criterion::Throughput::Elements(samples));
+        g.bench_function(
+            format!("{file}: 10k-line program at 1 kHz ({samples} samples), one thread"),
+            |b| b.iter(|| run(&m, black_box(&text))),
+        );
+    }
+    g.finish();
+}
+
+criterion_group!(
+    motion_benches,
+    motion,
+    five_axis_program,
+    batch_inverse,
+    program_motion
+);
 
 fn hexapod(c: &mut Criterion) {
     let Model::Hexapod(h) = machine("hexapod-linuxcnc.toml").model else {

@@ -311,6 +311,19 @@ impl<const N: usize> StrutSet<N> {
         xdd: &SVector<f64, 6>,
     ) -> ActuatorMotion<N> {
         let (p, r) = split_pose(x);
+        self.coords_motion_at(x, xd, xdd, &p, &r)
+    }
+
+    /// [`StrutSet::coords_motion`] with the pose already split into its position `p`
+    /// and rotation `r` ([`split_pose`]).
+    pub fn coords_motion_at(
+        &self,
+        x: &SVector<f64, 6>,
+        xd: &SVector<f64, 6>,
+        xdd: &SVector<f64, 6>,
+        p: &Vector3<f64>,
+        r: &Matrix3<f64>,
+    ) -> ActuatorMotion<N> {
         let ad = xd.fixed_rows::<3>(3).into_owned();
         let add = xdd.fixed_rows::<3>(3).into_owned();
         // The usual case for held orientations: no angular motion.
@@ -320,8 +333,8 @@ impl<const N: usize> StrutSet<N> {
             crate::rotation::rpy_angular_motion([x[3], x[4], x[5]], &ad, &add)
         };
         self.motion(
-            &p,
-            &r,
+            p,
+            r,
             &xd.fixed_rows::<3>(0).into_owned(),
             &w,
             &xdd.fixed_rows::<3>(0).into_owned(),

@@ -428,6 +428,22 @@ pub trait Mechanism<const P: usize, const A: usize>: Send + Sync {
         xd: &SVector<f64, P>,
         xdd: &SVector<f64, P>,
     ) -> Result<ActuatorMotion<A>>;
+
+    /// [`Mechanism::actuator_motion`], then [`Mechanism::check_limits`] with its
+    /// positions pushed onto `out`: the motion engine's call per sample. A type may
+    /// share work between the two (the hexapod computes the pose's rotation once); the
+    /// result must be the same.
+    fn actuator_motion_checked(
+        &self,
+        x: &SVector<f64, P>,
+        xd: &SVector<f64, P>,
+        xdd: &SVector<f64, P>,
+        out: &mut Vec<Violation>,
+    ) -> Result<ActuatorMotion<A>> {
+        let act = self.actuator_motion(x, xd, xdd)?;
+        self.check_limits(x, &act.q, out);
+        Ok(act)
+    }
 }
 
 /// Actuator position, velocity and acceleration at one instant (mm or rad, per s, per s^2).

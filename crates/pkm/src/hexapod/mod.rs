@@ -607,4 +607,21 @@ impl Mechanism<6, 6> for Hexapod {
     ) -> Result<ActuatorMotion<6>> {
         Ok(self.set.coords_motion(x, xd, xdd))
     }
+
+    /// One rotation of the pose for both the motion and the limits.
+    fn actuator_motion_checked(
+        &self,
+        x: &Vector6<f64>,
+        xd: &Vector6<f64>,
+        xdd: &Vector6<f64>,
+        out: &mut Vec<Violation>,
+    ) -> Result<ActuatorMotion<6>> {
+        let (p, r) = split_pose(x);
+        let act = self.set.coords_motion_at(x, xd, xdd, &p, &r);
+        self.scan(x, &act.q, &p, &r, |c| {
+            out.push(self.violation_of(&c));
+            false
+        });
+        Ok(act)
+    }
 }

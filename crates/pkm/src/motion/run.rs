@@ -309,7 +309,9 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
             Some(b) => b,
             None => self.m,
         };
-        let act = m.actuator_motion(&x, &xd, &xdd)?;
+        // Limits: positions (and the mechanism's own) with the motion, rates below.
+        self.buf.clear();
+        let act = m.actuator_motion_checked(&x, &xd, &xdd, &mut self.buf)?;
         let t = self.t0 + tl;
         self.samples += 1;
         for i in 0..A {
@@ -324,9 +326,6 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
             let qn = self.m.coordinates()[k].quantity;
             self.serial[j].add(qn.to_user(x[k]), qn.to_user(xd[k]), qn.to_user(xdd[k]));
         }
-        // Limits: positions (and the mechanism's own), then rates.
-        self.buf.clear();
-        m.check_limits(&x, &act.q, &mut self.buf);
         for i in 0..A {
             let a = &self.m.actuators()[i];
             if let Some(vm) = a.max_velocity {

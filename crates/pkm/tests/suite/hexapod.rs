@@ -768,3 +768,32 @@ fn screened_batch_equals_the_exact_path_on_and_near_every_limit() {
         }
     }
 }
+
+/// The motion engine's per-sample call shares the pose's rotation between the motion
+/// and the limits: the same actuator motion and the same violations, bit for bit, as
+/// the two calls apart, on poses within and beyond the limits.
+#[test]
+fn checked_actuator_motion_equals_motion_then_limits() {
+    for file in ["hexapod-linuxcnc.toml", "hexapod-seed001.toml"] {
+        let h = load(file);
+        let home = h.home();
+        let mut rng = rand::rngs::StdRng::seed_from_u64(11);
+        let mut violated = 0;
+        for _ in 0..5000 {
+            let x = Vector6::from_fn(|k, _| {
+                let s = if k < 3 { 150.0 } else { 0.3 };
+                home[k] + rng.random_range(-s..s)
+            });
+            let xd = Vector6::from_fn(|_, _| rng.random_range(-50.0..50.0));
+            let xdd = Vector6::from_fn(|_, _| rng.random_range(-500.0..500.0));
+            let (mut a, mut b) = (Vec::new(), Vec::new());
+            let got = h.actuator_motion_checked(&x, &xd, &xdd, &mut a).unwrap();
+            let want = h.actuator_motion(&x, &xd, &xdd).unwrap();
+            h.check_limits(&x, &want.q, &mut b);
+            assert_eq!(got, want, "{file}: {x:?}");
+            assert_eq!(a, b, "{file}: {x:?}");
+            violated += usize::from(!a.is_empty());
+        }
+        assert!(violated > 500 && violated < 4500, "{file}: {violated}");
+    }
+}
