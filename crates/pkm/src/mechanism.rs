@@ -272,6 +272,15 @@ pub trait Mechanism<const P: usize, const A: usize>: Send + Sync {
         newton_forward(self, q, start, &NewtonOptions::default())
     }
 
+    /// The tool pose of forward kinematics ([`Mechanism::forward`], then
+    /// [`Mechanism::tool_pose`]): the accuracy engine's call per deviated machine. A
+    /// type whose solver finds the pose as a rotation may return it without the round
+    /// trip through the pose coordinates' angles (the hexapod does).
+    fn forward_tool_pose(&self, q: &SVector<f64, A>, start: &SVector<f64, P>) -> Result<Pose> {
+        let f = self.forward(q, start)?;
+        self.tool_pose(&f.pose)
+    }
+
     /// Whether the mechanism leaves the tool free to spin about its own axis (a
     /// pentapod's ring joints turn): a rotation about the tool axis is then no error of
     /// the machine, and the accuracy engine keeps only the tilt of the tool axis

@@ -91,11 +91,9 @@ impl<M: Rebuild<P, A>, const P: usize, const A: usize> Evaluate for RebuildEvalu
         }
         let actual = if geometry {
             self.m.update_geometry(&mut self.scratch, &self.g)?;
-            let f = self.scratch.forward(&(self.q + dq), &self.x)?;
-            self.scratch.tool_pose(&f.pose)?
+            self.scratch.forward_tool_pose(&(self.q + dq), &self.x)?
         } else {
-            let f = self.m.forward(&(self.q + dq), &self.x)?;
-            self.m.tool_pose(&f.pose)?
+            self.m.forward_tool_pose(&(self.q + dq), &self.x)?
         };
         let e = PoseError::between(&self.nominal, &actual);
         Ok(if self.m.free_spin() {

@@ -453,6 +453,13 @@ impl Mechanism<6, 6> for Hexapod {
         })
     }
 
+    /// The solver's position and rotation as they are (no round trip through A, B, C).
+    fn forward_tool_pose(&self, q: &Vector6<f64>, start: &Vector6<f64>) -> Result<Pose> {
+        let (p0, r0) = split_pose(start);
+        let rep = forward::solve(self, q, &p0, &r0, &FkOptions::default())?;
+        Ok(crate::pose::pose_from_parts(rep.position, &rep.rotation))
+    }
+
     fn tool_pose(&self, x: &Vector6<f64>) -> Result<Pose> {
         Ok(crate::legs::spatial_tool_pose(x))
     }

@@ -797,3 +797,26 @@ fn checked_actuator_motion_equals_motion_then_limits() {
         assert!(violated > 500 && violated < 4500, "{file}: {violated}");
     }
 }
+
+/// The accuracy engine's forward call returns the solver's rotation as it is: the same
+/// tool pose as forward kinematics through X..C, to 1e-12 mm and rad.
+#[test]
+fn forward_tool_pose_equals_forward_then_tool_pose() {
+    let h = load("hexapod-linuxcnc.toml");
+    let home = h.home();
+    let mut rng = rand::rngs::StdRng::seed_from_u64(5);
+    for _ in 0..2000 {
+        let x = Vector6::from_fn(|k, _| {
+            let s = if k < 3 { 80.0 } else { 0.15 };
+            home[k] + rng.random_range(-s..s)
+        });
+        let q = h.inverse(&x).unwrap();
+        let a = h.forward_tool_pose(&q, &home).unwrap();
+        let b = h.tool_pose(&h.forward(&q, &home).unwrap().pose).unwrap();
+        assert!((a.translation.vector - b.translation.vector).norm() < 1e-12);
+        assert!(a.rotation.angle_to(&b.rotation) < 1e-12);
+        // And both are the pose the actuators came from.
+        let t = h.tool_pose(&x).unwrap();
+        assert!((a.translation.vector - t.translation.vector).norm() < 1e-9);
+    }
+}
