@@ -135,7 +135,7 @@ pub fn section(h: &mut Html, machine: &Machine, ctx: &Context) -> Result<()> {
         .collect();
     h.p(
         "Points per limit: every limit a point violates is counted (a point beyond two \
-         struts' strokes counts for both); the last column counts the points where it is \
+         limits counts for both); the last column counts the points where it is \
          the first violated limit in the machine's check order.",
     );
     h.table(&["limit", "points violating it", "first violated"], &rows);

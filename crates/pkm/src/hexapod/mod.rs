@@ -149,6 +149,14 @@ fn derived(
 }
 
 impl Hexapod {
+    /// Forward kinematics with the default options from the pose coordinates `start`
+    /// ([`forward::solve`]): what [`Mechanism::forward`] and
+    /// [`Mechanism::forward_tool_pose`] share.
+    fn solve_from_pose(&self, q: &Vector6<f64>, start: &Vector6<f64>) -> Result<FkReport> {
+        let (p0, r0) = split_pose(start);
+        forward::solve(self, q, &p0, &r0, &FkOptions::default())
+    }
+
     /// The limit check of [`Mechanism::check_limits`] at pose `x` (position `p`,
     /// rotation `r`) with actuators `q`, in its order: `found` is called with every
     /// violated limit as a code ([`Hexapod::violation_of`] names it) and the scan stops
@@ -436,8 +444,7 @@ impl Mechanism<6, 6> for Hexapod {
 
     /// Newton on SE(3) from `start` (see [`forward::solve`]).
     fn forward(&self, q: &Vector6<f64>, start: &Vector6<f64>) -> Result<Forward<6>> {
-        let (p0, r0) = split_pose(start);
-        let rep = forward::solve(self, q, &p0, &r0, &FkOptions::default())?;
+        let rep = self.solve_from_pose(q, start)?;
         let a = Convention::Rpy.from_matrix(&rep.rotation);
         Ok(Forward {
             pose: Vector6::new(
@@ -455,8 +462,7 @@ impl Mechanism<6, 6> for Hexapod {
 
     /// The solver's position and rotation as they are (no round trip through A, B, C).
     fn forward_tool_pose(&self, q: &Vector6<f64>, start: &Vector6<f64>) -> Result<Pose> {
-        let (p0, r0) = split_pose(start);
-        let rep = forward::solve(self, q, &p0, &r0, &FkOptions::default())?;
+        let rep = self.solve_from_pose(q, start)?;
         Ok(crate::pose::pose_from_parts(rep.position, &rep.rotation))
     }
 

@@ -337,8 +337,10 @@ impl SerialArm {
         let found: Vec<Vector6<f64>> =
             match self.closed_form(&target_p, &target_r, &self.home_joints, true) {
                 Err(_) => Vec::new(),
-                Ok(Some((sols, n))) => sols[..n].to_vec(),
-                Ok(None) => (0..starts.max(1))
+                Ok(Some((sols, n))) if n > 0 => sols[..n].to_vec(),
+                // Not in closed form, or no closed-form posture Newton could polish (as
+                // in `inverse_from`): the spread starts.
+                Ok(_) => (0..starts.max(1))
                     .filter_map(|k| {
                         let q0 = if k == 0 {
                             self.home_joints

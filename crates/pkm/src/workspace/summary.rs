@@ -37,7 +37,7 @@ pub struct WorkspaceSummary {
     /// sorted by count; points without a solution under their reason.
     pub binding: Vec<(String, usize)>,
     /// Points per violated limit, every limit a point violates counted (a point beyond
-    /// two struts' strokes counts for both), sorted by count.
+    /// two limits counts for both), sorted by count.
     pub violated: Vec<(String, usize)>,
     /// Points per outcome: reachable, limits violated, no solution, solver failed,
     /// singular, separate.
