@@ -9,50 +9,70 @@
 //! correctly rounded one unless the scaled value lies within 2e-3 of a tie (`.5`);
 //! those values, larger ones and non-finite ones take std's path.
 
+/// Two ASCII digits of every number 0..100.
+const PAIRS: [[u8; 2]; 100] = {
+    let mut t = [[0u8; 2]; 100];
+    let mut i = 0;
+    while i < 100 {
+        t[i] = [b'0' + (i / 10) as u8, b'0' + (i % 10) as u8];
+        i += 1;
+    }
+    t
+};
+
 /// Appends `v` with six decimals, exactly as `{:.6}` formats it.
+///
+/// The fast path needs neither `floor` nor `round` (libm calls on the baseline x86-64
+/// target): `s = |v| 1e6 < 1e13` truncates exactly to an integer `n`, `s - n` is then
+/// exact, and away from a tie `round(s)` is `n` or `n + 1` by that fraction.
 #[inline]
-pub fn push_fixed6(buf: &mut String, v: f64) {
+pub fn push_fixed6(buf: &mut Vec<u8>, v: f64) {
     let a = v.abs();
     if a < 1e7 {
         let s = a * 1e6;
-        let frac = s - s.floor();
+        let n = s as u64;
+        let frac = s - n as f64;
         if (frac - 0.5).abs() > 2e-3 {
-            let n = s.round() as u64;
+            let n = n + u64::from(frac > 0.5);
             if v.is_sign_negative() {
-                buf.push('-');
+                buf.push(b'-');
             }
             push_u64(buf, n / 1_000_000);
-            buf.push('.');
-            let f = n % 1_000_000;
-            let mut digits = [b'0'; 6];
-            let mut f = f;
-            for d in digits.iter_mut().rev() {
-                *d = b'0' + (f % 10) as u8;
-                f /= 10;
-            }
-            // ASCII digits.
-            buf.push_str(std::str::from_utf8(&digits).unwrap_or("000000"));
+            let f = (n % 1_000_000) as usize;
+            let (hi, lo) = (f / 10_000, f % 10_000);
+            buf.push(b'.');
+            buf.extend_from_slice(&PAIRS[hi]);
+            buf.extend_from_slice(&PAIRS[lo / 100]);
+            buf.extend_from_slice(&PAIRS[lo % 100]);
             return;
         }
     }
-    use std::fmt::Write as _;
+    use std::io::Write as _;
     let _ = write!(buf, "{v:.6}");
 }
 
 /// Appends the decimal digits of `n`.
 #[inline]
-pub fn push_u64(buf: &mut String, mut n: u64) {
+pub fn push_u64(buf: &mut Vec<u8>, mut n: u64) {
+    if n < 10 {
+        buf.push(b'0' + n as u8);
+        return;
+    }
     let mut digits = [0u8; 20];
     let mut k = digits.len();
-    loop {
-        k -= 1;
-        digits[k] = b'0' + (n % 10) as u8;
-        n /= 10;
-        if n == 0 {
-            break;
-        }
+    while n >= 100 {
+        k -= 2;
+        digits[k..k + 2].copy_from_slice(&PAIRS[(n % 100) as usize]);
+        n /= 100;
     }
-    buf.push_str(std::str::from_utf8(&digits[k..]).unwrap_or("0"));
+    if n >= 10 {
+        k -= 2;
+        digits[k..k + 2].copy_from_slice(&PAIRS[n as usize]);
+    } else {
+        k -= 1;
+        digits[k] = b'0' + n as u8;
+    }
+    buf.extend_from_slice(&digits[k..]);
 }
 
 #[cfg(test)]
@@ -60,9 +80,14 @@ mod tests {
     use super::*;
 
     fn same(v: f64) {
-        let mut b = String::new();
+        let mut b = Vec::new();
         push_fixed6(&mut b, v);
-        assert_eq!(b, format!("{v:.6}"), "{v:e} ({:#x})", v.to_bits());
+        assert_eq!(
+            String::from_utf8(b).unwrap(),
+            format!("{v:.6}"),
+            "{v:e} ({:#x})",
+            v.to_bits()
+        );
     }
 
     #[test]
@@ -112,10 +137,23 @@ mod tests {
 
     #[test]
     fn integers() {
-        for n in [0u64, 7, 10, 99, 1_000_000, u64::MAX] {
-            let mut b = String::new();
+        for n in [
+            0u64,
+            7,
+            10,
+            99,
+            100,
+            101,
+            999,
+            1000,
+            12_345,
+            1_000_000,
+            u64::MAX,
+            u64::MAX / 10,
+        ] {
+            let mut b = Vec::new();
             push_u64(&mut b, n);
-            assert_eq!(b, n.to_string());
+            assert_eq!(String::from_utf8(b).unwrap(), n.to_string());
         }
     }
 }

@@ -141,7 +141,15 @@ pub fn rpy_matrix(a: f64, b: f64, c: f64) -> Matrix3<f64> {
     if a == 0.0 && b == 0.0 && c == 0.0 {
         return Matrix3::identity();
     }
-    let ([sa, sb, sc], [ca, cb, cc]) = crate::trig::sin_cos_array(&[a, b, c]);
+    let (s, c) = crate::trig::sin_cos_array(&[a, b, c]);
+    rpy_from_sin_cos(s, c)
+}
+
+/// [`rpy_matrix`] from the sines `[sa, sb, sc]` and cosines `[ca, cb, cc]` of the
+/// angles (the one sequence of operations of every path that builds it).
+#[inline(always)]
+pub(crate) fn rpy_from_sin_cos(s: [f64; 3], c: [f64; 3]) -> Matrix3<f64> {
+    let ([sa, sb, sc], [ca, cb, cc]) = (s, c);
     Matrix3::new(
         cc * cb,
         cc * sb * sa - sc * ca,

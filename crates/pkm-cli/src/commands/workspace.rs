@@ -449,27 +449,32 @@ fn write_points(
         .collect();
     let user = |k: usize| user_coords(m, wm, k);
     let mut csv = AtomicFile::create(&out.join("points.csv"), inputs)?;
-    let mut row = format!("{},reachable,status,condition,binding\n", names.join(","));
+    let mut row = format!("{},reachable,status,condition,binding\n", names.join(",")).into_bytes();
     for (k, p) in wm.points.iter().enumerate() {
         for v in user(k) {
             push_fixed6(&mut row, v);
-            row.push(',');
+            row.push(b',');
         }
-        row.push_str(if p.reachable { "true," } else { "false," });
-        row.push_str(p.status.name());
-        row.push(',');
+        row.extend_from_slice(if p.reachable { b"true," } else { b"false," });
+        row.extend_from_slice(p.status.name().as_bytes());
+        row.push(b',');
         if p.reachable {
             push_fixed6(&mut row, p.condition);
         }
-        row.push(',');
-        row.push_str(&super::ik::csv_text(p.binding.as_deref().unwrap_or("")));
-        row.push('\n');
+        row.push(b',');
+        let binding = p.binding.as_deref().unwrap_or("");
+        if binding.contains([',', '"', '\n']) {
+            row.extend_from_slice(super::ik::csv_text(binding).as_bytes());
+        } else {
+            row.extend_from_slice(binding.as_bytes());
+        }
+        row.push(b'\n');
         if row.len() > 1 << 16 {
-            csv.write_all(row.as_bytes())?;
+            csv.write_all(&row)?;
             row.clear();
         }
     }
-    csv.write_all(row.as_bytes())?;
+    csv.write_all(&row)?;
     csv.commit()?;
     if axes.len() == 3 {
         let reachable = wm.points.iter().filter(|p| p.reachable).count();

@@ -362,6 +362,21 @@ impl Hexapod {
         }
     }
 
+    /// Strut lengths `|p + R(A, B, C) arm_i - base_i|` of spatial coordinates
+    /// `x = [X, Y, Z, A, B, C]` (seed 001's inverse kinematics; `R` is
+    /// [`crate::rotation::rpy_matrix`]): on a CPU with AVX-512F one pass from the
+    /// angles to the lengths, equal bit for bit to [`Hexapod::lengths`] of
+    /// [`crate::legs::split_pose`] (tested).
+    pub fn pose_lengths(&self, x: &Vector6<f64>) -> Vector6<f64> {
+        match self.lanes.pose_lengths(x) {
+            Some(l) => l,
+            None => {
+                let (p, r) = split_pose(x);
+                self.lengths(&p, &r)
+            }
+        }
+    }
+
     /// Strut lengths by the portable code only (the reference the AVX-512 kernel is
     /// tested against).
     pub fn lengths_portable(&self, p: &Vector3<f64>, r: &Matrix3<f64>) -> Vector6<f64> {
@@ -427,8 +442,7 @@ impl Mechanism<6, 6> for Hexapod {
 
     #[inline]
     fn inverse(&self, x: &Vector6<f64>) -> Result<Vector6<f64>> {
-        let (p, r) = split_pose(x);
-        Ok(self.lengths(&p, &r))
+        Ok(self.pose_lengths(x))
     }
 
     fn jacobian(&self, x: &Vector6<f64>) -> Result<SMatrix<f64, 6, 6>> {

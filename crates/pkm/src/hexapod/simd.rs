@@ -59,6 +59,27 @@ impl Lanes {
 }
 
 impl Lanes {
+    /// The six strut lengths of spatial coordinates `x = [X, Y, Z, A, B, C]` in one
+    /// AVX-512 pass: the three sines and cosines in one register
+    /// ([`crate::trig::avx512::sin_cos`], bit for bit the scalar kernel), the rotation
+    /// by [`crate::rotation::rpy_from_sin_cos`], then [`Lanes::lengths`]' kernel; so
+    /// equal bit for bit to `lengths(split_pose(x))`. `None` without AVX-512F or with
+    /// an angle beyond the kernel's range (`|angle| > 1e4` rad, NaN): the caller
+    /// takes the portable path, which defers those to libm.
+    #[inline]
+    pub(crate) fn pose_lengths(&self, x: &Vector6<f64>) -> Option<Vector6<f64>> {
+        #[cfg(target_arch = "x86_64")]
+        {
+            if self.available {
+                // SAFETY: as in `lengths`: the CPU reported AVX-512F.
+                let l = unsafe { pose_lengths_avx512(self, x) }?;
+                return Some(Vector6::new(l[0], l[1], l[2], l[3], l[4], l[5]));
+            }
+        }
+        let _ = x;
+        None
+    }
+
     /// Lengths of many poses; `false` when AVX-512F is not available (nothing
     /// written). The loop runs inside the AVX-512 function, so poses pipeline.
     pub(crate) fn lengths_batch(
@@ -108,6 +129,35 @@ fn detect() -> bool {
     {
         false
     }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+#[inline]
+unsafe fn pose_lengths_avx512(s: &Lanes, x: &Vector6<f64>) -> Option<[f64; 8]> {
+    use std::arch::x86_64::*;
+    let p = Vector3::new(x[0], x[1], x[2]);
+    let r = if x[3] == 0.0 && x[4] == 0.0 && x[5] == 0.0 {
+        // As `rotation::rpy_matrix`: exactly the identity.
+        Matrix3::identity()
+    } else {
+        // SAFETY: the masked load reads lanes 0..3 only, x[3..6] (six contiguous f64
+        // in `x`); the stores write the 8 f64 of two arrays.
+        let (sn, cs) = unsafe {
+            let ang = _mm512_maskz_loadu_pd(0b111, x.as_slice().as_ptr().add(3));
+            let ((sn, cs), in_range) = crate::trig::avx512::sin_cos(ang);
+            if in_range != 0xff {
+                return None;
+            }
+            let (mut so, mut co) = ([0.0; 8], [0.0; 8]);
+            _mm512_storeu_pd(so.as_mut_ptr(), sn);
+            _mm512_storeu_pd(co.as_mut_ptr(), cs);
+            (so, co)
+        };
+        crate::rotation::rpy_from_sin_cos([sn[0], sn[1], sn[2]], [cs[0], cs[1], cs[2]])
+    };
+    // SAFETY: same feature.
+    Some(unsafe { lengths_avx512(s, &p, &r) })
 }
 
 #[cfg(target_arch = "x86_64")]

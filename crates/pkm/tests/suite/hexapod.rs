@@ -500,6 +500,43 @@ fn simd_lengths_equal_portable_lengths() {
     }
 }
 
+/// The one-pass lengths from X..C equal the lengths of the split pose bit for bit:
+/// random poses, zero angles (the identity), angles beyond the AVX-512 kernel's range
+/// and NaN (the portable path).
+#[test]
+fn pose_lengths_equal_the_lengths_of_the_split_pose() {
+    for file in ["hexapod-linuxcnc.toml", "hexapod-seed001.toml"] {
+        let h = load(file);
+        let mut rng = rand::rngs::StdRng::seed_from_u64(5);
+        let mut xs: Vec<Vector6<f64>> = (0..100_000)
+            .map(|_| random_pose(&mut rng, &Vector3::new(0.0, 0.0, 560.0), 400.0, 300.0, 1.0))
+            .collect();
+        xs.extend([
+            Vector6::new(10.0, -5.0, 540.0, 0.0, 0.0, 0.0),
+            Vector6::new(10.0, -5.0, 540.0, 0.0, -0.0, 0.2),
+            Vector6::new(10.0, -5.0, 540.0, 2e4, 0.1, 0.2),
+            Vector6::new(10.0, -5.0, 540.0, 0.1, -1e4, 1e4),
+            Vector6::new(10.0, -5.0, 540.0, f64::NAN, 0.1, 0.2),
+        ]);
+        for x in &xs {
+            let (p, r) = pkm::legs::split_pose(x);
+            let a = h.pose_lengths(x);
+            let b = h.lengths(&p, &r);
+            let c = Mechanism::<6, 6>::inverse(&h, x).unwrap();
+            for i in 0..6 {
+                assert!(
+                    a[i].to_bits() == b[i].to_bits() && c[i].to_bits() == b[i].to_bits()
+                        || a[i].is_nan() && b[i].is_nan() && c[i].is_nan(),
+                    "{file} {x:?}: {} {} {}",
+                    a[i],
+                    b[i],
+                    c[i]
+                );
+            }
+        }
+    }
+}
+
 #[test]
 fn joint_centres_moved_in_place_equal_a_rebuilt_machine() {
     use pkm::identify::struts::StrutMachine;
