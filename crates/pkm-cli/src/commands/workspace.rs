@@ -363,10 +363,19 @@ pub fn run(a: &WorkspaceArgs) -> Result<u8> {
         serde_json::to_string_pretty(&summary)?.as_bytes(),
         &inputs,
     )?;
-    write_points(m, &wm, &a.out, &inputs)?;
-    for (name, svg) in slices(m, &wm)? {
-        write_atomic(&a.out.join(name), svg.as_bytes(), &inputs)?;
-    }
+    // The point files are written while the slices are drawn.
+    std::thread::scope(|scope| -> Result<()> {
+        let points = scope.spawn(|| write_points(m, &wm, &a.out, &inputs));
+        let drawn = slices(m, &wm).and_then(|list| {
+            list.iter().try_for_each(|(name, svg)| {
+                write_atomic(&a.out.join(name), svg.as_bytes(), &inputs)
+            })
+        });
+        points
+            .join()
+            .unwrap_or_else(|_| Err(anyhow::anyhow!("the point-cloud writer panicked")))?;
+        drawn
+    })?;
     if a.json {
         println!("{}", serde_json::to_string_pretty(&summary)?);
     } else {
@@ -430,29 +439,83 @@ pub fn run(a: &WorkspaceArgs) -> Result<u8> {
 /// The point cloud: points.csv with every point (streamed, six decimals), and for a map
 /// over three axes points.ply with the reachable ones and their condition number
 /// (binary little-endian doubles: 32 bytes a point, read by MeshLab, CloudCompare,
-/// Open3D and ParaView).
+/// Open3D and ParaView). The two files are written by two threads at once.
 fn write_points(
     m: &dyn DynMechanism,
     wm: &WorkspaceMap,
     out: &Path,
     inputs: &[&Path],
 ) -> Result<()> {
+    let table = AxisTable::new(m, wm);
+    std::thread::scope(|scope| {
+        let csv = scope.spawn(|| write_points_csv(m, wm, &table, out, inputs));
+        let ply = if wm.axes.len() == 3 {
+            write_points_ply(m, wm, &table, out, inputs)
+        } else {
+            Ok(())
+        };
+        let csv = csv
+            .join()
+            .unwrap_or_else(|_| Err(anyhow::anyhow!("the points.csv writer panicked")));
+        csv.and(ply)
+    })
+}
+
+/// The grid values of every map axis in user units, so that a point's coordinates
+/// come from its index without allocation.
+struct AxisTable {
+    /// Per axis, its values in user units.
+    values: Vec<Vec<f64>>,
+}
+
+impl AxisTable {
+    fn new(m: &dyn DynMechanism, wm: &WorkspaceMap) -> Self {
+        let values = wm
+            .axes
+            .iter()
+            .map(|ax| {
+                let q = m.coordinates()[ax.coordinate].quantity;
+                (0..ax.count()).map(|i| q.to_user(ax.value(i))).collect()
+            })
+            .collect();
+        AxisTable { values }
+    }
+
+    /// The axis values of point `k` into `out` (the last axis varies fastest, as
+    /// [`WorkspaceMap::coords`]).
+    fn point(&self, k: usize, out: &mut [f64]) {
+        let mut rem = k;
+        for (a, v) in self.values.iter().enumerate().rev() {
+            out[a] = v[rem % v.len()];
+            rem /= v.len();
+        }
+    }
+}
+
+fn write_points_csv(
+    m: &dyn DynMechanism,
+    wm: &WorkspaceMap,
+    table: &AxisTable,
+    out: &Path,
+    inputs: &[&Path],
+) -> Result<()> {
     use crate::fixed::push_fixed6;
     use std::io::Write as _;
-    let axes = &wm.axes;
-    let names: Vec<String> = axes
+    let names: Vec<String> = wm
+        .axes
         .iter()
         .map(|x| {
             let c = &m.coordinates()[x.coordinate];
             format!("{}_{}", c.name, c.quantity.unit())
         })
         .collect();
-    let user = |k: usize| user_coords(m, wm, k);
     let mut csv = AtomicFile::create(&out.join("points.csv"), inputs)?;
     let mut row = format!("{},reachable,status,condition,binding\n", names.join(",")).into_bytes();
+    let mut x = vec![0.0; wm.axes.len()];
     for (k, p) in wm.points.iter().enumerate() {
-        for v in user(k) {
-            push_fixed6(&mut row, v);
+        table.point(k, &mut x);
+        for v in &x {
+            push_fixed6(&mut row, *v);
             row.push(b',');
         }
         row.extend_from_slice(if p.reachable { b"true," } else { b"false," });
@@ -475,31 +538,40 @@ fn write_points(
         }
     }
     csv.write_all(&row)?;
-    csv.commit()?;
-    if axes.len() == 3 {
-        let reachable = wm.points.iter().filter(|p| p.reachable).count();
-        let mut ply = AtomicFile::create(&out.join("points.ply"), inputs)?;
-        write!(
-            ply,
-            "ply\nformat binary_little_endian 1.0\ncomment pkm workspace: reachable points of {}, mm\nelement vertex {reachable}\nproperty double x\nproperty double y\nproperty double z\nproperty double condition\nend_header\n",
-            m.name().replace('\n', " ")
-        )?;
-        let mut buf = Vec::with_capacity(1 << 16);
-        for (k, p) in wm.points.iter().enumerate() {
-            if p.reachable {
-                for v in user(k).into_iter().chain([p.condition]) {
-                    buf.extend_from_slice(&v.to_le_bytes());
-                }
-                if buf.len() >= 1 << 16 {
-                    ply.write_all(&buf)?;
-                    buf.clear();
-                }
+    csv.commit()
+}
+
+fn write_points_ply(
+    m: &dyn DynMechanism,
+    wm: &WorkspaceMap,
+    table: &AxisTable,
+    out: &Path,
+    inputs: &[&Path],
+) -> Result<()> {
+    use std::io::Write as _;
+    let reachable = wm.points.iter().filter(|p| p.reachable).count();
+    let mut ply = AtomicFile::create(&out.join("points.ply"), inputs)?;
+    write!(
+        ply,
+        "ply\nformat binary_little_endian 1.0\ncomment pkm workspace: reachable points of {}, mm\nelement vertex {reachable}\nproperty double x\nproperty double y\nproperty double z\nproperty double condition\nend_header\n",
+        m.name().replace('\n', " ")
+    )?;
+    let mut buf = Vec::with_capacity(1 << 16);
+    let mut x = [0.0; 3];
+    for (k, p) in wm.points.iter().enumerate() {
+        if p.reachable {
+            table.point(k, &mut x);
+            for v in x.into_iter().chain([p.condition]) {
+                buf.extend_from_slice(&v.to_le_bytes());
+            }
+            if buf.len() >= 1 << 16 {
+                ply.write_all(&buf)?;
+                buf.clear();
             }
         }
-        ply.write_all(&buf)?;
-        ply.commit()?;
     }
-    Ok(())
+    ply.write_all(&buf)?;
+    ply.commit()
 }
 
 /// The map's axis coordinates of point `k`, user units.

@@ -147,6 +147,57 @@ fn hexapod_conditioning_is_consistent() {
     }
 }
 
+/// The condition number from the root-free QL equals the one from the QL with square
+/// roots (the plain version) and nalgebra's SVD, over random poses of both example
+/// hexapods, singular-ish ones included: within 1e-12 relative where the matrix
+/// `J^T J` is conditioned below 1e4, and within the eigen-solvers' backward error
+/// (`1e-14 kappa^2` relative) beyond.
+#[test]
+fn hexapod_condition_numbers_agree_with_the_plain_ql_and_an_svd() {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand::rngs::StdRng::seed_from_u64(19);
+    let mut seen = 0;
+    for file in ["hexapod-linuxcnc.toml", "hexapod-seed001.toml"] {
+        let Model::Hexapod(h) = machine(file).model else {
+            panic!()
+        };
+        let mut worst: f64 = 0.0;
+        for k in 0..20_000 {
+            let spread = if k % 2 == 0 { 100.0 } else { 400.0 };
+            let tilt = if k % 2 == 0 { 0.17 } else { 1.2 };
+            let x = Vector6::new(
+                h.home[0] + rng.random_range(-spread..spread),
+                h.home[1] + rng.random_range(-spread..spread),
+                h.home[2] + rng.random_range(-spread..spread),
+                rng.random_range(-tilt..tilt),
+                rng.random_range(-tilt..tilt),
+                rng.random_range(-tilt..tilt),
+            );
+            let c = h.condition(&x).unwrap();
+            let (p, r) = pkm::legs::split_pose(&x);
+            let j = h.scaled_twist_jacobian(&p, &r);
+            let ev = pkm::linalg::symmetric_eigenvalues_ql(&(j.transpose() * j)).unwrap();
+            let plain = (ev.max() / ev.min()).sqrt();
+            let sv = j.singular_values();
+            let svd = sv.max() / sv.min();
+            if !(c.is_finite() && plain.is_finite()) || c > 1e6 {
+                continue;
+            }
+            seen += 1;
+            let tol = 1e-12f64.max(1e-14 * c * c);
+            let rel = (c - plain).abs() / plain;
+            worst = worst.max(rel / tol);
+            assert!(rel <= tol, "{file} {x:?}: {c} vs {plain} ({rel:e})");
+            assert!(
+                (c - svd).abs() <= 10.0 * tol * svd,
+                "{file} {x:?}: {c} vs SVD {svd}"
+            );
+        }
+        eprintln!("{file}: worst difference {worst:.3} of the tolerance");
+    }
+    assert!(seen > 20_000, "{seen}");
+}
+
 #[test]
 fn total_orientation_workspace_is_smaller() {
     let Model::Hexapod(h) = machine("hexapod-linuxcnc.toml").model else {
