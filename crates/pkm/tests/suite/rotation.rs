@@ -180,3 +180,47 @@ fn rotation_vector_is_accurate_near_half_turn() {
         }
     }
 }
+
+/// The written-out angular velocity and acceleration of A, B, C equal the products
+/// `Rz(C) Ry(B) e_x`, `e_z x c` they come from (the former code) within 1e-15, and the
+/// velocity is `vee(R' R^T)` of the rotation by central differences.
+#[test]
+fn rpy_angular_motion_equals_the_matrix_products_and_differences() {
+    use nalgebra::{Matrix3, Vector3};
+    use pkm::rotation::{rpy_angular_motion, rpy_matrix, ry, rz};
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand::rngs::StdRng::seed_from_u64(8);
+    for _ in 0..10_000 {
+        let a = [
+            rng.random_range(-3.0..3.0),
+            rng.random_range(-1.5..1.5),
+            rng.random_range(-3.0..3.0),
+        ];
+        let ad = Vector3::from_fn(|_, _| rng.random_range(-2.0..2.0));
+        let add = Vector3::from_fn(|_, _| rng.random_range(-5.0..5.0));
+        let (w, al) = rpy_angular_motion(a, &ad, &add);
+        // The products, as the former code formed them.
+        let (ex, ey, ez) = (Vector3::x(), Vector3::y(), Vector3::z());
+        let c0 = rz(a[2]) * ry(a[1]) * ex;
+        let c1 = rz(a[2]) * ey;
+        let e = Matrix3::from_columns(&[c0, c1, ez]);
+        let dc0 = ez.cross(&c0) * ad[2] + rz(a[2]) * (ey.cross(&(ry(a[1]) * ex)) * ad[1]);
+        let dc1 = ez.cross(&c1) * ad[2];
+        let edot = Matrix3::from_columns(&[dc0, dc1, Vector3::zeros()]);
+        assert!((w - e * ad).amax() <= 1e-15 * (1.0 + ad.amax()), "{a:?}");
+        assert!(
+            (al - (e * add + edot * ad)).amax() <= 1e-14 * (1.0 + add.amax() + ad.amax().powi(2)),
+            "{a:?}"
+        );
+        // w = vee(R' R^T), R' by central differences along the rates.
+        let h = 1e-6;
+        let at = |t: f64| rpy_matrix(a[0] + ad[0] * t, a[1] + ad[1] * t, a[2] + ad[2] * t);
+        let rd = (at(h) - at(-h)) / (2.0 * h);
+        let s = rd * at(0.0).transpose();
+        let wn = Vector3::new(s[(2, 1)], s[(0, 2)], s[(1, 0)]);
+        assert!(
+            (w - wn).amax() <= 1e-7 * (1.0 + ad.amax()),
+            "{a:?}: {w} vs {wn}"
+        );
+    }
+}
