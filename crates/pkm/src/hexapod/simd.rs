@@ -26,17 +26,25 @@ pub(crate) struct Lanes {
 
 impl Lanes {
     pub(crate) fn new(arms: &[Vector3<f64>; 6], base: &[Vector3<f64>; 6]) -> Self {
-        let pad = |f: &dyn Fn(usize) -> f64| -> [f64; 8] {
-            std::array::from_fn(|i| f(if i < 6 { i } else { 0 }))
-        };
-        Lanes {
-            ax: pad(&|i| arms[i].x),
-            ay: pad(&|i| arms[i].y),
-            az: pad(&|i| arms[i].z),
-            bx: pad(&|i| base[i].x),
-            by: pad(&|i| base[i].y),
-            bz: pad(&|i| base[i].z),
+        let mut lanes = Lanes {
+            ax: [0.0; 8],
+            ay: [0.0; 8],
+            az: [0.0; 8],
+            bx: [0.0; 8],
+            by: [0.0; 8],
+            bz: [0.0; 8],
             available: detect(),
+        };
+        lanes.set_geometry(arms, base);
+        lanes
+    }
+
+    /// Sets the strut geometry in place (the CPU check is kept).
+    pub(crate) fn set_geometry(&mut self, arms: &[Vector3<f64>; 6], base: &[Vector3<f64>; 6]) {
+        for i in 0..8 {
+            let k = if i < 6 { i } else { 0 };
+            (self.ax[i], self.ay[i], self.az[i]) = (arms[k].x, arms[k].y, arms[k].z);
+            (self.bx[i], self.by[i], self.bz[i]) = (base[k].x, base[k].y, base[k].z);
         }
     }
 
