@@ -174,6 +174,7 @@ impl CsvSink {
             values: Vec::with_capacity(BLOCK_ROWS * width),
             lines: Vec::with_capacity(BLOCK_ROWS),
         };
+        let writing = out.is_some();
         let (tx, back, handle) = match out {
             Some(w) => {
                 writeln!(w, "{}", sample_columns(machine).join(","))?;
@@ -192,7 +193,15 @@ impl CsvSink {
             CsvSink {
                 tx,
                 back,
-                block: new_block(),
+                // Without a file (--summary-only) the block stays empty: nothing held.
+                block: if writing {
+                    new_block()
+                } else {
+                    Block {
+                        values: Vec::new(),
+                        lines: Vec::new(),
+                    }
+                },
                 coords: m.coordinates().iter().map(|c| c.quantity).collect(),
                 acts: m.actuators().iter().map(|a| a.quantity).collect(),
                 bar,
