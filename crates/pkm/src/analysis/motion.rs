@@ -14,7 +14,7 @@ use crate::machine::{Analysable, Machine, Visitor};
 use crate::mechanism::PoseSpace;
 use crate::motion::gcode::{Interpreter, ToolEvent};
 use crate::motion::program::{profile, to_move, FeedOptions, ProfileKind};
-use crate::motion::{MotionSummary, Move, Profile, Runner, Sample, Sampling, Segment};
+use crate::motion::{MotionSummary, Move, Profile, Runner, Sample, Sampling, Segment, Step};
 
 /// Where the moves come from.
 pub enum MotionSource<'a> {
@@ -356,6 +356,12 @@ impl Visitor for Simulate<'_, '_> {
                 qdd: s.act.qdd.as_slice(),
             })
         };
+        let mut on_tool = |length: f64| -> Result<()> {
+            match tracker_cell.borrow_mut().as_mut() {
+                Some(t) => t.set_tool_length(length),
+                None => Ok(()),
+            }
+        };
         match self.source {
             MotionSource::PointToPoint {
                 from,
@@ -392,16 +398,14 @@ impl Visitor for Simulate<'_, '_> {
                         profile(kind, segment.length, v, self.feed)?
                     }
                 };
-                runner.run_move(
-                    &Move {
-                        segment,
-                        profile: prof,
-                        line: None,
-                        rapid: false,
-                    },
-                    true,
-                    &mut sink,
-                )?;
+                let mv = Move {
+                    segment,
+                    profile: prof,
+                    line: None,
+                    rapid: false,
+                };
+                let step = Step::Move { mv, last: true };
+                runner.run_steps([Ok(step)], &mut sink, &mut on_tool)?;
             }
             MotionSource::Polyline { points } => {
                 if points.len() < 2 {
@@ -429,19 +433,18 @@ impl Visitor for Simulate<'_, '_> {
                     .filter(|(_, s)| s.length > 0.0)
                     .collect();
                 let n = moves.len();
-                for (k, (i, segment)) in moves.into_iter().enumerate() {
-                    let prof = profile(self.feed.profile, segment.length, v, self.feed)?;
-                    runner.run_move(
-                        &Move {
+                let steps = moves.into_iter().enumerate().map(|(k, (i, segment))| {
+                    Ok(Step::Move {
+                        mv: Move {
+                            profile: profile(self.feed.profile, segment.length, v, self.feed)?,
                             segment,
-                            profile: prof,
                             line: Some(i as u64 + 1),
                             rapid: false,
                         },
-                        k + 1 == n,
-                        &mut sink,
-                    )?;
-                }
+                        last: k + 1 == n,
+                    })
+                });
+                runner.run_steps(steps, &mut sink, &mut on_tool)?;
             }
             MotionSource::Gcode {
                 reader,
@@ -461,23 +464,33 @@ impl Visitor for Simulate<'_, '_> {
                 };
                 let mut interp = Interpreter::new(crate::motion::run::to_spatial(m, &x));
                 interp.work_offsets = setup.work_offsets;
+                // Moves are handed on one line late: the last is known at the end.
                 let mut pending: Option<Move<P>> = None;
-                for (i, line) in reader.lines().enumerate() {
+                let mut queue: std::collections::VecDeque<Step<P>> = Default::default();
+                let mut lines = reader.lines().enumerate();
+                let mut done = false;
+                let interp_ref = &mut interp;
+                let mut next_line = |queue: &mut std::collections::VecDeque<Step<P>>,
+                                     pending: &mut Option<Move<P>>|
+                 -> Result<bool> {
+                    let Some((i, line)) = lines.next() else {
+                        return Ok(false);
+                    };
                     let text = line
                         .map_err(|e| invalid("G-code", format!("reading line {}: {e}", i + 1)))?;
                     out.borrow_mut().progress(text.len() as u64 + 1);
-                    if interp.ended {
-                        break;
+                    if interp_ref.ended {
+                        return Ok(false);
                     }
-                    let g = interp.line(&text, i as u64 + 1)?;
+                    let g = interp_ref.line(&text, i as u64 + 1)?;
                     let mv = match &g {
                         Some(g) => Some(to_move(m, g, self.feed)?),
                         None => None,
                     };
-                    if let Some(ev) = interp.tool_event.take() {
+                    if let Some(ev) = interp_ref.tool_event.take() {
                         // The moves before this line run with the tool they had.
                         if let Some(p) = pending.take() {
-                            runner.run_move(&p, false, &mut sink)?;
+                            queue.push_back(Step::Move { mv: p, last: false });
                         }
                         let (line, length) = match ev {
                             ToolEvent::Apply { h, line } => {
@@ -490,31 +503,42 @@ impl Visitor for Simulate<'_, '_> {
                                          --tool-length): taken as 0, the machine file's tool"
                                     )
                                 };
-                                interp.note(line, what);
+                                interp_ref.note(line, what);
                                 (line, l)
                             }
                             ToolEvent::Cancel { line } => (line, 0.0),
                         };
-                        runner
-                            .set_tool_length(length)
-                            .map_err(|e| Error::InvalidInput {
-                                what: format!("G-code line {line}"),
-                                message: e.to_string(),
-                            })?;
-                        if let Some(t) = tracker_cell.borrow_mut().as_mut() {
-                            t.set_tool_length(length)?;
-                        }
+                        queue.push_back(Step::ToolLength { length, line });
                     }
                     if let Some(mv) = mv {
-                        if let Some(p) = pending.take() {
-                            runner.run_move(&p, false, &mut sink)?;
+                        if let Some(p) = pending.replace(mv) {
+                            queue.push_back(Step::Move { mv: p, last: false });
                         }
-                        pending = Some(mv);
                     }
-                }
-                if let Some(p) = pending.take() {
-                    runner.run_move(&p, true, &mut sink)?;
-                }
+                    Ok(true)
+                };
+                let steps = std::iter::from_fn(|| loop {
+                    if let Some(s) = queue.pop_front() {
+                        return Some(Ok(s));
+                    }
+                    if done {
+                        return None;
+                    }
+                    match next_line(&mut queue, &mut pending) {
+                        Ok(true) => {}
+                        Ok(false) => {
+                            done = true;
+                            if let Some(p) = pending.take() {
+                                return Some(Ok(Step::Move { mv: p, last: true }));
+                            }
+                        }
+                        Err(e) => {
+                            done = true;
+                            return Some(Err(e));
+                        }
+                    }
+                });
+                runner.run_steps(steps, &mut sink, &mut on_tool)?;
                 notes = std::mem::take(&mut interp.notes);
                 dropped = interp.notes_dropped;
             }

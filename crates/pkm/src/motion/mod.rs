@@ -5,6 +5,7 @@
 pub mod decimated;
 pub mod gcode;
 pub mod path;
+pub mod plan;
 pub mod profile;
 pub mod program;
 pub mod run;
@@ -13,6 +14,7 @@ pub mod stats;
 pub mod tools;
 
 pub use path::{Segment, Shape};
+pub use plan::Step;
 pub use profile::Profile;
 pub use run::{MotionSummary, Move, Runner, Sample, Sampling, ViolationRun};
 pub use stats::{AxisStats, Ratios};

@@ -5,6 +5,7 @@ use nalgebra::SVector;
 use serde::Serialize;
 
 use super::path::Segment;
+use super::plan::{drive, Block, Planner, Step};
 use super::profile::Profile;
 use super::singular::{SingularReport, SingularTracker, DEFAULT_SINGULAR_ANGLE};
 use super::stats::{ratios, AxisStats, Ratios};
@@ -103,17 +104,18 @@ pub struct MotionSummary {
 
 const MAX_RUNS: usize = 10_000;
 
-/// Runs moves through a mechanism one at a time (streaming: memory stays flat).
+/// Runs moves through a mechanism (streaming: memory stays flat): plans their sample
+/// instants, computes them in blocks ([`super::plan`], across the rayon pool when it
+/// has more than one thread) and records every sample in order: statistics, rate
+/// limits, stretches of violations, passages near a singular direction, the sink.
 pub struct Runner<'m, M, const P: usize, const A: usize> {
+    plan: Planner<'m, M, P, A>,
+    rec: Recorder<'m, M, P, A>,
+}
+
+/// What the samples add up to, taken in order.
+struct Recorder<'m, M, const P: usize, const A: usize> {
     m: &'m M,
-    /// The mechanism with the program's tool length, when it has one.
-    tooled: Option<Box<M>>,
-    tool_length: f64,
-    sampling: Sampling,
-    t0: f64,
-    k: u64,
-    samples: u64,
-    first: bool,
     act: [AxisStats; A],
     serial: Vec<AxisStats>,
     serial_idx: Vec<usize>,
@@ -124,8 +126,6 @@ pub struct Runner<'m, M, const P: usize, const A: usize> {
     /// Largest |q'| / limit and |q''| / limit seen.
     v_ratio: f64,
     a_ratio: f64,
-    /// The work limit (samples).
-    max_samples: u64,
     singular: SingularTracker,
 }
 
@@ -156,164 +156,138 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
             _ => (0..3).collect(),
         };
         Ok(Runner {
-            m,
-            tooled: None,
-            tool_length: 0.0,
-            sampling,
-            t0: 0.0,
-            k: 0,
-            samples: 0,
-            first: true,
-            act: [AxisStats::default(); A],
-            serial: vec![AxisStats::default(); serial_idx.len()],
-            serial_idx,
-            runs: Vec::new(),
-            open: Vec::new(),
-            dropped: 0,
-            buf: Vec::new(),
-            v_ratio: 0.0,
-            a_ratio: 0.0,
-            max_samples: DEFAULT_MAX_SAMPLES,
-            singular: SingularTracker::new(m.actuators(), DEFAULT_SINGULAR_ANGLE)?,
+            plan: Planner::new(m, sampling),
+            rec: Recorder {
+                m,
+                act: [AxisStats::default(); A],
+                serial: vec![AxisStats::default(); serial_idx.len()],
+                serial_idx,
+                runs: Vec::new(),
+                open: Vec::new(),
+                dropped: 0,
+                buf: Vec::new(),
+                v_ratio: 0.0,
+                a_ratio: 0.0,
+                singular: SingularTracker::new(m.actuators(), DEFAULT_SINGULAR_ANGLE)?,
+            },
         })
     }
 
     /// Names of the serial axes (`X`, `Y`, `Z`, or the machine's own coordinates).
     pub fn serial_names(&self) -> Vec<String> {
-        self.serial_idx
+        let m = self.rec.m;
+        self.rec
+            .serial_idx
             .iter()
-            .map(|&k| self.m.coordinates()[k].name.clone())
+            .map(|&k| m.coordinates()[k].name.clone())
             .collect()
     }
 
     /// Runs the following moves with a tool `length` mm longer than the machine file's
     /// ([`Mechanism::with_tool_length`]; a program's `G43 H`, 0 for `G49`).
     pub fn set_tool_length(&mut self, length: f64) -> Result<()> {
-        if length == self.tool_length {
-            return Ok(());
-        }
-        match self.m.with_tool_length(length) {
-            Some(m) => {
-                self.tooled = Some(Box::new(m?));
-            }
-            None if length == 0.0 => self.tooled = None,
-            None => {
-                return Err(Error::Unsupported {
-                    machine: self.m.name().into(),
-                    kind: self.m.kind().into(),
-                    analysis: "a tool length from the program (G43)",
-                    reason: "its tool is set in the machine file".into(),
-                })
-            }
-        }
-        self.tool_length = length;
-        Ok(())
+        self.plan.set_tool_length(length)
     }
 
     /// Sets the threshold (rad, 0 to pi/2) of a passage near the singular direction
     /// ([`SingularTracker`]); default [`DEFAULT_SINGULAR_ANGLE`].
     pub fn set_singular_angle(&mut self, angle: f64) -> Result<()> {
-        self.singular = SingularTracker::new(self.m.actuators(), angle)?;
+        self.rec.singular = SingularTracker::new(self.rec.m.actuators(), angle)?;
         Ok(())
     }
 
-    /// Sets the work limit: at most `n` samples over the run.
+    /// Sets the work limit: at most `n` samples over the run. A move whose samples
+    /// would cross it is refused before any is computed: a dwell of years, a feed of a
+    /// micrometre per minute, a hundred million full turns or a billion points per move
+    /// end there with the cost.
     pub fn set_max_samples(&mut self, n: u64) {
-        self.max_samples = n;
+        self.plan.max_samples = n;
     }
 
-    /// Refuses move `mv` when its samples would take the run beyond the work limit,
-    /// before any is computed: a dwell of years, a feed of a micrometre per minute, a
-    /// hundred million full turns or a billion points per move end here with the cost.
-    fn check_work(&self, mv: &Move<P>) -> Result<()> {
-        let dur = mv.profile.duration;
-        let estimate = match self.sampling {
-            Sampling::Rate(rate) => (dur * rate).ceil() + 1.0,
-            Sampling::Points(n) => n as f64,
-        };
-        let total = self.samples as f64 + estimate;
-        if !(total <= self.max_samples as f64) {
-            return Err(Error::InvalidInput {
-                what: "motion".into(),
-                message: format!(
-                    "{}the move takes {dur:.6e} s and would make {total:.3e} samples, beyond \
-                     the limit of {:.3e} (raise the work limit: `pkm motion --max-samples`, \
-                     `max_samples=` in Python; or sample less densely)",
-                    mv.line.map(|l| format!("line {l}: ")).unwrap_or_default(),
-                    self.max_samples as f64
-                ),
-            });
-        }
-        Ok(())
-    }
-
-    /// Samples one move and passes every sample to `sink`. `last` marks the program's
-    /// final move (its end instant is sampled).
+    /// Samples one move and passes every sample to `sink`, on the caller's thread.
+    /// `last` marks the program's final move (its end instant is sampled).
     pub fn run_move<F>(&mut self, mv: &Move<P>, last: bool, sink: &mut F) -> Result<()>
     where
         F: FnMut(&Sample<P, A>) -> Result<()>,
     {
-        self.check_work(mv)?;
-        let driven = self.m.driven();
-        for k in 0..P {
-            if !driven.contains(&k) && (mv.segment.end[k] - mv.segment.start[k]).abs() > 1e-12 {
-                let c = &self.m.coordinates()[k];
-                return Err(Error::NotAttainable {
-                    reason: format!(
-                        "{}the move changes {} from {:.4} to {:.4} {}, which the mechanism holds constant",
-                        mv.line.map(|l| format!("line {l}: ")).unwrap_or_default(),
-                        c.name,
-                        c.quantity.to_user(mv.segment.start[k]),
-                        c.quantity.to_user(mv.segment.end[k]),
-                        c.quantity.unit()
-                    ),
-                });
-            }
+        let Runner { plan, rec } = self;
+        let base = rec.m;
+        let mut dispatch = |b: &mut Block<M, P, A>| -> Result<()> {
+            b.compute(base, false);
+            let r = rec.record(b, sink, &mut |_| Ok(()));
+            b.clear();
+            r
+        };
+        let mut blk = Block::new();
+        if let Err(e) = plan.plan(Step::Move { mv: *mv, last }, &mut blk, &mut dispatch) {
+            blk.tail = Some(e);
         }
-        let dur = mv.profile.duration;
-        match self.sampling {
-            Sampling::Rate(rate) => {
-                loop {
-                    let t = self.k as f64 / rate;
-                    if t > self.t0 + dur + 1e-12 {
-                        break;
-                    }
-                    self.sample(mv, t - self.t0, sink)?;
-                    self.k += 1;
-                }
-                if last && (self.t0 + dur) > (self.k as f64 - 1.0) / rate + 1e-12 {
-                    self.sample(mv, dur, sink)?;
-                }
-            }
-            Sampling::Points(n) => {
-                let from = if self.first { 0 } else { 1 };
-                for i in from..n {
-                    self.sample(mv, dur * i as f64 / (n - 1) as f64, sink)?;
-                }
-            }
-        }
-        self.first = false;
-        self.t0 += dur;
-        Ok(())
+        dispatch(&mut blk)
     }
 
-    fn sample<F>(&mut self, mv: &Move<P>, tl: f64, sink: &mut F) -> Result<()>
+    /// Runs `steps` (moves and tool changes, in order; an error ends them), passing
+    /// every sample to `sink` in order and every tool length to `tool` before the
+    /// samples taken with it. Blocks of samples are computed across the rayon pool
+    /// while this thread plans and records ([`super::plan`]); the results are those of
+    /// [`Runner::run_move`] move after move, whatever the thread count.
+    pub fn run_steps<I, F, T>(&mut self, steps: I, sink: &mut F, tool: &mut T) -> Result<()>
+    where
+        I: IntoIterator<Item = Result<Step<P>>>,
+        F: FnMut(&Sample<P, A>) -> Result<()>,
+        T: FnMut(f64) -> Result<()>,
+    {
+        let Runner { plan, rec } = self;
+        drive(plan, steps, &mut |b: &mut Block<M, P, A>| {
+            rec.record(b, sink, tool)
+        })
+    }
+
+    /// The summary of everything run so far.
+    pub fn finish(self) -> MotionSummary {
+        let names = self.serial_names();
+        let Runner { plan, rec } = self;
+        rec.finish(names, plan.t0, plan.samples)
+    }
+}
+
+impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
+    /// Records the samples of block `b` in order, after passing its tool length on;
+    /// raises the error the block ends on, if any, after the samples before it.
+    fn record<F, T>(&mut self, b: &mut Block<M, P, A>, sink: &mut F, tool: &mut T) -> Result<()>
+    where
+        F: FnMut(&Sample<P, A>) -> Result<()>,
+        T: FnMut(f64) -> Result<()>,
+    {
+        if let Some(length) = b.tool {
+            tool(length)?;
+        }
+        let n = b.failed.as_ref().map_or(b.plan.len(), |f| f.0);
+        let mut violations = b.violations.drain(..).peekable();
+        for k in 0..n {
+            self.buf.clear();
+            while let Some((_, v)) = violations.next_if(|v| v.0 as usize == k) {
+                self.buf.push(v);
+            }
+            let rapid = b.moves[b.plan[k].0 as usize].0.rapid;
+            self.record_sample(&b.samples[k], rapid, sink)?;
+        }
+        if let Some((_, e)) = b.failed.take() {
+            return Err(e);
+        }
+        match b.tail.take() {
+            Some(e) => Err(e),
+            None => Ok(()),
+        }
+    }
+
+    /// Records sample `s` of a move (a rapid when `rapid`); `self.buf` holds the
+    /// violations of the mechanism's own limits found with it, the rate limits are
+    /// checked here.
+    fn record_sample<F>(&mut self, s: &Sample<P, A>, rapid: bool, sink: &mut F) -> Result<()>
     where
         F: FnMut(&Sample<P, A>) -> Result<()>,
     {
-        let (s, sd, sdd) = mv.profile.eval(tl);
-        let (x, xs, xss) = mv.segment.eval(s);
-        let xd = xs * sd;
-        let xdd = xss * (sd * sd) + xs * sdd;
-        let m: &M = match &self.tooled {
-            Some(b) => b,
-            None => self.m,
-        };
-        // Limits: positions (and the mechanism's own) with the motion, rates below.
-        self.buf.clear();
-        let act = m.actuator_motion_checked(&x, &xd, &xdd, &mut self.buf)?;
-        let t = self.t0 + tl;
-        self.samples += 1;
+        let (t, act, x, xd, xdd) = (s.t, &s.act, &s.x, &s.xd, &s.xdd);
         for i in 0..A {
             let qn = self.m.actuators()[i].quantity;
             self.act[i].add(
@@ -361,23 +335,16 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
                 self.a_ratio = self.a_ratio.max(acc / am);
             }
         }
-        self.track(t, mv.line);
+        self.track(t, s.line);
         // The singular direction does not depend on the tool length. Rapids run each
         // axis at its rapid rate whatever the direction: what a passage costs is the
         // feed moves'.
-        if !mv.rapid {
-            if let Some(d) = self.m.singular_distance(&x) {
-                self.singular.add(t, mv.line, d, act.qd.as_slice());
+        if !rapid {
+            if let Some(d) = self.m.singular_distance(x) {
+                self.singular.add(t, s.line, d, act.qd.as_slice());
             }
         }
-        sink(&Sample {
-            t,
-            line: mv.line,
-            x,
-            xd,
-            xdd,
-            act,
-        })
+        sink(s)
     }
 
     fn track(&mut self, t: f64, line: Option<u64>) {
@@ -415,9 +382,8 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
         }
     }
 
-    /// The summary of everything run so far.
-    pub fn finish(mut self) -> MotionSummary {
-        let names = self.serial_names();
+    /// The summary, with the serial axes' `names`, the run's duration and samples.
+    fn finish(mut self, names: Vec<String>, duration_s: f64, samples: u64) -> MotionSummary {
         for s in self.act.iter_mut().chain(self.serial.iter_mut()) {
             s.finalize();
         }
@@ -448,8 +414,8 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
                 k.is_finite().then_some(k)
             },
             singular: self.singular.finish(),
-            duration_s: self.t0,
-            samples: self.samples,
+            duration_s,
+            samples,
         }
     }
 }

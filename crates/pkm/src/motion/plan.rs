@@ -1,0 +1,529 @@
+//! Planning a run: the sample instants of each move, gathered in blocks whose actuator
+//! motion is computed apart from the bookkeeping, on a worker thread and the rayon
+//! pool when there is more than one thread.
+//!
+//! A run has three stages. The *planner* (the caller's thread) reads the moves and lays
+//! out their sample instants, exactly as a one-sample-at-a-time loop would: at a fixed
+//! rate `t_k = k / rate` over the whole program, or `n` points per move. The *compute*
+//! stage evaluates each instant: time law, geometry, exact `q, q', q''` and the
+//! mechanism's own limits ([`Mechanism::actuator_motion_checked`]); samples do not
+//! depend on each other, so a block splits across cores. The *recorder*
+//! ([`super::Runner`], the caller's thread again) takes the blocks back in order for
+//! the statistics, the rate limits, the stretches of violations and the sink. Every
+//! sample is computed by the same code in the same way whichever stage runs where, so
+//! the results do not depend on the thread count.
+
+use std::sync::Arc;
+
+use rayon::prelude::*;
+
+use super::run::{Move, Sample, Sampling};
+use crate::error::{Error, Result};
+use crate::limits::Violation;
+use crate::mechanism::{ActuatorMotion, Mechanism};
+
+/// Samples per block: large enough to amortise a hand-over between threads (a few
+/// microseconds) over about a millisecond of work, small enough (1.3 MB for a
+/// hexapod) to stay in cache.
+pub(crate) const BLOCK: usize = 4096;
+
+/// Samples a task of the compute stage takes at once.
+const CHUNK: usize = 512;
+
+/// Blocks in flight between the planner and the recorder.
+const IN_FLIGHT: usize = 3;
+
+/// What a run is given, in order.
+// A move is a few hundred bytes and steps pass one at a time: boxing it would allocate
+// per move for nothing.
+#[allow(clippy::large_enum_variant)]
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Step<const P: usize> {
+    /// A move; `last` marks the program's final move (its end instant is sampled).
+    Move {
+        /// The move.
+        mv: Move<P>,
+        /// The program's final move.
+        last: bool,
+    },
+    /// The tool is `length` mm longer than the machine file's from here on (a
+    /// program's `G43 H`, 0 for `G49`); `line` is the G-code line, for messages.
+    ToolLength {
+        /// Tool length (mm).
+        length: f64,
+        /// G-code line.
+        line: u64,
+    },
+}
+
+/// Planned instants of a stretch of the run, then their computed samples.
+pub(crate) struct Block<M, const P: usize, const A: usize> {
+    /// The moves the instants lie on, with the time each starts and its serial number.
+    pub moves: Vec<(Move<P>, f64, u64)>,
+    /// Per instant: index into `moves`, time from the move's start (s).
+    pub plan: Vec<(u32, f64)>,
+    /// The mechanism with the program's tool, when it differs from the machine file's.
+    pub tooled: Option<Arc<M>>,
+    /// A tool length set before the block's first sample (the recorder passes it on).
+    pub tool: Option<f64>,
+    /// The computed samples, one per instant (up to `failed`); slots beyond the plan
+    /// are left over from earlier use of the block.
+    pub samples: Vec<Sample<P, A>>,
+    /// Violations of the mechanism's own limits: (instant, violation), in order.
+    pub violations: Vec<(u32, Violation)>,
+    /// The first instant whose computation failed, and why.
+    pub failed: Option<(usize, Error)>,
+    /// An error after the block's samples (the planner stopped there).
+    pub tail: Option<Error>,
+}
+
+impl<M, const P: usize, const A: usize> Block<M, P, A> {
+    pub(crate) fn new() -> Self {
+        Block {
+            moves: Vec::new(),
+            plan: Vec::with_capacity(BLOCK),
+            tooled: None,
+            tool: None,
+            samples: Vec::new(),
+            violations: Vec::new(),
+            failed: None,
+            tail: None,
+        }
+    }
+
+    /// Empties the block for reuse (its buffers stay allocated).
+    pub(crate) fn clear(&mut self) {
+        self.moves.clear();
+        self.plan.clear();
+        self.tooled = None;
+        self.tool = None;
+        self.violations.clear();
+        self.failed = None;
+        self.tail = None;
+    }
+
+    /// Whether nothing was planned into it.
+    fn is_empty(&self) -> bool {
+        self.plan.is_empty() && self.tool.is_none() && self.tail.is_none()
+    }
+}
+
+impl<M: Mechanism<P, A>, const P: usize, const A: usize> Block<M, P, A> {
+    /// Computes every planned instant on `base` (or the block's tooled mechanism),
+    /// across the rayon pool when `parallel`.
+    pub(crate) fn compute(&mut self, base: &M, parallel: bool) {
+        let m = self.tooled.as_deref().unwrap_or(base);
+        let n = self.plan.len();
+        let zero = Sample {
+            t: 0.0,
+            line: None,
+            x: nalgebra::SVector::zeros(),
+            xd: nalgebra::SVector::zeros(),
+            xdd: nalgebra::SVector::zeros(),
+            act: ActuatorMotion {
+                q: nalgebra::SVector::zeros(),
+                qd: nalgebra::SVector::zeros(),
+                qdd: nalgebra::SVector::zeros(),
+            },
+        };
+        // Every slot up to n is written below: the buffer only grows, never cleared.
+        if self.samples.len() < n {
+            self.samples.resize(n, zero);
+        }
+        self.violations.clear();
+        self.failed = None;
+        let moves = &self.moves;
+        let samples = &mut self.samples[..n];
+        if parallel && n > CHUNK {
+            let parts: Vec<_> = self
+                .plan
+                .par_chunks(CHUNK)
+                .zip(samples.par_chunks_mut(CHUNK))
+                .enumerate()
+                .map(|(c, (plan, out))| compute_range(m, moves, plan, out, c * CHUNK))
+                .collect();
+            for (violations, failed) in parts {
+                if self.failed.is_some() {
+                    break;
+                }
+                self.violations.extend(violations);
+                self.failed = failed;
+            }
+        } else {
+            let (violations, failed) = compute_range(m, moves, &self.plan, samples, 0);
+            self.violations = violations;
+            self.failed = failed;
+        }
+    }
+}
+
+/// Computes the instants `plan` into `out`; `offset` is the first instant's index in
+/// its block. Stops at the first failure.
+#[allow(clippy::type_complexity)]
+fn compute_range<M: Mechanism<P, A>, const P: usize, const A: usize>(
+    m: &M,
+    moves: &[(Move<P>, f64, u64)],
+    plan: &[(u32, f64)],
+    out: &mut [Sample<P, A>],
+    offset: usize,
+) -> (Vec<(u32, Violation)>, Option<(usize, Error)>) {
+    let mut violations = Vec::new();
+    let mut buf = Vec::new();
+    for (j, (&(mi, tl), out)) in plan.iter().zip(out.iter_mut()).enumerate() {
+        let (mv, t0, _) = &moves[mi as usize];
+        let (s, sd, sdd) = mv.profile.eval(tl);
+        let (x, xs, xss) = mv.segment.eval(s);
+        let xd = xs * sd;
+        let xdd = xss * (sd * sd) + xs * sdd;
+        buf.clear();
+        match m.actuator_motion_checked(&x, &xd, &xdd, &mut buf) {
+            Ok(act) => {
+                *out = Sample {
+                    t: t0 + tl,
+                    line: mv.line,
+                    x,
+                    xd,
+                    xdd,
+                    act,
+                };
+                let k = (offset + j) as u32;
+                violations.extend(buf.drain(..).map(|v| (k, v)));
+            }
+            Err(e) => {
+                return (
+                    violations,
+                    Some((offset + j, at_sample(e, mv.line, t0 + tl))),
+                )
+            }
+        }
+    }
+    (violations, None)
+}
+
+/// Error `e` of the sample at time `t` of G-code line `line`: a pose out of reach says
+/// where in the program it is.
+fn at_sample(e: Error, line: Option<u64>, t: f64) -> Error {
+    match e {
+        Error::NotAttainable { reason } => Error::NotAttainable {
+            reason: format!(
+                "{}t = {t:.4} s: {reason}",
+                line.map(|l| format!("line {l}, ")).unwrap_or_default()
+            ),
+        },
+        e => e,
+    }
+}
+
+/// The planner's state: where the run is in time, the work done, the tool.
+pub(crate) struct Planner<'m, M, const P: usize, const A: usize> {
+    pub m: &'m M,
+    /// The mechanism with the program's tool length, when it has one.
+    pub tooled: Option<Arc<M>>,
+    pub tool_length: f64,
+    pub sampling: Sampling,
+    /// Start of the next move (s): the run's duration at the end.
+    pub t0: f64,
+    /// Index of the next fixed-rate instant.
+    k: u64,
+    /// Samples planned.
+    pub samples: u64,
+    /// No move was planned yet.
+    first: bool,
+    /// Serial number of the next move.
+    serial: u64,
+    /// The work limit (samples).
+    pub max_samples: u64,
+    _actuators: std::marker::PhantomData<[(); A]>,
+}
+
+impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Planner<'m, M, P, A> {
+    pub(crate) fn new(m: &'m M, sampling: Sampling) -> Self {
+        Planner {
+            m,
+            tooled: None,
+            tool_length: 0.0,
+            sampling,
+            t0: 0.0,
+            k: 0,
+            samples: 0,
+            first: true,
+            serial: 0,
+            max_samples: super::run::DEFAULT_MAX_SAMPLES,
+            _actuators: std::marker::PhantomData,
+        }
+    }
+
+    /// Plans the following moves with a tool `length` mm longer than the machine
+    /// file's ([`Mechanism::with_tool_length`]).
+    pub(crate) fn set_tool_length(&mut self, length: f64) -> Result<()> {
+        if length == self.tool_length {
+            return Ok(());
+        }
+        match self.m.with_tool_length(length) {
+            Some(m) => self.tooled = Some(Arc::new(m?)),
+            None if length == 0.0 => self.tooled = None,
+            None => {
+                return Err(Error::Unsupported {
+                    machine: self.m.name().into(),
+                    kind: self.m.kind().into(),
+                    analysis: "a tool length from the program (G43)",
+                    reason: "its tool is set in the machine file".into(),
+                })
+            }
+        }
+        self.tool_length = length;
+        Ok(())
+    }
+
+    /// Refuses move `mv` when its samples would take the run beyond the work limit,
+    /// before any is computed: a dwell of years, a feed of a micrometre per minute, a
+    /// hundred million full turns or a billion points per move end here with the cost.
+    fn check_work(&self, mv: &Move<P>) -> Result<()> {
+        let dur = mv.profile.duration;
+        let estimate = match self.sampling {
+            Sampling::Rate(rate) => (dur * rate).ceil() + 1.0,
+            Sampling::Points(n) => n as f64,
+        };
+        let total = self.samples as f64 + estimate;
+        if !(total <= self.max_samples as f64) {
+            return Err(Error::InvalidInput {
+                what: "motion".into(),
+                message: format!(
+                    "{}the move takes {dur:.6e} s and would make {total:.3e} samples, beyond \
+                     the limit of {:.3e} (raise the work limit: `pkm motion --max-samples`, \
+                     `max_samples=` in Python; or sample less densely)",
+                    mv.line.map(|l| format!("line {l}: ")).unwrap_or_default(),
+                    self.max_samples as f64
+                ),
+            });
+        }
+        Ok(())
+    }
+
+    /// Refuses a move that changes a coordinate the mechanism holds constant.
+    fn check_driven(&self, mv: &Move<P>) -> Result<()> {
+        let driven = self.m.driven();
+        for k in 0..P {
+            if !driven.contains(&k) && (mv.segment.end[k] - mv.segment.start[k]).abs() > 1e-12 {
+                let c = &self.m.coordinates()[k];
+                return Err(Error::NotAttainable {
+                    reason: format!(
+                        "{}the move changes {} from {:.4} to {:.4} {}, which the mechanism holds constant",
+                        mv.line.map(|l| format!("line {l}: ")).unwrap_or_default(),
+                        c.name,
+                        c.quantity.to_user(mv.segment.start[k]),
+                        c.quantity.to_user(mv.segment.end[k]),
+                        c.quantity.unit()
+                    ),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Plans `step` into `blk`, handing full blocks to `dispatch` (which leaves an
+    /// empty block in their place).
+    pub(crate) fn plan<D>(
+        &mut self,
+        step: Step<P>,
+        blk: &mut Block<M, P, A>,
+        dispatch: &mut D,
+    ) -> Result<()>
+    where
+        D: FnMut(&mut Block<M, P, A>) -> Result<()>,
+    {
+        match step {
+            Step::ToolLength { length, line } => {
+                self.set_tool_length(length)
+                    .map_err(|e| Error::InvalidInput {
+                        what: format!("G-code line {line}"),
+                        message: e.to_string(),
+                    })?;
+                // The samples before run with the tool they had.
+                if !blk.is_empty() {
+                    dispatch(blk)?;
+                }
+                blk.tool = Some(length);
+                blk.tooled = self.tooled.clone();
+                Ok(())
+            }
+            Step::Move { mv, last } => self.plan_move(&mv, last, blk, dispatch),
+        }
+    }
+
+    fn plan_move<D>(
+        &mut self,
+        mv: &Move<P>,
+        last: bool,
+        blk: &mut Block<M, P, A>,
+        dispatch: &mut D,
+    ) -> Result<()>
+    where
+        D: FnMut(&mut Block<M, P, A>) -> Result<()>,
+    {
+        self.check_work(mv)?;
+        self.check_driven(mv)?;
+        let serial = self.serial;
+        self.serial += 1;
+        let t0 = self.t0;
+        let dur = mv.profile.duration;
+        let mut push = |this: &mut Self, tl: f64| -> Result<()> {
+            if blk.plan.len() >= BLOCK {
+                dispatch(blk)?;
+            }
+            if blk.plan.is_empty() {
+                blk.tooled = this.tooled.clone();
+            }
+            if blk.moves.last().map(|m| m.2) != Some(serial) {
+                blk.moves.push((*mv, t0, serial));
+            }
+            blk.plan.push(((blk.moves.len() - 1) as u32, tl));
+            this.samples += 1;
+            Ok(())
+        };
+        match self.sampling {
+            Sampling::Rate(rate) => {
+                loop {
+                    let t = self.k as f64 / rate;
+                    if t > t0 + dur + 1e-12 {
+                        break;
+                    }
+                    push(self, t - t0)?;
+                    self.k += 1;
+                }
+                if last && (t0 + dur) > (self.k as f64 - 1.0) / rate + 1e-12 {
+                    push(self, dur)?;
+                }
+            }
+            Sampling::Points(n) => {
+                let from = if self.first { 0 } else { 1 };
+                for i in from..n {
+                    push(self, dur * i as f64 / (n - 1) as f64)?;
+                }
+            }
+        }
+        self.first = false;
+        self.t0 += dur;
+        Ok(())
+    }
+}
+
+/// Runs `steps` through the planner, the compute stage and `record`, which takes the
+/// computed blocks in order.
+///
+/// With one rayon thread, or when called from a rayon worker (a sweep already keeps the
+/// cores busy), everything runs on the caller's thread. Otherwise each full block is
+/// handed to the rayon pool (and spread over it) while the caller plans and records,
+/// at most [`IN_FLIGHT`] blocks ahead; a record that fails stops the run at once, a
+/// planning error is raised after the samples planned before it are recorded.
+pub(crate) fn drive<M, I, R, const P: usize, const A: usize>(
+    planner: &mut Planner<'_, M, P, A>,
+    steps: I,
+    record: &mut R,
+) -> Result<()>
+where
+    M: Mechanism<P, A>,
+    I: IntoIterator<Item = Result<Step<P>>>,
+    R: FnMut(&mut Block<M, P, A>) -> Result<()>,
+{
+    let base = planner.m;
+    // Set when a record failed: the planner's error is then that one, raised at once.
+    let stopped = std::cell::Cell::new(false);
+    let run = |planner: &mut Planner<'_, M, P, A>,
+               hand_over: &mut dyn FnMut(&mut Block<M, P, A>) -> Result<()>|
+     -> Result<()> {
+        let mut blk = Block::new();
+        let mut dispatch = |b: &mut Block<M, P, A>| {
+            let r = hand_over(b);
+            stopped.set(r.is_err());
+            r
+        };
+        for step in steps {
+            if let Err(e) = step.and_then(|s| planner.plan(s, &mut blk, &mut dispatch)) {
+                if stopped.get() {
+                    return Err(e);
+                }
+                blk.tail = Some(e);
+                break;
+            }
+        }
+        dispatch(&mut blk)
+    };
+    if rayon::current_num_threads() <= 1 || rayon::current_thread_index().is_some() {
+        let mut dispatch = |b: &mut Block<M, P, A>| -> Result<()> {
+            b.compute(base, false);
+            let r = record(b);
+            b.clear();
+            r
+        };
+        return run(planner, &mut dispatch);
+    }
+    rayon::in_place_scope(|scope| {
+        let (done_tx, done_rx) = std::sync::mpsc::channel::<(u64, Block<M, P, A>)>();
+        let mut queue = Queue {
+            done_rx,
+            sent: 0,
+            next: 0,
+            early: Vec::new(),
+            made: 1,
+        };
+        let mut dispatch = |b: &mut Block<M, P, A>| -> Result<()> {
+            // An empty block to fill next: a new one while fewer than IN_FLIGHT + 1
+            // exist, else the oldest in flight, once recorded.
+            let next = if queue.made <= IN_FLIGHT {
+                queue.made += 1;
+                Block::new()
+            } else {
+                let mut done = queue.recv();
+                let r = record(&mut done);
+                done.clear();
+                r?;
+                done
+            };
+            let mut full = std::mem::replace(b, next);
+            let (seq, tx) = (queue.sent, done_tx.clone());
+            queue.sent += 1;
+            scope.spawn(move |_| {
+                full.compute(base, true);
+                // The receiver is gone only when the run stopped on an error.
+                let _ = tx.send((seq, full));
+            });
+            Ok(())
+        };
+        run(planner, &mut dispatch)?;
+        while queue.next < queue.sent {
+            let mut done = queue.recv();
+            record(&mut done)?;
+        }
+        Ok(())
+    })
+}
+
+/// The computed blocks coming back from the pool, handed out in planning order.
+struct Queue<B> {
+    done_rx: std::sync::mpsc::Receiver<(u64, B)>,
+    /// Blocks handed to the pool.
+    sent: u64,
+    /// The next block to hand out.
+    next: u64,
+    /// Blocks that came back before their turn.
+    early: Vec<(u64, B)>,
+    /// Blocks allocated.
+    made: usize,
+}
+
+impl<B> Queue<B> {
+    fn recv(&mut self) -> B {
+        loop {
+            if let Some(i) = self.early.iter().position(|(s, _)| *s == self.next) {
+                self.next += 1;
+                return self.early.swap_remove(i).1;
+            }
+            let got = self
+                .done_rx
+                .recv()
+                .expect("a block in flight is sent back before its task ends");
+            self.early.push(got);
+        }
+    }
+}

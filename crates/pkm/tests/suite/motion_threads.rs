@@ -1,0 +1,247 @@
+//! A run split across threads (`motion/plan.rs`: blocks of samples computed on the
+//! rayon pool while the caller plans and records) gives what the same run gives on one
+//! thread: every sample bit for bit, the summary, the accuracy along the path, and the
+//! same error after the same samples when a move is refused, a pose is out of reach or
+//! the sink fails.
+//!
+//! The one-thread run is the run inside a rayon pool of one thread; the other uses the
+//! global pool (as many threads as cores: on a one-core machine both take the one-thread
+//! path and the test still checks the results against each other).
+
+use pkm::analysis::motion::{
+    feed_options, run_motion_with, MotionRun, MotionSource, PathAccuracyRequest, ProgramSetup,
+    SampleRow, SampleSink,
+};
+use pkm::motion::Sampling;
+use pkm::Machine;
+
+fn load(name: &str) -> Machine {
+    Machine::from_path(format!(
+        "{}/../../examples/machines/{name}",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap()
+}
+
+/// Every sample as its bits: t, line, pose, q, q', q''.
+#[derive(Default)]
+struct Rows {
+    rows: Vec<Vec<u64>>,
+    /// Fails on this sample (0-based), when set.
+    fail_at: Option<usize>,
+    /// Samples offered after the failure (the run should have stopped).
+    after_failure: usize,
+}
+
+impl SampleSink for Rows {
+    fn sample(&mut self, s: &SampleRow) -> pkm::Result<()> {
+        if Some(self.rows.len()) == self.fail_at {
+            self.after_failure += 1;
+            return Err(pkm::Error::InvalidInput {
+                what: "sink".into(),
+                message: format!("refused sample {}", self.rows.len()),
+            });
+        }
+        let mut r = vec![s.t.to_bits(), s.line.unwrap_or(u64::MAX)];
+        for v in [s.x, s.q, s.qd, s.qdd] {
+            r.extend(v.iter().map(|x| x.to_bits()));
+        }
+        self.rows.push(r);
+        Ok(())
+    }
+}
+
+struct Outcome {
+    rows: Rows,
+    result: pkm::Result<MotionRun>,
+}
+
+fn run(
+    m: &Machine,
+    program: &str,
+    setup: ProgramSetup,
+    rate: f64,
+    accuracy: Option<&PathAccuracyRequest>,
+    fail_at: Option<usize>,
+    one_thread: bool,
+) -> Outcome {
+    let go = || {
+        let mut rows = Rows {
+            fail_at,
+            ..Default::default()
+        };
+        let result = run_motion_with(
+            m,
+            MotionSource::Gcode {
+                reader: Box::new(std::io::Cursor::new(program.to_string())),
+                from: None,
+                setup: Box::new(setup.clone()),
+            },
+            &feed_options(m),
+            Sampling::Rate(rate),
+            accuracy,
+            &mut rows,
+        );
+        Outcome { rows, result }
+    };
+    if one_thread {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap()
+            .install(go)
+    } else {
+        go()
+    }
+}
+
+/// The run on one thread and on many, checked equal.
+fn both(
+    m: &Machine,
+    program: &str,
+    setup: ProgramSetup,
+    rate: f64,
+    accuracy: Option<&PathAccuracyRequest>,
+    fail_at: Option<usize>,
+) -> (Outcome, Outcome) {
+    let one = run(m, program, setup.clone(), rate, accuracy, fail_at, true);
+    let many = run(m, program, setup, rate, accuracy, fail_at, false);
+    same(&one, &many);
+    (one, many)
+}
+
+fn same(a: &Outcome, b: &Outcome) {
+    assert_eq!(a.rows.rows.len(), b.rows.rows.len());
+    for (k, (x, y)) in a.rows.rows.iter().zip(&b.rows.rows).enumerate() {
+        assert_eq!(x, y, "sample {k}");
+    }
+    match (&a.result, &b.result) {
+        (Ok(x), Ok(y)) => {
+            assert_eq!(x.summary, y.summary);
+            assert_eq!(x.notes, y.notes);
+            let json = |r: &MotionRun| serde_json::to_string(&r.accuracy).unwrap();
+            assert_eq!(json(x), json(y));
+            let traces = |r: &MotionRun| serde_json::to_string(&r.traces).unwrap();
+            assert_eq!(traces(x), traces(y));
+        }
+        (Err(x), Err(y)) => assert_eq!(x.to_string(), y.to_string()),
+        (x, y) => panic!("{:?} against {:?}", x.is_ok(), y.is_ok()),
+    }
+}
+
+/// A hexapod program of many blocks whose path leaves the struts' range for a while.
+fn hexapod_program(lines: usize) -> String {
+    let mut s = String::from("G21 G90 G17\nG0 X0 Y40 Z508 A0 B0 C0\nF2400\n");
+    for i in 0..lines {
+        let t = i as f64 * 0.01;
+        // Z dips below the struts' range around the middle of the program.
+        let dip = if (lines / 2..lines / 2 + 40).contains(&i) {
+            320.0
+        } else {
+            0.0
+        };
+        s += &format!(
+            "G1 X{:.4} Y{:.4} Z{:.4} A{:.4} B{:.4}\n",
+            40.0 * (t * 0.7).sin(),
+            40.0 * (t * 0.53).cos(),
+            508.0 + 5.0 * (t * 1.3).sin() - dip,
+            3.0 * (t * 0.2).sin(),
+            3.0 * (t * 0.17).cos()
+        );
+    }
+    s + "M2\n"
+}
+
+#[test]
+fn a_hexapod_run_is_the_same_on_one_thread_and_many() {
+    let m = load("hexapod-linuxcnc.toml");
+    let text = hexapod_program(1500);
+    let accuracy = PathAccuracyRequest {
+        machines: 4,
+        every: 50,
+        ..Default::default()
+    };
+    let one = run(
+        &m,
+        &text,
+        Default::default(),
+        1000.0,
+        Some(&accuracy),
+        None,
+        true,
+    );
+    let many = run(
+        &m,
+        &text,
+        Default::default(),
+        1000.0,
+        Some(&accuracy),
+        None,
+        false,
+    );
+    let r = one.result.as_ref().unwrap();
+    // Several blocks, and the dip is reported as a stretch of strut violations.
+    assert!(one.rows.rows.len() > 5 * 4096, "{}", one.rows.rows.len());
+    assert!(
+        r.summary
+            .violations
+            .iter()
+            .any(|v| v.limit.contains("strut")),
+        "{:?}",
+        r.summary.violations
+    );
+
+    // A sink that fails stops the run at once, with its error, whatever the threads.
+    for k in [0, 4095, 4096, 9000] {
+        let (_, many) = both(&m, &text, Default::default(), 1000.0, None, Some(k));
+        assert_eq!((many.rows.rows.len(), many.rows.after_failure), (k, 1));
+        let e = many.result.as_ref().err().unwrap().to_string();
+        assert!(e.contains(&format!("refused sample {k}")), "{e}");
+    }
+
+    // A move refused while planning (here a bad word on line 900) comes after every
+    // sample of the moves before it, as on one thread.
+    let mut lines: Vec<&str> = text.lines().collect();
+    lines[899] = "G1 X1 Q";
+    let bad = lines.join("\n");
+    let (_, many) = both(&m, &bad, Default::default(), 1000.0, None, None);
+    let e = many.result.as_ref().err().unwrap().to_string();
+    assert!(e.contains("900"), "{e}");
+    assert!(many.rows.rows.len() > 4096, "{}", many.rows.rows.len());
+}
+
+#[test]
+fn a_robot_run_out_of_reach_fails_after_the_same_samples() {
+    // The KR 30 along X: the arm cannot reach 3 m out; the run fails at the first
+    // sample beyond its reach, after every sample before it.
+    let m = load("kr30-dh.toml");
+    let text = "G21 G90\nG0 X1170 Y0 Z1400 A180 B0 C0\nG1 X1300 F6000\nG1 X3000\nG1 X1200\n";
+    let (one, _) = both(&m, text, Default::default(), 1000.0, None, None);
+    let e = one.result.as_ref().err().unwrap().to_string();
+    assert!(e.contains("line 4"), "{e}");
+    assert!(one.rows.rows.len() > 4096, "{}", one.rows.rows.len());
+}
+
+#[test]
+fn a_five_axis_run_with_tool_changes_is_the_same_on_one_thread_and_many() {
+    // LinuxCNC's boat program through the MC 300: G43 H1 at line 12, G49 at 1863; the
+    // tool length reaches the samples after it and the accuracy along the path.
+    let m = load("mc300.toml");
+    let text = std::fs::read_to_string(format!(
+        "{}/../../tests/fixtures/linuxcnc/xyzbc-trt/boat-xyzbc.ngc",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let setup = ProgramSetup {
+        tool_lengths: [(1, 50.0)].into_iter().collect(),
+        ..Default::default()
+    };
+    let accuracy = PathAccuracyRequest {
+        machines: 3,
+        every: 200,
+        ..Default::default()
+    };
+    let (one, _) = both(&m, &text, setup, 100.0, Some(&accuracy), None);
+    assert!(one.result.is_ok());
+    assert!(one.rows.rows.len() > 3 * 4096, "{}", one.rows.rows.len());
+}
