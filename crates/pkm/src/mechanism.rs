@@ -340,9 +340,11 @@ pub trait Mechanism<const P: usize, const A: usize>: Send + Sync {
     /// row (equal to [`Mechanism::inverse`]'s to rounding), and `clear[i]` is set where
     /// row `i` is certainly within every limit (with `check`; without it, where the
     /// row certainly has a solution). A row left uncleared is solved again by
-    /// [`Mechanism::inverse_first_limit`], which decides it. Returns `false` (nothing
-    /// written) for a type without such a kernel, the default; the hexapod's runs
-    /// eight poses at a time across SIMD lanes.
+    /// [`Mechanism::inverse_first_limit`], which decides it. A row cleared with
+    /// `check` is one where [`Mechanism::actuator_motion_checked`] finds no violation
+    /// either: the motion engine then calls [`Mechanism::actuator_motion`] alone.
+    /// Returns `false` (nothing written) for a type without such a kernel, the
+    /// default; the hexapod's runs eight poses at a time across SIMD lanes.
     fn inverse_screened(
         &self,
         xs: &[f64],

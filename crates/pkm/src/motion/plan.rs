@@ -159,6 +159,14 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Block<M, P, A> {
 
 /// Computes the instants `plan` into `out`; `offset` is the first instant's index in
 /// its block. Stops at the first failure.
+///
+/// The poses come first, then the mechanism's block screen
+/// ([`Mechanism::inverse_screened`], the hexapod's eight poses per AVX-512 register)
+/// where it has one: a pose it clears is within every limit, so its motion is
+/// [`Mechanism::actuator_motion`] with no violation to look for; the others, and every
+/// pose of a type without a screen, go through
+/// [`Mechanism::actuator_motion_checked`]. Both give the same motion: the screen only
+/// decides which call makes it.
 #[allow(clippy::type_complexity)]
 fn compute_range<M: Mechanism<P, A>, const P: usize, const A: usize>(
     m: &M,
@@ -169,32 +177,40 @@ fn compute_range<M: Mechanism<P, A>, const P: usize, const A: usize>(
 ) -> (Vec<(u32, Violation)>, Option<(usize, Error)>) {
     let mut violations = Vec::new();
     let mut buf = Vec::new();
-    for (j, (&(mi, tl), out)) in plan.iter().zip(out.iter_mut()).enumerate() {
+    for (&(mi, tl), out) in plan.iter().zip(out.iter_mut()) {
         let (mv, t0, _) = &moves[mi as usize];
         let (s, sd, sdd) = mv.profile.eval(tl);
         let (x, xs, xss) = mv.segment.eval(s);
-        let xd = xs * sd;
-        let xdd = xss * (sd * sd) + xs * sdd;
+        out.t = t0 + tl;
+        out.line = mv.line;
+        out.x = x;
+        out.xd = xs * sd;
+        out.xdd = xss * (sd * sd) + xs * sdd;
+    }
+    let n = out.len();
+    let mut xs = Vec::with_capacity(P * n);
+    for s in out.iter() {
+        xs.extend_from_slice(s.x.as_slice());
+    }
+    let mut qs = vec![0.0; A * n];
+    let mut clear = vec![false; n];
+    if !m.inverse_screened(&xs, &mut qs, &mut clear, true) {
+        clear.fill(false);
+    }
+    for (j, (s, &clear)) in out.iter_mut().zip(&clear).enumerate() {
         buf.clear();
-        match m.actuator_motion_checked(&x, &xd, &xdd, &mut buf) {
+        let act = if clear {
+            m.actuator_motion(&s.x, &s.xd, &s.xdd)
+        } else {
+            m.actuator_motion_checked(&s.x, &s.xd, &s.xdd, &mut buf)
+        };
+        match act {
             Ok(act) => {
-                *out = Sample {
-                    t: t0 + tl,
-                    line: mv.line,
-                    x,
-                    xd,
-                    xdd,
-                    act,
-                };
+                s.act = act;
                 let k = (offset + j) as u32;
                 violations.extend(buf.drain(..).map(|v| (k, v)));
             }
-            Err(e) => {
-                return (
-                    violations,
-                    Some((offset + j, at_sample(e, mv.line, t0 + tl))),
-                )
-            }
+            Err(e) => return (violations, Some((offset + j, at_sample(e, s.line, s.t)))),
         }
     }
     (violations, None)

@@ -245,3 +245,101 @@ fn a_five_axis_run_with_tool_changes_is_the_same_on_one_thread_and_many() {
     assert!(one.result.is_ok());
     assert!(one.rows.rows.len() > 3 * 4096, "{}", one.rows.rows.len());
 }
+
+/// A hexapod program sweeping in and out of every limit family: strut range, joint
+/// cones, strut interference, axis travel.
+fn wild_program(lines: usize) -> String {
+    let mut s = String::from("G21 G90 G17\nG0 X0 Y0 Z508 A0 B0 C0\nF6000\n");
+    for i in 0..lines {
+        let t = i as f64 * 0.05;
+        s += &format!(
+            "G1 X{:.4} Y{:.4} Z{:.4} A{:.4} B{:.4} C{:.4}\n",
+            160.0 * (t * 0.7).sin(),
+            160.0 * (t * 0.53).cos(),
+            520.0 + 140.0 * (t * 1.3).sin(),
+            25.0 * (t * 0.9).sin(),
+            25.0 * (t * 0.61).cos(),
+            50.0 * (t * 0.37).sin()
+        );
+    }
+    s + "M2\n"
+}
+
+#[test]
+fn the_screened_motion_equals_the_checked_call_sample_by_sample() {
+    // Poses the hexapod's block screen clears take `actuator_motion` alone: every
+    // sample's q, q', q'' must be the bits of `actuator_motion_checked`, and the
+    // stretches of violations those rebuilt from a checked call per sample.
+    use pkm::limits::LimitKind;
+    use pkm::machine::Model;
+    use pkm::motion::program::to_move;
+    use pkm::motion::{gcode::Interpreter, Runner};
+    use pkm::Mechanism;
+    // LinuxCNC's hexapod with an X travel and thick struts, so every family is met.
+    let text = std::fs::read_to_string(format!(
+        "{}/../../examples/machines/hexapod-linuxcnc.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap()
+    .replacen(
+        "[limits]\n",
+        "[limits]\naxes = { X = [-150.0, 150.0] }\n",
+        1,
+    )
+    .replacen("strut_diameter = 25.0", "strut_diameter = 90.0", 1);
+    let Model::Hexapod(h) = Machine::from_toml_str(&text, "hex.toml").unwrap().model else {
+        panic!()
+    };
+    let h = *h;
+    let o = pkm::motion::program::FeedOptions::default();
+    let mut g = Interpreter::new([0.0; 6]);
+    let moves: Vec<_> = wild_program(400)
+        .lines()
+        .enumerate()
+        .filter_map(|(i, l)| g.line(l, i as u64 + 1).unwrap())
+        .map(|gm| to_move(&h, &gm, &o).unwrap())
+        .collect();
+    let mut r = Runner::new(&h, Sampling::Rate(1000.0)).unwrap();
+    // Per limit (rates aside): violated at the previous sample, and the starts.
+    let mut before: Vec<String> = Vec::new();
+    let mut starts: Vec<(String, u64)> = Vec::new();
+    let mut samples = 0;
+    let n = moves.len();
+    for (k, mv) in moves.iter().enumerate() {
+        r.run_move(mv, k + 1 == n, &mut |s| {
+            let mut v = Vec::new();
+            let act = h.actuator_motion_checked(&s.x, &s.xd, &s.xdd, &mut v)?;
+            for (a, b) in [(act.q, s.act.q), (act.qd, s.act.qd), (act.qdd, s.act.qdd)] {
+                assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits), "t = {}", s.t);
+            }
+            let now: Vec<String> = v.into_iter().map(|v| v.limit).collect();
+            for l in &now {
+                if !before.contains(l) {
+                    starts.push((l.clone(), s.t.to_bits()));
+                }
+            }
+            before = now;
+            samples += 1;
+            Ok(())
+        })
+        .unwrap();
+    }
+    let summary = r.finish();
+    let rates = [LimitKind::ActuatorVelocity, LimitKind::ActuatorAcceleration];
+    let mut runs: Vec<(String, u64)> = summary
+        .violations
+        .iter()
+        .filter(|v| !rates.contains(&v.kind))
+        .map(|v| (v.limit.clone(), v.start_s.to_bits()))
+        .collect();
+    let kinds: std::collections::BTreeSet<String> = summary
+        .violations
+        .iter()
+        .map(|v| format!("{:?}", v.kind))
+        .collect();
+    assert!(samples > 8 * 4096, "{samples}");
+    assert_eq!(kinds.len(), 4, "{kinds:?}");
+    starts.sort();
+    runs.sort();
+    assert_eq!(starts, runs);
+}
