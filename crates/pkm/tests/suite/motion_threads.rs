@@ -161,24 +161,7 @@ fn a_hexapod_run_is_the_same_on_one_thread_and_many() {
         every: 50,
         ..Default::default()
     };
-    let one = run(
-        &m,
-        &text,
-        Default::default(),
-        1000.0,
-        Some(&accuracy),
-        None,
-        true,
-    );
-    let many = run(
-        &m,
-        &text,
-        Default::default(),
-        1000.0,
-        Some(&accuracy),
-        None,
-        false,
-    );
+    let (one, _) = both(&m, &text, Default::default(), 1000.0, Some(&accuracy), None);
     let r = one.result.as_ref().unwrap();
     // Several blocks, and the dip is reported as a stretch of strut violations.
     assert!(one.rows.rows.len() > 5 * 4096, "{}", one.rows.rows.len());
