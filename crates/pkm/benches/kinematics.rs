@@ -243,7 +243,8 @@ fn wave_program(lines: usize, centre: [f64; 3], a0: f64) -> String {
 }
 
 /// Issue 19: programs through a hexapod and a 6R robot at 1 kHz, the whole sampler
-/// (G-code, profile, exact actuator q, q', q'', statistics, limits), one thread.
+/// (G-code, profile, exact actuator q, q', q'', statistics, limits), on one thread and
+/// on the global pool (`motion/plan.rs`).
 fn program_motion(c: &mut Criterion) {
     use pkm::analysis::motion::{feed_options, run_motion_with, MotionSource, NoSink};
     let run = |m: &Machine, text: &str| {
@@ -273,8 +274,21 @@ fn program_motion(c: &mut Criterion) {
         let text = wave_program(10_000, centre, a0);
         let samples = run(&m, &text);
         g.throughput(criterion::Throughput::Elements(samples));
+        // One thread: everything inline, in a pool of one.
+        let one = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
         g.bench_function(
-            format!("{file}: 10k-line program at 1 kHz ({samples} samples), one thread"),
+            format!("{file}: 10k-line program at 1 kHz ({samples} samples), 1 thread"),
+            |b| b.iter(|| one.install(|| run(&m, black_box(&text)))),
+        );
+        // The global pool: blocks computed on it while this thread records.
+        g.bench_function(
+            format!(
+                "{file}: 10k-line program at 1 kHz ({samples} samples), {} threads",
+                rayon::current_num_threads()
+            ),
             |b| b.iter(|| run(&m, black_box(&text))),
         );
     }
