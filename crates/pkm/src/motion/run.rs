@@ -123,9 +123,14 @@ struct Recorder<'m, M, const P: usize, const A: usize> {
     open: Vec<(String, usize)>,
     dropped: u64,
     buf: Vec<Violation>,
-    /// Largest |q'| / limit and |q''| / limit seen.
-    v_ratio: f64,
-    a_ratio: f64,
+    /// Per actuator, `Quantity::to_user`'s factor.
+    act_scale: [f64; A],
+    /// Per serial axis, the same.
+    serial_scale: Vec<f64>,
+    /// Per actuator, the velocity and acceleration limits (infinite where none).
+    rate_limits: [(f64, f64); A],
+    /// Per actuator, the largest |q'| and |q''| seen.
+    peak_rates: [(f64, f64); A],
     singular: SingularTracker,
 }
 
@@ -161,13 +166,24 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
                 m,
                 act: [AxisStats::default(); A],
                 serial: vec![AxisStats::default(); serial_idx.len()],
-                serial_idx,
                 runs: Vec::new(),
                 open: Vec::new(),
                 dropped: 0,
                 buf: Vec::new(),
-                v_ratio: 0.0,
-                a_ratio: 0.0,
+                act_scale: std::array::from_fn(|i| m.actuators()[i].quantity.user_scale()),
+                serial_scale: serial_idx
+                    .iter()
+                    .map(|&k| m.coordinates()[k].quantity.user_scale())
+                    .collect(),
+                rate_limits: std::array::from_fn(|i| {
+                    let a = &m.actuators()[i];
+                    (
+                        a.max_velocity.unwrap_or(f64::INFINITY),
+                        a.max_acceleration.unwrap_or(f64::INFINITY),
+                    )
+                }),
+                peak_rates: [(0.0, 0.0); A],
+                serial_idx,
                 singular: SingularTracker::new(m.actuators(), DEFAULT_SINGULAR_ANGLE)?,
             },
         })
@@ -288,52 +304,27 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
         F: FnMut(&Sample<P, A>) -> Result<()>,
     {
         let (t, act, x, xd, xdd) = (s.t, &s.act, &s.x, &s.xd, &s.xdd);
+        // `v * scale` is `Quantity::to_user(v)` bit for bit (1 or 180 / pi).
         for i in 0..A {
-            let qn = self.m.actuators()[i].quantity;
-            self.act[i].add(
-                qn.to_user(act.q[i]),
-                qn.to_user(act.qd[i]),
-                qn.to_user(act.qdd[i]),
-            );
+            let c = self.act_scale[i];
+            self.act[i].add(act.q[i] * c, act.qd[i] * c, act.qdd[i] * c);
         }
-        for (j, &k) in self.serial_idx.iter().enumerate() {
-            let qn = self.m.coordinates()[k].quantity;
-            self.serial[j].add(qn.to_user(x[k]), qn.to_user(xd[k]), qn.to_user(xdd[k]));
+        for (j, (&k, &c)) in self.serial_idx.iter().zip(&self.serial_scale).enumerate() {
+            self.serial[j].add(x[k] * c, xd[k] * c, xdd[k] * c);
         }
+        // Rate limits (infinite where none is given): a violation is rare, the peaks
+        // make the feed override at the end.
         for i in 0..A {
-            let a = &self.m.actuators()[i];
-            if let Some(vm) = a.max_velocity {
-                let v = act.qd[i].abs();
-                if v > vm {
-                    let mut x = Violation::new(
-                        format!("actuator {} velocity", a.name),
-                        LimitKind::ActuatorVelocity,
-                        Side::Max,
-                        a.quantity,
-                        v,
-                        vm,
-                    );
-                    x.unit = a.quantity.rate_unit(1);
-                    self.buf.push(x);
-                }
-                self.v_ratio = self.v_ratio.max(v / vm);
+            let v = act.qd[i].abs();
+            if v > self.rate_limits[i].0 {
+                self.buf.push(self.rate_violation(i, 1, v));
             }
-            if let Some(am) = a.max_acceleration {
-                let acc = act.qdd[i].abs();
-                if acc > am {
-                    let mut x = Violation::new(
-                        format!("actuator {} acceleration", a.name),
-                        LimitKind::ActuatorAcceleration,
-                        Side::Max,
-                        a.quantity,
-                        acc,
-                        am,
-                    );
-                    x.unit = a.quantity.rate_unit(2);
-                    self.buf.push(x);
-                }
-                self.a_ratio = self.a_ratio.max(acc / am);
+            self.peak_rates[i].0 = self.peak_rates[i].0.max(v);
+            let acc = act.qdd[i].abs();
+            if acc > self.rate_limits[i].1 {
+                self.buf.push(self.rate_violation(i, 2, acc));
             }
+            self.peak_rates[i].1 = self.peak_rates[i].1.max(acc);
         }
         self.track(t, s.line);
         // The singular direction does not depend on the tool length. Rapids run each
@@ -347,7 +338,38 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
         sink(s)
     }
 
+    /// The violation of actuator `i`'s velocity (`order` 1) or acceleration (2) limit
+    /// by `value` (internal units).
+    fn rate_violation(&self, i: usize, order: u8, value: f64) -> Violation {
+        let a = &self.m.actuators()[i];
+        let (what, kind, bound) = match order {
+            1 => (
+                "velocity",
+                LimitKind::ActuatorVelocity,
+                self.rate_limits[i].0,
+            ),
+            _ => (
+                "acceleration",
+                LimitKind::ActuatorAcceleration,
+                self.rate_limits[i].1,
+            ),
+        };
+        let mut x = Violation::new(
+            format!("actuator {} {what}", a.name),
+            kind,
+            Side::Max,
+            a.quantity,
+            value,
+            bound,
+        );
+        x.unit = a.quantity.rate_unit(order);
+        x
+    }
+
     fn track(&mut self, t: f64, line: Option<u64>) {
+        if self.buf.is_empty() && self.open.is_empty() {
+            return;
+        }
         // Close stretches whose limit is no longer violated.
         let buf = &self.buf;
         self.open
@@ -410,7 +432,18 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
             violations_not_listed: self.dropped,
             feed_override_max: {
                 // Velocities scale with the override k, accelerations with k^2.
-                let k = (1.0 / self.v_ratio).min((1.0 / self.a_ratio).sqrt());
+                // max over samples of |q'| / limit is max |q'| / limit: a correctly
+                // rounded division is monotonic in its numerator.
+                let (mut v_ratio, mut a_ratio) = (0.0f64, 0.0f64);
+                for (&(vp, ap), &(vm, am)) in self.peak_rates.iter().zip(&self.rate_limits) {
+                    if vm < f64::INFINITY {
+                        v_ratio = v_ratio.max(vp / vm);
+                    }
+                    if am < f64::INFINITY {
+                        a_ratio = a_ratio.max(ap / am);
+                    }
+                }
+                let k = (1.0 / v_ratio).min((1.0 / a_ratio).sqrt());
                 k.is_finite().then_some(k)
             },
             singular: self.singular.finish(),
