@@ -25,13 +25,15 @@ impl<T> Decimated<T> {
 
     /// The next item of the stream; `item` is called only when it is kept.
     pub fn push(&mut self, item: impl FnOnce() -> T) {
-        if self.seen.is_multiple_of(self.stride) {
+        // The stride is a power of two: a mask, not a division per item.
+        let mask = self.stride - 1;
+        if self.seen & mask == 0 {
             if self.rows.len() >= self.cap {
                 let kept: Vec<T> = self.rows.drain(..).step_by(2).collect();
                 self.rows = kept;
                 self.stride *= 2;
             }
-            if self.seen.is_multiple_of(self.stride) {
+            if self.seen & (self.stride - 1) == 0 {
                 self.rows.push(item());
             }
         }
