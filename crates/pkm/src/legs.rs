@@ -146,6 +146,68 @@ impl<const N: usize> StrutSoa<N> {
         SVector::<f64, N>::from(out)
     }
 
+    /// [`StrutSet::motion`] laid out by coordinate: the same operations in the same
+    /// order on every strut (so the same bits), as loops over struts the compiler
+    /// vectorises (wider where the caller enables AVX-512, `Hexapod::motion_at`).
+    /// Per strut (seed 001 eq. 1 differentiated twice): `d = p + R b'_i - a_i`,
+    /// `L = |d|`, `n = d / L`, `d' = v + w x R b'_i`,
+    /// `d'' = a + alpha x R b'_i + w x (w x R b'_i)`, `L' = n . d'`,
+    /// `L'' = (|d'|^2 - L'^2) / L + n . d''`.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    pub fn motion(
+        &self,
+        p: &Vector3<f64>,
+        r: &Matrix3<f64>,
+        v: &Vector3<f64>,
+        w: &Vector3<f64>,
+        a: &Vector3<f64>,
+        al: &Vector3<f64>,
+    ) -> ActuatorMotion<N> {
+        let (mut q, mut qd, mut qdd) = ([0.0; N], [0.0; N], [0.0; N]);
+        for i in 0..N {
+            let (x, y, z) = (self.ax[i], self.ay[i], self.az[i]);
+            // R b'_i as nalgebra's matrix-vector product sums it: column by column.
+            let rx = r[(0, 0)] * x + r[(0, 1)] * y + r[(0, 2)] * z;
+            let ry = r[(1, 0)] * x + r[(1, 1)] * y + r[(1, 2)] * z;
+            let rz = r[(2, 0)] * x + r[(2, 1)] * y + r[(2, 2)] * z;
+            let (dx, dy, dz) = (
+                p.x + rx - self.bx[i],
+                p.y + ry - self.by[i],
+                p.z + rz - self.bz[i],
+            );
+            let l = (dx * dx + dy * dy + dz * dz).sqrt();
+            let (nx, ny, nz) = (dx / l, dy / l, dz / l);
+            // w x R b'_i, alpha x R b'_i, w x (w x R b'_i).
+            let (cx, cy, cz) = (
+                w.y * rz - w.z * ry,
+                w.z * rx - w.x * rz,
+                w.x * ry - w.y * rx,
+            );
+            let (ex, ey, ez) = (
+                al.y * rz - al.z * ry,
+                al.z * rx - al.x * rz,
+                al.x * ry - al.y * rx,
+            );
+            let (fx, fy, fz) = (
+                w.y * cz - w.z * cy,
+                w.z * cx - w.x * cz,
+                w.x * cy - w.y * cx,
+            );
+            let (ux, uy, uz) = (v.x + cx, v.y + cy, v.z + cz);
+            let (gx, gy, gz) = (a.x + ex + fx, a.y + ey + fy, a.z + ez + fz);
+            let ld = nx * ux + ny * uy + nz * uz;
+            q[i] = l;
+            qd[i] = ld;
+            qdd[i] = (ux * ux + uy * uy + uz * uz - ld * ld) / l + (nx * gx + ny * gy + nz * gz);
+        }
+        ActuatorMotion {
+            q: SVector::from(q),
+            qd: SVector::from(qd),
+            qdd: SVector::from(qdd),
+        }
+    }
+
     /// Strut lengths of many poses (tool tips `p`, rotations `r`) into `out`, computed
     /// eight poses at a time across SIMD lanes (the poses are transposed into lanes,
     /// so the arithmetic and the square roots vectorise over poses).
@@ -324,21 +386,32 @@ impl<const N: usize> StrutSet<N> {
         p: &Vector3<f64>,
         r: &Matrix3<f64>,
     ) -> ActuatorMotion<N> {
-        let ad = xd.fixed_rows::<3>(3).into_owned();
-        let add = xdd.fixed_rows::<3>(3).into_owned();
-        // The usual case for held orientations: no angular motion.
-        let (w, al) = if ad == Vector3::zeros() && add == Vector3::zeros() {
-            (ad, add)
-        } else {
-            crate::rotation::rpy_angular_motion([x[3], x[4], x[5]], &ad, &add)
-        };
-        self.motion(
-            p,
-            r,
-            &xd.fixed_rows::<3>(0).into_owned(),
-            &w,
-            &xdd.fixed_rows::<3>(0).into_owned(),
-            &al,
-        )
+        let [v, w, a, al] = coords_twist(x, xd, xdd);
+        self.motion(p, r, &v, &w, &a, &al)
     }
+}
+
+/// The platform's velocity `v`, angular velocity `w`, acceleration `a` and angular
+/// acceleration `alpha` (base frame) from spatial coordinates `X..C` moving with rates
+/// `xd` and accelerations `xdd` ([`crate::rotation::rpy_angular_motion`]).
+#[inline]
+pub fn coords_twist(
+    x: &SVector<f64, 6>,
+    xd: &SVector<f64, 6>,
+    xdd: &SVector<f64, 6>,
+) -> [Vector3<f64>; 4] {
+    let ad = xd.fixed_rows::<3>(3).into_owned();
+    let add = xdd.fixed_rows::<3>(3).into_owned();
+    // The usual case for held orientations: no angular motion.
+    let (w, al) = if ad == Vector3::zeros() && add == Vector3::zeros() {
+        (ad, add)
+    } else {
+        crate::rotation::rpy_angular_motion([x[3], x[4], x[5]], &ad, &add)
+    };
+    [
+        xd.fixed_rows::<3>(0).into_owned(),
+        w,
+        xdd.fixed_rows::<3>(0).into_owned(),
+        al,
+    ]
 }

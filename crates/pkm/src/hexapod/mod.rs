@@ -392,6 +392,26 @@ impl Hexapod {
         self.soa.lengths(p, r)
     }
 
+    /// [`StrutSet::coords_motion_at`] bit for bit, strut by strut across SIMD lanes
+    /// ([`crate::legs::StrutSoa::motion`], compiled for AVX-512 where the CPU has it).
+    pub fn motion_at(
+        &self,
+        x: &Vector6<f64>,
+        xd: &Vector6<f64>,
+        xdd: &Vector6<f64>,
+        p: &Vector3<f64>,
+        r: &Matrix3<f64>,
+    ) -> ActuatorMotion<6> {
+        let [v, w, a, al] = crate::legs::coords_twist(x, xd, xdd);
+        #[cfg(target_arch = "x86_64")]
+        if self.simd_lengths() {
+            // SAFETY: `simd_lengths` is the detection of AVX-512F, the one feature the
+            // function enables.
+            return unsafe { simd::motion(&self.soa, p, r, &v, &w, &a, &al) };
+        }
+        self.soa.motion(p, r, &v, &w, &a, &al)
+    }
+
     /// Whether [`Hexapod::lengths`] runs the AVX-512 kernel on this CPU.
     pub fn simd_lengths(&self) -> bool {
         self.lanes.available
@@ -642,7 +662,8 @@ impl Mechanism<6, 6> for Hexapod {
         xd: &Vector6<f64>,
         xdd: &Vector6<f64>,
     ) -> Result<ActuatorMotion<6>> {
-        Ok(self.set.coords_motion(x, xd, xdd))
+        let (p, r) = split_pose(x);
+        Ok(self.motion_at(x, xd, xdd, &p, &r))
     }
 
     /// One rotation of the pose for both the motion and the limits.
@@ -654,7 +675,7 @@ impl Mechanism<6, 6> for Hexapod {
         out: &mut Vec<Violation>,
     ) -> Result<ActuatorMotion<6>> {
         let (p, r) = split_pose(x);
-        let act = self.set.coords_motion_at(x, xd, xdd, &p, &r);
+        let act = self.motion_at(x, xd, xdd, &p, &r);
         self.scan(x, &act.q, &p, &r, |c| {
             out.push(self.violation_of(&c));
             false

@@ -236,3 +236,23 @@ pub(crate) fn strut_length(d: [std::arch::x86_64::__m512d; 3]) -> std::arch::x86
     let e = _mm512_fnmadd_pd(l, l, d2);
     _mm512_fmadd_pd(e, _mm512_mul_pd(y, b(0.5)), l)
 }
+
+/// [`crate::legs::StrutSoa::motion`] compiled with AVX-512 enabled (the same operations,
+/// so the same bits, in wider vectors).
+///
+/// # Safety
+/// The CPU must have AVX-512F.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+#[allow(clippy::too_many_arguments)]
+pub(crate) unsafe fn motion(
+    soa: &crate::legs::StrutSoa<6>,
+    p: &nalgebra::Vector3<f64>,
+    r: &nalgebra::Matrix3<f64>,
+    v: &nalgebra::Vector3<f64>,
+    w: &nalgebra::Vector3<f64>,
+    a: &nalgebra::Vector3<f64>,
+    al: &nalgebra::Vector3<f64>,
+) -> crate::mechanism::ActuatorMotion<6> {
+    soa.motion(p, r, v, w, a, al)
+}

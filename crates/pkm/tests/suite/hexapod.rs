@@ -857,3 +857,45 @@ fn forward_tool_pose_equals_forward_then_tool_pose() {
         assert!((a.translation.vector - t.translation.vector).norm() < 1e-9);
     }
 }
+
+/// `Hexapod::motion_at` (struts across SIMD lanes, AVX-512 where the CPU has it) and
+/// the portable `StrutSoa::motion` give the bits of `StrutSet::coords_motion_at` (the
+/// 3-vector form): lengths, rates and accelerations, on random poses and rates, held
+/// orientations (no angular motion), zero rates, and NaN.
+#[test]
+fn strut_motion_across_lanes_is_the_three_vector_form_bit_for_bit() {
+    let mut rng = rand::rngs::StdRng::seed_from_u64(19);
+    for file in ["hexapod-linuxcnc.toml", "hexapod-seed001.toml"] {
+        let h = load(file);
+        let home = h.home();
+        let bits = |a: &pkm::ActuatorMotion<6>| [a.q, a.qd, a.qdd].map(|v| v.map(|x| x.to_bits()));
+        for k in 0..20_000 {
+            let mut x = home;
+            let mut xd = Vector6::zeros();
+            let mut xdd = Vector6::zeros();
+            for i in 0..6 {
+                let (span, rate) = if i < 3 { (100.0, 200.0) } else { (0.3, 2.0) };
+                x[i] += rng.random_range(-span..span);
+                xd[i] = rng.random_range(-rate..rate);
+                xdd[i] = rng.random_range(-10.0 * rate..10.0 * rate);
+            }
+            match k % 4 {
+                // Orientation held: the zero angular motion shortcut.
+                1 => xd.fixed_rows_mut::<3>(3).fill(0.0),
+                2 => {
+                    xd.fill(0.0);
+                    xdd.fill(0.0);
+                }
+                3 if k % 400 == 3 => x[k % 6] = f64::NAN,
+                _ => {}
+            }
+            let (p, r) = pkm::legs::split_pose(&x);
+            let want = h.strut_set().coords_motion_at(&x, &xd, &xdd, &p, &r);
+            let [v, w, a, al] = pkm::legs::coords_twist(&x, &xd, &xdd);
+            let portable = h.soa().motion(&p, &r, &v, &w, &a, &al);
+            let lanes = h.motion_at(&x, &xd, &xdd, &p, &r);
+            assert_eq!(bits(&portable), bits(&want), "{file} {k}");
+            assert_eq!(bits(&lanes), bits(&want), "{file} {k}");
+        }
+    }
+}
