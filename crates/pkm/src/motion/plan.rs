@@ -424,6 +424,61 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Planner<'m, M, P, A
     }
 }
 
+/// Plans `steps` into `blk`, handing each full block and the last one to `hand_over`.
+/// A planning error ends the steps and is the last block's tail (raised after its
+/// samples); an error of `hand_over` (a record that failed) is returned at once.
+fn plan_all<M, I, const P: usize, const A: usize>(
+    planner: &mut Planner<'_, M, P, A>,
+    steps: I,
+    blk: &mut Block<M, P, A>,
+    hand_over: &mut dyn FnMut(&mut Block<M, P, A>) -> Result<()>,
+) -> Result<()>
+where
+    M: Mechanism<P, A>,
+    I: IntoIterator<Item = Result<Step<P>>>,
+{
+    let stopped = std::cell::Cell::new(false);
+    let mut dispatch = |b: &mut Block<M, P, A>| {
+        let r = hand_over(b);
+        stopped.set(r.is_err());
+        r
+    };
+    for step in steps {
+        if let Err(e) = step.and_then(|s| planner.plan(s, blk, &mut dispatch)) {
+            if stopped.get() {
+                return Err(e);
+            }
+            blk.tail = Some(e);
+            break;
+        }
+    }
+    dispatch(blk)
+}
+
+/// [`drive`] on the caller's thread alone, planning into `blk` (left empty).
+pub(crate) fn run_inline<M, I, R, const P: usize, const A: usize>(
+    planner: &mut Planner<'_, M, P, A>,
+    steps: I,
+    blk: &mut Block<M, P, A>,
+    record: &mut R,
+) -> Result<()>
+where
+    M: Mechanism<P, A>,
+    I: IntoIterator<Item = Result<Step<P>>>,
+    R: FnMut(&mut Block<M, P, A>) -> Result<()>,
+{
+    let base = planner.m;
+    let mut dispatch = |b: &mut Block<M, P, A>| -> Result<()> {
+        b.compute(base, false);
+        let r = record(b);
+        b.clear();
+        r
+    };
+    let r = plan_all(planner, steps, blk, &mut dispatch);
+    blk.clear();
+    r
+}
+
 /// Runs `steps` through the planner, the compute stage and `record`, which takes the
 /// computed blocks in order.
 ///
@@ -443,36 +498,8 @@ where
     R: FnMut(&mut Block<M, P, A>) -> Result<()>,
 {
     let base = planner.m;
-    // Set when a record failed: the planner's error is then that one, raised at once.
-    let stopped = std::cell::Cell::new(false);
-    let run = |planner: &mut Planner<'_, M, P, A>,
-               hand_over: &mut dyn FnMut(&mut Block<M, P, A>) -> Result<()>|
-     -> Result<()> {
-        let mut blk = Block::new();
-        let mut dispatch = |b: &mut Block<M, P, A>| {
-            let r = hand_over(b);
-            stopped.set(r.is_err());
-            r
-        };
-        for step in steps {
-            if let Err(e) = step.and_then(|s| planner.plan(s, &mut blk, &mut dispatch)) {
-                if stopped.get() {
-                    return Err(e);
-                }
-                blk.tail = Some(e);
-                break;
-            }
-        }
-        dispatch(&mut blk)
-    };
     if rayon::current_num_threads() <= 1 || rayon::current_thread_index().is_some() {
-        let mut dispatch = |b: &mut Block<M, P, A>| -> Result<()> {
-            b.compute(base, false);
-            let r = record(b);
-            b.clear();
-            r
-        };
-        return run(planner, &mut dispatch);
+        return run_inline(planner, steps, &mut Block::new(), record);
     }
     rayon::in_place_scope(|scope| {
         let (done_tx, done_rx) = std::sync::mpsc::channel::<(u64, Block<M, P, A>)>();
@@ -506,7 +533,7 @@ where
             });
             Ok(())
         };
-        run(planner, &mut dispatch)?;
+        plan_all(planner, steps, &mut Block::new(), &mut dispatch)?;
         while queue.next < queue.sent {
             let mut done = queue.recv();
             record(&mut done)?;

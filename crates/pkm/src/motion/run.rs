@@ -5,7 +5,7 @@ use nalgebra::SVector;
 use serde::Serialize;
 
 use super::path::Segment;
-use super::plan::{drive, Block, Planner, Step};
+use super::plan::{drive, run_inline, Block, Planner, Step};
 use super::profile::Profile;
 use super::singular::{SingularReport, SingularTracker, DEFAULT_SINGULAR_ANGLE};
 use super::stats::{ratios, AxisStats, Ratios};
@@ -111,6 +111,9 @@ const MAX_RUNS: usize = 10_000;
 pub struct Runner<'m, M, const P: usize, const A: usize> {
     plan: Planner<'m, M, P, A>,
     rec: Recorder<'m, M, P, A>,
+    /// The block [`Runner::run_move`] plans into, kept between calls (its buffers stay
+    /// allocated: a caller running moves one by one allocates once).
+    spare: Block<M, P, A>,
 }
 
 /// What the samples add up to, taken in order.
@@ -161,6 +164,7 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
             _ => (0..3).collect(),
         };
         Ok(Runner {
+            spare: Block::new(),
             plan: Planner::new(m, sampling),
             rec: Recorder {
                 m,
@@ -226,19 +230,11 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
     where
         F: FnMut(&Sample<P, A>) -> Result<()>,
     {
-        let Runner { plan, rec } = self;
-        let base = rec.m;
-        let mut dispatch = |b: &mut Block<M, P, A>| -> Result<()> {
-            b.compute(base, false);
-            let r = rec.record(b, sink, &mut |_| Ok(()));
-            b.clear();
-            r
-        };
-        let mut blk = Block::new();
-        if let Err(e) = plan.plan(Step::Move { mv: *mv, last }, &mut blk, &mut dispatch) {
-            blk.tail = Some(e);
-        }
-        dispatch(&mut blk)
+        let Runner { plan, rec, spare } = self;
+        let step = Ok(Step::Move { mv: *mv, last });
+        run_inline(plan, [step], spare, &mut |b: &mut Block<M, P, A>| {
+            rec.record(b, sink, &mut |_| Ok(()))
+        })
     }
 
     /// Runs `steps` (moves and tool changes, in order; an error ends them), passing
@@ -252,7 +248,7 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
         F: FnMut(&Sample<P, A>) -> Result<()>,
         T: FnMut(f64) -> Result<()>,
     {
-        let Runner { plan, rec } = self;
+        let Runner { plan, rec, .. } = self;
         drive(plan, steps, &mut |b: &mut Block<M, P, A>| {
             rec.record(b, sink, tool)
         })
@@ -261,7 +257,7 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
     /// The summary of everything run so far.
     pub fn finish(self) -> MotionSummary {
         let names = self.serial_names();
-        let Runner { plan, rec } = self;
+        let Runner { plan, rec, .. } = self;
         rec.finish(names, plan.t0, plan.samples)
     }
 }

@@ -326,3 +326,53 @@ fn the_screened_motion_equals_the_checked_call_sample_by_sample() {
     runs.sort();
     assert_eq!(starts, runs);
 }
+
+#[test]
+fn run_move_stops_at_a_failing_sink() {
+    // One move of ~10 000 samples (three blocks) through `Runner::run_move`: a sink
+    // failing at sample k sees no sample after it.
+    use pkm::machine::Model;
+    use pkm::motion::{Move, Profile, Runner, Segment};
+    let Model::Hexapod(h) = load("hexapod-linuxcnc.toml").model else {
+        panic!()
+    };
+    let h = *h;
+    let home = pkm::Mechanism::home(&h);
+    let mut to = home;
+    to[0] += 50.0;
+    let q = [pkm::Quantity::Length; 6];
+    let seg = Segment::line(home, to, &q, true);
+    let mv = Move {
+        profile: Profile::constant(seg.length, 5.0).unwrap(),
+        segment: seg,
+        line: Some(1),
+        rapid: false,
+    };
+    for k in [0usize, 4095, 4096, 9000] {
+        let mut r = Runner::new(&h, Sampling::Rate(1000.0)).unwrap();
+        let mut calls = 0usize;
+        let e = r
+            .run_move(&mv, false, &mut |_| {
+                calls += 1;
+                if calls > k {
+                    return Err(pkm::Error::InvalidInput {
+                        what: "sink".into(),
+                        message: "full".into(),
+                    });
+                }
+                Ok(())
+            })
+            .unwrap_err();
+        assert!(e.to_string().contains("full"), "{e}");
+        assert_eq!(calls, k + 1);
+    }
+    // Whole, the move has its 10 001 samples.
+    let mut r = Runner::new(&h, Sampling::Rate(1000.0)).unwrap();
+    let mut n = 0;
+    r.run_move(&mv, true, &mut |_| {
+        n += 1;
+        Ok(())
+    })
+    .unwrap();
+    assert_eq!(n, 10_001);
+}
