@@ -1,5 +1,6 @@
 //! `pkm`: kinematics and accuracy of parallel, hybrid and serial machine tools.
 
+mod columnar;
 mod commands;
 mod fixed;
 mod io;

@@ -74,6 +74,48 @@ def test_motion_of_a_program_equals_the_command(tmp_path):
     assert s2["summary"] == r["summary"] and len(s2["t"]) == 0 and s2["q"].shape == (0, 3)
 
 
+def test_parquet_series_hold_the_python_results_at_full_precision(tmp_path):
+    """`--format parquet` read by pyarrow (an independent reader): the CSV's columns and
+    rows, each value Python's own result to the last bits where the CSV rounds to six
+    decimals, nulls where the CSV has empty fields."""
+    import pyarrow.parquet as pq  # the [sweep] extra, which scripts/test installs
+    m = pkm.load(TRIPOD)
+    r = m.motion(gcode=pathlib.Path(ARC), start=[32, -32, -290, 0, 0, 0], feed=10000 / 60,
+                 points=101)
+    args = ["motion", TRIPOD, "--gcode", ARC, "--from", "32,-32,-290", "--feed", "10000",
+            "--points", "101"]
+    cli(*args, "--out", str(tmp_path / "c"))
+    cli(*args, "--format", "parquet", "--out", str(tmp_path / "p"))
+    assert not (tmp_path / "p" / "actuators.csv").exists()
+    f = pq.ParquetFile(tmp_path / "p" / "actuators.parquet")
+    assert f.schema_arrow.metadata[b"pkm.machine"].decode() == m.name
+    t = f.read().to_pydict()
+    with open(tmp_path / "c" / "actuators.csv") as h:
+        rows = list(csv.DictReader(h))
+    assert list(t) == list(rows[0])
+    assert len(t["t_s"]) == len(rows) == len(r["t"])
+    for i, row in enumerate(rows):
+        assert t["line"][i] == (int(row["line"]) if row["line"] else None)
+        for k, v in row.items():
+            if k != "line":
+                assert abs(t[k][i] - float(v)) <= 5e-7, (i, k)
+    assert np.array_equal(np.array(t["t_s"]), r["t"])
+    for k, a in enumerate(r["columns"][1]):
+        for col, arr in ((f"{a}_mm", r["q"]), (f"{a}_mm_per_s", r["qd"]),
+                         (f"{a}_mm_per_s2", r["qdd"])):
+            assert np.array_equal(np.array(t[col]), arr[:, k]), col
+
+    w = m.workspace()
+    cli("workspace", TRIPOD, "--format", "parquet", "--out", str(tmp_path / "w"))
+    p = pq.read_table(tmp_path / "w" / "points.parquet").to_pydict()
+    assert np.array_equal(np.array([p["X_mm"], p["Y_mm"], p["Z_mm"]]).T, w["points"])
+    assert p["reachable"] == list(w["reachable"])
+    cond = np.array([np.nan if c is None else c for c in p["condition"]])
+    assert np.array_equal(cond, w["condition"], equal_nan=True)
+    assert p["status"] == [w["status_names"][s] for s in w["status"]]
+    assert p["binding"] == [w["binding_names"][b] if b >= 0 else None for b in w["binding"]]
+
+
 def test_motion_along_a_path_of_waypoints():
     m = pkm.load(TRIPOD)
     a = m.home.copy()

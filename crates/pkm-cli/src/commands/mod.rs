@@ -10,6 +10,7 @@ pub mod ik;
 pub mod linuxcnc;
 pub mod motion;
 pub mod motion_accuracy;
+pub mod motion_series;
 pub mod tolerance_args;
 pub mod workspace;
 

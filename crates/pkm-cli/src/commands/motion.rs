@@ -10,13 +10,9 @@ use pkm::Convention;
 use std::fs::File;
 use std::io::{BufReader, Write};
 use std::path::{Path, PathBuf};
-use std::sync::mpsc::{sync_channel, Receiver, SyncSender};
 
 use anyhow::{Context, Result};
-use indicatif::ProgressBar;
-use pkm::analysis::motion::{
-    run_motion_with, sample_columns, MotionRun, MotionSource, ProgramSetup, SampleRow, SampleSink,
-};
+use pkm::analysis::motion::{run_motion_with, MotionRun, MotionSource, ProgramSetup};
 use pkm::motion::program::FeedOptions;
 use pkm::motion::tools::parse_tool_table;
 use pkm::motion::{MotionSummary, Sampling};
@@ -24,7 +20,8 @@ use pkm::{DynMechanism, Machine};
 use serde_json::json;
 
 use super::load;
-use crate::fixed::{push_fixed6, push_u64};
+use super::motion_series::SeriesSink;
+use crate::columnar::SeriesFormat;
 use crate::io::{write_atomic, AtomicFile};
 use crate::poses::{parse_list, pose_from_user};
 use crate::report::plot::{panels_marked, Panel, Series};
@@ -96,9 +93,13 @@ pub struct MotionArgs {
     pub out: PathBuf,
     #[command(flatten)]
     pub accuracy: super::motion_accuracy::AccuracyArgs,
-    /// Skip actuators.csv (summary and plots only), for very long programs.
+    /// Skip the sample series (summary and plots only), for very long programs.
     #[arg(long)]
     pub summary_only: bool,
+    /// Format of the sample series: actuators.csv (six decimals) or actuators.parquet
+    /// (full precision, typed columns; pandas.read_parquet, polars, DuckDB).
+    #[arg(long, value_enum, default_value = "csv")]
+    pub format: SeriesFormat,
     /// Print summary.json to stdout.
     #[arg(long)]
     pub json: bool,
@@ -121,190 +122,6 @@ impl From<ProfileArg> for pkm::motion::program::ProfileKind {
             ProfileArg::Constant => Self::Constant,
             ProfileArg::Trapezoid => Self::Trapezoid,
             ProfileArg::Scurve => Self::Scurve,
-        }
-    }
-}
-
-/// Rows per block handed from the run to the writer thread.
-const BLOCK_ROWS: usize = 4096;
-
-/// A block of rows in user units: per row `t`, the coordinates, then per actuator
-/// `q, q', q''` (`width` numbers), and the row's G-code line.
-struct Block {
-    values: Vec<f64>,
-    lines: Vec<Option<u64>>,
-}
-
-/// Writes samples as CSV rows (user units) and drives the progress bar.
-///
-/// The run only converts each sample to user units and appends it to a block; a
-/// writer thread formats full blocks and writes them while the run goes on (the
-/// formatting of 26 numbers per sample had cost more than the kinematics). Three
-/// blocks circulate between the threads, so memory stays flat and no block is allocated per
-/// row; rows reach the file in the order of the samples.
-pub struct CsvSink {
-    /// Full blocks to the writer; `None` when no rows are written.
-    tx: Option<SyncSender<Block>>,
-    /// Blocks the writer has written, for reuse.
-    back: Option<Receiver<Block>>,
-    block: Block,
-    /// Coordinate and actuator quantities, for the units (read once, not per sample).
-    coords: Vec<pkm::Quantity>,
-    acts: Vec<pkm::Quantity>,
-    bar: Option<ProgressBar>,
-}
-
-/// The writer thread of a [`CsvSink`]; `finish` returns what writing gave.
-pub struct CsvWriter<'scope> {
-    handle: Option<std::thread::ScopedJoinHandle<'scope, std::io::Result<()>>>,
-}
-
-impl CsvSink {
-    /// A sink writing the header row now, and the writer thread of the rows in
-    /// `scope`; a progress bar over `bytes` of program when that is large.
-    pub fn start<'scope, 'env>(
-        scope: &'scope std::thread::Scope<'scope, 'env>,
-        machine: &Machine,
-        out: Option<&'env mut (dyn Write + Send)>,
-        bytes: u64,
-    ) -> Result<(Self, CsvWriter<'scope>)> {
-        let m = machine.mechanism();
-        let width = 1 + m.coordinates().len() + 3 * m.actuators().len();
-        let new_block = || Block {
-            values: Vec::with_capacity(BLOCK_ROWS * width),
-            lines: Vec::with_capacity(BLOCK_ROWS),
-        };
-        let writing = out.is_some();
-        let (tx, back, handle) = match out {
-            Some(w) => {
-                writeln!(w, "{}", sample_columns(machine).join(","))?;
-                let (tx, rx) = sync_channel::<Block>(1);
-                let (back_tx, back) = sync_channel::<Block>(2);
-                for _ in 0..2 {
-                    back_tx.send(new_block()).ok();
-                }
-                let handle = scope.spawn(move || write_blocks(rx, back_tx, w, width));
-                (Some(tx), Some(back), Some(handle))
-            }
-            None => (None, None, None),
-        };
-        let bar = crate::progress::bar(bytes, 1_000_000, "{bar:40} {bytes}/{total_bytes} {eta}");
-        Ok((
-            CsvSink {
-                tx,
-                back,
-                // Without a file (--summary-only) the block stays empty: nothing held.
-                block: if writing {
-                    new_block()
-                } else {
-                    Block {
-                        values: Vec::new(),
-                        lines: Vec::new(),
-                    }
-                },
-                coords: m.coordinates().iter().map(|c| c.quantity).collect(),
-                acts: m.actuators().iter().map(|a| a.quantity).collect(),
-                bar,
-            },
-            CsvWriter { handle },
-        ))
-    }
-
-    /// Hands the current block to the writer and takes a written one back.
-    fn flush(&mut self) -> pkm::Result<()> {
-        let (Some(tx), Some(back)) = (&self.tx, &self.back) else {
-            return Ok(());
-        };
-        let stopped = || pkm::Error::InvalidInput {
-            what: "actuators.csv".into(),
-            message: "writing stopped".into(),
-        };
-        let next = back.recv().map_err(|_| stopped())?;
-        let full = std::mem::replace(&mut self.block, next);
-        tx.send(full).map_err(|_| stopped())
-    }
-
-    /// Writes the last rows, ends the writer thread and clears the progress bar: what
-    /// writing gave (an error of the file system, the first one).
-    pub fn finish(mut self, writer: CsvWriter<'_>) -> std::io::Result<()> {
-        if let Some(b) = &self.bar {
-            b.finish_and_clear();
-        }
-        let flushed = if self.block.lines.is_empty() {
-            Ok(())
-        } else {
-            self.flush()
-        };
-        // Closing the channel ends the writer's loop.
-        self.tx = None;
-        let written = match writer.handle {
-            Some(h) => h
-                .join()
-                .unwrap_or_else(|_| Err(std::io::Error::other("the writer thread panicked"))),
-            None => Ok(()),
-        };
-        written?;
-        flushed.map_err(|e| std::io::Error::other(e.to_string()))
-    }
-}
-
-/// The writer thread: formats each block (six decimals, as `{:.6}`) and writes it,
-/// then returns the block for reuse.
-fn write_blocks(
-    rx: Receiver<Block>,
-    back: SyncSender<Block>,
-    w: &mut (dyn Write + Send),
-    width: usize,
-) -> std::io::Result<()> {
-    let mut buf: Vec<u8> = Vec::with_capacity(BLOCK_ROWS * width * 12);
-    for mut block in rx {
-        buf.clear();
-        for (row, line) in block.values.chunks_exact(width).zip(&block.lines) {
-            push_fixed6(&mut buf, row[0]);
-            buf.push(b',');
-            if let Some(l) = line {
-                push_u64(&mut buf, *l);
-            }
-            for v in &row[1..] {
-                buf.push(b',');
-                push_fixed6(&mut buf, *v);
-            }
-            buf.push(b'\n');
-        }
-        w.write_all(&buf)?;
-        block.values.clear();
-        block.lines.clear();
-        // The run may have finished and gone: nothing more to hand back then.
-        let _ = back.send(block);
-    }
-    Ok(())
-}
-
-impl SampleSink for CsvSink {
-    fn sample(&mut self, s: &SampleRow) -> pkm::Result<()> {
-        if self.tx.is_none() {
-            return Ok(());
-        }
-        let b = &mut self.block;
-        b.lines.push(s.line);
-        b.values.push(s.t);
-        for (qn, x) in self.coords.iter().zip(s.x) {
-            b.values.push(qn.to_user(*x));
-        }
-        for (i, qn) in self.acts.iter().enumerate() {
-            for v in [s.q[i], s.qd[i], s.qdd[i]] {
-                b.values.push(qn.to_user(v));
-            }
-        }
-        if b.lines.len() == BLOCK_ROWS {
-            self.flush()?;
-        }
-        Ok(())
-    }
-
-    fn progress(&mut self, bytes: u64) {
-        if let Some(b) = &self.bar {
-            b.inc(bytes);
         }
     }
 }
@@ -560,16 +377,18 @@ pub fn run(a: &MotionArgs) -> Result<u8> {
     }
     std::fs::create_dir_all(&a.out)
         .with_context(|| format!("cannot create {}", a.out.display()))?;
+    let series = a.out.join(a.format.file("actuators"));
     let mut writer = if a.summary_only {
         None
     } else {
-        Some(AtomicFile::create(&a.out.join("actuators.csv"), &inputs)?)
+        Some(AtomicFile::create(&series, &inputs)?)
     };
     let outcome = std::thread::scope(|scope| -> Result<MotionRun> {
-        let (mut sink, csv) = CsvSink::start(
+        let (mut sink, csv) = SeriesSink::start(
             scope,
             &machine,
             writer.as_mut().map(|w| w as &mut (dyn Write + Send)),
+            a.format,
             bytes,
         )?;
         let run = run_motion_with(
@@ -582,8 +401,7 @@ pub fn run(a: &MotionArgs) -> Result<u8> {
         );
         // A failed write stops the run: its error is the one to report.
         let written = sink.finish(csv);
-        written
-            .with_context(|| format!("cannot write {}", a.out.join("actuators.csv").display()))?;
+        written.with_context(|| format!("cannot write {}", series.display()))?;
         Ok(run?)
     })?;
     if let Some(w) = writer {
@@ -746,112 +564,5 @@ fn print_singular(sg: &pkm::motion::singular::SingularReport) {
             p.closest_deg,
             peaks.join(", ")
         );
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn hexapod() -> Machine {
-        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/machines");
-        load(&dir.join("hexapod-linuxcnc.toml")).unwrap()
-    }
-
-    /// Feeds `n` samples (some without a line) to a sink writing into `w`.
-    fn feed(
-        machine: &Machine,
-        w: &mut (dyn Write + Send),
-        n: usize,
-    ) -> (pkm::Result<()>, std::io::Result<()>) {
-        std::thread::scope(|scope| {
-            let (mut sink, csv) = CsvSink::start(scope, machine, Some(w), 0).unwrap();
-            let mut fed = Ok(());
-            for k in 0..n {
-                let v = k as f64;
-                let x = [v * 1e-3, -v, 0.25, 0.01 * v, -0.02, 1e-7 * v];
-                let q = [v + 0.5e-6, 1.0, 2.0, 3.0, 4.0, -v];
-                fed = sink.sample(&SampleRow {
-                    t: v * 1e-3,
-                    line: (k % 3 != 0).then_some(k as u64),
-                    x: &x,
-                    q: &q,
-                    qd: &q,
-                    qdd: &x,
-                });
-                if fed.is_err() {
-                    break;
-                }
-            }
-            (fed, sink.finish(csv))
-        })
-    }
-
-    /// The rows the writer thread formats, in blocks, are the rows formatted one by one
-    /// with `{:.6}`, in the order of the samples.
-    #[test]
-    fn rows_are_written_in_order_as_formatted_one_by_one() {
-        let machine = hexapod();
-        let m = machine.mechanism();
-        let n = 3 * BLOCK_ROWS + 17;
-        let mut out: Vec<u8> = Vec::new();
-        let (fed, written) = feed(&machine, &mut out, n);
-        fed.unwrap();
-        written.unwrap();
-        let text = String::from_utf8(out).unwrap();
-        let mut lines = text.lines();
-        assert_eq!(lines.next().unwrap(), sample_columns(&machine).join(","));
-        let mut rows = 0;
-        for (k, row) in lines.enumerate() {
-            let v = k as f64;
-            let x = [v * 1e-3, -v, 0.25, 0.01 * v, -0.02, 1e-7 * v];
-            let q = [v + 0.5e-6, 1.0, 2.0, 3.0, 4.0, -v];
-            let mut want = vec![format!("{:.6}", v * 1e-3)];
-            want.push(if k % 3 != 0 {
-                k.to_string()
-            } else {
-                String::new()
-            });
-            for (c, x) in m.coordinates().iter().zip(x) {
-                want.push(format!("{:.6}", c.quantity.to_user(x)));
-            }
-            for (i, a) in m.actuators().iter().enumerate() {
-                for v in [q[i], q[i], x[i]] {
-                    want.push(format!("{:.6}", a.quantity.to_user(v)));
-                }
-            }
-            assert_eq!(row, want.join(","), "row {k}");
-            rows += 1;
-        }
-        assert_eq!(rows, n);
-    }
-
-    /// A writer that fails after `left` bytes.
-    struct Failing {
-        left: usize,
-    }
-
-    impl Write for Failing {
-        fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
-            if b.len() > self.left {
-                return Err(std::io::Error::other("disk full"));
-            }
-            self.left -= b.len();
-            Ok(b.len())
-        }
-        fn flush(&mut self) -> std::io::Result<()> {
-            Ok(())
-        }
-    }
-
-    /// A failing file system stops the run (no hang, no lost error): the sink refuses
-    /// further samples and `finish` returns the writer's error.
-    #[test]
-    fn a_write_error_stops_the_run_and_is_reported() {
-        let machine = hexapod();
-        let mut w = Failing { left: 100_000 };
-        let (fed, written) = feed(&machine, &mut w, 20 * BLOCK_ROWS);
-        assert!(fed.is_err(), "the run went on after the writer failed");
-        assert_eq!(written.unwrap_err().to_string(), "disk full");
     }
 }

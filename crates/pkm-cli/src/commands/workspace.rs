@@ -10,6 +10,7 @@ use serde_json::json;
 use std::path::{Path, PathBuf};
 
 use super::load;
+use crate::columnar::{machine_metadata, Kind, SeriesFormat, Table, GROUP_ROWS};
 use crate::io::{write_atomic, AtomicFile};
 use crate::poses::{parse_list, pose_from_user};
 use crate::report::heatmap::{slice_svg, Cell, Scale};
@@ -58,6 +59,10 @@ pub struct WorkspaceArgs {
     /// Output directory.
     #[arg(long)]
     pub out: PathBuf,
+    /// Format of the point table: points.csv (six decimals) or points.parquet (full
+    /// precision, typed columns; pandas.read_parquet, polars, DuckDB).
+    #[arg(long, value_enum, default_value = "csv")]
+    pub format: SeriesFormat,
     /// Print summary.json to stdout.
     #[arg(long)]
     pub json: bool,
@@ -365,7 +370,7 @@ pub fn run(a: &WorkspaceArgs) -> Result<u8> {
     )?;
     // The point files are written while the slices are drawn.
     std::thread::scope(|scope| -> Result<()> {
-        let points = scope.spawn(|| write_points(m, &wm, &a.out, &inputs));
+        let points = scope.spawn(|| write_points(m, &wm, &a.out, a.format, &inputs));
         let drawn = slices(m, &wm).and_then(|list| {
             list.iter().try_for_each(|(name, svg)| {
                 write_atomic(&a.out.join(name), svg.as_bytes(), &inputs)
@@ -436,19 +441,24 @@ pub fn run(a: &WorkspaceArgs) -> Result<u8> {
     Ok(0)
 }
 
-/// The point cloud: points.csv with every point (streamed, six decimals), and for a map
-/// over three axes points.ply with the reachable ones and their condition number
-/// (binary little-endian doubles: 32 bytes a point, read by MeshLab, CloudCompare,
-/// Open3D and ParaView). The two files are written by two threads at once.
+/// The point cloud: the table of every point (points.csv, streamed, six decimals; or
+/// points.parquet, full precision), and for a map over three axes points.ply with the
+/// reachable ones and their condition number (binary little-endian doubles: 32 bytes a
+/// point, read by MeshLab, CloudCompare, Open3D and ParaView). The two files are
+/// written by two threads at once.
 fn write_points(
     m: &dyn DynMechanism,
     wm: &WorkspaceMap,
     out: &Path,
+    format: SeriesFormat,
     inputs: &[&Path],
 ) -> Result<()> {
     let table = AxisTable::new(m, wm);
     std::thread::scope(|scope| {
-        let csv = scope.spawn(|| write_points_csv(m, wm, &table, out, inputs));
+        let csv = scope.spawn(|| match format {
+            SeriesFormat::Csv => write_points_csv(m, wm, &table, out, inputs),
+            SeriesFormat::Parquet => write_points_parquet(m, wm, &table, out, inputs),
+        });
         let ply = if wm.axes.len() == 3 {
             write_points_ply(m, wm, &table, out, inputs)
         } else {
@@ -456,7 +466,7 @@ fn write_points(
         };
         let csv = csv
             .join()
-            .unwrap_or_else(|_| Err(anyhow::anyhow!("the points.csv writer panicked")));
+            .unwrap_or_else(|_| Err(anyhow::anyhow!("the point table's writer panicked")));
         csv.and(ply)
     })
 }
@@ -492,6 +502,65 @@ impl AxisTable {
     }
 }
 
+/// The point table's axis columns: `X_mm`, `A_deg`, ... per map axis.
+fn axis_columns(m: &dyn DynMechanism, wm: &WorkspaceMap) -> Vec<String> {
+    wm.axes
+        .iter()
+        .map(|x| {
+            let c = &m.coordinates()[x.coordinate];
+            format!("{}_{}", c.name, c.quantity.unit())
+        })
+        .collect()
+}
+
+/// points.parquet: the columns of points.csv (the axes in user units, `reachable`,
+/// `status`, `condition` null where unreachable, `binding` null where no limit binds),
+/// at full precision, in row groups written as they fill; the machine in its metadata.
+fn write_points_parquet(
+    m: &dyn DynMechanism,
+    wm: &WorkspaceMap,
+    table: &AxisTable,
+    out: &Path,
+    inputs: &[&Path],
+) -> Result<()> {
+    let n = wm.axes.len();
+    let mut columns: Vec<(String, Kind)> = axis_columns(m, wm)
+        .into_iter()
+        .map(|c| (c, Kind::F64))
+        .collect();
+    for (c, k) in [
+        ("reachable", Kind::Bool),
+        ("status", Kind::OptText),
+        ("condition", Kind::OptF64),
+        ("binding", Kind::OptText),
+    ] {
+        columns.push((c.to_string(), k));
+    }
+    let meta = machine_metadata(
+        m,
+        "pkm workspace grid points: axes (units in the column names), reachable, status, \
+         condition number, binding limit",
+    );
+    let mut file = AtomicFile::create(&out.join("points.parquet"), inputs)?;
+    // Row groups found by the grid axes.
+    let axes: Vec<usize> = (0..n).collect();
+    let mut t = Table::create(&mut file, &columns, &axes, meta, GROUP_ROWS)?;
+    let mut x = vec![0.0; n];
+    for (k, p) in wm.points.iter().enumerate() {
+        table.point(k, &mut x);
+        for (c, v) in x.iter().enumerate() {
+            t.f64(c, *v);
+        }
+        t.bool(n, p.reachable);
+        t.opt_text(n + 1, Some(p.status.name()));
+        t.opt_f64(n + 2, p.reachable.then_some(p.condition));
+        t.opt_text(n + 3, p.binding.as_deref());
+        t.end_row()?;
+    }
+    t.finish()?;
+    file.commit()
+}
+
 fn write_points_csv(
     m: &dyn DynMechanism,
     wm: &WorkspaceMap,
@@ -501,14 +570,7 @@ fn write_points_csv(
 ) -> Result<()> {
     use crate::fixed::push_fixed6;
     use std::io::Write as _;
-    let names: Vec<String> = wm
-        .axes
-        .iter()
-        .map(|x| {
-            let c = &m.coordinates()[x.coordinate];
-            format!("{}_{}", c.name, c.quantity.unit())
-        })
-        .collect();
+    let names = axis_columns(m, wm);
     let mut csv = AtomicFile::create(&out.join("points.csv"), inputs)?;
     let mut row = format!("{},reachable,status,condition,binding\n", names.join(",")).into_bytes();
     let mut x = vec![0.0; wm.axes.len()];

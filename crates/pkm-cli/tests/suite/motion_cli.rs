@@ -517,3 +517,60 @@ fn check_warns_of_a_turned_part_frame() {
         );
     }
 }
+
+/// `--format parquet` writes actuators.parquet instead of actuators.csv: the CSV's
+/// columns and rows at full precision, over several blocks and row groups (a 5 kHz run
+/// of about 90 000 samples), and nothing with --summary-only.
+#[test]
+fn parquet_series_hold_the_csv_rows() {
+    use crate::common::assert_parquet_is_csv;
+    let dir = tempfile::tempdir().unwrap();
+    let g = dir.path().join("wave.ngc");
+    let mut prog = String::from("G21 G90 G17\nG0 X0 Y40 Z508 A0 B0 C0\nF800\n");
+    for k in 0..60 {
+        let a = k as f64 * 0.3;
+        prog.push_str(&format!(
+            "G1 X{:.4} Y{:.4} Z{:.4} A{:.3} B{:.3}\n",
+            20.0 * a.sin(),
+            40.0 * a.cos(),
+            508.0 + 2.0 * (2.0 * a).sin(),
+            3.0 * a.sin(),
+            -2.0 * a.cos()
+        ));
+    }
+    prog.push_str("M2\n");
+    std::fs::write(&g, prog).unwrap();
+    let run = |format: &str, extra: &[&str]| {
+        let out = dir.path().join(format!("{format}{}", extra.len()));
+        let o = pkm()
+            .args([
+                "motion",
+                &path("examples/machines/hexapod-linuxcnc.toml"),
+                "--rate",
+                "5000",
+                "--format",
+                format,
+                "--gcode",
+            ])
+            .arg(&g)
+            .args(extra)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
+        ok(&o);
+        out
+    };
+    let csv = run("csv", &[]);
+    let pq = run("parquet", &[]);
+    assert!(!pq.join("actuators.csv").exists());
+    let rows = assert_parquet_is_csv(&pq.join("actuators.parquet"), &csv.join("actuators.csv"));
+    assert!(rows > 65_536, "{rows} rows: one row group only");
+    assert_eq!(
+        std::fs::read(csv.join("summary.json")).unwrap(),
+        std::fs::read(pq.join("summary.json")).unwrap()
+    );
+    let none = run("parquet", &["--summary-only"]);
+    assert!(!none.join("actuators.parquet").exists());
+    assert!(none.join("summary.json").exists());
+}

@@ -363,3 +363,48 @@ fn hexapod_csv_round_trip_through_the_tracking_fk() {
         }
     }
 }
+
+/// `pkm workspace --format parquet`: points.parquet holds points.csv's rows (axes,
+/// reachable, status, condition, binding limit; nulls where the CSV is empty) on a grid
+/// reaching past the hexapod's limits, so that unreachable points name their limit.
+#[test]
+fn parquet_points_hold_the_csv_rows() {
+    use crate::common::{assert_parquet_is_csv, parquet_rows, Cell};
+    let dir = tempfile::tempdir().unwrap();
+    let run = |format: &str| {
+        let out = dir.path().join(format);
+        let o = pkm()
+            .args([
+                "workspace",
+                &path("examples/machines/hexapod-linuxcnc.toml"),
+                "--step",
+                "40",
+                "--format",
+                format,
+                "--out",
+            ])
+            .arg(&out)
+            .output()
+            .unwrap();
+        ok(&o);
+        out
+    };
+    let (csv, pq) = (run("csv"), run("parquet"));
+    assert!(!pq.join("points.csv").exists());
+    let n = assert_parquet_is_csv(&pq.join("points.parquet"), &csv.join("points.csv"));
+    let (names, rows) = parquet_rows(&pq.join("points.parquet"));
+    let col = |c: &str| names.iter().position(|n| n == c).unwrap();
+    let unreachable: Vec<&Vec<Cell>> = rows
+        .iter()
+        .filter(|r| r[col("reachable")] == Cell::Text("false".into()))
+        .collect();
+    assert!(!unreachable.is_empty() && unreachable.len() < n);
+    for r in unreachable {
+        assert_eq!(r[col("condition")], Cell::Null);
+        assert!(matches!(&r[col("binding")], Cell::Text(t) if !t.is_empty()));
+    }
+    assert_eq!(
+        std::fs::read(csv.join("points.ply")).unwrap(),
+        std::fs::read(pq.join("points.ply")).unwrap()
+    );
+}
