@@ -205,13 +205,19 @@ impl SerialArm {
     /// velocity over angular velocity, part frame) at joint values `q`.
     pub fn pose_and_jacobian(&self, q: &Vector6<f64>) -> (Matrix4<f64>, Matrix6<f64>) {
         let (t, j) = self.tool.jacobian::<6>(&(*q).into());
+        (self.part_inverse * t, self.in_part_frame(&j))
+    }
+
+    /// Velocity-over-angular-velocity columns (a Jacobian, `J' q'`) turned from the
+    /// base frame into the part frame: both halves by the part's fixed rotation.
+    fn in_part_frame<const C: usize>(&self, j: &SMatrix<f64, 6, C>) -> SMatrix<f64, 6, C> {
         let r = self.part_inverse.fixed_view::<3, 3>(0, 0).into_owned();
-        let mut jp = Matrix6::zeros();
-        jp.fixed_view_mut::<3, 6>(0, 0)
-            .copy_from(&(r * j.fixed_view::<3, 6>(0, 0)));
-        jp.fixed_view_mut::<3, 6>(3, 0)
-            .copy_from(&(r * j.fixed_view::<3, 6>(3, 0)));
-        (self.part_inverse * t, jp)
+        let mut jp = SMatrix::<f64, 6, C>::zeros();
+        jp.fixed_view_mut::<3, C>(0, 0)
+            .copy_from(&(r * j.fixed_view::<3, C>(0, 0)));
+        jp.fixed_view_mut::<3, C>(3, 0)
+            .copy_from(&(r * j.fixed_view::<3, C>(3, 0)));
+        jp
     }
 
     /// Pose coordinates X..C of joint values `q` (forward kinematics, closed form).
@@ -744,7 +750,10 @@ impl Mechanism<6, 6> for SerialArm {
         xdd: &Vector6<f64>,
     ) -> Result<ActuatorMotion<6>> {
         let q = self.inverse(x)?;
-        let (_, j) = self.pose_and_jacobian(&q);
+        // One pass along the chain: the axes give J and, once q' is known, J' q'.
+        let (t, axes) = self.tool.axes::<6>(&q.into());
+        let p = Vector3::new(t[(0, 3)], t[(1, 3)], t[(2, 3)]);
+        let j = self.in_part_frame(&super::jacobian_of_axes(&p, &axes));
         let inv = self.inverse_geometric(&j)?;
         let a = [x[3], x[4], x[5]];
         let (w, al) = rpy_angular_motion(
@@ -754,15 +763,8 @@ impl Mechanism<6, 6> for SerialArm {
         );
         let twist = Vector6::new(xd[0], xd[1], xd[2], w.x, w.y, w.z);
         let qd = inv * twist;
-        let n = qd.norm();
-        let jd_qd = if n > 0.0 {
-            let h = 1e-5 / n;
-            let (_, jp) = self.pose_and_jacobian(&(q + qd * h));
-            let (_, jm) = self.pose_and_jacobian(&(q - qd * h));
-            (jp - jm) * qd / (2.0 * h)
-        } else {
-            Vector6::zeros()
-        };
+        // J' q' exactly (the part frame is fixed: its rotation commutes with d/dt).
+        let jd_qd = self.in_part_frame(&super::jacobian_rate_times_rates(&p, &axes, &qd.into()));
         let acc = Vector6::new(xdd[0], xdd[1], xdd[2], al.x, al.y, al.z);
         Ok(ActuatorMotion {
             q,
