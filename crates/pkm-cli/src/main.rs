@@ -76,9 +76,11 @@ enum Command {
         pkm motion examples/machines/tripod-seed000.toml --gcode examples/paths/seed000-arc.ngc --from 32,-32,-290 --feed 10000 --points 101 --out arc\n  \
         pkm motion examples/machines/tripod-seed000.toml --from 0,0,-290 --to 40,20,-300 --feed 3000 --profile scurve --out p2p\n  \
         pkm motion MACHINE.toml --from POSE --to POSE --duration 1 --profile trapezoid --accel-time 0.1 --out DIR\n  \
-        pkm motion examples/machines/mc300.toml --gcode tests/fixtures/linuxcnc/xyzbc-trt/boat-xyzbc.ngc --accuracy --out DIR\n\n\
+        pkm motion examples/machines/mc300.toml --gcode tests/fixtures/linuxcnc/xyzbc-trt/boat-xyzbc.ngc --accuracy --out DIR\n  \
+        pkm motion examples/machines/tripod-seed000.toml --gcode examples/paths/seed000-arc.ngc --from 32,-32,-290 --format parquet --out arc   # for pandas, polars\n\n\
         Writes DIR/actuators.csv (t, line, pose coordinates, then per actuator position,\n\
-        velocity, acceleration), DIR/summary.json and DIR/actuators.svg, DIR/serial.svg;\n\
+        velocity, acceleration; DIR/actuators.parquet with --format parquet), DIR/summary.json\n\
+        and DIR/actuators.svg, DIR/serial.svg;\n\
         with --accuracy DIR/accuracy.csv (per G-code line) and DIR/accuracy.svg.\n\
         A program starts at --from when given, else at the machine's home pose. Moves stop\n\
         exactly at each segment end (no blending). Exit code 3 when a limit is violated.")]
@@ -91,7 +93,8 @@ enum Command {
         pkm workspace examples/machines/hexapod-linuxcnc.toml --tilt 15 --step 25 --out total   # reachable at every tilt <= 15 deg\n  \
         pkm workspace examples/machines/hexapod-linuxcnc.toml --at 0,0,550 --out tilt          # orientation workspace at a point\n\n\
         Writes DIR/summary.json (measure and measure_unit, volume_mm3 over X, Y, Z, bounding_box, reachable_fraction, condition\n\
-        statistics, points per binding limit), DIR/points.csv, DIR/points.ply and slice heat maps.")]
+        statistics, points per binding limit), DIR/points.csv (DIR/points.parquet with\n\
+        --format parquet), DIR/points.ply and slice heat maps.")]
     Workspace(WorkspaceArgs),
     /// Accuracy of any machine (seed 003's model): the tool-pose error of given
     /// deviations, the sensitivity to every geometric parameter, the error budget of

@@ -477,7 +477,8 @@ pub fn run(a: &MotionArgs) -> Result<u8> {
                 r.acceleration_of_mean_peaks
             ),
             None => println!(
-                "ratios serial/PKM: none (an actuator or axis turns: mm over deg means nothing)"
+                "ratios serial/PKM: none (no serial axis moved, or an actuator or axis turns: \
+                 mm over deg means nothing)"
             ),
         }
         match s.feed_override_max {

@@ -154,7 +154,7 @@ pub fn section(h: &mut Html, machine: &Machine, ctx: &Context) -> Result<()> {
                     "{:.3} / {:.3} / {:.3}",
                     r.travel, r.velocity, r.acceleration
                 ),
-                None => "n/a (revolute drives)".into(),
+                None => "n/a (revolute drives, or no serial axis moved)".into(),
             },
             if s.violations.is_empty() {
                 "<span class=\"ok\">none</span>".into()

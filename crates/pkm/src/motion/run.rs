@@ -82,7 +82,8 @@ pub struct MotionSummary {
     /// Per serial (Cartesian) axis, the same path on a serial machine.
     pub serial: Vec<(String, AxisStats)>,
     /// Serial over PKM ratios (seed 000's definitions); `None` when an actuator or a
-    /// serial axis is an angle (a ratio of mm to deg means nothing).
+    /// serial axis is an angle (a ratio of mm to deg means nothing), or when no serial
+    /// axis moves.
     pub ratios: Option<Ratios>,
     /// Violated limits along the path (the first 10 000 stretches).
     pub violations: Vec<ViolationRun>,

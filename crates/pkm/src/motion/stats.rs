@@ -98,7 +98,8 @@ pub struct Ratios {
 
 /// Computes [`Ratios`]; serial axes that do not move are left out. `None` unless every
 /// serial axis and every actuator is a length (a ratio of mm to deg means nothing:
-/// robots, turning drives).
+/// robots, turning drives), and `None` when no serial axis moves (a run without
+/// samples, a dwell: nothing over nothing is not a ratio).
 pub fn ratios(
     serial: &[AxisStats],
     serial_quantities: &[Quantity],
@@ -110,6 +111,9 @@ pub fn ratios(
         return None;
     }
     let moving: Vec<&AxisStats> = serial.iter().filter(|s| s.travel > 1e-9).collect();
+    if moving.is_empty() {
+        return None;
+    }
     let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
     let largest = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
     let over = |s: f64, p: f64| if p > 0.0 { s / p } else { f64::INFINITY };

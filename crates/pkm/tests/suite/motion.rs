@@ -338,6 +338,32 @@ fn ratios_are_not_given_for_turning_drives() {
     assert!(run.summary.ratios.is_none());
 }
 
+/// A program without motion (no samples, or a dwell) has no ratios: nothing over
+/// nothing, where `inf` was reported.
+#[test]
+fn ratios_are_not_given_when_nothing_moves() {
+    let m = load("tripod-seed000.toml");
+    for program in ["G21 G90\nM2\n", "G21 G90\nG4 P0.5\nM2\n"] {
+        let run = pkm::analysis::motion::run_motion(
+            &m,
+            pkm::analysis::motion::MotionSource::Gcode {
+                reader: Box::new(program.as_bytes()),
+                from: None,
+                setup: Default::default(),
+            },
+            &pkm::motion::program::FeedOptions::default(),
+            Sampling::Rate(100.0),
+            &mut pkm::analysis::motion::NoSink,
+        )
+        .unwrap();
+        assert!(
+            run.summary.ratios.is_none(),
+            "{program}: {:?}",
+            run.summary.ratios
+        );
+    }
+}
+
 #[test]
 fn limits_and_feed_override_along_the_path() {
     let t = translational();
