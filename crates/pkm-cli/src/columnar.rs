@@ -94,10 +94,14 @@ impl Buf {
             Buf::Bool(v) => v.clear(),
             Buf::OptF64(v, d) => (v.clear(), d.clear()).1,
             Buf::OptI64(v, d) => (v.clear(), d.clear()).1,
-            Buf::OptText(v, d, _) => (v.clear(), d.clear()).1,
+            Buf::OptText(v, d, seen) => (v.clear(), d.clear(), seen.clear()).2,
         }
     }
 }
+
+/// Distinct texts of a column kept per row group, so that a repeated one (a limit's
+/// name) is stored once in memory.
+pub const MAX_INTERNED: usize = 1024;
 
 /// Rows per row group by default: 65 536 rows of 27 doubles are 14 MB.
 pub const GROUP_ROWS: usize = 1 << 16;
@@ -240,13 +244,16 @@ impl<W: Write + Send> Table<W> {
         }
     }
 
-    /// Appends a text or a null to column `c` (a [`Kind::OptText`] column); each
-    /// distinct text is copied once.
+    /// Appends a text or a null to column `c` (a [`Kind::OptText`] column); each of
+    /// the first [`MAX_INTERNED`] distinct texts of a row group is copied once.
     pub fn opt_text(&mut self, c: usize, x: Option<&str>) {
         match (&mut self.bufs[c], x) {
             (Buf::OptText(v, d, seen), Some(s)) => {
                 let b = match seen.get(s) {
                     Some(b) => b.clone(),
+                    // Texts that are all different (messages with numbers) are not
+                    // kept: the map stays small.
+                    None if seen.len() >= MAX_INTERNED => ByteArray::from(s),
                     None => {
                         let b = ByteArray::from(s);
                         seen.insert(s.into(), b.clone());
@@ -418,6 +425,44 @@ pub(crate) mod tests {
             k += 1;
         }
         assert_eq!(k, n);
+    }
+
+    /// Texts that are all different (messages with numbers) round-trip, and the map of
+    /// distinct texts kept in memory stops at [`MAX_INTERNED`] and is emptied with each
+    /// row group.
+    #[test]
+    fn many_distinct_texts_are_not_all_kept() {
+        let cols = vec![("why".to_string(), Kind::OptText)];
+        let mut t = Table::create(Vec::new(), &cols, &[], Vec::new(), 5000).unwrap();
+        let text = |k: usize| format!("line {k}: strut 3 length {:.3} mm", k as f64 * 0.1);
+        for k in 0..4000 {
+            t.opt_text(0, Some(&text(k)));
+            t.end_row().unwrap();
+        }
+        let Buf::OptText(_, _, seen) = &t.bufs[0] else {
+            panic!()
+        };
+        assert_eq!(seen.len(), MAX_INTERNED);
+        for k in 4000..6000 {
+            t.opt_text(0, Some(&text(k)));
+            t.end_row().unwrap();
+        }
+        let Buf::OptText(_, _, seen) = &t.bufs[0] else {
+            panic!()
+        };
+        assert_eq!(
+            seen.len(),
+            1000,
+            "emptied by the row group written at 5000 rows"
+        );
+        let (bytes, rows) = t.finish().unwrap();
+        assert_eq!(rows, 6000);
+        let r = reader(&bytes);
+        for (k, row) in r.get_row_iter(None).unwrap().enumerate() {
+            let row = row.unwrap();
+            let (_, f) = row.get_column_iter().next().unwrap();
+            assert_eq!(f, &Field::Str(text(k)), "row {k}");
+        }
     }
 
     /// A row missing a column's value, or a value of the wrong type, is refused at the

@@ -10,14 +10,15 @@ use pkm::pose::rotation_matrix;
 use pkm::{DynMechanism, PoseSpace};
 use serde_json::json;
 
-use super::csvio::{finish_batch, num, read_table};
-use super::ik::csv_text;
+use super::csvio::{read_table, BatchTable};
 use super::load;
+use crate::columnar::{machine_metadata, Kind};
 use crate::poses::{
     actuators_from_user, actuators_json, clean, coords_json, coords_text, parse_list,
     pose_from_user, tool_json,
 };
 use crate::EXIT_UNREACHABLE;
+use std::fmt::Write as _;
 
 #[derive(Args)]
 pub struct FkArgs {
@@ -41,7 +42,8 @@ pub struct FkArgs {
     /// CSV of many actuator sets (header row naming the actuators).
     #[arg(long, requires = "output")]
     pub input: Option<PathBuf>,
-    /// CSV to write the batch results to.
+    /// File to write the batch results to: CSV, or Parquet when its name ends in
+    /// `.parquet` (full precision, typed columns, nulls for empty cells).
     #[arg(long, requires = "input")]
     pub output: Option<PathBuf>,
     #[command(flatten)]
@@ -190,72 +192,91 @@ fn batch(
     let conv = a.opts.rotation;
     let names: Vec<String> = m.actuators().iter().map(|a| a.name.clone()).collect();
     let table = read_table(input, &[names])?;
-    let mut header = table.header.clone();
+    let mut columns: Vec<(String, Kind)> = table
+        .header
+        .iter()
+        .map(|h| (h.clone(), Kind::F64))
+        .collect();
     let spatial = m.pose_space() != PoseSpace::Own;
-    if spatial {
-        header.extend(["X_mm", "Y_mm", "Z_mm"].map(String::from));
-        header.extend(conv.angle_names().map(|n| format!("{n}_deg")));
+    let pose_names: Vec<String> = if spatial {
+        ["X_mm", "Y_mm", "Z_mm"]
+            .map(String::from)
+            .into_iter()
+            .chain(conv.angle_names().map(|n| format!("{n}_deg")))
+            .collect()
     } else {
-        header.extend(
-            m.coordinates()
-                .iter()
-                .map(|c| format!("{}_{}", c.name, c.quantity.unit())),
-        );
-    }
-    header.extend(["iterations", "residual", "reachable", "status"].map(String::from));
-    let mut out = header.join(",") + "\n";
+        m.coordinates()
+            .iter()
+            .map(|c| format!("{}_{}", c.name, c.quantity.unit()))
+            .collect()
+    };
+    let n = pose_names.len();
+    columns.extend(pose_names.into_iter().map(|c| (c, Kind::OptF64)));
+    columns.push(("iterations".into(), Kind::OptI64));
+    columns.push(("residual".into(), Kind::OptF64));
+    columns.push(("reachable".into(), Kind::Bool));
+    columns.push(("status".into(), Kind::OptText));
+    let meta = machine_metadata(
+        m,
+        "pkm fk batch: the input actuator values, the pose (null without a solution), \
+         the solver's iterations and residual, whether every limit holds, the violated \
+         limits",
+    );
+    let mut out = BatchTable::create(output, &[input, &a.machine], &columns, meta)?;
     // Rows are a stream: each solved from the last (hexapods keep a tracking solver).
     let mut stream = pkm::analysis::kinematics::ForwardStream::new(machine, &start)?;
     let mut failed = 0usize;
+    let mut text = String::new();
     for (line, vals) in &table.rows {
-        let mut cells: Vec<String> = vals.iter().map(|v| num(*v)).collect();
+        for v in vals {
+            out.num(Some(*v));
+        }
         let res = actuators_from_user(m, vals).and_then(|q| Ok(stream.next(&q)?));
+        text.clear();
         match res {
             Ok((f, v)) => {
                 if spatial {
                     let pose = m.tool_pose(&f.pose)?;
                     let p = pose.translation.vector;
                     let ang = conv.from_matrix(&rotation_matrix(&pose));
-                    cells.extend([p.x, p.y, p.z].map(num));
-                    cells.extend(ang.map(|x| num(x.to_degrees())));
+                    for x in [p.x, p.y, p.z] {
+                        out.num(Some(x));
+                    }
+                    for x in ang {
+                        out.num(Some(x.to_degrees()));
+                    }
                 } else {
-                    cells.extend(
-                        m.coordinates()
-                            .iter()
-                            .zip(&f.pose)
-                            .map(|(c, x)| num(c.quantity.to_user(*x))),
-                    );
+                    for (c, x) in m.coordinates().iter().zip(&f.pose) {
+                        out.num(Some(c.quantity.to_user(*x)));
+                    }
                 }
-                cells.push(f.iterations.to_string());
-                cells.push(num(f.residual));
-                cells.push(v.is_empty().to_string());
+                out.int(Some(f.iterations as u64));
+                out.num(Some(f.residual));
+                out.bool(v.is_empty());
                 if !v.is_empty() {
                     failed += 1;
                 }
-                cells.push(csv_text(
-                    &v.iter()
-                        .map(|x| x.to_string())
-                        .collect::<Vec<_>>()
-                        .join("; "),
-                ));
+                for (k, x) in v.iter().enumerate() {
+                    if k > 0 {
+                        text.push_str("; ");
+                    }
+                    let _ = write!(text, "{x}");
+                }
+                out.text((!text.is_empty()).then_some(text.as_str()));
             }
             Err(e) => {
                 failed += 1;
-                let n = if spatial { 6 } else { m.coordinates().len() };
-                cells.extend((0..n + 2).map(|_| String::new()));
-                cells.push("false".into());
-                cells.push(csv_text(&format!("line {line}: {e}")));
+                for _ in 0..n {
+                    out.num(None);
+                }
+                out.int(None);
+                out.num(None);
+                out.bool(false);
+                let _ = write!(text, "line {line}: {e}");
+                out.text(Some(&text));
             }
         }
-        out.push_str(&cells.join(","));
-        out.push('\n');
+        out.end_row()?;
     }
-    finish_batch(
-        output,
-        &out,
-        &[input, &a.machine],
-        table.rows.len(),
-        failed,
-        "solved within limits",
-    )
+    out.finish(output, failed, "solved within limits")
 }

@@ -12,12 +12,14 @@ use pkm::analysis::kinematics::{
 use pkm::{Machine, PoseSpace};
 use serde_json::{json, Map, Value};
 
-use super::csvio::{finish_batch, num, read_table};
+use super::csvio::{read_table, BatchTable};
 use super::load;
+use crate::columnar::{machine_metadata, Kind};
 use crate::poses::{
     actuators_json, coords_json, coords_text, parse_list, pose_from_user, pose_names, tool_json,
 };
 use crate::EXIT_UNREACHABLE;
+use std::fmt::Write as _;
 
 #[derive(Args)]
 pub struct IkArgs {
@@ -34,7 +36,8 @@ pub struct IkArgs {
     /// CSV of many poses (header row naming the values).
     #[arg(long, requires = "output")]
     pub input: Option<PathBuf>,
-    /// CSV to write the batch results to.
+    /// File to write the batch results to: CSV, or Parquet when its name ends in
+    /// `.parquet` (full precision, typed columns, nulls for empty cells).
     #[arg(long, requires = "input")]
     pub output: Option<PathBuf>,
     /// Six-axis robots: every inverse solution found (postures: shoulder, elbow, wrist),
@@ -255,63 +258,67 @@ fn batch(
         accepted.push(names[..3].to_vec());
     }
     let table = read_table(input, &accepted)?;
-    let mut out = String::new();
-    let mut header = table.header.clone();
-    header.extend(
+    let mut columns: Vec<(String, Kind)> = table
+        .header
+        .iter()
+        .map(|h| (h.clone(), Kind::F64))
+        .collect();
+    columns.extend(
         m.actuators()
             .iter()
-            .map(|a| format!("{}_{}", a.name, a.quantity.unit())),
+            .map(|a| (format!("{}_{}", a.name, a.quantity.unit()), Kind::OptF64)),
     );
-    header.push("reachable".into());
-    header.push("violations".into());
-    out.push_str(&header.join(","));
-    out.push('\n');
+    columns.push(("reachable".into(), Kind::Bool));
+    columns.push(("violations".into(), Kind::OptText));
+    let meta = machine_metadata(
+        m,
+        "pkm ik batch: the input poses, the actuator values (null without a solution), \
+         whether every limit holds, the violated limits",
+    );
+    let mut out = BatchTable::create(output, &[input, &a.machine], &columns, meta)?;
     let mut unreachable = 0usize;
     let mut counts: BTreeMap<String, usize> = BTreeMap::new();
+    let mut text = String::new();
     for (line, vals) in &table.rows {
-        let mut cells: Vec<String> = vals.iter().map(|v| num(*v)).collect();
+        for v in vals {
+            out.num(Some(*v));
+        }
         let res = pose_from_user(m, vals, conv)
             .map_err(anyhow::Error::from)
             .and_then(|x| solve(machine, x));
+        text.clear();
         match res {
             Ok(r) => {
                 for (act, q) in m.actuators().iter().zip(&r.actuators) {
-                    cells.push(num(act.quantity.to_user(*q)));
+                    out.num(Some(act.quantity.to_user(*q)));
                 }
-                cells.push(r.violations.is_empty().to_string());
+                out.bool(r.violations.is_empty());
                 if !r.violations.is_empty() {
                     unreachable += 1;
-                    for v in &r.violations {
+                    for (k, v) in r.violations.iter().enumerate() {
                         *counts.entry(v.limit.clone()).or_default() += 1;
+                        if k > 0 {
+                            text.push_str("; ");
+                        }
+                        let _ = write!(text, "{v}");
                     }
                 }
-                cells.push(csv_text(
-                    &r.violations
-                        .iter()
-                        .map(|v| v.to_string())
-                        .collect::<Vec<_>>()
-                        .join("; "),
-                ));
+                out.text((!text.is_empty()).then_some(text.as_str()));
             }
             Err(e) => {
                 unreachable += 1;
                 *counts.entry("no solution".into()).or_default() += 1;
-                cells.extend(m.actuators().iter().map(|_| String::new()));
-                cells.push("false".into());
-                cells.push(csv_text(&format!("line {line}: {e}")));
+                for _ in m.actuators() {
+                    out.num(None);
+                }
+                out.bool(false);
+                let _ = write!(text, "line {line}: {e}");
+                out.text(Some(&text));
             }
         }
-        out.push_str(&cells.join(","));
-        out.push('\n');
+        out.end_row()?;
     }
-    let code = finish_batch(
-        output,
-        &out,
-        &[input, &a.machine],
-        table.rows.len(),
-        unreachable,
-        "reachable",
-    )?;
+    let code = out.finish(output, unreachable, "reachable")?;
     for (k, n) in &counts {
         eprintln!("  {n} x {k}");
     }

@@ -583,3 +583,55 @@ fn every_help_example_runs_as_printed() {
     }
     assert!(ran >= 15, "{ran} examples ran");
 }
+
+/// An ik or fk batch written to `*.parquet` holds the rows of the same batch written
+/// as CSV, value for value (the CSV's numbers are exact: shortest round-trip form):
+/// reachable rows, a row beyond a limit with its violations, a row without a solution
+/// with its message, nulls where the CSV is empty.
+#[test]
+fn batches_written_as_parquet_hold_the_csv_rows() {
+    use crate::common::{assert_parquet_is_csv, parquet_rows, Cell};
+    let dir = tempfile::tempdir().unwrap();
+    let m = seed000();
+    let run = |cmd: &str, input: &std::path::Path, out: &str| {
+        let output = dir.path().join(out);
+        let o = pkm()
+            .args([cmd, &m, "--input"])
+            .arg(input)
+            .arg("--output")
+            .arg(&output)
+            .output()
+            .unwrap();
+        assert!(
+            matches!(o.status.code(), Some(0) | Some(3)),
+            "{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        output
+    };
+    let poses = dir.path().join("poses.csv");
+    std::fs::write(
+        &poses,
+        "X,Y,Z,A,B,C\n0,0,-290,0,0,0\n10,5,-300,2,0,0\n0,0,-420,0,0,0\n-3.25,1e-3,-288.125,0,0,0\n",
+    )
+    .unwrap();
+    let n = assert_parquet_is_csv(
+        &run("ik", &poses, "q.parquet"),
+        &run("ik", &poses, "q.csv"),
+        0.0,
+    );
+    assert_eq!(n, 4);
+    let lengths = dir.path().join("lengths.csv");
+    // A set the tripod assembles (beyond a collision limit at the held orientation),
+    // then one it cannot.
+    std::fs::write(&lengths, "e,f,g\n215.35,189.2,224.45\n150,150,600\n").unwrap();
+    let fk = run("fk", &lengths, "fk.parquet");
+    assert_parquet_is_csv(&fk, &run("fk", &lengths, "fk.csv"), 0.0);
+    let (names, rows) = parquet_rows(&fk);
+    let col = |c: &str| names.iter().position(|n| n == c).unwrap();
+    assert_eq!(rows[1][col("X_mm")], Cell::Null);
+    assert_eq!(rows[1][col("iterations")], Cell::Null);
+    assert!(matches!(&rows[1][col("status")], Cell::Text(t) if t.starts_with("line 3: ")));
+    assert!(matches!(rows[0][col("iterations")], Cell::Num(_)));
+    assert!(matches!(rows[0][col("X_mm")], Cell::Num(_)));
+}

@@ -391,7 +391,7 @@ fn parquet_points_hold_the_csv_rows() {
     };
     let (csv, pq) = (run("csv"), run("parquet"));
     assert!(!pq.join("points.csv").exists());
-    let n = assert_parquet_is_csv(&pq.join("points.parquet"), &csv.join("points.csv"));
+    let n = assert_parquet_is_csv(&pq.join("points.parquet"), &csv.join("points.csv"), 5e-7);
     let (names, rows) = parquet_rows(&pq.join("points.parquet"));
     let col = |c: &str| names.iter().position(|n| n == c).unwrap();
     let unreachable: Vec<&Vec<Cell>> = rows

@@ -94,8 +94,8 @@ pub fn csv_rows(file: &std::path::Path) -> (Vec<String>, Vec<Vec<Cell>>) {
 }
 
 /// Asserts that a Parquet table holds a CSV table's columns and rows: numbers within
-/// the CSV's six decimals (half a unit of the last), texts and nulls equal.
-pub fn assert_parquet_is_csv(parquet: &std::path::Path, csv: &std::path::Path) -> usize {
+/// `tol` (plus 1e-9 relative), texts and nulls equal; the rows compared.
+pub fn assert_parquet_is_csv(parquet: &std::path::Path, csv: &std::path::Path, tol: f64) -> usize {
     let (pn, pr) = parquet_rows(parquet);
     let (cn, cr) = csv_rows(csv);
     assert_eq!(pn, cn, "columns");
@@ -103,7 +103,7 @@ pub fn assert_parquet_is_csv(parquet: &std::path::Path, csv: &std::path::Path) -
     for (k, (p, c)) in pr.iter().zip(&cr).enumerate() {
         for (j, (a, b)) in p.iter().zip(c).enumerate() {
             let same = match (a, b) {
-                (Cell::Num(a), Cell::Num(b)) => (a - b).abs() <= 5e-7 * (1.0 + 1e-9 * a.abs()),
+                (Cell::Num(a), Cell::Num(b)) => (a - b).abs() <= tol + 5e-16 * a.abs(),
                 _ => a == b,
             };
             assert!(same, "row {k}, column {}: {a:?} vs {b:?}", pn[j]);
