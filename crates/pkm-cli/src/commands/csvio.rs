@@ -111,7 +111,7 @@ enum Out {
 
 impl BatchTable {
     /// A table of `columns` (name, kind) to be written to `output` (never over one of
-    /// `inputs`); `content` describes it in a Parquet file's metadata.
+    /// `inputs`), with `metadata` (key, value) in a Parquet file's footer.
     pub fn create(
         output: &Path,
         inputs: &[&Path],
