@@ -245,3 +245,41 @@ pub fn tolerance_file(data: &[u8]) {
         }
     }
 }
+
+/// Rows of a fuzzed batch file run through the inverse kinematics.
+const MAX_SOLVED_ROWS: usize = 64;
+
+/// A batch file (`pkm ik --input`) for the tripod: what parses has one finite value
+/// per header name in every row, rows in increasing line order within the text's line
+/// count; its first rows go through the inverse kinematics with every limit.
+pub fn batch_table(data: &[u8]) {
+    let Ok(text) = std::str::from_utf8(data) else {
+        return;
+    };
+    let names = |n: &[&str]| n.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+    let accepted = [
+        names(&["X", "Y", "Z", "A", "B", "C"]),
+        names(&["X", "Y", "Z"]),
+    ];
+    let Ok(t) = pkm::analysis::batch_table::parse_batch_table(text, "fuzz.csv", &accepted) else {
+        return;
+    };
+    let lines = text.lines().count() as u64;
+    let mut last = 0;
+    for (line, row) in &t.rows {
+        assert_eq!(row.len(), t.header.len(), "one value per header name");
+        assert!(row.iter().all(|v| v.is_finite()), "finite values: {row:?}");
+        assert!(
+            *line > last && *line <= lines,
+            "line {line} after {last}, of {lines}"
+        );
+        last = *line;
+    }
+    let machine = tripod();
+    let home = machine.mechanism().home();
+    for (_, row) in t.rows.iter().take(MAX_SOLVED_ROWS) {
+        let mut x = home.clone();
+        x[..row.len()].copy_from_slice(row);
+        let _ = pkm::analysis::kinematics::inverse(machine, &x);
+    }
+}

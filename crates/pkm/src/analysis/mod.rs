@@ -7,6 +7,7 @@
 
 pub mod accuracy;
 pub mod batch;
+pub mod batch_table;
 pub mod clearance;
 pub mod clearance_class;
 pub mod clearance_path;

@@ -62,3 +62,8 @@ fn tool_tables() {
 fn linuxcnc_configurations() {
     replay("linuxcnc_config", targets::linuxcnc_config);
 }
+
+#[test]
+fn batch_tables() {
+    replay("batch_table", targets::batch_table);
+}
