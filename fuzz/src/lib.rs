@@ -251,7 +251,8 @@ const MAX_SOLVED_ROWS: usize = 64;
 
 /// A batch file (`pkm ik --input`) for the tripod: what parses has one finite value
 /// per header name in every row, rows in increasing line order within the text's line
-/// count; its first rows go through the inverse kinematics with every limit.
+/// count (line ends: `\n`, `\r\n`, a lone `\r`); its first rows go through the
+/// inverse kinematics with every limit.
 pub fn batch_table(data: &[u8]) {
     let Ok(text) = std::str::from_utf8(data) else {
         return;
@@ -264,7 +265,8 @@ pub fn batch_table(data: &[u8]) {
     let Ok(t) = pkm::analysis::batch_table::parse_batch_table(text, "fuzz.csv", &accepted) else {
         return;
     };
-    let lines = text.lines().count() as u64;
+    // Lines end at \n, \r\n or a lone \r, as the reader's records do.
+    let lines = text.replace("\r\n", "\n").split(['\n', '\r']).count() as u64;
     let mut last = 0;
     for (line, row) in &t.rows {
         assert_eq!(row.len(), t.header.len(), "one value per header name");

@@ -61,11 +61,8 @@ pub fn parse_batch_table(text: &str, file: &str, accepted: &[Vec<String>]) -> Re
         .map(str::to_string)
         .collect();
     // Lines by byte offset: the reader's own line count skips comment lines.
-    let header_line = text
-        .lines()
-        .position(|l| !l.trim().is_empty() && !l.trim_start().starts_with('#'))
-        .map_or(1, |i| i as u64 + 1);
     let mut lines = LineCounter::new(text);
+    let header_line = lines.clone().at(0);
     let got: Vec<String> = header.iter().map(|h| canonical(h)).collect();
     let ok = accepted.iter().any(|a| {
         a.len() == got.len()
@@ -159,25 +156,37 @@ impl<'a> LineCounter<'a> {
     /// lines it skips, so those are passed over here.
     fn at(&mut self, offset: u64) -> u64 {
         let to = (offset as usize).min(self.text.len());
-        if to > self.at {
-            self.line += self.text[self.at..to]
-                .iter()
-                .filter(|b| **b == b'\n')
-                .count() as u64;
-            self.at = to;
+        // Lines that end before `offset` (the reader may point into a `\r\n`).
+        while self.at < to {
+            let (end, next) = line_end(self.text, self.at);
+            if end >= to {
+                break;
+            }
+            self.at = next;
+            self.line += 1;
         }
         loop {
-            let rest = &self.text[self.at..];
-            let end = rest.iter().position(|b| *b == b'\n');
-            let l = &rest[..end.unwrap_or(rest.len())];
-            let content = l.trim_ascii();
-            match end {
-                Some(e) if content.is_empty() || content.starts_with(b"#") => {
-                    self.at += e + 1;
-                    self.line += 1;
-                }
-                _ => return self.line,
+            let (end, next) = line_end(self.text, self.at);
+            let content = self.text[self.at..end].trim_ascii();
+            if next > end && (content.is_empty() || content.starts_with(b"#")) {
+                self.at = next;
+                self.line += 1;
+            } else {
+                return self.line;
             }
+        }
+    }
+}
+
+/// The end of the line starting at `from` and the start of the next one: a line ends
+/// at `\n`, `\r\n` or a lone `\r`, as the CSV reader's records do.
+fn line_end(text: &[u8], from: usize) -> (usize, usize) {
+    match text[from..].iter().position(|b| *b == b'\n' || *b == b'\r') {
+        None => (text.len(), text.len()),
+        Some(k) => {
+            let e = from + k;
+            let crlf = text[e] == b'\r' && text.get(e + 1) == Some(&b'\n');
+            (e, e + 1 + usize::from(crlf))
         }
     }
 }
@@ -223,7 +232,10 @@ mod tests {
         // Blank and comment lines before the row count (the reader's own count skips
         // comments), and Windows line ends.
         assert!(e("X,Y,Z\n1,2,3\n\n# note\n  \n1,abc,3\n").starts_with("p.csv:6: field `Y`"));
-        assert!(e("X,Y,Z\r\n1,2,3\r\n# c\r\n1,abc,3\r\n").starts_with("p.csv:4: field `Y`"));
+        let crlf = e("X,Y,Z\r\n1,2,3\r\n# c\r\n1,abc,3\r\n");
+        assert!(crlf.starts_with("p.csv:4: field `Y`"), "{crlf}");
+        // Old Mac line ends (a lone carriage return) end lines too.
+        assert!(e("X,Y,Z\r1,2,3\r\r1,abc,3\r").starts_with("p.csv:4: field `Y`"));
         assert!(e("X,Y,Z\n1,2\n").starts_with("p.csv:2: expected 3 values, found 2"));
         assert!(e("A,B\n1,2\n").starts_with("p.csv:1: header `A,B` does not name"));
         assert!(e("# c\nA,B\n1,2\n").starts_with("p.csv:2: header"));
