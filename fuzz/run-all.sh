@@ -9,7 +9,7 @@ cd "$(dirname "$0")"
 secs=${1:-600}
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(machine_toml urdf gcode measurement_csv tolerance_file tool_table linuxcnc_config)
+[ ${#targets[@]} -gt 0 ] || targets=(machine_toml urdf gcode measurement_csv tolerance_file tool_table linuxcnc_config batch_table)
 dict_of() {
   case $1 in
     machine_toml|tolerance_file) echo dict/toml.dict ;;
