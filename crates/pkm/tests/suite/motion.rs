@@ -322,11 +322,16 @@ fn ratios_are_not_given_for_turning_drives() {
         env!("CARGO_MANIFEST_DIR")
     ))
     .unwrap();
-    let program = "G91 G1 X10 Y5 F600\n";
-    let run = pkm::analysis::motion::run_motion(
-        &m,
+    let s = summary_at_100_hz(&m, "G91 G1 X10 Y5 F600\n");
+    assert!(s.ratios.is_none());
+}
+
+/// The summary of `program` run through `m` from its home at 100 Hz, default feeds.
+fn summary_at_100_hz(m: &pkm::Machine, program: &str) -> pkm::motion::MotionSummary {
+    pkm::analysis::motion::run_motion(
+        m,
         pkm::analysis::motion::MotionSource::Gcode {
-            reader: Box::new(program.as_bytes()),
+            reader: Box::new(std::io::Cursor::new(program.as_bytes().to_vec())),
             from: None,
             setup: Default::default(),
         },
@@ -334,8 +339,8 @@ fn ratios_are_not_given_for_turning_drives() {
         Sampling::Rate(100.0),
         &mut pkm::analysis::motion::NoSink,
     )
-    .unwrap();
-    assert!(run.summary.ratios.is_none());
+    .unwrap()
+    .summary
 }
 
 /// A program without motion (no samples, or a dwell) has no ratios: nothing over
@@ -344,23 +349,10 @@ fn ratios_are_not_given_for_turning_drives() {
 fn ratios_are_not_given_when_nothing_moves() {
     let m = load("tripod-seed000.toml");
     for program in ["G21 G90\nM2\n", "G21 G90\nG4 P0.5\nM2\n"] {
-        let run = pkm::analysis::motion::run_motion(
-            &m,
-            pkm::analysis::motion::MotionSource::Gcode {
-                reader: Box::new(program.as_bytes()),
-                from: None,
-                setup: Default::default(),
-            },
-            &pkm::motion::program::FeedOptions::default(),
-            Sampling::Rate(100.0),
-            &mut pkm::analysis::motion::NoSink,
-        )
-        .unwrap();
-        assert!(
-            run.summary.ratios.is_none(),
-            "{program}: {:?}",
-            run.summary.ratios
-        );
+        let s = summary_at_100_hz(&m, program);
+        // The dwell has samples: the case of a run that stands still.
+        assert_eq!(s.samples > 0, program.contains("G4"), "{program}");
+        assert!(s.ratios.is_none(), "{program}: {:?}", s.ratios);
     }
 }
 
