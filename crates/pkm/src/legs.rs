@@ -165,41 +165,13 @@ impl<const N: usize> StrutSoa<N> {
         al: &Vector3<f64>,
     ) -> ActuatorMotion<N> {
         let (mut q, mut qd, mut qdd) = ([0.0; N], [0.0; N], [0.0; N]);
+        let r: [f64; 9] = std::array::from_fn(|k| r[(k / 3, k % 3)]);
+        let twist = [v, w, a, al].map(|u| [u.x, u.y, u.z]);
         for i in 0..N {
-            let (x, y, z) = (self.ax[i], self.ay[i], self.az[i]);
-            // R b'_i as nalgebra's matrix-vector product sums it: column by column.
-            let rx = r[(0, 0)] * x + r[(0, 1)] * y + r[(0, 2)] * z;
-            let ry = r[(1, 0)] * x + r[(1, 1)] * y + r[(1, 2)] * z;
-            let rz = r[(2, 0)] * x + r[(2, 1)] * y + r[(2, 2)] * z;
-            let (dx, dy, dz) = (
-                p.x + rx - self.bx[i],
-                p.y + ry - self.by[i],
-                p.z + rz - self.bz[i],
-            );
-            let l = (dx * dx + dy * dy + dz * dz).sqrt();
-            let (nx, ny, nz) = (dx / l, dy / l, dz / l);
-            // w x R b'_i, alpha x R b'_i, w x (w x R b'_i).
-            let (cx, cy, cz) = (
-                w.y * rz - w.z * ry,
-                w.z * rx - w.x * rz,
-                w.x * ry - w.y * rx,
-            );
-            let (ex, ey, ez) = (
-                al.y * rz - al.z * ry,
-                al.z * rx - al.x * rz,
-                al.x * ry - al.y * rx,
-            );
-            let (fx, fy, fz) = (
-                w.y * cz - w.z * cy,
-                w.z * cx - w.x * cz,
-                w.x * cy - w.y * cx,
-            );
-            let (ux, uy, uz) = (v.x + cx, v.y + cy, v.z + cz);
-            let (gx, gy, gz) = (a.x + ex + fx, a.y + ey + fy, a.z + ez + fz);
-            let ld = nx * ux + ny * uy + nz * uz;
-            q[i] = l;
-            qd[i] = ld;
-            qdd[i] = (ux * ux + uy * uy + uz * uz - ld * ld) / l + (nx * gx + ny * gy + nz * gz);
+            let arm = [self.ax[i], self.ay[i], self.az[i]];
+            let base = [self.bx[i], self.by[i], self.bz[i]];
+            let m = strut_motion(&r, &[p.x, p.y, p.z], arm, base, &twist);
+            (q[i], qd[i], qdd[i]) = (m.l, m.ld, m.ldd);
         }
         ActuatorMotion {
             q: SVector::from(q),
@@ -391,6 +363,76 @@ impl<const N: usize> StrutSet<N> {
     }
 }
 
+/// One strut's vector, length, rate and acceleration ([`StrutSoa::motion`]'s formula)
+/// on any number type (`f64`, or an AVX-512 register of eight poses:
+/// [`crate::lane`]), so the hexapod's motion kernel computes lane by lane what the
+/// scalar code does.
+pub(crate) struct StrutMotion<T> {
+    /// `d = p + R b' - a`.
+    pub d: [T; 3],
+    /// `L = |d|`, `L'`, `L''`.
+    pub l: T,
+    pub ld: T,
+    pub ldd: T,
+}
+
+/// [`StrutMotion`] of the strut from base joint `base` to platform arm `arm` (platform
+/// frame), for the pose `p`, `r` (rotation row by row) moving with the twist
+/// `[v, w, a, alpha]`: `R b'` summed as nalgebra's matrix-vector product sums it
+/// (column by column), then the formula of [`StrutSoa::motion`].
+#[inline(always)]
+pub(crate) fn strut_motion<T: crate::lane::Lane, U: Copy + Into<T>>(
+    r: &[T; 9],
+    p: &[T; 3],
+    arm: [U; 3],
+    base: [U; 3],
+    twist: &[[T; 3]; 4],
+) -> StrutMotion<T> {
+    let [x, y, z] = arm.map(Into::into);
+    let [v, w, a, al] = twist;
+    let row = |k: usize| {
+        r[3 * k]
+            .mul(x)
+            .add(r[3 * k + 1].mul(y))
+            .add(r[3 * k + 2].mul(z))
+    };
+    let (rx, ry, rz) = (row(0), row(1), row(2));
+    let d = [
+        p[0].add(rx).sub(base[0].into()),
+        p[1].add(ry).sub(base[1].into()),
+        p[2].add(rz).sub(base[2].into()),
+    ];
+    let [dx, dy, dz] = d;
+    let l = dx.mul(dx).add(dy.mul(dy)).add(dz.mul(dz)).sqrt();
+    let (nx, ny, nz) = (dx.div(l), dy.div(l), dz.div(l));
+    // w x R b'_i, alpha x R b'_i, w x (w x R b'_i).
+    let cross = |u: &[T; 3], (px, py, pz): (T, T, T)| {
+        (
+            u[1].mul(pz).sub(u[2].mul(py)),
+            u[2].mul(px).sub(u[0].mul(pz)),
+            u[0].mul(py).sub(u[1].mul(px)),
+        )
+    };
+    let (cx, cy, cz) = cross(w, (rx, ry, rz));
+    let (ex, ey, ez) = cross(al, (rx, ry, rz));
+    let (fx, fy, fz) = cross(w, (cx, cy, cz));
+    let (ux, uy, uz) = (v[0].add(cx), v[1].add(cy), v[2].add(cz));
+    let (gx, gy, gz) = (
+        a[0].add(ex).add(fx),
+        a[1].add(ey).add(fy),
+        a[2].add(ez).add(fz),
+    );
+    let ld = nx.mul(ux).add(ny.mul(uy)).add(nz.mul(uz));
+    let ldd = ux
+        .mul(ux)
+        .add(uy.mul(uy))
+        .add(uz.mul(uz))
+        .sub(ld.mul(ld))
+        .div(l)
+        .add(nx.mul(gx).add(ny.mul(gy)).add(nz.mul(gz)));
+    StrutMotion { d, l, ld, ldd }
+}
+
 /// The platform's velocity `v`, angular velocity `w`, acceleration `a` and angular
 /// acceleration `alpha` (base frame) from spatial coordinates `X..C` moving with rates
 /// `xd` and accelerations `xdd` ([`crate::rotation::rpy_angular_motion`]).
@@ -402,12 +444,7 @@ pub fn coords_twist(
 ) -> [Vector3<f64>; 4] {
     let ad = xd.fixed_rows::<3>(3).into_owned();
     let add = xdd.fixed_rows::<3>(3).into_owned();
-    // The usual case for held orientations: no angular motion.
-    let (w, al) = if ad == Vector3::zeros() && add == Vector3::zeros() {
-        (ad, add)
-    } else {
-        crate::rotation::rpy_angular_motion([x[3], x[4], x[5]], &ad, &add)
-    };
+    let (w, al) = crate::rotation::rpy_angular_motion([x[3], x[4], x[5]], &ad, &add);
     [
         xd.fixed_rows::<3>(0).into_owned(),
         w,

@@ -31,6 +31,7 @@ pub mod error;
 pub mod hexapod;
 pub mod hybrid_am;
 pub mod identify;
+mod lane;
 pub mod legs;
 pub mod limits;
 pub mod linalg;

@@ -356,6 +356,21 @@ pub trait Mechanism<const P: usize, const A: usize>: Send + Sync {
         false
     }
 
+    /// [`Mechanism::actuator_motion`] of many samples with the limit screen of
+    /// [`Mechanism::inverse_screened`], for the motion engine: `x` holds the samples'
+    /// poses, rates and accelerations (each whole rows of `P`, row-major), `q` receives
+    /// the actuators' positions, rates and accelerations (`A` per row) of the rows it
+    /// clears, and `clear[i]` is set where row `i` is certainly within every limit
+    /// ([`Mechanism::actuator_motion_checked`] finds no violation) and its motion is
+    /// written, equal bit for bit to [`Mechanism::actuator_motion`]'s. Rows left
+    /// uncleared are computed again by [`Mechanism::actuator_motion_checked`].
+    /// Returns `false` (nothing written) for a type without such a kernel, the
+    /// default; the hexapod's runs eight samples at a time across SIMD lanes.
+    fn motion_screened(&self, x: [&[f64]; 3], q: [&mut [f64]; 3], clear: &mut [bool]) -> bool {
+        let _ = (x, q, clear);
+        false
+    }
+
     /// The violation a code of [`Mechanism::inverse_first_limit`] stands for (equal to
     /// the one [`Mechanism::check_limits`] reports). The default, for types that never
     /// return codes, names the limit by its number.

@@ -149,18 +149,26 @@ pub fn rpy_matrix(a: f64, b: f64, c: f64) -> Matrix3<f64> {
 /// angles (the one sequence of operations of every path that builds it).
 #[inline(always)]
 pub(crate) fn rpy_from_sin_cos(s: [f64; 3], c: [f64; 3]) -> Matrix3<f64> {
+    let e = rpy_entries(s, c);
+    Matrix3::new(e[0], e[1], e[2], e[3], e[4], e[5], e[6], e[7], e[8])
+}
+
+/// The entries of [`rpy_from_sin_cos`], row by row, on any number type (`f64`, or an
+/// AVX-512 register of eight poses' values: [`crate::lane`]).
+#[inline(always)]
+pub(crate) fn rpy_entries<T: crate::lane::Lane>(s: [T; 3], c: [T; 3]) -> [T; 9] {
     let ([sa, sb, sc], [ca, cb, cc]) = (s, c);
-    Matrix3::new(
-        cc * cb,
-        cc * sb * sa - sc * ca,
-        cc * sb * ca + sc * sa,
-        sc * cb,
-        sc * sb * sa + cc * ca,
-        sc * sb * ca - cc * sa,
-        -sb,
-        cb * sa,
-        cb * ca,
-    )
+    [
+        cc.mul(cb),
+        cc.mul(sb).mul(sa).sub(sc.mul(ca)),
+        cc.mul(sb).mul(ca).add(sc.mul(sa)),
+        sc.mul(cb),
+        sc.mul(sb).mul(sa).add(cc.mul(ca)),
+        sc.mul(sb).mul(ca).sub(cc.mul(sa)),
+        sb.neg(),
+        cb.mul(sa),
+        cb.mul(ca),
+    ]
 }
 
 /// The angle `a` (rad) wrapped into `(-pi, pi]`.
@@ -379,24 +387,62 @@ pub fn angle_between(a: &Matrix3<f64>, b: &Matrix3<f64>) -> f64 {
 /// cosine of `B` and of `C` (`c_B`, `s_B`, ...):
 ///
 /// `E = [(c_C c_B, s_C c_B, -s_B), (-s_C, c_C, 0), (0, 0, 1)]` (columns),
-/// `E' = [C' (-s_C c_B, c_C c_B, 0) + B' (-c_C s_B, -s_C s_B, -c_B), C' (-c_C, -s_C, 0), 0]`.
+/// `E' = [C' (-s_C c_B, c_C c_B, 0) + B' (-c_C s_B, -s_C s_B, -c_B), C' (-c_C, -s_C, 0), 0]`,
 ///
-/// The same products as `Rz(C) Ry(B) e_x` and `e_z x c` with their zero terms dropped
-/// (adding an exact zero changes nothing), from two `sin_cos` calls instead of five.
+/// so, component by component (the one sequence of operations of every path that
+/// computes it, the hexapod's motion kernel across SIMD lanes included):
+///
+/// `w = (c_C c_B A' - s_C B', s_C c_B A' + c_C B', C' - s_B A')`,
+/// `al = (c_C c_B A'' - s_C B'' - (s_C c_B C' + c_C s_B B') A' - c_C C' B',
+///        s_C c_B A'' + c_C B'' + (c_C c_B C' - s_C s_B B') A' - s_C C' B',
+///        C'' - s_B A'' - c_B B' A')`.
+///
+/// The sines and cosines come from [`crate::trig::sin_cos`] (within 2 units in the
+/// last place of libm's; the same kernel as [`rpy_matrix`]). No angular motion at all
+/// (`ad = add = 0`, held orientations) gives exact zeros.
+#[inline]
 pub fn rpy_angular_motion(
     a: [f64; 3],
     ad: &Vector3<f64>,
     add: &Vector3<f64>,
 ) -> (Vector3<f64>, Vector3<f64>) {
-    let (sb, cb) = a[1].sin_cos();
-    let (sc, cc) = a[2].sin_cos();
-    let e = Matrix3::new(cc * cb, -sc, 0.0, sc * cb, cc, 0.0, -sb, 0.0, 1.0);
-    let w = e * ad;
-    let dc0 = Vector3::new(-sc * cb, cc * cb, 0.0) * ad[2]
-        + Vector3::new(-cc * sb, -sc * sb, -cb) * ad[1];
-    let dc1 = Vector3::new(-cc, -sc, 0.0) * ad[2];
-    let edot = Matrix3::from_columns(&[dc0, dc1, Vector3::zeros()]);
-    (w, e * add + edot * ad)
+    if *ad == Vector3::zeros() && *add == Vector3::zeros() {
+        return (Vector3::zeros(), Vector3::zeros());
+    }
+    let (sb, cb) = crate::trig::sin_cos(a[1]);
+    let (sc, cc) = crate::trig::sin_cos(a[2]);
+    let [w, al] = rpy_angular_terms([sb, cb, sc, cc], [ad.x, ad.y, ad.z], [add.x, add.y, add.z]);
+    (Vector3::from(w), Vector3::from(al))
+}
+
+/// [`rpy_angular_motion`]'s arithmetic on any number type (`f64`, or an AVX-512
+/// register of eight poses' values: [`crate::lane`]): the same operations in the same
+/// order, so every path gives the same bits.
+#[inline(always)]
+pub(crate) fn rpy_angular_terms<T: crate::lane::Lane>(
+    [sb, cb, sc, cc]: [T; 4],
+    [a1, b1, c1]: [T; 3],
+    [a2, b2, c2]: [T; 3],
+) -> [[T; 3]; 2] {
+    let ccb = cc.mul(cb);
+    let scb = sc.mul(cb);
+    let w = [
+        ccb.mul(a1).sub(sc.mul(b1)),
+        scb.mul(a1).add(cc.mul(b1)),
+        c1.sub(sb.mul(a1)),
+    ];
+    let al = [
+        ccb.mul(a2)
+            .sub(sc.mul(b2))
+            .sub(scb.mul(c1).add(cc.mul(sb).mul(b1)).mul(a1))
+            .sub(cc.mul(c1).mul(b1)),
+        scb.mul(a2)
+            .add(cc.mul(b2))
+            .add(ccb.mul(c1).sub(sc.mul(sb).mul(b1)).mul(a1))
+            .sub(sc.mul(c1).mul(b1)),
+        c2.sub(sb.mul(a2)).sub(cb.mul(b1).mul(a1)),
+    ];
+    [w, al]
 }
 
 /// Angular-velocity map of the A, B, C angles (`R = Rz(C) Ry(B) Rx(A)`):

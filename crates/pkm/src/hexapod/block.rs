@@ -44,8 +44,8 @@ const PARALLEL: f64 = 1e-6;
 /// machine's public fields, so it cannot go stale when a caller edits them).
 pub(crate) struct Screen {
     /// Arms `R`-free: `b'_i - t` (platform frame) and base joints `a_i`, by component.
-    arm: [[f64; 6]; 3],
-    base: [[f64; 6]; 3],
+    pub(super) arm: [[f64; 6]; 3],
+    pub(super) base: [[f64; 6]; 3],
     /// Axis travel by pose coordinate (infinite where unlimited).
     axis: [(f64, f64); 6],
     /// Strut length range by strut.
@@ -98,6 +98,11 @@ impl Screen {
             avx512,
         }
     }
+
+    /// Whether the CPU has AVX-512F (the kernels run).
+    pub(super) fn avx512(&self) -> bool {
+        self.avx512
+    }
 }
 
 /// Lengths of the rows of `xs` (row-major X, Y, Z, A, B, C) into `qs` (row-major, six
@@ -138,7 +143,7 @@ pub(crate) fn screen_rows(
 }
 
 #[cfg(target_arch = "x86_64")]
-mod avx512 {
+pub(super) mod avx512 {
     use std::arch::x86_64::*;
 
     use super::super::simd::{strut_component, strut_length};
@@ -231,6 +236,44 @@ mod avx512 {
         [row_mask(5, 1), row_mask(5, 2)],
     ];
 
+    /// The columns of a block (48 doubles, row-major, six per row): coordinate or
+    /// strut `k` of the eight rows in the lanes of vector `k`.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    pub(in crate::hexapod) fn columns(xs: &[f64; 6 * LANES]) -> [__m512d; 6] {
+        // SAFETY: unaligned loads of 8 f64 at offsets 0..40 step 8 of the 48 of `xs`,
+        // and of the 8 i64 of an index table.
+        let v: [__m512d; 6] =
+            std::array::from_fn(|j| unsafe { _mm512_loadu_pd(xs.as_ptr().add(8 * j)) });
+        let index = |t: &[i64; LANES]| unsafe { _mm512_loadu_si512(t.as_ptr().cast()) };
+        std::array::from_fn(|k| {
+            let idx = index(&COLUMN_INDEX[k]);
+            let [m16, m32] = COLUMN_MASK[k];
+            let lo = _mm512_permutex2var_pd(v[0], idx, v[1]);
+            let mid = _mm512_permutex2var_pd(v[2], idx, v[3]);
+            let hi = _mm512_permutex2var_pd(v[4], idx, v[5]);
+            _mm512_mask_blend_pd(m32, _mm512_mask_blend_pd(m16, lo, mid), hi)
+        })
+    }
+
+    /// [`columns`] undone: the six column vectors written back as eight rows of six.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    pub(in crate::hexapod) fn rows(cols: &[__m512d; 6], out: &mut [f64; 6 * LANES]) {
+        // SAFETY: loads of the 8 i64 of an index table.
+        let index = |t: &[i64; LANES]| unsafe { _mm512_loadu_si512(t.as_ptr().cast()) };
+        for j in 0..6 {
+            let idx = index(&ROW_INDEX[j]);
+            let [m1, m2] = ROW_MASK[j];
+            let p0 = _mm512_permutex2var_pd(cols[0], idx, cols[1]);
+            let p1 = _mm512_permutex2var_pd(cols[2], idx, cols[3]);
+            let p2 = _mm512_permutex2var_pd(cols[4], idx, cols[5]);
+            let row = _mm512_mask_blend_pd(m2, _mm512_mask_blend_pd(m1, p0, p1), p2);
+            // SAFETY: 8 f64 at offset 8 j < 48 of the 48 of `out`.
+            unsafe { _mm512_storeu_pd(out.as_mut_ptr().add(8 * j), row) };
+        }
+    }
+
     /// One block: lengths into `qs`, the mask of cleared lanes returned.
     #[target_feature(enable = "avx512f")]
     pub(super) unsafe fn block(
@@ -240,43 +283,18 @@ mod avx512 {
         check: bool,
     ) -> u8 {
         let c = |v: f64| _mm512_set1_pd(v);
-        let add = |a: __m512d, b: __m512d| _mm512_add_pd(a, b);
         let sub = |a: __m512d, b: __m512d| _mm512_sub_pd(a, b);
-        let mul = |a: __m512d, b: __m512d| _mm512_mul_pd(a, b);
-        let ge = |a: __m512d, b: __m512d| _mm512_cmp_pd_mask::<_CMP_GE_OQ>(a, b);
-        let le = |a: __m512d, b: __m512d| _mm512_cmp_pd_mask::<_CMP_LE_OQ>(a, b);
-        // SAFETY: unaligned loads of 8 f64 at offsets 0..40 step 8 of the 48 of `xs`,
-        // and of the 8 i64 of an index table.
-        let v: [__m512d; 6] =
-            std::array::from_fn(|j| unsafe { _mm512_loadu_pd(xs.as_ptr().add(8 * j)) });
-        let index = |t: &[i64; LANES]| unsafe { _mm512_loadu_si512(t.as_ptr().cast()) };
-        let col = |k: usize| {
-            let idx = index(&COLUMN_INDEX[k]);
-            let [m16, m32] = COLUMN_MASK[k];
-            let lo = _mm512_permutex2var_pd(v[0], idx, v[1]);
-            let mid = _mm512_permutex2var_pd(v[2], idx, v[3]);
-            let hi = _mm512_permutex2var_pd(v[4], idx, v[5]);
-            _mm512_mask_blend_pd(m32, _mm512_mask_blend_pd(m16, lo, mid), hi)
-        };
-        let (px, py, pz) = (col(0), col(1), col(2));
-        let (a, b, cc_) = (col(3), col(4), col(5));
+        let x = columns(xs);
+        let [px, py, pz, a, b, cc_] = x;
         use crate::trig::avx512::sin_cos;
         let ((sa, ca), in_a) = sin_cos(a);
         let ((sb, cb), in_b) = sin_cos(b);
         let ((sc, cc), in_c) = sin_cos(cc_);
-        let mut ok: u8 = in_a & in_b & in_c;
+        let ok: u8 = in_a & in_b & in_c;
         // R = Rz(C) Ry(B) Rx(A), as rotation::rpy_matrix (same operations, same order).
-        let r = [
-            mul(cc, cb),
-            sub(mul(mul(cc, sb), sa), mul(sc, ca)),
-            add(mul(mul(cc, sb), ca), mul(sc, sa)),
-            mul(sc, cb),
-            add(mul(mul(sc, sb), sa), mul(cc, ca)),
-            sub(mul(mul(sc, sb), ca), mul(cc, sa)),
-            sub(c(0.0), sb),
-            mul(cb, sa),
-            mul(cb, ca),
-        ];
+        use crate::lane::Zmm;
+        let r = crate::rotation::rpy_entries([sa, sb, sc].map(Zmm::of), [ca, cb, cc].map(Zmm::of))
+            .map(Zmm::reg);
         // Strut vectors and lengths by the single pose's AVX-512 steps (`simd.rs`), so
         // a batch's lengths equal `Hexapod::lengths` bit for bit, whichever path
         // settles a row.
@@ -299,23 +317,36 @@ mod avx512 {
             len[i] = strut_length(v);
             d[i] = v;
         }
-        for j in 0..6 {
-            let idx = index(&ROW_INDEX[j]);
-            let [m1, m2] = ROW_MASK[j];
-            let p0 = _mm512_permutex2var_pd(len[0], idx, len[1]);
-            let p1 = _mm512_permutex2var_pd(len[2], idx, len[3]);
-            let p2 = _mm512_permutex2var_pd(len[4], idx, len[5]);
-            let row = _mm512_mask_blend_pd(m2, _mm512_mask_blend_pd(m1, p0, p1), p2);
-            // SAFETY: 8 f64 at offset 8 j < 48 of the 48 of `qs`.
-            unsafe { _mm512_storeu_pd(qs.as_mut_ptr().add(8 * j), row) };
-        }
+        rows(&len, qs);
         if !check || ok == 0 {
             return ok;
         }
-        for (k, v) in [px, py, pz, a, b, cc_].into_iter().enumerate() {
+        limits(s, &x, &r, &d, &len, ok)
+    }
+
+    /// Narrows `ok` to the lanes whose pose (coordinates `x` by column, rotation `r`
+    /// row by row, strut vectors `d` and lengths `len`) is within every limit of the
+    /// screen with its margin.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    pub(in crate::hexapod) fn limits(
+        s: &Screen,
+        x: &[__m512d; 6],
+        r: &[__m512d; 9],
+        d: &[[__m512d; 3]; 6],
+        len: &[__m512d; 6],
+        mut ok: u8,
+    ) -> u8 {
+        let c = |v: f64| _mm512_set1_pd(v);
+        let add = |a: __m512d, b: __m512d| _mm512_add_pd(a, b);
+        let sub = |a: __m512d, b: __m512d| _mm512_sub_pd(a, b);
+        let mul = |a: __m512d, b: __m512d| _mm512_mul_pd(a, b);
+        let ge = |a: __m512d, b: __m512d| _mm512_cmp_pd_mask::<_CMP_GE_OQ>(a, b);
+        let le = |a: __m512d, b: __m512d| _mm512_cmp_pd_mask::<_CMP_LE_OQ>(a, b);
+        for (k, v) in x.iter().enumerate() {
             let (lo, hi) = s.axis[k];
             if lo.is_finite() || hi.is_finite() {
-                ok &= ge(v, c(lo)) & le(v, c(hi));
+                ok &= ge(*v, c(lo)) & le(*v, c(hi));
             }
         }
         let dot = |u: &[__m512d; 3], w: [__m512d; 3]| {

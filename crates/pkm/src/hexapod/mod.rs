@@ -9,6 +9,7 @@
 #![allow(clippy::needless_range_loop)]
 
 mod block;
+mod block_motion;
 pub mod forward;
 mod interference;
 mod simd;
@@ -574,6 +575,14 @@ impl Mechanism<6, 6> for Hexapod {
             return false;
         }
         block::screen_rows(&block::Screen::new(self), xs, qs, clear, check)
+    }
+
+    fn motion_screened(&self, x: [&[f64]; 3], q: [&mut [f64]; 3], clear: &mut [bool]) -> bool {
+        let n = clear.len();
+        if x.iter().any(|x| x.len() != 6 * n) || q.iter().any(|q| q.len() != 6 * n) {
+            return false;
+        }
+        block_motion::motion_rows(&block::Screen::new(self), x, q, clear)
     }
 
     fn limit_violation(&self, code: &LimitCode) -> Violation {

@@ -160,13 +160,14 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Block<M, P, A> {
 /// Computes the instants `plan` into `out`; `offset` is the first instant's index in
 /// its block. Stops at the first failure.
 ///
-/// The poses come first, then the mechanism's block screen
-/// ([`Mechanism::inverse_screened`], the hexapod's eight poses per AVX-512 register)
-/// where it has one: a pose it clears is within every limit, so its motion is
-/// [`Mechanism::actuator_motion`] with no violation to look for; the others, and every
-/// pose of a type without a screen, go through
-/// [`Mechanism::actuator_motion_checked`]. Both give the same motion: the screen only
-/// decides which call makes it.
+/// The poses come first, then the mechanism's block kernel where it has one:
+/// [`Mechanism::motion_screened`] (the hexapod's: the motion of eight samples per
+/// AVX-512 register, with the limit screen) computes the motion of the samples it
+/// clears of every limit; else [`Mechanism::inverse_screened`]'s screen clears poses
+/// whose motion is then [`Mechanism::actuator_motion`] with no violation to look for.
+/// The others, and every sample of a type with neither, go through
+/// [`Mechanism::actuator_motion_checked`]. All give the same motion, bit for bit: the
+/// screen only decides which code makes it.
 #[allow(clippy::type_complexity)]
 fn compute_range<M: Mechanism<P, A>, const P: usize, const A: usize>(
     m: &M,
@@ -188,16 +189,31 @@ fn compute_range<M: Mechanism<P, A>, const P: usize, const A: usize>(
         out.xdd = xss * (sd * sd) + xs * sdd;
     }
     let n = out.len();
-    let mut xs = Vec::with_capacity(P * n);
+    let mut x = [(); 3].map(|_| Vec::with_capacity(P * n));
     for s in out.iter() {
-        xs.extend_from_slice(s.x.as_slice());
+        x[0].extend_from_slice(s.x.as_slice());
+        x[1].extend_from_slice(s.xd.as_slice());
+        x[2].extend_from_slice(s.xdd.as_slice());
     }
-    let mut qs = vec![0.0; A * n];
+    let mut q = [(); 3].map(|_| vec![0.0; A * n]);
     let mut clear = vec![false; n];
-    if !m.inverse_screened(&xs, &mut qs, &mut clear, true) {
+    let [q0, q1, q2] = &mut q;
+    // The motion kernel where the type has one, else the inverse's screen.
+    let kernel = m.motion_screened([&x[0], &x[1], &x[2]], [q0, q1, q2], &mut clear);
+    if !kernel && !m.inverse_screened(&x[0], &mut q[0], &mut clear, true) {
         clear.fill(false);
     }
     for (j, (s, &clear)) in out.iter_mut().zip(&clear).enumerate() {
+        if clear && kernel {
+            // In place: a 144-byte `ActuatorMotion` moved through a `Result` is two
+            // `memcpy` calls per sample.
+            for i in 0..A {
+                s.act.q[i] = q[0][A * j + i];
+                s.act.qd[i] = q[1][A * j + i];
+                s.act.qdd[i] = q[2][A * j + i];
+            }
+            continue;
+        }
         buf.clear();
         let act = if clear {
             m.actuator_motion(&s.x, &s.xd, &s.xdd)

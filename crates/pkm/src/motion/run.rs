@@ -8,7 +8,7 @@ use super::path::Segment;
 use super::plan::{drive, run_inline, Block, Planner, Step};
 use super::profile::Profile;
 use super::singular::{SingularReport, SingularTracker, DEFAULT_SINGULAR_ANGLE};
-use super::stats::{ratios, AxisStats, Ratios};
+use super::stats::{ratios, AxisBank, AxisStats, Ratios};
 use crate::error::{Error, Result};
 use crate::limits::{LimitKind, Side, Violation};
 use crate::mechanism::{ActuatorMotion, Mechanism, PoseSpace};
@@ -120,8 +120,9 @@ pub struct Runner<'m, M, const P: usize, const A: usize> {
 /// What the samples add up to, taken in order.
 struct Recorder<'m, M, const P: usize, const A: usize> {
     m: &'m M,
-    act: [AxisStats; A],
-    serial: Vec<AxisStats>,
+    act: AxisBank<A>,
+    /// The serial axes in the first `serial_idx.len()` lanes (the others stay zero).
+    serial: AxisBank<P>,
     serial_idx: Vec<usize>,
     runs: Vec<ViolationRun>,
     open: Vec<(String, usize)>,
@@ -129,8 +130,8 @@ struct Recorder<'m, M, const P: usize, const A: usize> {
     buf: Vec<Violation>,
     /// Per actuator, `Quantity::to_user`'s factor.
     act_scale: [f64; A],
-    /// Per serial axis, the same.
-    serial_scale: Vec<f64>,
+    /// Per serial axis, the same (zero past the serial axes).
+    serial_scale: [f64; P],
     /// Per actuator, the velocity and acceleration limits (infinite where none).
     rate_limits: [(f64, f64); A],
     /// Per actuator, the largest |q'| and |q''| seen.
@@ -169,17 +170,18 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
             plan: Planner::new(m, sampling),
             rec: Recorder {
                 m,
-                act: [AxisStats::default(); A],
-                serial: vec![AxisStats::default(); serial_idx.len()],
+                act: AxisBank::default(),
+                serial: AxisBank::default(),
                 runs: Vec::new(),
                 open: Vec::new(),
                 dropped: 0,
                 buf: Vec::new(),
                 act_scale: std::array::from_fn(|i| m.actuators()[i].quantity.user_scale()),
-                serial_scale: serial_idx
-                    .iter()
-                    .map(|&k| m.coordinates()[k].quantity.user_scale())
-                    .collect(),
+                serial_scale: std::array::from_fn(|j| {
+                    serial_idx
+                        .get(j)
+                        .map_or(0.0, |&k| m.coordinates()[k].quantity.user_scale())
+                }),
                 rate_limits: std::array::from_fn(|i| {
                     let a = &m.actuators()[i];
                     (
@@ -302,13 +304,19 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
     {
         let (t, act, x, xd, xdd) = (s.t, &s.act, &s.x, &s.xd, &s.xdd);
         // `v * scale` is `Quantity::to_user(v)` bit for bit (1 or 180 / pi).
-        for i in 0..A {
-            let c = self.act_scale[i];
-            self.act[i].add(act.q[i] * c, act.qd[i] * c, act.qdd[i] * c);
-        }
-        for (j, (&k, &c)) in self.serial_idx.iter().zip(&self.serial_scale).enumerate() {
-            self.serial[j].add(x[k] * c, xd[k] * c, xdd[k] * c);
-        }
+        let c = &self.act_scale;
+        self.act.add(
+            &std::array::from_fn(|i| act.q[i] * c[i]),
+            &std::array::from_fn(|i| act.qd[i] * c[i]),
+            &std::array::from_fn(|i| act.qdd[i] * c[i]),
+        );
+        let (c, idx) = (&self.serial_scale, &self.serial_idx);
+        let lane = |v: &SVector<f64, P>, j: usize| idx.get(j).map_or(0.0, |&k| v[k] * c[j]);
+        self.serial.add(
+            &std::array::from_fn(|j| lane(x, j)),
+            &std::array::from_fn(|j| lane(xd, j)),
+            &std::array::from_fn(|j| lane(xdd, j)),
+        );
         // Rate limits (infinite where none is given): a violation is rare, the peaks
         // make the feed override at the end.
         for i in 0..A {
@@ -402,11 +410,11 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
     }
 
     /// The summary, with the serial axes' `names`, the run's duration and samples.
-    fn finish(mut self, names: Vec<String>, duration_s: f64, samples: u64) -> MotionSummary {
-        for s in self.act.iter_mut().chain(self.serial.iter_mut()) {
-            s.finalize();
-        }
-        let act: Vec<AxisStats> = self.act.to_vec();
+    fn finish(self, names: Vec<String>, duration_s: f64, samples: u64) -> MotionSummary {
+        let act: Vec<AxisStats> = (0..A).map(|i| self.act.axis(i)).collect();
+        let serial: Vec<AxisStats> = (0..self.serial_idx.len())
+            .map(|j| self.serial.axis(j))
+            .collect();
         let coords = self.m.coordinates();
         let serial_q: Vec<Quantity> = self
             .serial_idx
@@ -414,7 +422,7 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
             .map(|&k| coords[k].quantity)
             .collect();
         let act_q: Vec<Quantity> = self.m.actuators().iter().map(|a| a.quantity).collect();
-        let ratios = ratios(&self.serial, &serial_q, &act, &act_q);
+        let ratios = ratios(&serial, &serial_q, &act, &act_q);
         MotionSummary {
             actuators: self
                 .m
@@ -423,7 +431,7 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
                 .map(|a| a.name.clone())
                 .zip(act)
                 .collect(),
-            serial: names.into_iter().zip(self.serial).collect(),
+            serial: names.into_iter().zip(serial).collect(),
             ratios,
             violations: self.runs,
             violations_not_listed: self.dropped,

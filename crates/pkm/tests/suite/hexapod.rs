@@ -788,6 +788,8 @@ fn screened_batch_equals_the_exact_path_on_and_near_every_limit() {
             "{name}: {within} of {} random rows within limits, {cleared} cleared",
             random.len()
         );
+        let within: Vec<bool> = random.iter().map(|&r| batch.reachable[r]).collect();
+        motion_kernel_equals_the_exact_path(name, h, &poses, &random, &within);
         // Without the check the screen settles every row but the NaN one and the one
         // with an angle beyond the fast sine's range (on a CPU with AVX-512; without
         // it there is no block kernel).
@@ -804,6 +806,89 @@ fn screened_batch_equals_the_exact_path_on_and_near_every_limit() {
             }
         }
     }
+}
+
+/// The motion kernel (`Mechanism::motion_screened`, eight samples per AVX-512
+/// register) on `poses` with random rates and accelerations: a cleared row's `q`,
+/// `q'`, `q''` are `actuator_motion`'s bit for bit and `actuator_motion_checked` finds
+/// no violation on it; rows with held angles (no angular rate), level poses
+/// (A = B = C = 0) and rows at rest take the scalar path's shortcuts alike; and the
+/// kernel clears at least 99 % of the random rows (`random`) that are `within` limits.
+fn motion_kernel_equals_the_exact_path(
+    name: &str,
+    h: &Hexapod,
+    poses: &[Vector6<f64>],
+    random: &[usize],
+    within: &[bool],
+) {
+    let mut rng = rand::rngs::StdRng::seed_from_u64(34);
+    let n = poses.len();
+    let mut x = poses.to_vec();
+    let (mut xd, mut xdd) = (Vec::new(), Vec::new());
+    for (r, x) in x.iter_mut().enumerate() {
+        let mut v = Vector6::from_fn(|_, _| rng.random_range(-80.0..80.0));
+        let mut a = Vector6::from_fn(|_, _| rng.random_range(-900.0..900.0));
+        match r % 7 {
+            // Held angles: exact zeros for the angular motion.
+            0 => (3..6).for_each(|k| (v[k], a[k]) = (0.0, 0.0)),
+            // A level pose (the exact identity) moving.
+            1 if r % 2 == 1 => (3..6).for_each(|k| x[k] = 0.0),
+            // At rest.
+            2 => (v, a) = (Vector6::zeros(), Vector6::zeros()),
+            // Only an angular acceleration.
+            3 => (3..6).for_each(|k| v[k] = 0.0),
+            _ => {
+                v.fixed_rows_mut::<3>(3).scale_mut(1e-3);
+                a.fixed_rows_mut::<3>(3).scale_mut(1e-3);
+            }
+        }
+        xd.push(v);
+        xdd.push(a);
+    }
+    let flat =
+        |v: &[Vector6<f64>]| -> Vec<f64> { v.iter().flat_map(|x| x.iter().copied()).collect() };
+    let rows = [flat(&x), flat(&xd), flat(&xdd)];
+    let mut q = [
+        vec![f64::NAN; 6 * n],
+        vec![f64::NAN; 6 * n],
+        vec![f64::NAN; 6 * n],
+    ];
+    let mut clear = vec![false; n];
+    let [q0, q1, q2] = &mut q;
+    if !h.motion_screened([&rows[0], &rows[1], &rows[2]], [q0, q1, q2], &mut clear) {
+        eprintln!("no AVX-512 on this CPU: the per-sample path only");
+        return;
+    }
+    let mut buf = Vec::new();
+    let mut level = 0;
+    for r in 0..n {
+        if !clear[r] {
+            continue;
+        }
+        let want = h.actuator_motion(&x[r], &xd[r], &xdd[r]).unwrap();
+        for i in 0..6 {
+            for (k, w) in [want.q[i], want.qd[i], want.qdd[i]].into_iter().enumerate() {
+                assert_eq!(
+                    q[k][6 * r + i].to_bits(),
+                    w.to_bits(),
+                    "{name} row {r} strut {i} order {k}"
+                );
+            }
+        }
+        buf.clear();
+        h.actuator_motion_checked(&x[r], &xd[r], &xdd[r], &mut buf)
+            .unwrap();
+        assert!(buf.is_empty(), "{name} row {r}: cleared but {buf:?}");
+        level += usize::from(x[r].fixed_rows::<3>(3) == Vector3::zeros());
+    }
+    let (ok, cleared) = random.iter().zip(within).fold((0, 0), |(o, c), (&r, &w)| {
+        (o + usize::from(w), c + usize::from(w && clear[r]))
+    });
+    assert!(
+        ok >= 100 && cleared as f64 > 0.99 * ok as f64,
+        "{name}: {ok} random rows within limits, {cleared} cleared by the motion kernel"
+    );
+    assert!(level > 0, "{name}: no level pose was cleared");
 }
 
 /// The motion engine's per-sample call shares the pose's rotation between the motion

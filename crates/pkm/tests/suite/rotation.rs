@@ -181,9 +181,10 @@ fn rotation_vector_is_accurate_near_half_turn() {
     }
 }
 
-/// The written-out angular velocity and acceleration of A, B, C equal the products
-/// `Rz(C) Ry(B) e_x`, `e_z x c` they come from (the former code) within 1e-15, and the
-/// velocity is `vee(R' R^T)` of the rotation by central differences.
+/// The written-out angular velocity and acceleration of A, B, C (sines from pkm's
+/// kernel) equal the products `Rz(C) Ry(B) e_x`, `e_z x c` they come from (the former
+/// code, libm's sines) within 1e-15 and 1e-14, and the velocity is `vee(R' R^T)` of the
+/// rotation by central differences. Held angles give exact zeros.
 #[test]
 fn rpy_angular_motion_equals_the_matrix_products_and_differences() {
     use nalgebra::{Matrix3, Vector3};
@@ -221,6 +222,12 @@ fn rpy_angular_motion_equals_the_matrix_products_and_differences() {
         assert!(
             (w - wn).amax() <= 1e-7 * (1.0 + ad.amax()),
             "{a:?}: {w} vs {wn}"
+        );
+        let z = Vector3::zeros();
+        let (w0, al0) = rpy_angular_motion(a, &z, &z);
+        assert!(
+            w0.iter().chain(al0.iter()).all(|v| v.to_bits() == 0),
+            "{a:?}"
         );
     }
 }

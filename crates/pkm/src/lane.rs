@@ -1,0 +1,115 @@
+//! One formula for scalar and SIMD paths: the arithmetic a shared formula needs, on
+//! `f64` and (on x86-64) on an AVX-512 register of eight values, so a kernel that runs
+//! eight poses per register computes, lane by lane, exactly what the scalar code does.
+//!
+//! Every operation is one IEEE operation with one rounding (no fused multiply-add:
+//! Rust never contracts `a * b + c`), so a formula written once over [`Lane`] gives the
+//! same bits on either type; the tests of the kernels that use it check that.
+
+/// The arithmetic of a formula shared by scalar and SIMD code.
+pub(crate) trait Lane: Copy {
+    fn add(self, o: Self) -> Self;
+    fn sub(self, o: Self) -> Self;
+    fn mul(self, o: Self) -> Self;
+    fn div(self, o: Self) -> Self;
+    fn sqrt(self) -> Self;
+    /// `-self` (the sign bit flipped, as `-x` on `f64`: `-0.0` from `0.0`).
+    fn neg(self) -> Self;
+}
+
+impl Lane for f64 {
+    #[inline(always)]
+    fn add(self, o: f64) -> f64 {
+        self + o
+    }
+    #[inline(always)]
+    fn sub(self, o: f64) -> f64 {
+        self - o
+    }
+    #[inline(always)]
+    fn mul(self, o: f64) -> f64 {
+        self * o
+    }
+    #[inline(always)]
+    fn div(self, o: f64) -> f64 {
+        self / o
+    }
+    #[inline(always)]
+    fn sqrt(self) -> f64 {
+        f64::sqrt(self)
+    }
+    #[inline(always)]
+    fn neg(self) -> f64 {
+        -self
+    }
+}
+
+/// Eight doubles, the lanes of an AVX-512 register. The operations are plain loops
+/// over the lanes: inlined into a function compiled with AVX-512F enabled, each becomes
+/// one 512-bit instruction (the intrinsics themselves cannot be called from a trait
+/// method, which cannot enable the feature, without a function call per operation).
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy)]
+#[repr(C, align(64))]
+pub(crate) struct Zmm(pub [f64; 8]);
+
+#[cfg(target_arch = "x86_64")]
+impl Zmm {
+    /// The lanes of a register.
+    #[inline(always)]
+    pub(crate) fn of(v: std::arch::x86_64::__m512d) -> Zmm {
+        // SAFETY: both are eight f64 (64 bytes), any bits valid.
+        Zmm(unsafe { std::mem::transmute::<std::arch::x86_64::__m512d, [f64; 8]>(v) })
+    }
+
+    /// The register of the lanes.
+    #[inline(always)]
+    pub(crate) fn reg(self) -> std::arch::x86_64::__m512d {
+        // SAFETY: as in `of`.
+        unsafe { std::mem::transmute::<[f64; 8], std::arch::x86_64::__m512d>(self.0) }
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl From<f64> for Zmm {
+    #[inline(always)]
+    fn from(v: f64) -> Zmm {
+        Zmm([v; 8])
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Zmm {
+    #[inline(always)]
+    fn zip(self, o: Zmm, f: impl Fn(f64, f64) -> f64) -> Zmm {
+        Zmm(std::array::from_fn(|k| f(self.0[k], o.0[k])))
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Lane for Zmm {
+    #[inline(always)]
+    fn add(self, o: Zmm) -> Zmm {
+        self.zip(o, |a, b| a + b)
+    }
+    #[inline(always)]
+    fn sub(self, o: Zmm) -> Zmm {
+        self.zip(o, |a, b| a - b)
+    }
+    #[inline(always)]
+    fn mul(self, o: Zmm) -> Zmm {
+        self.zip(o, |a, b| a * b)
+    }
+    #[inline(always)]
+    fn div(self, o: Zmm) -> Zmm {
+        self.zip(o, |a, b| a / b)
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Zmm {
+        Zmm(self.0.map(f64::sqrt))
+    }
+    #[inline(always)]
+    fn neg(self) -> Zmm {
+        Zmm(self.0.map(|a| -a))
+    }
+}
