@@ -387,12 +387,14 @@ pub(super) mod avx512 {
         let clamp01 = |v: __m512d| _mm512_min_pd(_mm512_max_pd(v, zero), one);
         // 1 / L_i^2, once per strut, when a pair first needs it.
         let mut inv_a: [Option<__m512d>; 6] = [None; 6];
+        // |d_i|^2 from the lengths (within a few units in the last place of the dot
+        // products, far inside the margin), once per strut instead of twice per pair.
+        let sq: [__m512d; 6] = std::array::from_fn(|i| mul(len[i], len[i]));
         for &(i, k) in &s.pairs {
             // r = a_i - a_k is the same in every lane.
             let rv = [0, 1, 2].map(|j| c(s.base[j][i] - s.base[j][k]));
             let (u, w) = (&d[i], &d[k]);
-            let a2 = dot(u, *u);
-            let e2 = dot(w, *w);
+            let (a2, e2) = (sq[i], sq[k]);
             // The lines' distance, a lower bound of the segments': (r . n)^2 >= need^2
             // |n|^2, n = d_i x d_k, |n|^2 = |d_i|^2 |d_k|^2 sin^2 (nearly parallel
             // lines are not judged).

@@ -318,18 +318,26 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
             &std::array::from_fn(|j| lane(xdd, j)),
         );
         // Rate limits (infinite where none is given): a violation is rare, the peaks
-        // make the feed override at the end.
+        // make the feed override at the end. One pass over the actuators for the peaks
+        // and whether any limit is exceeded, then (rarely) the violations in order.
+        let v: [f64; A] = std::array::from_fn(|i| act.qd[i].abs());
+        let acc: [f64; A] = std::array::from_fn(|i| act.qdd[i].abs());
+        let mut over = false;
         for i in 0..A {
-            let v = act.qd[i].abs();
-            if v > self.rate_limits[i].0 {
-                self.buf.push(self.rate_violation(i, 1, v));
+            let (vm, am) = self.rate_limits[i];
+            over |= (v[i] > vm) | (acc[i] > am);
+            let peak = &mut self.peak_rates[i];
+            *peak = (peak.0.max(v[i]), peak.1.max(acc[i]));
+        }
+        if over {
+            for i in 0..A {
+                if v[i] > self.rate_limits[i].0 {
+                    self.buf.push(self.rate_violation(i, 1, v[i]));
+                }
+                if acc[i] > self.rate_limits[i].1 {
+                    self.buf.push(self.rate_violation(i, 2, acc[i]));
+                }
             }
-            self.peak_rates[i].0 = self.peak_rates[i].0.max(v);
-            let acc = act.qdd[i].abs();
-            if acc > self.rate_limits[i].1 {
-                self.buf.push(self.rate_violation(i, 2, acc));
-            }
-            self.peak_rates[i].1 = self.peak_rates[i].1.max(acc);
         }
         self.track(t, s.line);
         // The singular direction does not depend on the tool length. Rapids run each
