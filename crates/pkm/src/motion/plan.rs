@@ -189,47 +189,77 @@ fn compute_range<M: Mechanism<P, A>, const P: usize, const A: usize>(
         out.xdd = xss * (sd * sd) + xs * sdd;
     }
     let n = out.len();
-    let mut x = [(); 3].map(|_| Vec::with_capacity(P * n));
-    for s in out.iter() {
-        x[0].extend_from_slice(s.x.as_slice());
-        x[1].extend_from_slice(s.xd.as_slice());
-        x[2].extend_from_slice(s.xdd.as_slice());
-    }
-    let mut q = [(); 3].map(|_| vec![0.0; A * n]);
-    let mut clear = vec![false; n];
-    let [q0, q1, q2] = &mut q;
-    // The motion kernel where the type has one, else the inverse's screen.
-    let kernel = m.motion_screened([&x[0], &x[1], &x[2]], [q0, q1, q2], &mut clear);
-    if !kernel && !m.inverse_screened(&x[0], &mut q[0], &mut clear, true) {
-        clear.fill(false);
-    }
-    for (j, (s, &clear)) in out.iter_mut().zip(&clear).enumerate() {
-        if clear && kernel {
-            // In place: a 144-byte `ActuatorMotion` moved through a `Result` is two
-            // `memcpy` calls per sample.
-            for i in 0..A {
-                s.act.q[i] = q[0][A * j + i];
-                s.act.qd[i] = q[1][A * j + i];
-                s.act.qdd[i] = q[2][A * j + i];
-            }
-            continue;
+    ROWS.with_borrow_mut(|rows| {
+        let Rows { x, q, clear } = rows;
+        for v in x.iter_mut() {
+            v.clear();
         }
-        buf.clear();
-        let act = if clear {
-            m.actuator_motion(&s.x, &s.xd, &s.xdd)
-        } else {
-            m.actuator_motion_checked(&s.x, &s.xd, &s.xdd, &mut buf)
-        };
-        match act {
-            Ok(act) => {
-                s.act = act;
-                let k = (offset + j) as u32;
-                violations.extend(buf.drain(..).map(|v| (k, v)));
-            }
-            Err(e) => return (violations, Some((offset + j, at_sample(e, s.line, s.t)))),
+        for s in out.iter() {
+            x[0].extend_from_slice(s.x.as_slice());
+            x[1].extend_from_slice(s.xd.as_slice());
+            x[2].extend_from_slice(s.xdd.as_slice());
         }
-    }
-    (violations, None)
+        // Grown, never cleared: every row a kernel clears is written by it.
+        for v in q.iter_mut() {
+            if v.len() < A * n {
+                v.resize(A * n, 0.0);
+            }
+        }
+        if clear.len() < n {
+            clear.resize(n, false);
+        }
+        let clear = &mut clear[..n];
+        let [q0, q1, q2] = q;
+        let (q0, q1, q2) = (&mut q0[..A * n], &mut q1[..A * n], &mut q2[..A * n]);
+        // The motion kernel where the type has one, else the inverse's screen.
+        let kernel =
+            m.motion_screened([&x[0], &x[1], &x[2]], [&mut *q0, &mut *q1, &mut *q2], clear);
+        if !kernel && !m.inverse_screened(&x[0], q0, clear, true) {
+            clear.fill(false);
+        }
+        let q = [&*q0, &*q1, &*q2];
+        for (j, (s, &clear)) in out.iter_mut().zip(clear.iter()).enumerate() {
+            if clear && kernel {
+                // In place: a 144-byte `ActuatorMotion` moved through a `Result` is two
+                // `memcpy` calls per sample.
+                for i in 0..A {
+                    s.act.q[i] = q[0][A * j + i];
+                    s.act.qd[i] = q[1][A * j + i];
+                    s.act.qdd[i] = q[2][A * j + i];
+                }
+                continue;
+            }
+            buf.clear();
+            let act = if clear {
+                m.actuator_motion(&s.x, &s.xd, &s.xdd)
+            } else {
+                m.actuator_motion_checked(&s.x, &s.xd, &s.xdd, &mut buf)
+            };
+            match act {
+                Ok(act) => {
+                    s.act = act;
+                    let k = (offset + j) as u32;
+                    violations.extend(buf.drain(..).map(|v| (k, v)));
+                }
+                Err(e) => return (violations, Some((offset + j, at_sample(e, s.line, s.t)))),
+            }
+        }
+        (violations, None)
+    })
+}
+
+/// Per-thread rows of [`compute_range`]: the samples' poses, rates and accelerations,
+/// the kernel's actuator rows and the clear mask, kept between calls (a run allocates
+/// them once per thread, not per chunk).
+#[derive(Default)]
+struct Rows {
+    x: [Vec<f64>; 3],
+    q: [Vec<f64>; 3],
+    clear: Vec<bool>,
+}
+
+thread_local! {
+    static ROWS: std::cell::RefCell<Rows> = std::cell::RefCell::new(Rows::default());
 }
 
 /// Error `e` of the sample at time `t` of G-code line `line`: a pose out of reach says
