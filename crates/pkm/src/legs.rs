@@ -368,11 +368,13 @@ impl<const N: usize> StrutSet<N> {
 /// [`crate::lane`]), so the hexapod's motion kernel computes lane by lane what the
 /// scalar code does.
 pub(crate) struct StrutMotion<T> {
-    /// `d = p + R b' - a`.
+    /// The strut vector `d = p + R b' - a`.
     pub d: [T; 3],
-    /// `L = |d|`, `L'`, `L''`.
+    /// Its length `L = |d|`.
     pub l: T,
+    /// `L' = n . d'`.
     pub ld: T,
+    /// `L'' = (|d'|^2 - L'^2) / L + n . d''`.
     pub ldd: T,
 }
 
