@@ -12,7 +12,8 @@
 //! - strut length `lo_i <= L_i <= hi_i`;
 //! - base cone `d_i . w_i >= cos(max) L_i` (`w_i` the cone's axis);
 //! - platform cone `-d_i . (R w'_i) >= cos(max) L_i`;
-//! - strut pairs: the distance of the segments `a_i -> a_i + d_i` (the closest points
+//! - strut pairs: bounding boxes apart by the strut diameter along X, Y or Z, else the
+//!   lines' distance, else the distance of the segments `a_i -> a_i + d_i` (the closest points
 //!   by the clamped parameters of [`super::segment_distance`], with selects instead of
 //!   branches) at least the strut diameter.
 //!
@@ -390,7 +391,23 @@ pub(super) mod avx512 {
         // |d_i|^2 from the lengths (within a few units in the last place of the dot
         // products, far inside the margin), once per strut instead of twice per pair.
         let sq: [__m512d; 6] = std::array::from_fn(|i| mul(len[i], len[i]));
+        // Each strut's bounding box, `a_i` to `a_i + d_i` along X, Y, Z: boxes apart by
+        // the diameter along one axis settle a pair in a few operations.
+        let needv = c(need);
+        let boxes: [[(__m512d, __m512d); 3]; 6] = std::array::from_fn(|i| {
+            std::array::from_fn(|j| {
+                let (a, e) = (c(s.base[j][i]), add(c(s.base[j][i]), d[i][j]));
+                (_mm512_min_pd(a, e), _mm512_max_pd(a, e))
+            })
+        });
         for &(i, k) in &s.pairs {
+            let apart = (0..3).fold(0u8, |m, j| {
+                let ((li, hi), (lk, hk)) = (boxes[i][j], boxes[k][j]);
+                m | ge(sub(lk, hi), needv) | ge(sub(li, hk), needv)
+            });
+            if apart & ok == ok {
+                continue;
+            }
             // r = a_i - a_k is the same in every lane.
             let rv = [0, 1, 2].map(|j| c(s.base[j][i] - s.base[j][k]));
             let (u, w) = (&d[i], &d[k]);
@@ -406,7 +423,7 @@ pub(super) mod avx512 {
             let rn = dot(&rv, n);
             let nn = dot(&n, n);
             let not_parallel = _mm512_cmp_pd_mask::<_CMP_GT_OQ>(nn, mul(c(PARALLEL), mul(a2, e2)));
-            let lines = ge(mul(rn, rn), mul(need2, nn)) & not_parallel;
+            let lines = (ge(mul(rn, rn), mul(need2, nn)) & not_parallel) | apart;
             if lines & ok == ok {
                 continue;
             }
