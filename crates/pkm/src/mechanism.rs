@@ -360,7 +360,8 @@ pub trait Mechanism<const P: usize, const A: usize>: Send + Sync {
     /// [`Mechanism::inverse_screened`], for the motion engine: `x` holds the samples'
     /// poses, rates and accelerations (each whole rows of `P`, row-major), `q` receives
     /// the actuators' positions, rates and accelerations (`A` per row) of the rows it
-    /// clears, and `clear[i]` is set where row `i` is certainly within every limit
+    /// clears (other rows may be overwritten and are not to be read), and `clear[i]`
+    /// is set where row `i` is certainly within every limit
     /// ([`Mechanism::actuator_motion_checked`] finds no violation) and its motion is
     /// written, equal bit for bit to [`Mechanism::actuator_motion`]'s. Rows left
     /// uncleared are computed again by [`Mechanism::actuator_motion_checked`].

@@ -24,9 +24,10 @@ use super::block::{Screen, LANES};
 
 /// The motion of the rows of `x = [poses, rates, accelerations]` (row-major X, Y, Z,
 /// A, B, C and their derivatives) into `q = [lengths, rates, accelerations]` (six per
-/// row), with `clear[i]` set where row `i` is certainly within every limit (its values
-/// written; rows not cleared, and those past the last whole block, are left as they
-/// were). Returns `false` (nothing written) on a CPU without AVX-512F.
+/// row), with `clear[i]` set where row `i` is certainly within every limit. The rows
+/// of whole blocks of eight are all written, their values meaningful where cleared;
+/// rows past the last whole block are neither written nor cleared. Returns `false`
+/// (nothing written) on a CPU without AVX-512F.
 pub(crate) fn motion_rows(
     s: &Screen,
     x: [&[f64]; 3],
