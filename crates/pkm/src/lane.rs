@@ -68,6 +68,12 @@ impl Zmm {
         // SAFETY: as in `of`.
         unsafe { std::mem::transmute::<[f64; 8], std::arch::x86_64::__m512d>(self.0) }
     }
+
+    /// `f` lane by lane.
+    #[inline(always)]
+    fn zip(self, o: Zmm, f: impl Fn(f64, f64) -> f64) -> Zmm {
+        Zmm(std::array::from_fn(|k| f(self.0[k], o.0[k])))
+    }
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -75,14 +81,6 @@ impl From<f64> for Zmm {
     #[inline(always)]
     fn from(v: f64) -> Zmm {
         Zmm([v; 8])
-    }
-}
-
-#[cfg(target_arch = "x86_64")]
-impl Zmm {
-    #[inline(always)]
-    fn zip(self, o: Zmm, f: impl Fn(f64, f64) -> f64) -> Zmm {
-        Zmm(std::array::from_fn(|k| f(self.0[k], o.0[k])))
     }
 }
 

@@ -250,7 +250,9 @@ fn compute_range<M: Mechanism<P, A>, const P: usize, const A: usize>(
 
 /// Per-thread rows of [`compute_range`]: the samples' poses, rates and accelerations,
 /// the kernel's actuator rows and the clear mask, kept between calls (a run allocates
-/// them once per thread, not per chunk).
+/// them once per thread, not per chunk). Borrowed for the whole of one call: nothing
+/// inside it may run rayon work on the same thread (a stolen `compute_range` would
+/// borrow them again and panic); the mechanism calls it makes are plain per-pose code.
 #[derive(Default)]
 struct Rows {
     x: [Vec<f64>; 3],
