@@ -467,22 +467,32 @@ impl Visitor for Simulate<'_, '_> {
                 // Moves are handed on one line late: the last is known at the end.
                 let mut pending: Option<Move<P>> = None;
                 let mut queue: std::collections::VecDeque<Step<P>> = Default::default();
-                let mut lines = reader.lines().enumerate();
+                let mut reader = reader;
+                // One line at a time into one buffer (`BufRead::lines` would allocate a
+                // string per line): the same lines, the same errors.
+                let (mut buf, mut i) = (String::new(), 0usize);
                 let mut done = false;
                 let interp_ref = &mut interp;
                 let mut next_line = |queue: &mut std::collections::VecDeque<Step<P>>,
                                      pending: &mut Option<Move<P>>|
                  -> Result<bool> {
-                    let Some((i, line)) = lines.next() else {
-                        return Ok(false);
-                    };
-                    let text = line
+                    buf.clear();
+                    let read = reader
+                        .read_line(&mut buf)
                         .map_err(|e| invalid("G-code", format!("reading line {}: {e}", i + 1)))?;
+                    if read == 0 {
+                        return Ok(false);
+                    }
+                    i += 1;
+                    let text = match buf.strip_suffix('\n') {
+                        Some(t) => t.strip_suffix('\r').unwrap_or(t),
+                        None => &buf,
+                    };
                     out.borrow_mut().progress(text.len() as u64 + 1);
                     if interp_ref.ended {
                         return Ok(false);
                     }
-                    let g = interp_ref.line(&text, i as u64 + 1)?;
+                    let g = interp_ref.line(text, i as u64)?;
                     let mv = match &g {
                         Some(g) => Some(to_move(m, g, self.feed)?),
                         None => None,

@@ -1,4 +1,4 @@
-//! A modal G-code interpreter over the `gcode` crate's syntax tree.
+//! A modal G-code interpreter over the `gcode` crate's parser.
 //!
 //! Supported (any other G code or word is an error naming its line, never skipped):
 //! G0, G1, G2, G3 (I J K and R forms, full circles, helical arcs, P turns), G4 (dwell,
@@ -12,13 +12,15 @@
 //! G40 (cutter compensation off), T and M6 (tool change), M0/M1/M2/M30/M3/M4/M5/M7/
 //! M8/M9 with S (no kinematic effect). Other M codes (a controller's own, such as
 //! LinuxCNC's remapped M428) are accepted with a note ([`Interpreter::notes`]).
-//! Numbers are re-read from the source text as f64 (the syntax tree holds f32).
+//! Numbers are re-read from the source text as f64 (the parser reads f32); the parser
+//! runs through its zero-allocation visitors ([`super::words`]).
 //!
 //! Lines are interpreted one at a time ([`Interpreter::line`]), so a program of any
 //! length streams with flat memory.
 
 use nalgebra::Vector3;
 
+use super::words::LineWords;
 use crate::error::{Error, Result};
 
 /// Active plane for arcs: in-plane axes `(e1, e2)` and normal `e1 x e2`.
@@ -142,6 +144,8 @@ pub struct Interpreter {
     /// Notes beyond [`MAX_NOTES`].
     pub notes_dropped: u64,
     percents: u32,
+    /// The last line's codes and words (buffers reused from line to line).
+    words: LineWords,
 }
 
 fn err(line: u64, message: String) -> Error {
@@ -175,7 +179,7 @@ fn exponent_hint(text: &str) -> &'static str {
 /// (leading zeros aside), outside comments. The `gcode` crate multiplies the number by
 /// ten in a `u32`: `G2147483649` wraps to `G1` in a release build (a silent move) and
 /// panics in a checked one, so such a word is refused before it gets there.
-fn oversized_code(text: &str) -> Option<String> {
+pub(super) fn oversized_code(text: &str) -> Option<String> {
     let b = text.as_bytes();
     let mut i = 0;
     let mut depth = 0usize;
@@ -227,6 +231,7 @@ impl Interpreter {
             notes: Vec::new(),
             notes_dropped: 0,
             percents: 0,
+            words: LineWords::default(),
         }
     }
 
@@ -261,76 +266,38 @@ impl Interpreter {
                 format!("`{word}`: a G, M or T code number has at most 6 digits"),
             ));
         }
-        let program = gcode::parse(text).map_err(|d| {
-            let first = d
-                .iter()
-                .next()
-                .map(|x| x.kind.to_string())
-                .unwrap_or_default();
-            err(line, format!("malformed: {first}"))
-        })?;
-        let mut words: Vec<(char, f64)> = Vec::new();
-        let mut codes: Vec<(char, u32, Option<u32>)> = Vec::new();
-        let value = |span: gcode::core::Span, letter: char| -> Result<f64> {
-            let raw = text.get(span.start..span.start + span.length).unwrap_or("");
-            let num = raw
-                .trim_start_matches([letter, letter.to_ascii_lowercase()])
-                .trim();
-            num.parse::<f64>()
-                .ok()
-                .filter(|v| v.is_finite())
-                .ok_or_else(|| err(line, format!("`{raw}`: expected a number after {letter}")))
-        };
-        for block in &program.blocks {
-            for code in &block.codes {
-                let (letter, number, args) = match code {
-                    gcode::Code::General(g) => ('G', g.number, &g.args),
-                    gcode::Code::Miscellaneous(m) => ('M', m.number, &m.args),
-                    gcode::Code::ToolChange(t) => ('T', t.number, &t.args),
-                    _ => return Err(err(line, "unsupported code".into())),
-                };
-                codes.push((letter, number.major(), number.minor().map(|m| m.get())));
-                for a in args {
-                    let l = a.letter.to_ascii_uppercase();
-                    if let gcode::Value::Variable(v) = &a.value {
-                        return Err(err(line, format!("{l}#{v}: variables are not supported")));
+        let mut read = std::mem::take(&mut self.words);
+        let r = read.read(text, line, err).and_then(|()| {
+            let glued_exponent =
+                read.words.iter().any(|w| w.0 == 'E') && !exponent_hint(text).is_empty();
+            self.apply(&read.codes, &read.words, line)
+                .map_err(|e| match e {
+                    Error::InvalidInput { what, message }
+                        if glued_exponent && message.starts_with("unsupported word E") =>
+                    {
+                        Error::InvalidInput {
+                            what,
+                            message: format!("{message}{}", exponent_hint(text)),
+                        }
                     }
-                    words.push((l, value(a.span, a.letter)?));
-                }
-            }
-            for w in &block.word_addresses {
-                let l = w.letter.to_ascii_uppercase();
-                if let gcode::Value::Variable(v) = &w.value {
-                    return Err(err(line, format!("{l}#{v}: variables are not supported")));
-                }
-                words.push((l, value(w.span, w.letter)?));
-            }
-        }
-        let glued_exponent = words.iter().any(|w| w.0 == 'E') && !exponent_hint(text).is_empty();
-        self.apply(codes, words, line).map_err(|e| match e {
-            Error::InvalidInput { what, message }
-                if glued_exponent && message.starts_with("unsupported word E") =>
-            {
-                Error::InvalidInput {
-                    what,
-                    message: format!("{message}{}", exponent_hint(text)),
-                }
-            }
-            e => e,
-        })
+                    e => e,
+                })
+        });
+        self.words = read;
+        r
     }
 
     fn apply(
         &mut self,
-        codes: Vec<(char, u32, Option<u32>)>,
-        words: Vec<(char, f64)>,
+        codes: &[(char, u32, Option<u32>)],
+        words: &[(char, f64)],
         line: u64,
     ) -> Result<Option<GMove>> {
         let mut dwell = false;
         let mut machine_coords = false;
         let mut g43 = false;
         let mut m6 = false;
-        for (letter, major, minor) in &codes {
+        for (letter, major, minor) in codes {
             match (letter, major, minor) {
                 ('G', 93, None) => self.inverse_time = true,
                 ('G', 94, None) => self.inverse_time = false,
@@ -386,7 +353,7 @@ impl Interpreter {
         } else {
             self.work_offsets[self.work]
         };
-        for &(l, v) in &words {
+        for &(l, v) in words {
             match l {
                 'X' | 'Y' | 'Z' => {
                     let k = (l as u8 - b'X') as usize;

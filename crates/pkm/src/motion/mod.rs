@@ -12,6 +12,7 @@ pub mod run;
 pub mod singular;
 pub mod stats;
 pub mod tools;
+mod words;
 
 pub use path::{Segment, Shape};
 pub use plan::Step;

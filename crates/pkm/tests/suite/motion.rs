@@ -343,6 +343,41 @@ fn summary_at_100_hz(m: &pkm::Machine, program: &str) -> pkm::motion::MotionSumm
     .summary
 }
 
+/// The program is read line by line into one buffer: CRLF and LF endings, a last line
+/// without an ending and a lone CR at the end read as `BufRead::lines` reads them, and
+/// bytes that are not UTF-8 name their line.
+#[test]
+fn program_lines_are_read_as_lines_reads_them() {
+    let m = load("tripod-seed000.toml");
+    let run = |bytes: &[u8]| {
+        pkm::analysis::motion::run_motion(
+            &m,
+            pkm::analysis::motion::MotionSource::Gcode {
+                reader: Box::new(std::io::Cursor::new(bytes.to_vec())),
+                from: None,
+                setup: Default::default(),
+            },
+            &pkm::motion::program::FeedOptions::default(),
+            Sampling::Rate(100.0),
+            &mut pkm::analysis::motion::NoSink,
+        )
+    };
+    let lf = run(b"G21 G90\nG1 X5 Y2 F600\nG1 X-3 Y4\n").unwrap().summary;
+    let crlf = run(b"G21 G90\r\nG1 X5 Y2 F600\r\nG1 X-3 Y4")
+        .unwrap()
+        .summary;
+    assert!(lf.samples > 10);
+    assert_eq!(format!("{lf:?}"), format!("{crlf:?}"));
+    // A CR with no LF after it stays in the line, as `lines` leaves it; the parser
+    // takes it for a space.
+    let cr = run(b"G21 G90\nG1 X5 Y2 F600\nG1 X-3 Y4\r").unwrap().summary;
+    assert_eq!(format!("{lf:?}"), format!("{cr:?}"));
+    let e = run(b"G21 G90\nG1 X5 F600\n(\xff)\nG1 X6\n")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("reading line 3") && e.contains("UTF-8"), "{e}");
+}
+
 /// A program without motion (no samples, or a dwell) has no ratios: nothing over
 /// nothing, where `inf` was reported.
 #[test]

@@ -1,0 +1,364 @@
+//! The codes and words of one G-code line, read through the `gcode` crate's
+//! zero-allocation parser (`gcode::core`'s visitors) into buffers kept from line to
+//! line.
+//!
+//! `gcode::parse` builds a syntax tree per call: a `Program`, its blocks, their codes
+//! and arguments, each a vector of its own, allocated and dropped per line. The crate's
+//! own AST builder is a visitor over `gcode::core`; this one records what the
+//! interpreter reads (the codes, and each word's letter and source span) and nothing
+//! else, with the builder's order and diagnostics: a line is read to the same codes,
+//! words and first error as by `gcode::parse` (tested against it).
+
+use gcode::core::{
+    BlockVisitor, CommandVisitor, ControlFlow, Diagnostics, HasDiagnostics, Number, ProgramVisitor,
+    Span, TokenType, Value,
+};
+
+use crate::error::{Error, Result};
+
+/// A word as the parser reported it: the letter as written and its source span, or
+/// the variable (`X#1`) it names.
+#[derive(Debug, Clone)]
+enum Raw {
+    Number { letter: char, span: Span },
+    Variable { letter: char, name: String },
+}
+
+/// What one line holds, read by [`LineWords::read`]; the buffers are reused.
+#[derive(Default)]
+pub(crate) struct LineWords {
+    /// The G, M and T codes in order: letter, major number, minor number (`G91.1`).
+    pub codes: Vec<(char, u32, Option<u32>)>,
+    /// The words in order (a block's code arguments, then its bare words): upper-case
+    /// letter and value, re-read from the source text as f64.
+    pub words: Vec<(char, f64)>,
+    raw: Vec<Raw>,
+    bare: Vec<Raw>,
+    first_error: Option<String>,
+}
+
+// The buffers are scratch space, not state: an interpreter's copy starts empty, and two
+// interpreters are equal whatever their buffers hold.
+impl Clone for LineWords {
+    fn clone(&self) -> Self {
+        LineWords::default()
+    }
+}
+
+impl PartialEq for LineWords {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
+}
+
+impl std::fmt::Debug for LineWords {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("LineWords")
+    }
+}
+
+impl LineWords {
+    /// Reads `text`, one source line (1-based number `line`), into [`Self::codes`] and
+    /// [`Self::words`]. Errors, as `err(line, message)`: the parser's first diagnostic
+    /// (`malformed: ...`), a variable, a word whose number is not a finite f64.
+    pub fn read(
+        &mut self,
+        text: &str,
+        line: u64,
+        err: impl Fn(u64, String) -> Error,
+    ) -> Result<()> {
+        self.codes.clear();
+        self.words.clear();
+        self.raw.clear();
+        self.bare.clear();
+        self.first_error = None;
+        gcode::core::parse(text, &mut Reader(self));
+        if let Some(first) = self.first_error.take() {
+            return Err(err(line, format!("malformed: {first}")));
+        }
+        for raw in &self.raw {
+            match raw {
+                Raw::Variable { letter, name } => {
+                    let l = letter.to_ascii_uppercase();
+                    return Err(err(
+                        line,
+                        format!("{l}#{name}: variables are not supported"),
+                    ));
+                }
+                Raw::Number { letter, span } => {
+                    let src = text.get(span.start..span.start + span.length).unwrap_or("");
+                    let num = src
+                        .trim_start_matches([*letter, letter.to_ascii_lowercase()])
+                        .trim();
+                    let value = num.parse::<f64>().ok().filter(|v| v.is_finite());
+                    let Some(v) = value else {
+                        return Err(err(
+                            line,
+                            format!("`{src}`: expected a number after {letter}"),
+                        ));
+                    };
+                    self.words.push((letter.to_ascii_uppercase(), v));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn word(letter: char, value: Value<'_>, span: Span) -> Raw {
+        match value {
+            Value::Literal(_) => Raw::Number { letter, span },
+            Value::Variable(v) => Raw::Variable {
+                letter,
+                name: v.to_string(),
+            },
+        }
+    }
+
+    fn code(&mut self, letter: char, number: Number) -> ControlFlow<Command<'_>> {
+        self.codes
+            .push((letter, number.major(), number.minor().map(|m| m.get())));
+        ControlFlow::Continue(Command(self))
+    }
+}
+
+/// The diagnostics `gcode::parse` collects (unknown content, unexpected tokens), the
+/// first one kept in its words.
+impl Diagnostics for LineWords {
+    fn emit_unknown_content(&mut self, text: &str, _span: Span) {
+        if self.first_error.is_none() {
+            let kind = gcode::DiagnosticKind::UnknownContent {
+                text: text.to_string(),
+            };
+            self.first_error = Some(kind.to_string());
+        }
+    }
+
+    fn emit_unexpected(&mut self, actual: &str, expected: &[TokenType], _span: Span) {
+        if self.first_error.is_none() {
+            let kind = gcode::DiagnosticKind::Unexpected {
+                actual: actual.to_string(),
+                expected: expected.to_vec(),
+            };
+            self.first_error = Some(kind.to_string());
+        }
+    }
+}
+
+struct Reader<'a>(&'a mut LineWords);
+struct Block<'a>(&'a mut LineWords);
+struct Command<'a>(&'a mut LineWords);
+
+impl HasDiagnostics for Reader<'_> {
+    fn diagnostics(&mut self) -> &mut dyn Diagnostics {
+        self.0
+    }
+}
+
+impl HasDiagnostics for Block<'_> {
+    fn diagnostics(&mut self) -> &mut dyn Diagnostics {
+        self.0
+    }
+}
+
+impl HasDiagnostics for Command<'_> {
+    fn diagnostics(&mut self) -> &mut dyn Diagnostics {
+        self.0
+    }
+}
+
+impl ProgramVisitor for Reader<'_> {
+    fn start_block(&mut self) -> ControlFlow<impl BlockVisitor + '_> {
+        ControlFlow::Continue(Block(&mut *self.0))
+    }
+}
+
+impl BlockVisitor for Block<'_> {
+    // A comment is `;...` or `(...)`; `gcode::parse` reports anything else it is
+    // handed as a comment as unexpected, and so does this.
+    fn comment(&mut self, value: &str, span: Span) {
+        if !value.starts_with([';', '(']) {
+            self.0.emit_unexpected(value, &[TokenType::Comment], span);
+        }
+    }
+
+    fn word_address(&mut self, letter: char, value: Value<'_>, span: Span) {
+        self.0.bare.push(LineWords::word(letter, value, span));
+    }
+
+    fn start_general_code(&mut self, number: Number) -> ControlFlow<impl CommandVisitor + '_> {
+        self.0.code('G', number)
+    }
+
+    fn start_miscellaneous_code(
+        &mut self,
+        number: Number,
+    ) -> ControlFlow<impl CommandVisitor + '_> {
+        self.0.code('M', number)
+    }
+
+    fn start_tool_change_code(&mut self, number: Number) -> ControlFlow<impl CommandVisitor + '_> {
+        self.0.code('T', number)
+    }
+
+    // A block's bare words follow its codes' arguments, as `gcode::parse`'s blocks
+    // are read.
+    fn end_line(self, _span: Span) {
+        let words = self.0;
+        words.raw.append(&mut words.bare);
+    }
+}
+
+impl CommandVisitor for Command<'_> {
+    fn argument(&mut self, letter: char, value: Value<'_>, span: Span) {
+        self.0.raw.push(LineWords::word(letter, value, span));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn err(line: u64, message: String) -> Error {
+        Error::InvalidInput {
+            what: format!("G-code line {line}"),
+            message,
+        }
+    }
+
+    type Read = (Vec<(char, u32, Option<u32>)>, Vec<(char, f64)>);
+
+    /// The line read from `gcode::parse`'s syntax tree, as the interpreter did before
+    /// the visitor: the reference.
+    fn from_tree(text: &str, line: u64) -> Result<Read> {
+        let program = gcode::parse(text).map_err(|d| {
+            let first = d.iter().next().map(|x| x.kind.to_string());
+            err(line, format!("malformed: {}", first.unwrap_or_default()))
+        })?;
+        let (mut codes, mut words) = (Vec::new(), Vec::new());
+        let value = |span: Span, letter: char| -> Result<f64> {
+            let raw = text.get(span.start..span.start + span.length).unwrap_or("");
+            let num = raw
+                .trim_start_matches([letter, letter.to_ascii_lowercase()])
+                .trim();
+            num.parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| err(line, format!("`{raw}`: expected a number after {letter}")))
+        };
+        let word = |letter: char, v: &gcode::Value, span: Span| -> Result<(char, f64)> {
+            let l = letter.to_ascii_uppercase();
+            if let gcode::Value::Variable(v) = v {
+                return Err(err(line, format!("{l}#{v}: variables are not supported")));
+            }
+            Ok((l, value(span, letter)?))
+        };
+        for block in &program.blocks {
+            for code in &block.codes {
+                let (letter, number, args) = match code {
+                    gcode::Code::General(g) => ('G', g.number, &g.args),
+                    gcode::Code::Miscellaneous(m) => ('M', m.number, &m.args),
+                    gcode::Code::ToolChange(t) => ('T', t.number, &t.args),
+                    _ => unreachable!("the parser has three kinds of code"),
+                };
+                codes.push((letter, number.major(), number.minor().map(|m| m.get())));
+                for a in args {
+                    words.push(word(a.letter, &a.value, a.span)?);
+                }
+            }
+            for w in &block.word_addresses {
+                words.push(word(w.letter, &w.value, w.span)?);
+            }
+        }
+        Ok((codes, words))
+    }
+
+    fn check(buf: &mut LineWords, text: &str) {
+        // The interpreter refuses these before the parser sees them (the crate's code
+        // numbers overflow).
+        if crate::motion::gcode::oversized_code(text).is_some() {
+            return;
+        }
+        let want = from_tree(text, 7).map_err(|e| e.to_string());
+        let got = buf
+            .read(text, 7, err)
+            .map(|()| (buf.codes.clone(), buf.words.clone()))
+            .map_err(|e| e.to_string());
+        // Values compare by bits: the same text is parsed the same way.
+        let bits = |r: std::result::Result<Read, String>| {
+            r.map(|(c, w)| {
+                let w: Vec<_> = w.iter().map(|(l, v)| (*l, v.to_bits())).collect();
+                (c, w)
+            })
+        };
+        assert_eq!(bits(got), bits(want), "line {text:?}");
+    }
+
+    /// Every line of the example programs and of the G-code fuzz corpus, and lines
+    /// written to reach each diagnostic, read to the same codes, words and first error
+    /// as from `gcode::parse`; the buffers are reused across all of them.
+    #[test]
+    fn reads_every_line_as_the_syntax_tree_does() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+        let mut lines: Vec<String> = [
+            "G1 X10 Y-2.5 F800",
+            "g01 x1.5 y.5 z-.25 a3 b-4 c5",
+            "N10 G90 G91.1 G21 (comment) X1 ; end",
+            "X5 Y6",
+            "X5 G1 Y6",
+            "G2 X1 Y0 I0.5 J0 R2 P3",
+            "G43 H2 T3 M6 S12000 M3",
+            "G1 X#1 Y2",
+            "G1 X#<name>",
+            "G1 X",
+            "G1 X-",
+            "G1 X+3",
+            "G1 X1e5",
+            "G1 X1..2",
+            "G1 X99999999999999999999999999999999999999999999999",
+            "G1 X3.4028236e38",
+            "G1 X5 $$",
+            "G1 X5 (unclosed",
+            "O100 G0 X1",
+            "% G0 X1",
+            "N5.5 G1 X1",
+            "G0 N3 X1",
+            "G1 X1 X2 X3",
+            "M428",
+            "G59.3 X0",
+            "G1\tX1\tY2",
+            "  ",
+            "\u{e9}G1 X1",
+        ]
+        .map(String::from)
+        .into();
+        for dir in ["examples/paths", "fuzz/corpus/gcode"] {
+            let mut files: Vec<_> = std::fs::read_dir(root.join(dir))
+                .unwrap()
+                .map(|e| e.unwrap().path())
+                .collect();
+            files.sort();
+            for f in files {
+                let bytes = std::fs::read(&f).unwrap();
+                let text = String::from_utf8_lossy(&bytes);
+                lines.extend(text.lines().map(String::from));
+            }
+        }
+        assert!(lines.len() > 2000, "{} lines", lines.len());
+        let mut buf = LineWords::default();
+        for text in &lines {
+            check(&mut buf, text);
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(4000))]
+        /// Random lines of G-code's characters.
+        #[test]
+        fn reads_random_lines_as_the_syntax_tree_does(
+            text in "[GgMmTtXYZABCFIJKRPHNOSEe0-9 .+\\-#;()%<>$\t]{0,40}"
+        ) {
+            check(&mut LineWords::default(), &text);
+        }
+    }
+}
