@@ -181,6 +181,17 @@ fn exponent_hint(text: &str) -> &'static str {
 /// panics in a checked one, so such a word is refused before it gets there.
 pub(super) fn oversized_code(text: &str) -> Option<String> {
     let b = text.as_bytes();
+    // Such a number is a run of seven digits or more: a line without one (nearly every
+    // line) is settled by one pass over its bytes.
+    let mut run = 0u32;
+    let mut longest = 0u32;
+    for &c in b {
+        run = if c.is_ascii_digit() { run + 1 } else { 0 };
+        longest = longest.max(run);
+    }
+    if longest <= 6 {
+        return None;
+    }
     let mut i = 0;
     let mut depth = 0usize;
     while i < b.len() {

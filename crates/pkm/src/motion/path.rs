@@ -149,7 +149,7 @@ impl<const P: usize> Segment<P> {
 
     /// Pose coordinates and their first and second derivatives with respect to the path
     /// parameter `s` (exact).
-    #[inline]
+    #[inline(always)]
     pub fn eval(&self, s: f64) -> (SVector<f64, P>, SVector<f64, P>, SVector<f64, P>) {
         if !(self.length > 0.0) {
             return (self.start, SVector::zeros(), SVector::zeros());

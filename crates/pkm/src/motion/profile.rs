@@ -185,7 +185,7 @@ impl Profile {
     }
 
     /// Path parameter, speed and acceleration at time `t` (clamped to the profile).
-    #[inline]
+    #[inline(always)]
     pub fn eval(&self, t: f64) -> (f64, f64, f64) {
         if self.n == 0 {
             return (self.length, 0.0, 0.0);
