@@ -72,6 +72,21 @@ impl AxisStats {
         self.mean_abs_velocity = self.sum_v / n;
         self.mean_abs_acceleration = self.sum_a / n;
     }
+
+    /// Every reported figure's bits, for tests that compare results bit for bit.
+    #[cfg(test)]
+    pub(crate) fn bits(&self) -> [u64; 7] {
+        [
+            self.travel,
+            self.min,
+            self.max,
+            self.peak_velocity,
+            self.mean_abs_velocity,
+            self.peak_acceleration,
+            self.mean_abs_acceleration,
+        ]
+        .map(f64::to_bits)
+    }
 }
 
 /// [`AxisStats`] of `N` axes sampled together, laid out by field (one array per
@@ -239,19 +254,7 @@ mod tests {
                     let mut s = *s;
                     s.finalize();
                     let b = bank.axis(i);
-                    let bits = |s: &AxisStats| {
-                        [
-                            s.travel,
-                            s.min,
-                            s.max,
-                            s.peak_velocity,
-                            s.mean_abs_velocity,
-                            s.peak_acceleration,
-                            s.mean_abs_acceleration,
-                        ]
-                        .map(f64::to_bits)
-                    };
-                    assert_eq!(bits(&b), bits(&s), "axis {i} after {k} samples");
+                    assert_eq!(b.bits(), s.bits(), "axis {i} after {k} samples");
                 }
             }
         }
