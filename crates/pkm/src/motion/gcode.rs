@@ -13,7 +13,7 @@
 //! M8/M9 with S (no kinematic effect). Other M codes (a controller's own, such as
 //! LinuxCNC's remapped M428) are accepted with a note ([`Interpreter::notes`]).
 //! Numbers are re-read from the source text as f64 (the parser reads f32); the parser
-//! runs through its zero-allocation visitors ([`super::words`]).
+//! runs through its zero-allocation visitors (`motion/words.rs`).
 //!
 //! Lines are interpreted one at a time ([`Interpreter::line`]), so a program of any
 //! length streams with flat memory.
