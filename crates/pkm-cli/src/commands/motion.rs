@@ -465,17 +465,27 @@ pub fn run(a: &MotionArgs) -> Result<u8> {
                 );
             }
         }
+        let ratio = |r: Option<f64>| r.map_or("n/a".to_string(), |r| format!("{r:.3}"));
         match &s.ratios {
-            Some(r) => println!(
-                "ratios serial/PKM (seed 000's): travel {:.3} (mean over mean), peak velocity \
-                 {:.3}, peak acceleration {:.3} (largest over largest); of mean peaks: \
-                 velocity {:.3}, acceleration {:.3}",
-                r.travel,
-                r.velocity,
-                r.acceleration,
-                r.velocity_of_mean_peaks,
-                r.acceleration_of_mean_peaks
-            ),
+            Some(r) => {
+                println!(
+                    "ratios serial/PKM (seed 000's): travel {:.3} (mean over mean), peak \
+                     velocity {:.3}, peak acceleration {} (largest over largest); of mean \
+                     peaks: velocity {:.3}, acceleration {}",
+                    r.travel,
+                    r.velocity,
+                    ratio(r.acceleration),
+                    r.velocity_of_mean_peaks,
+                    ratio(r.acceleration_of_mean_peaks)
+                );
+                if r.acceleration.is_none() {
+                    println!(
+                        "  (acceleration n/a: the serial axes never accelerate within a move \
+                         under `--profile constant`, and its velocity steps at the corners \
+                         are not samples; `--profile trapezoid` or `scurve` gives the ramps)"
+                    );
+                }
+            }
             None => println!(
                 "ratios serial/PKM: none (no serial axis moved, or an actuator or axis turns: \
                  mm over deg means nothing)"

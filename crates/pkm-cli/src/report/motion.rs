@@ -151,8 +151,11 @@ pub fn section(h: &mut Html, machine: &Machine, ctx: &Context) -> Result<()> {
             sig(peak(&s.serial, |x| x.peak_acceleration)),
             match &s.ratios {
                 Some(r) => format!(
-                    "{:.3} / {:.3} / {:.3}",
-                    r.travel, r.velocity, r.acceleration
+                    "{:.3} / {:.3} / {}",
+                    r.travel,
+                    r.velocity,
+                    r.acceleration
+                        .map_or("n/a (constant profile)".to_string(), |a| format!("{a:.3}"))
                 ),
                 None => "n/a (revolute drives, or no serial axis moved)".into(),
             },

@@ -177,14 +177,18 @@ pub struct Ratios {
     pub travel: f64,
     /// Largest serial peak |velocity| over the largest actuator peak |velocity|.
     pub velocity: f64,
-    /// Largest serial peak |acceleration| over the largest actuator peak.
-    pub acceleration: f64,
+    /// Largest serial peak |acceleration| over the largest actuator peak; `None` when
+    /// no moving serial axis accelerates: straight moves under the constant profile
+    /// (each move at its feed from its first sample to its last; the velocity steps
+    /// at the corners are not samples), where "0" would say the serial machine needs
+    /// no acceleration.
+    pub acceleration: Option<f64>,
     /// Mean peak |velocity| of the moving serial axes over the actuators' mean peak
     /// |velocity| (not the paper's definition).
     pub velocity_of_mean_peaks: f64,
     /// Mean peak |acceleration| of the moving serial axes over the actuators' mean
-    /// peak (not the paper's definition).
-    pub acceleration_of_mean_peaks: f64,
+    /// peak (not the paper's definition); `None` as [`Ratios::acceleration`].
+    pub acceleration_of_mean_peaks: Option<f64>,
 }
 
 /// Computes [`Ratios`]; serial axes that do not move are left out. `None` unless every
@@ -214,12 +218,13 @@ pub fn ratios(
     let by_mean = |g: fn(&AxisStats) -> f64| over(mean(&col(&moving, g)), mean(&col(&acts, g)));
     let by_largest =
         |g: fn(&AxisStats) -> f64| over(largest(&col(&moving, g)), largest(&col(&acts, g)));
+    let accelerates = largest(&col(&moving, |x| x.peak_acceleration)) > 0.0;
     Some(Ratios {
         travel: by_mean(|x| x.travel),
         velocity: by_largest(|x| x.peak_velocity),
-        acceleration: by_largest(|x| x.peak_acceleration),
+        acceleration: accelerates.then(|| by_largest(|x| x.peak_acceleration)),
         velocity_of_mean_peaks: by_mean(|x| x.peak_velocity),
-        acceleration_of_mean_peaks: by_mean(|x| x.peak_acceleration),
+        acceleration_of_mean_peaks: accelerates.then(|| by_mean(|x| x.peak_acceleration)),
     })
 }
 
