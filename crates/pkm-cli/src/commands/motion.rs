@@ -480,9 +480,10 @@ pub fn run(a: &MotionArgs) -> Result<u8> {
                 );
                 if r.acceleration.is_none() {
                     println!(
-                        "  (acceleration n/a: the serial axes never accelerate within a move \
-                         under `--profile constant`, and its velocity steps at the corners \
-                         are not samples; `--profile trapezoid` or `scurve` gives the ramps)"
+                        "  (acceleration n/a: under `--profile constant` the serial axes keep \
+                         their speed along each straight move, and the speed steps at the \
+                         corners are not samples; `--profile trapezoid` or `scurve` gives the \
+                         ramps)"
                     );
                 }
             }

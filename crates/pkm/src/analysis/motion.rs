@@ -447,7 +447,7 @@ impl Visitor for Simulate<'_, '_> {
                 runner.run_steps(steps, &mut sink, &mut on_tool)?;
             }
             MotionSource::Gcode {
-                reader,
+                mut reader,
                 from,
                 setup,
             } => {
@@ -467,7 +467,6 @@ impl Visitor for Simulate<'_, '_> {
                 // Moves are handed on one line late: the last is known at the end.
                 let mut pending: Option<Move<P>> = None;
                 let mut queue: std::collections::VecDeque<Step<P>> = Default::default();
-                let mut reader = reader;
                 // One line at a time into one buffer (`BufRead::lines` would allocate a
                 // string per line): the same lines, the same errors.
                 let (mut buf, mut i) = (String::new(), 0usize);

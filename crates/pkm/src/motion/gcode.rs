@@ -148,7 +148,8 @@ pub struct Interpreter {
     words: LineWords,
 }
 
-fn err(line: u64, message: String) -> Error {
+/// The error of G-code line `line`: `message` under "G-code line N".
+pub(super) fn err(line: u64, message: String) -> Error {
     Error::InvalidInput {
         what: format!("G-code line {line}"),
         message,
@@ -278,7 +279,7 @@ impl Interpreter {
             ));
         }
         let mut read = std::mem::take(&mut self.words);
-        let r = read.read(text, line, err).and_then(|()| {
+        let r = read.read(text, line).and_then(|()| {
             let glued_exponent =
                 read.words.iter().any(|w| w.0 == 'E') && !exponent_hint(text).is_empty();
             self.apply(&read.codes, &read.words, line)

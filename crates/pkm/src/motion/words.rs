@@ -14,7 +14,8 @@ use gcode::core::{
     Span, TokenType, Value,
 };
 
-use crate::error::{Error, Result};
+use super::gcode::err;
+use crate::error::Result;
 
 /// A word as the parser reported it: the letter as written and its source span, or
 /// the variable (`X#1`) it names.
@@ -59,14 +60,9 @@ impl std::fmt::Debug for LineWords {
 
 impl LineWords {
     /// Reads `text`, one source line (1-based number `line`), into [`Self::codes`] and
-    /// [`Self::words`]. Errors, as `err(line, message)`: the parser's first diagnostic
+    /// [`Self::words`]. Errors, naming the line: the parser's first diagnostic
     /// (`malformed: ...`), a variable, a word whose number is not a finite f64.
-    pub fn read(
-        &mut self,
-        text: &str,
-        line: u64,
-        err: impl Fn(u64, String) -> Error,
-    ) -> Result<()> {
+    pub fn read(&mut self, text: &str, line: u64) -> Result<()> {
         self.codes.clear();
         self.words.clear();
         self.raw.clear();
@@ -219,13 +215,6 @@ mod tests {
     use super::*;
     use proptest::prelude::*;
 
-    fn err(line: u64, message: String) -> Error {
-        Error::InvalidInput {
-            what: format!("G-code line {line}"),
-            message,
-        }
-    }
-
     type Read = (Vec<(char, u32, Option<u32>)>, Vec<(char, f64)>);
 
     /// The line read from `gcode::parse`'s syntax tree, as the interpreter did before
@@ -281,7 +270,7 @@ mod tests {
         }
         let want = from_tree(text, 7).map_err(|e| e.to_string());
         let got = buf
-            .read(text, 7, err)
+            .read(text, 7)
             .map(|()| (buf.codes.clone(), buf.words.clone()))
             .map_err(|e| e.to_string());
         // Values compare by bits: the same text is parsed the same way.

@@ -347,8 +347,8 @@ fn summary_at_100_hz(m: &pkm::Machine, program: &str) -> pkm::motion::MotionSumm
     .summary
 }
 
-/// The program is read line by line into one buffer: CRLF and LF endings, a last line
-/// without an ending and a lone CR at the end read as `BufRead::lines` reads them, and
+/// The program is read line by line into one buffer: CRLF and LF endings and a last
+/// line without an ending give the same run, a lone CR at the end does no harm, and
 /// bytes that are not UTF-8 name their line.
 #[test]
 fn program_lines_are_read_as_lines_reads_them() {
@@ -372,8 +372,8 @@ fn program_lines_are_read_as_lines_reads_them() {
         .summary;
     assert!(lf.samples > 10);
     assert_eq!(format!("{lf:?}"), format!("{crlf:?}"));
-    // A CR with no LF after it stays in the line, as `lines` leaves it; the parser
-    // takes it for a space.
+    // A CR with no LF after it stays in the line (as `BufRead::lines` leaves it); the
+    // parser takes it for a space.
     let cr = run(b"G21 G90\nG1 X5 Y2 F600\nG1 X-3 Y4\r").unwrap().summary;
     assert_eq!(format!("{lf:?}"), format!("{cr:?}"));
     let e = run(b"G21 G90\nG1 X5 F600\n(\xff)\nG1 X6\n")
