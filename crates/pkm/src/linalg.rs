@@ -22,40 +22,73 @@ pub struct SmallLu<const N: usize> {
 
 impl<const N: usize> SmallLu<N> {
     /// Factorises `m`; `None` when a pivot is exactly zero or not finite.
+    ///
+    /// Gaussian elimination with partial pivoting (the largest |entry| of the column,
+    /// the first one of equal ones). Up to 8 x 8 the steps are written out, so each
+    /// step's loop bounds and row indices are constants: its loops unroll, the rows
+    /// stay in registers, and a 6 x 6 factorisation takes 50 ns instead of 140-170 ns
+    /// (EPYC, random matrices and matrices near one another), with the same operations
+    /// in the same order (the same bits; tested).
     #[inline]
     pub fn new(m: &SMatrix<f64, N, N>) -> Option<Self> {
-        let mut lu: [[f64; N]; N] = std::array::from_fn(|r| std::array::from_fn(|c| m[(r, c)]));
-        let mut perm: [usize; N] = std::array::from_fn(|i| i);
-        let mut inv_diag = [0.0; N];
-        for k in 0..N {
-            let mut piv = k;
-            let mut best = lu[k][k].abs();
-            for (r, row) in lu.iter().enumerate().skip(k + 1) {
-                let v = row[k].abs();
-                if v > best {
-                    best = v;
-                    piv = r;
-                }
-            }
-            if !(best > 0.0) || !best.is_finite() {
-                return None;
-            }
-            if piv != k {
-                lu.swap(k, piv);
-                perm.swap(k, piv);
-            }
-            let pivot_row = lu[k];
-            let inv = 1.0 / pivot_row[k];
-            inv_diag[k] = inv;
-            for row in lu.iter_mut().skip(k + 1) {
-                let f = row[k] * inv;
-                row[k] = f;
-                for c in k + 1..N {
-                    row[c] -= f * pivot_row[c];
-                }
+        let mut f = SmallLu {
+            lu: std::array::from_fn(|r| std::array::from_fn(|c| m[(r, c)])),
+            perm: std::array::from_fn(|i| i),
+            inv_diag: [0.0; N],
+        };
+        let ok = if N <= 8 {
+            let mut step = |k: usize| k >= N || f.eliminate(k);
+            step(0) && step(1) && step(2) && step(3) && step(4) && step(5) && step(6) && step(7)
+        } else {
+            (0..N).all(|k| f.eliminate(k))
+        };
+        ok.then_some(f)
+    }
+
+    /// Step `k` of the elimination: picks the pivot of column `k`, swaps it into row
+    /// `k`, stores the multipliers below it and updates the rows below; `false` when
+    /// the pivot is zero or not finite.
+    #[inline(always)]
+    fn eliminate(&mut self, k: usize) -> bool {
+        let lu = &mut self.lu;
+        let mut piv = k;
+        let mut best = lu[k][k].abs();
+        for (r, row) in lu.iter().enumerate().skip(k + 1) {
+            let v = row[k].abs();
+            if v > best {
+                best = v;
+                piv = r;
             }
         }
-        Some(SmallLu { lu, perm, inv_diag })
+        if !(best > 0.0) || !best.is_finite() {
+            return false;
+        }
+        // Rows `k` and `piv` swapped by selects over the rows below `k` (constant
+        // indices once the steps are written out, so the rows stay in registers; a
+        // swap at the index `piv` went through memory and was most of the time).
+        let (old_row, old_perm) = (lu[k], self.perm[k]);
+        for r in k + 1..N {
+            let here = r == piv;
+            let row = lu[r];
+            for c in 0..N {
+                lu[k][c] = if here { row[c] } else { lu[k][c] };
+                lu[r][c] = if here { old_row[c] } else { row[c] };
+            }
+            let p = self.perm[r];
+            self.perm[k] = if here { p } else { self.perm[k] };
+            self.perm[r] = if here { old_perm } else { p };
+        }
+        let pivot_row = lu[k];
+        let inv = 1.0 / pivot_row[k];
+        self.inv_diag[k] = inv;
+        for row in lu.iter_mut().skip(k + 1) {
+            let f = row[k] * inv;
+            row[k] = f;
+            for c in k + 1..N {
+                row[c] -= f * pivot_row[c];
+            }
+        }
+        true
     }
 
     /// Smallest and largest |pivot| of the factorisation: a cheap conditioning estimate
@@ -472,6 +505,99 @@ mod tests {
         assert!((m * x - b).amax() < 1e-14);
         let inv = m.try_inverse().unwrap();
         assert!((lu.inverse() - inv).amax() < 1e-14);
+    }
+
+    /// The loop over elimination steps, as `SmallLu::new` was before its steps were
+    /// written out: the reference the written-out steps must equal bit for bit.
+    fn factor_by_loop<const N: usize>(m: &SMatrix<f64, N, N>) -> Option<SmallLu<N>> {
+        let mut f = SmallLu {
+            lu: std::array::from_fn(|r| std::array::from_fn(|c| m[(r, c)])),
+            perm: std::array::from_fn(|i| i),
+            inv_diag: [0.0; N],
+        };
+        for k in 0..N {
+            let mut piv = k;
+            let mut best = f.lu[k][k].abs();
+            for r in k + 1..N {
+                if f.lu[r][k].abs() > best {
+                    best = f.lu[r][k].abs();
+                    piv = r;
+                }
+            }
+            if !(best > 0.0) || !best.is_finite() {
+                return None;
+            }
+            f.lu.swap(k, piv);
+            f.perm.swap(k, piv);
+            let p = f.lu[k];
+            let inv = 1.0 / p[k];
+            f.inv_diag[k] = inv;
+            for r in k + 1..N {
+                let g = f.lu[r][k] * inv;
+                f.lu[r][k] = g;
+                for c in k + 1..N {
+                    f.lu[r][c] -= g * p[c];
+                }
+            }
+        }
+        Some(f)
+    }
+
+    /// Bit patterns of a factorisation (NaN compares equal to itself).
+    fn bits<const N: usize>(f: &Option<SmallLu<N>>) -> Option<(Vec<u64>, [usize; N])> {
+        f.as_ref().map(|f| {
+            let v = f.lu.iter().flatten().chain(&f.inv_diag);
+            (v.map(|x| x.to_bits()).collect(), f.perm)
+        })
+    }
+
+    fn written_out_equals_loop<const N: usize>(seed: u64) -> usize {
+        let mut s = seed;
+        let mut rnd = move || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        let base = SMatrix::<f64, N, N>::from_fn(|_, _| rnd());
+        let mut some = 0;
+        for case in 0..3000 {
+            let mut m = match case % 4 {
+                // Random, then near one matrix (the FK's case: the same pivots).
+                0 => SMatrix::<f64, N, N>::from_fn(|_, _| rnd()),
+                1 => base.map(|v| v + 1e-4 * rnd()),
+                // Small integers: exact ties between pivot candidates, exact zeros.
+                2 => SMatrix::<f64, N, N>::from_fn(|_, _| (3.0 * rnd()).round()),
+                _ => SMatrix::<f64, N, N>::from_fn(|_, _| (1.5 * rnd()).round()),
+            };
+            if case % 50 == 7 {
+                m[(case % N, (case / 3) % N)] = [f64::NAN, f64::INFINITY, -0.0][case % 3];
+            }
+            let f = SmallLu::new(&m);
+            assert_eq!(bits(&f), bits(&factor_by_loop(&m)), "{m}");
+            some += f.is_some() as usize;
+        }
+        some
+    }
+
+    /// The written-out elimination steps give the loop's factorisation bit for bit
+    /// (and the same refusals): random matrices, matrices near one another, small
+    /// integers (ties between pivots, zero pivots, singular matrices), NaN, infinity
+    /// and negative zero; at the sizes written out (1, 3, 6, 8) and beyond (9).
+    /// Mutations tried: a step skipped, or the strict pivot comparison made `>=`
+    /// (the last of equal pivots), fail it.
+    #[test]
+    fn written_out_elimination_equals_the_loop() {
+        for (some, total) in [
+            (written_out_equals_loop::<1>(11), 3000),
+            (written_out_equals_loop::<3>(12), 3000),
+            (written_out_equals_loop::<6>(13), 3000),
+            (written_out_equals_loop::<8>(14), 3000),
+            (written_out_equals_loop::<9>(15), 3000),
+        ] {
+            // Both outcomes are exercised.
+            assert!(some > 1000 && some < total, "{some} of {total} factorised");
+        }
     }
 
     #[test]

@@ -100,7 +100,7 @@ pub fn solve(
     r0: &Matrix3<f64>,
     o: &FkOptions,
 ) -> Result<FkReport> {
-    solve_from(h, q, p0, r0, None, o).map(|(r, _)| r)
+    solve_from(h, q, p0, r0, &mut None, o)
 }
 
 /// Forward kinematics along a stream of strut lengths (a trajectory sampled at a
@@ -148,10 +148,14 @@ impl FkTracker {
             }
             _ => (self.p, self.r),
         };
-        let (rep, lu) = match solve_from(h, q, &p0, &r0, self.lu, &self.options) {
+        let mut lu = self.lu;
+        let rep = match solve_from(h, q, &p0, &r0, &mut lu, &self.options) {
             Ok(x) => x,
             // A prediction can overshoot at a sharp turn: retry from the last pose.
-            Err(_) => solve_from(h, q, &self.p, &self.r, None, &self.options)?,
+            Err(_) => {
+                lu = None;
+                solve_from(h, q, &self.p, &self.r, &mut lu, &self.options)?
+            }
         };
         self.prev = Some((self.p, self.r));
         self.p = rep.position;
@@ -161,16 +165,27 @@ impl FkTracker {
     }
 }
 
-/// [`solve`] with an optional factorisation (and its smallest pivot) to start with;
-/// returns the factorisation in use at the end.
+/// The factorisation `lu` kept for the next solve with its smallest pivot, or dropped.
+#[inline(always)]
+fn keep(lu: &mut Option<(SmallLu<6>, f64)>, worth_it: bool, min_pivot: f64) {
+    match lu {
+        Some(l) if worth_it => l.1 = min_pivot,
+        _ => *lu = None,
+    }
+}
+
+/// [`solve`] with an optional factorisation (and its smallest pivot) to start with,
+/// replaced in place by the factorisation in use at the end (`None`: not worth
+/// keeping). In place, not passed and returned: the hexapod's Monte Carlo solves
+/// once per machine, and moving the 400-byte factorisation in and out was 4 % of it.
 fn solve_from(
     h: &Hexapod,
     q: &Vector6<f64>,
     p0: &Vector3<f64>,
     r0: &Matrix3<f64>,
-    lu0: Option<(SmallLu<6>, f64)>,
+    lu: &mut Option<(SmallLu<6>, f64)>,
     o: &FkOptions,
-) -> Result<(FkReport, Option<(SmallLu<6>, f64)>)> {
+) -> Result<FkReport> {
     let singular = |p: &Vector3<f64>, rc: f64| Error::Singular {
         what: format!(
             "hexapod forward kinematics: the Jacobian is singular near X={:.3} Y={:.3} Z={:.3} mm",
@@ -187,10 +202,9 @@ fn solve_from(
     let mut res_v = l0 - q;
     let mut res = res_v.amax();
     let mut fresh = true; // j is the Jacobian at the current pose
-    let mut lu: Option<SmallLu<6>> = lu0.map(|l| l.0);
-    // Smallest LU pivot of the factorisation in use: the pose uncertainty is about
-    // 6 * residual / pivot (cheap); the exact |J^-1| is computed only when that is large.
-    let mut min_pivot = lu0.map(|l| l.1).unwrap_or(0.0);
+                          // Smallest LU pivot of the factorisation in use: the pose uncertainty is about
+                          // 6 * residual / pivot (cheap); the exact |J^-1| is computed only when that is large.
+    let mut min_pivot = lu.as_ref().map(|l| l.1).unwrap_or(0.0);
     // A kept factorisation that converged slowly: not worth keeping for the next solve.
     let mut stale = false;
     for it in 0..o.max_iterations {
@@ -217,15 +231,13 @@ fn solve_from(
                     rcond: rcond1(&j),
                 });
             }
-            return Ok((
-                FkReport {
-                    position: p,
-                    rotation: r,
-                    iterations: it,
-                    residual: res,
-                },
-                lu.filter(|_| !stale).map(|l| (l, min_pivot)),
-            ));
+            keep(lu, !stale, min_pivot);
+            return Ok(FkReport {
+                position: p,
+                rotation: r,
+                iterations: it,
+                residual: res,
+            });
         }
         let chord = lu.is_some(); // the factorisation is kept from an earlier pose
         if lu.is_none() {
@@ -237,13 +249,13 @@ fn solve_from(
             let rc = if hi > 0.0 { lo / hi } else { 0.0 };
             match f {
                 Some(f) if rc >= o.min_rcond => {
-                    lu = Some(f);
+                    *lu = Some((f, lo));
                     min_pivot = lo;
                 }
                 _ => return Err(singular(&p, rc)),
             }
         }
-        let d = lu.as_ref().map(|f| f.solve(&res_v)).unwrap_or_default();
+        let d = lu.as_ref().map(|f| f.0.solve(&res_v)).unwrap_or_default();
         let dv = Vector3::new(d[0], d[1], d[2]);
         let dw = Vector3::new(d[3], d[4], d[5]) * inv_lc;
         let mut t = 1.0;
@@ -279,7 +291,7 @@ fn solve_from(
         if !accepted {
             if chord {
                 // Retry this iteration with a fresh Jacobian.
-                lu = None;
+                *lu = None;
                 continue;
             }
             return Err(Error::NotConverged {
@@ -291,19 +303,17 @@ fn solve_from(
         // Keep the factorisation only after a small full step that cut the residual
         // tenfold (Newton's quadratic regime), or after a chord step that did.
         if !(t == 1.0 && d.norm() <= o.chord_step && res <= 0.1 * res_before) {
-            lu = None;
+            *lu = None;
         }
     }
     if res <= o.tolerance {
-        Ok((
-            FkReport {
-                position: p,
-                rotation: r,
-                iterations: o.max_iterations,
-                residual: res,
-            },
-            lu.map(|l| (l, min_pivot)),
-        ))
+        keep(lu, true, min_pivot);
+        Ok(FkReport {
+            position: p,
+            rotation: r,
+            iterations: o.max_iterations,
+            residual: res,
+        })
     } else {
         Err(Error::NotConverged {
             solver: "hexapod forward kinematics",
