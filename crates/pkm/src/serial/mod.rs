@@ -152,8 +152,31 @@ pub fn link_transform(link: &Link, dev: &LinkDeviation) -> Matrix4<f64> {
 /// exact, without the nine square roots. The
 /// `acos`/`cos` round trip, 2 x 49 libm calls per pose of a deviated 6R arm, was
 /// nine tenths of [`Chain::pose`]; the two agree within 1e-15 per entry (tested).
+///
+/// On a CPU with AVX2 the same code runs compiled for it (the same operations in the
+/// same order, so the same bits: Rust does not contract `a * b + c`; tested): 218 ns
+/// per deviated 6R [`Chain::pose`] instead of 243 ns (EPYC; an AVX-512 build took
+/// 229 ns, and the whole walk built for AVX2 290 ns).
 #[inline]
 pub fn deviated_block(link: &Link, dev: &LinkDeviation) -> Matrix3<f64> {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2 (checked on the line above).
+        return unsafe { deviated_block_avx2(link, dev) };
+    }
+    deviated_block_body(link, dev)
+}
+
+/// [`deviated_block_body`] compiled for AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn deviated_block_avx2(link: &Link, dev: &LinkDeviation) -> Matrix3<f64> {
+    deviated_block_body(link, dev)
+}
+
+/// [`deviated_block`]'s code, for every build of it.
+#[inline(always)]
+fn deviated_block_body(link: &Link, dev: &LinkDeviation) -> Matrix3<f64> {
     if let Some(b) = &dev.block {
         return *b;
     }
@@ -528,3 +551,65 @@ impl PreparedChain {
 }
 
 pub use machine::{ChainDeviations, Parameter as Deviation, SerialMachine};
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+
+    /// The AVX2 build of the deviated block equals the plain build bit for bit:
+    /// random, identity and axis-permuting rotations; deviations from 1e-9 rad to
+    /// 0.3 rad (beyond the small-angle series too), sparse ones, NaN; completed blocks.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn deviated_block_is_the_same_in_every_build() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            return;
+        }
+        let mut rng = rand::rngs::StdRng::seed_from_u64(7);
+        for case in 0..20_000 {
+            let rotation = match case % 4 {
+                0 => Matrix3::identity(),
+                1 => Matrix3::new(1.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 1.0, 0.0),
+                _ => *nalgebra::Rotation3::from_euler_angles(
+                    rng.random_range(-3.0..3.0),
+                    rng.random_range(-3.0..3.0),
+                    rng.random_range(-3.0..3.0),
+                )
+                .matrix(),
+            };
+            let scale = 10f64.powf(rng.random_range(-9.0..-0.5));
+            let mut alpha = Matrix3::from_fn(|_, _| {
+                if rng.random_bool(0.3) {
+                    0.0
+                } else {
+                    scale * rng.random_range(-1.0..1.0)
+                }
+            });
+            if case % 997 == 5 {
+                alpha[case % 9] = f64::NAN;
+            }
+            let link = Link {
+                name: "l".into(),
+                joint: None,
+                translation: Vector3::zeros(),
+                rotation,
+            };
+            let dev = LinkDeviation {
+                alpha,
+                block: (case % 101 == 3).then_some(rotation * 0.5),
+                ..Default::default()
+            };
+            let plain = deviated_block_body(&link, &dev);
+            // SAFETY: the CPU has AVX2 (checked above).
+            let avx2 = unsafe { deviated_block_avx2(&link, &dev) };
+            for k in 0..9 {
+                assert_eq!(
+                    plain[k].to_bits(),
+                    avx2[k].to_bits(),
+                    "case {case} entry {k}"
+                );
+            }
+        }
+    }
+}
