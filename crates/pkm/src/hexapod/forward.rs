@@ -201,9 +201,10 @@ fn solve_from(
     let (l0, mut j) = soa.lengths_and_jacobian(&p, &r, lc);
     let mut res_v = l0 - q;
     let mut res = res_v.amax();
-    let mut fresh = true; // j is the Jacobian at the current pose
-                          // Smallest LU pivot of the factorisation in use: the pose uncertainty is about
-                          // 6 * residual / pivot (cheap); the exact |J^-1| is computed only when that is large.
+    // j is the Jacobian at the current pose.
+    let mut fresh = true;
+    // Smallest LU pivot of the factorisation in use: the pose uncertainty is about
+    // 6 * residual / pivot (cheap); the exact |J^-1| is computed only when that is large.
     let mut min_pivot = lu.as_ref().map(|l| l.1).unwrap_or(0.0);
     // A kept factorisation that converged slowly: not worth keeping for the next solve.
     let mut stale = false;
