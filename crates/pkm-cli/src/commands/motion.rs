@@ -470,20 +470,31 @@ pub fn run(a: &MotionArgs) -> Result<u8> {
             Some(r) => {
                 println!(
                     "ratios serial/PKM (seed 000's): travel {:.3} (mean over mean), peak \
-                     velocity {:.3}, peak acceleration {} (largest over largest); of mean \
-                     peaks: velocity {:.3}, acceleration {}",
+                     velocity {}, peak acceleration {} (largest over largest); of mean \
+                     peaks: velocity {}, acceleration {}",
                     r.travel,
-                    r.velocity,
+                    ratio(r.velocity),
                     ratio(r.acceleration),
-                    r.velocity_of_mean_peaks,
+                    ratio(r.velocity_of_mean_peaks),
                     ratio(r.acceleration_of_mean_peaks)
                 );
-                if r.acceleration.is_none() {
+                if r.velocity.is_none() {
                     println!(
-                        "  (acceleration n/a: under `--profile constant` the serial axes keep \
-                         their speed along each straight move, and the speed steps at the \
-                         corners are not samples; `--profile trapezoid` or `scurve` gives the \
-                         ramps)"
+                        "  (n/a: no sample caught the machine moving: every move is shorter \
+                         than the sampling period, so its samples are its ends, at rest; \
+                         a higher --rate samples it)"
+                    );
+                } else if r.acceleration.is_none() {
+                    println!(
+                        "  (acceleration n/a: no sample caught a serial axis accelerating{})",
+                        match a.profile {
+                            ProfileArg::Constant =>
+                                ": under `--profile constant` the serial axes keep their \
+                                 speed along each straight move, and the speed steps at the \
+                                 corners are not samples; `--profile trapezoid` or `scurve` \
+                                 gives the ramps",
+                            _ => "",
+                        }
                     );
                 }
             }

@@ -151,11 +151,18 @@ pub fn section(h: &mut Html, machine: &Machine, ctx: &Context) -> Result<()> {
             sig(peak(&s.serial, |x| x.peak_acceleration)),
             match &s.ratios {
                 Some(r) => format!(
-                    "{:.3} / {:.3} / {}",
+                    "{:.3} / {} / {}",
                     r.travel,
-                    r.velocity,
-                    r.acceleration
-                        .map_or("n/a (constant profile)".to_string(), |a| format!("{a:.3}"))
+                    r.velocity
+                        .map_or("n/a (no sample in motion)".to_string(), |v| format!(
+                            "{v:.3}"
+                        )),
+                    match (r.velocity, r.acceleration) {
+                        (_, Some(a)) => format!("{a:.3}"),
+                        (None, None) => "n/a".into(),
+                        // The report's run has the constant profile.
+                        (Some(_), None) => "n/a (constant profile)".into(),
+                    }
                 ),
                 None => "n/a (revolute drives, or no serial axis moved)".into(),
             },

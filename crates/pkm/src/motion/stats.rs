@@ -175,8 +175,11 @@ impl<const N: usize> AxisBank<N> {
 pub struct Ratios {
     /// Mean travel of the moving serial axes over the actuators' mean travel.
     pub travel: f64,
-    /// Largest serial peak |velocity| over the largest actuator peak |velocity|.
-    pub velocity: f64,
+    /// Largest serial peak |velocity| over the largest actuator peak |velocity|;
+    /// `None` when no sample caught the machine moving (every move shorter than the
+    /// sampling period: its samples are its ends, at rest), where the quotient would
+    /// be 0 / 0.
+    pub velocity: Option<f64>,
     /// Largest serial peak |acceleration| over the largest actuator peak; `None` when
     /// no moving serial axis accelerates: straight moves under the constant profile
     /// (each move at its feed from its first sample to its last; the velocity steps
@@ -184,8 +187,8 @@ pub struct Ratios {
     /// no acceleration.
     pub acceleration: Option<f64>,
     /// Mean peak |velocity| of the moving serial axes over the actuators' mean peak
-    /// |velocity| (not the paper's definition).
-    pub velocity_of_mean_peaks: f64,
+    /// |velocity| (not the paper's definition); `None` as [`Ratios::velocity`].
+    pub velocity_of_mean_peaks: Option<f64>,
     /// Mean peak |acceleration| of the moving serial axes over the actuators' mean
     /// peak (not the paper's definition); `None` as [`Ratios::acceleration`].
     pub acceleration_of_mean_peaks: Option<f64>,
@@ -218,12 +221,18 @@ pub fn ratios(
     let by_mean = |g: fn(&AxisStats) -> f64| over(mean(&col(&moving, g)), mean(&col(&acts, g)));
     let by_largest =
         |g: fn(&AxisStats) -> f64| over(largest(&col(&moving, g)), largest(&col(&acts, g)));
-    let accelerates = largest(&col(&moving, |x| x.peak_acceleration)) > 0.0;
+    // A peak ratio needs the moving serial axes to have one at a sample: otherwise it
+    // would read 0 (or 0 / 0) where nothing was measured.
+    let sampled = |g: fn(&AxisStats) -> f64| largest(&col(&moving, g)) > 0.0;
+    let (moves, accelerates) = (
+        sampled(|x| x.peak_velocity),
+        sampled(|x| x.peak_acceleration),
+    );
     Some(Ratios {
         travel: by_mean(|x| x.travel),
-        velocity: by_largest(|x| x.peak_velocity),
+        velocity: moves.then(|| by_largest(|x| x.peak_velocity)),
         acceleration: accelerates.then(|| by_largest(|x| x.peak_acceleration)),
-        velocity_of_mean_peaks: by_mean(|x| x.peak_velocity),
+        velocity_of_mean_peaks: moves.then(|| by_mean(|x| x.peak_velocity)),
         acceleration_of_mean_peaks: accelerates.then(|| by_mean(|x| x.peak_acceleration)),
     })
 }
