@@ -584,8 +584,8 @@ mod tests {
     /// (and the same refusals): random matrices, matrices near one another, small
     /// integers (ties between pivots, zero pivots, singular matrices), NaN, infinity
     /// and negative zero; at the sizes written out (1, 3, 6, 8) and beyond (9).
-    /// Mutations tried: a step skipped, or the strict pivot comparison made `>=`
-    /// (the last of equal pivots), fail it.
+    /// Mutations tried: a step skipped, the strict pivot comparison made `>=` (the
+    /// last of equal pivots), or the swap's second half dropped, fail it.
     #[test]
     fn written_out_elimination_equals_the_loop() {
         for (some, total) in [
