@@ -163,13 +163,18 @@ impl SphericalWrist {
     }
 
     /// Every solution of the tool pose `(target_p, target_r)` (at most eight; joints
-    /// with infinitely many solutions at `start`'s values), not polished and not wrapped;
-    /// or why the pose is out of reach.
+    /// with infinitely many solutions at `start`'s values), not polished and not wrapped,
+    /// in the order shoulder, elbow, wrist flip; or why the pose is out of reach.
+    ///
+    /// With `nearest`, the branches that cannot hold the solution nearest its joint
+    /// values are skipped ([`Nearest`]): the solutions returned are a subset, in the
+    /// same order, that holds every one as near as the nearest.
     pub(super) fn solve(
         &self,
         target_p: &Vector3<f64>,
         target_r: &Matrix3<f64>,
         start: &Vector6<f64>,
+        nearest: Option<&Nearest>,
     ) -> Solutions {
         let (w, p, n) = (&self.w, &self.p, self.w[1]);
         let tol = GEOMETRY_TOLERANCE * self.scale;
@@ -196,14 +201,17 @@ impl SphericalWrist {
                 g.abs() / n_across
             ));
         };
-        let mut out = [Vector6::zeros(); 8];
-        let mut count = 0;
+        // Slot `4 i + 2 j + k` holds the solution of shoulder `i`, elbow `j`, wrist `k`.
+        let mut slots = [None::<Vector6<f64>>; 8];
+        let mut search = Search::new(nearest);
         let mut elbow_miss = None;
         let mut wrist_miss = false;
         let (e2, f2) = (self.e.norm_squared(), self.f.norm_squared());
-        for (i, &q1) in q1s.iter().enumerate() {
-            if i == 1 && q1s[1] == q1s[0] {
-                break;
+        for i in search.order(0, &q1s) {
+            let q1 = q1s[i];
+            let d1 = search.term(0, q1);
+            if search.beyond(d1) {
+                continue;
             }
             let r1 = rot(&w[0], q1);
             // 2. Elbow: the planar distance from axis 2.
@@ -213,17 +221,20 @@ impl SphericalWrist {
             let a3 = 2.0 * self.e.dot(&self.f);
             let b3 = 2.0 * self.sigma * self.e.dot(&n.cross(&self.f));
             let Some(q3s) = cos_sin(a3, b3, r2 - e2 - f2) else {
-                // Of the shoulder's two solutions, report the nearer miss.
+                // Of the shoulder's two solutions, report the nearer miss (the first
+                // shoulder's on a tie, whatever the order they were tried in).
                 let (e, f, r) = (e2.sqrt(), f2.sqrt(), r2.sqrt());
                 let miss = ((e - f).abs() - r).max(r - (e + f));
-                if elbow_miss.is_none_or(|(m, _)| miss < m) {
-                    elbow_miss = Some((miss, r));
+                if elbow_miss.is_none_or(|(m, _, k)| miss < m || (miss == m && i < k)) {
+                    elbow_miss = Some((miss, r, i));
                 }
                 continue;
             };
-            for (j, &q3) in q3s.iter().enumerate() {
-                if j == 1 && q3s[1] == q3s[0] {
-                    break;
+            for j in search.order(2, &q3s) {
+                let q3 = q3s[j];
+                let d13 = d1 + search.term(2, q3);
+                if search.beyond(d13) {
+                    continue;
                 }
                 let r3 = rot(&w[2], q3);
                 let u = self.e + r3 * self.f;
@@ -232,6 +243,10 @@ impl SphericalWrist {
                 } else {
                     angle_about(&n, &u, &d)
                 };
+                let d123 = d13 + search.term(1, q2);
+                if search.beyond(d123) {
+                    continue;
+                }
                 let r123 = r1 * rot(&n, q2) * r3;
                 // 3. Wrist.
                 let m = r123.transpose() * target_r * self.r0.transpose();
@@ -244,9 +259,11 @@ impl SphericalWrist {
                     wrist_miss = true;
                     continue;
                 };
-                for (k, &q5) in q5s.iter().enumerate() {
-                    if k == 1 && q5s[1] == q5s[0] {
-                        break;
+                for k in search.order(4, &q5s) {
+                    let q5 = q5s[k];
+                    let d1235 = d123 + search.term(4, q5);
+                    if search.beyond(d1235) {
+                        continue;
                     }
                     let r5 = rot(w5, q5);
                     let y = r5 * w6;
@@ -258,16 +275,22 @@ impl SphericalWrist {
                     };
                     let k6 = r5.transpose() * rot(w4, q4).transpose() * m;
                     let q6 = angle_about(w6, &self.across6, &(k6 * self.across6));
-                    out[count] = Vector6::new(q1, q2, q3, q4, q5, q6);
-                    count += 1;
+                    search.found(d1235 + search.term(3, q4) + search.term(5, q6));
+                    slots[4 * i + 2 * j + k] = Some(Vector6::new(q1, q2, q3, q4, q5, q6));
                 }
             }
+        }
+        let mut out = [Vector6::zeros(); 8];
+        let mut count = 0;
+        for q in slots.into_iter().flatten() {
+            out[count] = q;
+            count += 1;
         }
         if count > 0 {
             return Ok((out, count));
         }
         Err(match elbow_miss {
-            Some((_, r)) if !wrist_miss => {
+            Some((_, r, _)) if !wrist_miss => {
                 let (e, f) = (e2.sqrt(), f2.sqrt());
                 format!(
                     "the wrist centre would be {r:.3} mm from axis 2, outside the {:.3} to \
@@ -278,5 +301,79 @@ impl SphericalWrist {
             }
             _ => "the tool orientation needs a wrist bend the wrist's axes cannot make".into(),
         })
+    }
+}
+
+/// The joint values whose nearest solution [`SphericalWrist::solve`] is asked for:
+/// nearest in `|wrap(q) - near|^2`, where `wrap` shifts the joints marked `wrapped` by
+/// whole turns to within half a turn of `near` (as [`super::arm::SerialArm`] ranks its
+/// solutions).
+pub(super) struct Nearest<'a> {
+    pub near: &'a Vector6<f64>,
+    pub wrapped: [bool; 6],
+}
+
+/// The branch-and-bound of [`SphericalWrist::solve`] toward [`Nearest`]: each branch
+/// (shoulder, then elbow, then wrist flip) is tried nearest first, and one whose
+/// joints known so far are already farther than a whole solution found is skipped.
+///
+/// The squared distance of a solution is a sum of one term per joint, each
+/// nonnegative, so a partial sum never exceeds the whole (rounding to nearest is
+/// monotone). A branch is skipped only when its partial sum exceeds the best whole
+/// sum by more than 1e-9 relative: far beyond the few ulps by which sums of the same
+/// terms in another order (the caller's ranking) can differ, so a skipped solution is
+/// strictly farther than one kept and never the nearest, nor tied with it.
+struct Search<'a> {
+    nearest: Option<&'a Nearest<'a>>,
+    best: f64,
+}
+
+impl<'a> Search<'a> {
+    fn new(nearest: Option<&'a Nearest<'a>>) -> Self {
+        Search {
+            nearest,
+            best: f64::INFINITY,
+        }
+    }
+
+    /// Joint `i`'s term `(wrap(q) - near_i)^2`; 0 without [`Nearest`].
+    fn term(&self, i: usize, q: f64) -> f64 {
+        use std::f64::consts::TAU;
+        let Some(n) = self.nearest else {
+            return 0.0;
+        };
+        let near = n.near[i];
+        // `SerialArm::wrap`'s operations, so the same wrapped value.
+        let w = if n.wrapped[i] {
+            q - TAU * ((q - near) / TAU).round()
+        } else {
+            q
+        };
+        (w - near) * (w - near)
+    }
+
+    /// Whether a branch whose joints so far sum to `partial` cannot hold the nearest.
+    fn beyond(&self, partial: f64) -> bool {
+        partial > self.best * (1.0 + 1e-9)
+    }
+
+    /// A whole solution at squared distance `whole` was found.
+    fn found(&mut self, whole: f64) {
+        if whole < self.best {
+            self.best = whole;
+        }
+    }
+
+    /// The indices of a subproblem's two solutions `qs` of joint `i` (one when they are
+    /// equal), nearer first with [`Nearest`], else in order.
+    fn order(&self, i: usize, qs: &[f64; 2]) -> impl Iterator<Item = usize> {
+        let order = if qs[1] == qs[0] {
+            [Some(0), None]
+        } else if self.nearest.is_some() && self.term(i, qs[1]) < self.term(i, qs[0]) {
+            [Some(1), Some(0)]
+        } else {
+            [Some(0), Some(1)]
+        };
+        order.into_iter().flatten()
     }
 }
