@@ -46,7 +46,7 @@ const MAX_STEP: f64 = 0.3;
 const RESTARTS: usize = 32;
 
 /// Up to eight postures and how many there are.
-type Postures = ([Vector6<f64>; 8], usize);
+type Postures = [Vector6<f64>; 8];
 
 /// Which iteration [`SerialArm::descend`] runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -173,13 +173,18 @@ impl SerialArm {
     /// nearest solution ([`super::spherical_wrist::Nearest`]); should Newton fail to
     /// polish the nearest (a singular pose), every branch is solved and the next
     /// nearest tried, as with `all`. The answer is the same either way.
+    ///
+    /// The solutions are written into `sols`, the first `n` of the returned
+    /// `Some(n)` (eight 48-byte vectors: written in place, not moved through the
+    /// results).
     fn closed_form(
         &self,
         p: &Vector3<f64>,
         r: &Matrix3<f64>,
         near: &Vector6<f64>,
         all: bool,
-    ) -> std::result::Result<Option<Postures>, String> {
+        sols: &mut Postures,
+    ) -> std::result::Result<Option<usize>, String> {
         if self.wrist.is_none() {
             return Ok(None);
         }
@@ -188,12 +193,12 @@ impl SerialArm {
                 near,
                 wrapped: std::array::from_fn(|i| self.actuators[i].quantity == Quantity::Angle),
             };
-            let found = self.polished(p, r, near, false, Some(&nearest))?;
-            if found.1 > 0 {
-                return Ok(Some(found));
+            let n = self.polished(p, r, near, false, Some(&nearest), sols)?;
+            if n > 0 {
+                return Ok(Some(n));
             }
         }
-        self.polished(p, r, near, all, None).map(Some)
+        self.polished(p, r, near, all, None, sols).map(Some)
     }
 
     /// [`SerialArm::closed_form`] with the arm's wrist, over the branches `nearest`
@@ -205,11 +210,13 @@ impl SerialArm {
         near: &Vector6<f64>,
         all: bool,
         nearest: Option<&super::spherical_wrist::Nearest>,
-    ) -> std::result::Result<Postures, String> {
+        sols: &mut Postures,
+    ) -> std::result::Result<usize, String> {
         let Some(wrist) = &self.wrist else {
-            return Ok(([Vector6::zeros(); 8], 0));
+            return Ok(0);
         };
-        let (mut raw, n) = wrist.solve(p, r, near, nearest)?;
+        let mut raw = [Vector6::zeros(); 8];
+        let n = wrist.solve(p, r, near, nearest, &mut raw)?;
         for q in &mut raw[..n] {
             *q = self.wrap(*q, near);
         }
@@ -218,7 +225,6 @@ impl SerialArm {
                 .norm_squared()
                 .total_cmp(&(b - near).norm_squared())
         });
-        let mut sols = [Vector6::zeros(); 8];
         let mut count = 0;
         // Of a partial set, only the first is sure to be where it is in the whole.
         let tries = if nearest.is_some() { n.min(1) } else { n };
@@ -231,7 +237,7 @@ impl SerialArm {
                 }
             }
         }
-        Ok((sols, count))
+        Ok(count)
     }
 
     /// Tool pose relative to the part (homogeneous) and geometric Jacobian (tool-point
@@ -319,9 +325,10 @@ impl SerialArm {
         }
         let target_r = crate::rotation::rpy_matrix(x[3], x[4], x[5]);
         if closed_form {
-            match self.closed_form(&target_p, &target_r, start, false) {
+            let mut sols = [Vector6::zeros(); 8];
+            match self.closed_form(&target_p, &target_r, start, false, &mut sols) {
                 Err(reason) => return Err(Error::NotAttainable { reason }),
-                Ok(Some((sols, n))) if n > 0 => return Ok(sols[0]),
+                Ok(Some(n)) if n > 0 => return Ok(sols[0]),
                 // Not in closed form, or Newton could not polish a closed-form
                 // solution (a pose at a singular configuration): numerically below.
                 Ok(_) => {}
@@ -373,10 +380,11 @@ impl SerialArm {
             return Vec::new();
         }
         let target_r = crate::rotation::rpy_matrix(x[3], x[4], x[5]);
+        let mut sols = [Vector6::zeros(); 8];
         let found: Vec<Vector6<f64>> =
-            match self.closed_form(&target_p, &target_r, &self.home_joints, true) {
+            match self.closed_form(&target_p, &target_r, &self.home_joints, true, &mut sols) {
                 Err(_) => Vec::new(),
-                Ok(Some((sols, n))) if n > 0 => sols[..n].to_vec(),
+                Ok(Some(n)) if n > 0 => sols[..n].to_vec(),
                 // Not in closed form, or no closed-form posture Newton could polish (as
                 // in `inverse_from`): the spread starts.
                 Ok(_) => (0..starts.max(1))
@@ -866,39 +874,41 @@ mod tests {
                     2 => q + Vector6::from_fn(|_, _| rng.random_range(-9.0..9.0)),
                     _ => Vector6::from_fn(|_, _| rng.random_range(-PI..PI)),
                 };
-                let fast = a.closed_form(&p, &r, &near, false);
-                let whole = a.polished(&p, &r, &near, false, None);
-                match (&fast, &whole) {
-                    (Ok(Some((f, nf))), Ok((w, nw))) => {
-                        assert_eq!(nf.min(&1), nw.min(&1), "{file} case {case}");
+                let (mut fast, mut whole) = ([Vector6::zeros(); 8], [Vector6::zeros(); 8]);
+                let nf = a.closed_form(&p, &r, &near, false, &mut fast);
+                let nw = a.polished(&p, &r, &near, false, None, &mut whole);
+                match (&nf, &nw) {
+                    (Ok(Some(nf)), Ok(nw)) => {
+                        assert_eq!(nf, nw, "{file} case {case}");
                         if *nw > 0 {
                             for k in 0..6 {
                                 assert_eq!(
-                                    f[0][k].to_bits(),
-                                    w[0][k].to_bits(),
+                                    fast[0][k].to_bits(),
+                                    whole[0][k].to_bits(),
                                     "{file} case {case} joint {k}"
                                 );
                             }
                         }
                     }
                     (Err(e), Err(g)) => assert_eq!(e, g, "{file} case {case}"),
-                    _ => panic!("{file} case {case}: {fast:?} vs {whole:?}"),
+                    _ => panic!("{file} case {case}: {nf:?} vs {nw:?}"),
                 }
                 let wrist = a.wrist.as_ref().unwrap();
                 let nearest = super::super::spherical_wrist::Nearest {
                     near: &near,
                     wrapped: [true; 6],
                 };
-                if let (Ok((_, kept)), Ok((_, n))) = (
-                    wrist.solve(&p, &r, &near, Some(&nearest)),
-                    wrist.solve(&p, &r, &near, None),
+                let mut raw = [Vector6::zeros(); 8];
+                if let (Ok(kept), Ok(n)) = (
+                    wrist.solve(&p, &r, &near, Some(&nearest), &mut raw),
+                    wrist.solve(&p, &r, &near, None, &mut raw),
                 ) {
                     pruned_some += usize::from(kept < n);
                 }
-                if let Ok(Some((_, 1))) = fast {
+                if let Ok(Some(1)) = nf {
                     singular_fallbacks += usize::from(
-                        a.polished(&p, &r, &near, false, Some(&nearest))
-                            .is_ok_and(|s| s.1 == 0),
+                        a.polished(&p, &r, &near, false, Some(&nearest), &mut raw)
+                            .is_ok_and(|n| n == 0),
                     );
                 }
             }

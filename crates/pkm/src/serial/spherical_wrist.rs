@@ -62,9 +62,6 @@ pub(super) struct SphericalWrist {
     scale: f64,
 }
 
-/// Solutions of the closed form (before polishing), or why there are none.
-pub(super) type Solutions = Result<([Vector6<f64>; 8], usize), String>;
-
 /// `Rot(w, t)`, `w` unit.
 fn rot(w: &Vector3<f64>, t: f64) -> Matrix3<f64> {
     Rotation3::from_axis_angle(&Unit::new_unchecked(*w), t).into_inner()
@@ -163,8 +160,9 @@ impl SphericalWrist {
     }
 
     /// Every solution of the tool pose `(target_p, target_r)` (at most eight; joints
-    /// with infinitely many solutions at `start`'s values), not polished and not wrapped,
-    /// in the order shoulder, elbow, wrist flip; or why the pose is out of reach.
+    /// with infinitely many solutions at `start`'s values) into `out`, not polished and
+    /// not wrapped, in the order shoulder, elbow, wrist flip; their number, or why the
+    /// pose is out of reach.
     ///
     /// With `nearest`, the branches that cannot hold the solution nearest its joint
     /// values are skipped ([`Nearest`]): the solutions returned are a subset, in the
@@ -175,7 +173,8 @@ impl SphericalWrist {
         target_r: &Matrix3<f64>,
         start: &Vector6<f64>,
         nearest: Option<&Nearest>,
-    ) -> Solutions {
+        out: &mut [Vector6<f64>; 8],
+    ) -> Result<usize, String> {
         let (w, p, n) = (&self.w, &self.p, self.w[1]);
         let tol = GEOMETRY_TOLERANCE * self.scale;
         let centre = target_p + target_r * self.centre_tool;
@@ -280,14 +279,13 @@ impl SphericalWrist {
                 }
             }
         }
-        let mut out = [Vector6::zeros(); 8];
         let mut count = 0;
         for q in slots.into_iter().flatten() {
             out[count] = q;
             count += 1;
         }
         if count > 0 {
-            return Ok((out, count));
+            return Ok(count);
         }
         Err(match elbow_miss {
             Some((_, r, _)) if !wrist_miss => {
