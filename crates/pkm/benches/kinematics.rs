@@ -696,6 +696,36 @@ fn serial(c: &mut Criterion) {
         },
     );
     g.finish();
+    // The inverse of a robot's 6 x 6 Jacobian (each motion sample takes two): random
+    // matrices with rows 3..6 times 1000 (angular rows scaled by a length), as in
+    // `SerialArm`.
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand::rngs::StdRng::seed_from_u64(6);
+    let jacobians: Vec<nalgebra::Matrix6<f64>> = (0..1024)
+        .map(|_| {
+            nalgebra::Matrix6::from_fn(|r, _| {
+                rng.random_range(-1.0..1.0) * if r >= 3 { 1e3 } else { 1.0 }
+            })
+        })
+        .collect();
+    let mut g = c.benchmark_group("6x6 inverse of 1024 random matrices");
+    g.bench_function("nalgebra try_inverse", |b| {
+        b.iter(|| {
+            jacobians
+                .iter()
+                .map(|m| black_box(m).try_inverse().map_or(0.0, |i| i[(5, 5)]))
+                .sum::<f64>()
+        })
+    });
+    g.bench_function("pkm::linalg::inverse_lu (the same bits)", |b| {
+        b.iter(|| {
+            jacobians
+                .iter()
+                .map(|m| pkm::linalg::inverse_lu(black_box(m)).map_or(0.0, |i| i[(5, 5)]))
+                .sum::<f64>()
+        })
+    });
+    g.finish();
 }
 
 criterion_group!(serial_benches, serial);

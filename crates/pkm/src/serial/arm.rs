@@ -577,8 +577,8 @@ impl SerialArm {
             js.row_mut(r).scale_mut(lc);
             es[r] *= lc;
         }
-        let lu = js.lu();
-        if let Some(inv) = lu.try_inverse() {
+        // nalgebra's `js.lu().try_inverse()`, bit for bit.
+        if let Some(inv) = crate::linalg::inverse_lu(&js) {
             // Reciprocal condition estimate in the 1-norm.
             let rcond = 1.0 / (crate::linalg::norm1(&js) * crate::linalg::norm1(&inv));
             if rcond > 1e-8 {
@@ -624,7 +624,8 @@ impl SerialArm {
             what: "serial robot Jacobian".into(),
             rcond,
         };
-        let inv = js.try_inverse().ok_or_else(|| singular(0.0))?;
+        // nalgebra's `js.try_inverse()`, bit for bit.
+        let inv = crate::linalg::inverse_lu(&js).ok_or_else(|| singular(0.0))?;
         let rcond = 1.0 / (crate::linalg::norm1(&js) * crate::linalg::norm1(&inv));
         if rcond < 1e-12 {
             return Err(singular(rcond));

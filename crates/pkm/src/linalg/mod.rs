@@ -7,6 +7,9 @@
 // Parallel fixed-size arrays (struts, rows, columns) are indexed together.
 #![allow(clippy::needless_range_loop)]
 
+mod inverse;
+pub use inverse::inverse_lu;
+
 use nalgebra::{SMatrix, SVector};
 
 /// LU factorisation with partial pivoting, `P M = L U`, stored in place (row-major
