@@ -708,6 +708,37 @@ fn serial(c: &mut Criterion) {
             })
         })
         .collect();
+    // A robot's inverse kinematics from X..C (what its controller is sent): the KR 30's
+    // closed form, the posture nearest the home joints, at poses of random joints
+    // within the ranges (clipped to +-3 rad).
+    let kr = machine("kr30-dh.toml");
+    let Model::Serial(kr) = &kr.model else {
+        unreachable!("the KR 30 is a serial machine")
+    };
+    let pkm::serial::mechanism::SerialAny::Arm(arm) = &kr.mechanism else {
+        unreachable!("the KR 30 has tool-pose coordinates")
+    };
+    let poses: Vec<Vector6<f64>> = (0..1024)
+        .map(|_| {
+            let q = Vector6::from_fn(|i, _| {
+                let r = arm.actuators()[i].range;
+                rng.random_range(r.min.max(-3.0)..r.max.min(3.0))
+            });
+            arm.coords_of_joints(&q)
+        })
+        .collect();
+    c.bench_function(
+        "KR 30 IK from X..C (closed form, nearest home), 1024 random poses, one thread",
+        |b| {
+            b.iter(|| {
+                poses
+                    .iter()
+                    .filter_map(|x| arm.inverse(black_box(x)).ok())
+                    .map(|q| q[0])
+                    .sum::<f64>()
+            })
+        },
+    );
     let mut g = c.benchmark_group("6x6 inverse of 1024 random matrices");
     g.bench_function("nalgebra try_inverse", |b| {
         b.iter(|| {
