@@ -272,9 +272,13 @@ impl SphericalWrist {
                     } else {
                         angle_about(w4, &y_n, &z_n)
                     };
+                    let d12345 = d1235 + search.term(3, q4);
+                    if search.beyond(d12345) {
+                        continue;
+                    }
                     let k6 = r5.transpose() * rot(w4, q4).transpose() * m;
                     let q6 = angle_about(w6, &self.across6, &(k6 * self.across6));
-                    search.found(d1235 + search.term(3, q4) + search.term(5, q6));
+                    search.found(d12345 + search.term(5, q6));
                     slots[4 * i + 2 * j + k] = Some(Vector6::new(q1, q2, q3, q4, q5, q6));
                 }
             }
