@@ -577,7 +577,8 @@ impl SerialArm {
             js.row_mut(r).scale_mut(lc);
             es[r] *= lc;
         }
-        // nalgebra's `js.lu().try_inverse()`, bit for bit.
+        // nalgebra's `js.lu().try_inverse()`, bit for bit (refused where a pivot is
+        // not finite, where nalgebra returns NaN: the damped step below then).
         if let Some(inv) = crate::linalg::inverse_lu(&js) {
             // Reciprocal condition estimate in the 1-norm.
             let rcond = 1.0 / (crate::linalg::norm1(&js) * crate::linalg::norm1(&inv));
@@ -624,7 +625,8 @@ impl SerialArm {
             what: "serial robot Jacobian".into(),
             rcond,
         };
-        // nalgebra's `js.try_inverse()`, bit for bit.
+        // nalgebra's `js.try_inverse()`, bit for bit (a pivot not finite refused:
+        // singular, where nalgebra returned NaN rates).
         let inv = crate::linalg::inverse_lu(&js).ok_or_else(|| singular(0.0))?;
         let rcond = 1.0 / (crate::linalg::norm1(&js) * crate::linalg::norm1(&inv));
         if rcond < 1e-12 {

@@ -16,6 +16,25 @@ fn example_arm(file: &str) -> SerialArm {
     a
 }
 
+/// Joint `k`'s axis (unit direction, a point) at joints `q`, in the part frame.
+fn part_axis(a: &SerialArm, q: &Vector6<f64>, k: usize) -> (Vector3<f64>, Vector3<f64>) {
+    let (_, axes) = a.tool.axes::<6>(&(*q).into());
+    let r: Matrix3<f64> = a.part_inverse.fixed_view::<3, 3>(0, 0).into_owned();
+    let t = Vector3::new(
+        a.part_inverse[(0, 3)],
+        a.part_inverse[(1, 3)],
+        a.part_inverse[(2, 3)],
+    );
+    (r * axes[k].0, r * axes[k].1 + t)
+}
+
+/// The wrist centre at joints `q`: the point of axis 4 nearest axis 5 (part frame).
+fn wrist_centre(a: &SerialArm, q: &Vector6<f64>) -> Vector3<f64> {
+    let ((z4, o4), (z5, o5)) = (part_axis(a, q, 3), part_axis(a, q, 4));
+    let (d, c45) = (o5 - o4, z4.dot(&z5));
+    o4 + z4 * ((z4.dot(&d) - c45 * z5.dot(&d)) / (1.0 - c45 * c45))
+}
+
 /// The closed form toward the nearest solution (branches that cannot hold it
 /// skipped) gives the solution of the whole closed form bit for bit, or the same
 /// error: poses of random joints, of joints at the wrist singularity (q5 = 0, q4 and
@@ -33,7 +52,7 @@ fn the_nearest_branch_search_equals_the_whole_closed_form() {
     for file in ["machines/kr30-dh.toml", "robots/puma560-dh.toml"] {
         let a = example_arm(file);
         let mut rng = rand::rngs::StdRng::seed_from_u64(23);
-        let (mut pruned_some, mut singular_fallbacks) = (0, 0);
+        let (mut pruned_some, mut singular_fallbacks, mut on_axis) = (0, 0, (0, 0));
         for case in 0..6000 {
             let mut q = Vector6::from_fn(|i, _| {
                 let r = a.actuators[i].range;
@@ -51,6 +70,12 @@ fn the_nearest_branch_search_equals_the_whole_closed_form() {
             if case % 6 == 4 {
                 p *= rng.random_range(1.0..3.0);
             }
+            if case % 6 == 5 {
+                // The pose moved so that its wrist centre is on axis 1 (any q1 then).
+                let c = wrist_centre(&a, &q);
+                let (z1, o1) = part_axis(&a, &q, 0);
+                p -= c - (o1 + z1 * z1.dot(&(c - o1)));
+            }
             let near = match case % 5 {
                 0 => q,
                 1 => q + Vector6::from_fn(|_, _| rng.random_range(-0.01..0.01)),
@@ -60,6 +85,13 @@ fn the_nearest_branch_search_equals_the_whole_closed_form() {
             let (mut fast, mut whole) = ([Vector6::zeros(); 8], [Vector6::zeros(); 8]);
             let nf = a.closed_form(&p, &r, &near, false, &mut fast);
             let nw = a.polished(&p, &r, &near, false, None, &mut whole);
+            if case % 6 == 5 {
+                match &nw {
+                    Ok(n) if *n > 0 => on_axis.0 += 1,
+                    Err(e) if e.contains("from axis 1") => on_axis.1 += 1,
+                    _ => {}
+                }
+            }
             match (&nf, &nw) {
                 (Ok(Some(nf)), Ok(nw)) => {
                     assert_eq!(nf, nw, "{file} case {case}");
@@ -95,9 +127,23 @@ fn the_nearest_branch_search_equals_the_whole_closed_form() {
                 );
             }
         }
-        // The search does skip branches, and the fallback was exercised or not
-        // needed: both counted so the test says what it covered.
+        // What was covered: poses where branches were skipped, poses where Newton
+        // could not polish the nearest and every branch was solved again, and solved
+        // poses with the wrist centre on axis 1: solved on the KR 30 (its arm's plane
+        // holds axis 1), proven out of reach on the PUMA 560 (its shoulder offset).
         assert!(pruned_some > 3000, "{file}: {pruned_some} poses pruned");
-        eprintln!("{file}: {pruned_some} pruned, {singular_fallbacks} fallbacks");
+        assert!(
+            singular_fallbacks > 10,
+            "{file}: {singular_fallbacks} fallbacks"
+        );
+        let (solved, refused) = on_axis;
+        assert!(
+            solved + refused > 500,
+            "{file}: on axis 1 {solved} + {refused}"
+        );
+        assert!(
+            file.contains("kr30") == (solved > 500),
+            "{file}: {solved} solved"
+        );
     }
 }
