@@ -14,7 +14,7 @@ pub mod stats;
 pub mod tools;
 mod words;
 
-pub use path::{Segment, Shape};
+pub use path::{Segment, Shape, MIN_MOVE};
 pub use plan::Step;
 pub use profile::Profile;
 pub use run::{MotionSummary, Move, Runner, Sample, Sampling, ViolationRun};

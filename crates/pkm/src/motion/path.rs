@@ -50,8 +50,19 @@ pub struct Segment<const P: usize> {
     pub length: f64,
 }
 
+/// Shortest straight move (mm, or deg for a reorientation): below it a change is
+/// rounding, not motion. A pose computed by forward kinematics (a robot's home pose)
+/// carries errors of about 1e-14 mm and 1e-27 rad; a program's first line moving "to"
+/// it would otherwise be a move of that length at the programmed feed, and the tiny
+/// tip or angle change scaled by the feed over a near-zero length gave rates of
+/// 1e12 mm/s. 1e-6 mm (a nanometre) and 1e-6 deg are far below what a controller
+/// resolves (1e-4 mm and 1e-4 deg in a metric program).
+pub const MIN_MOVE: f64 = 1e-6;
+
 /// Length of a straight move: tool-tip distance for spatial coordinates (the first
-/// three are X, Y, Z), else the coordinate change in user units.
+/// three are X, Y, Z) when the tip moves at least [`MIN_MOVE`], else the largest
+/// rotary change in deg when that is at least [`MIN_MOVE`]; for a machine's own
+/// coordinates their Euclidean change in user units. Zero (no motion) below.
 fn line_length<const P: usize>(
     start: &SVector<f64, P>,
     end: &SVector<f64, P>,
@@ -59,19 +70,25 @@ fn line_length<const P: usize>(
     spatial: bool,
 ) -> f64 {
     let d = end - start;
-    if spatial {
+    let l = if spatial {
         let l = d.fixed_rows::<3>(0).norm();
-        if l > 1e-12 {
+        if l >= MIN_MOVE {
             return l;
         }
-        return (3..P)
+        (3..P)
             .map(|k| quantities[k].to_user(d[k]).abs())
-            .fold(0.0, f64::max);
+            .fold(0.0, f64::max)
+    } else {
+        (0..P)
+            .map(|k| quantities[k].to_user(d[k]).powi(2))
+            .sum::<f64>()
+            .sqrt()
+    };
+    if l >= MIN_MOVE {
+        l
+    } else {
+        0.0
     }
-    (0..P)
-        .map(|k| quantities[k].to_user(d[k]).powi(2))
-        .sum::<f64>()
-        .sqrt()
 }
 
 impl<const P: usize> Segment<P> {

@@ -19,6 +19,7 @@ mod linuxcnc;
 mod linuxcnc_tripod;
 mod machine_file;
 mod motion;
+mod motion_robot;
 mod motion_threads;
 mod p3rp;
 mod path_accuracy;

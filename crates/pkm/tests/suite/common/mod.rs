@@ -1,7 +1,16 @@
-//! Helpers shared by the clearance tests.
+//! Helpers shared by the tests.
 
 use nalgebra::Vector3;
 use pkm::Machine;
+
+/// The example machine file `name` (in `examples/machines/`), loaded.
+pub fn example(name: &str) -> Machine {
+    Machine::from_path(format!(
+        "{}/../../examples/machines/{name}",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap()
+}
 
 /// The tool point's change after moving the named joints' centres by `d` (mm) in the
 /// machine file `file` itself (lines `NAME = [x, y, z]`) and solving forward
