@@ -471,6 +471,33 @@ pub trait Mechanism<const P: usize, const A: usize>: Send + Sync {
         self.check_limits(x, &act.q, out);
         Ok(act)
     }
+
+    /// Whether a motion carries the actuator positions on from sample to sample with
+    /// [`Mechanism::follow`]: a type whose inverse picks one of several solutions (a
+    /// 6R robot's posture, a revolute joint's whole turns) says `true`. Default `false`:
+    /// the inverse has one solution.
+    fn follows(&self) -> bool {
+        false
+    }
+
+    /// Carries the motion on from the previous sample: `act` is
+    /// [`Mechanism::actuator_motion`] at `x` (rates `xd`, `xdd`), `prev` the previous
+    /// sample's motion, `dt` seconds before. A type with several inverse solutions
+    /// returns in `act` the one that continues `prev`, as a controller moving the
+    /// machine does, where `actuator_motion` alone picks one by a fixed rule (nearest
+    /// the home joints). Returns whether `act.q` changed (the motion engine then checks
+    /// its limits again). Called in sample order, on one thread. Default: unchanged.
+    fn follow(
+        &self,
+        _x: &SVector<f64, P>,
+        _xd: &SVector<f64, P>,
+        _xdd: &SVector<f64, P>,
+        _dt: f64,
+        _prev: &ActuatorMotion<A>,
+        _act: &mut ActuatorMotion<A>,
+    ) -> bool {
+        false
+    }
 }
 
 /// Actuator position, velocity and acceleration at one instant (mm or rad, per s, per s^2).

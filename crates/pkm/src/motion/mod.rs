@@ -3,6 +3,7 @@
 //! the path.
 
 pub mod decimated;
+mod follow;
 pub mod gcode;
 pub mod path;
 pub mod plan;

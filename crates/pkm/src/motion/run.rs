@@ -4,6 +4,7 @@
 use nalgebra::SVector;
 use serde::Serialize;
 
+use super::follow::{follow_block, Last};
 use super::path::Segment;
 use super::plan::{drive, run_inline, Block, Planner, Step};
 use super::profile::Profile;
@@ -137,6 +138,8 @@ struct Recorder<'m, M, const P: usize, const A: usize> {
     /// Per actuator, the largest |q'| and |q''| seen.
     peak_rates: [(f64, f64); A],
     singular: SingularTracker,
+    /// The last sample recorded, which the next continues ([`super::follow`]).
+    last: Last<A>,
 }
 
 /// The default work limit of a run: 2e7 samples (about 10 s on one core for a hexapod;
@@ -192,6 +195,7 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
                 peak_rates: [(0.0, 0.0); A],
                 serial_idx,
                 singular: SingularTracker::new(m.actuators(), DEFAULT_SINGULAR_ANGLE)?,
+                last: None,
             },
         })
     }
@@ -276,6 +280,8 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
         if let Some(length) = b.tool {
             tool(length)?;
         }
+        // Each sample continues the one before (a robot's posture and turns).
+        follow_block(self.m, b, &mut self.last);
         let n = b.failed.as_ref().map_or(b.plan.len(), |f| f.0);
         let mut violations = b.violations.drain(..).peekable();
         // The samples in order, then their statistics: the statistics see the same

@@ -784,16 +784,53 @@ impl Mechanism<6, 6> for SerialArm {
         self.characteristic_length
     }
 
-    /// `q' = J^-1 [v; w]`, `q'' = J^-1 ([a; al] - J' q')` with `J' q'` the directional
-    /// derivative of the geometric Jacobian along `q'` (central difference, step
-    /// `1e-5 / |q'|`: error of order 1e-10 relative).
+    /// At the inverse solution nearest the home joints ([`Mechanism::inverse`]):
+    /// `q' = J^-1 [v; w]`, `q'' = J^-1 ([a; al] - J' q')` with `J' q'` exact from the
+    /// chain's axes (one pass along the chain). A motion carries the posture on from
+    /// sample to sample ([`Mechanism::follow`]).
     fn actuator_motion(
         &self,
         x: &Vector6<f64>,
         xd: &Vector6<f64>,
         xdd: &Vector6<f64>,
     ) -> Result<ActuatorMotion<6>> {
-        let q = self.inverse(x)?;
+        self.motion_at(self.inverse(x)?, x, xd, xdd)
+    }
+
+    /// A posture is one of up to eight inverse solutions, and each revolute joint's
+    /// position is defined up to whole turns: a motion carries both on.
+    fn follows(&self) -> bool {
+        true
+    }
+
+    /// The solution continuing `prev`: each revolute joint shifted by whole turns to
+    /// within half a turn of `prev`; then, when a joint still moved more than the two
+    /// samples' rates explain (`|q - q_prev| > 2 dt max|q'| + dt^2 max|q''| + 1e-9`:
+    /// another posture), the inverse solved again from `prev` (closed form: the
+    /// posture nearest `prev`; else Newton from `prev`) and taken when nearer `prev`.
+    fn follow(
+        &self,
+        x: &Vector6<f64>,
+        xd: &Vector6<f64>,
+        xdd: &Vector6<f64>,
+        dt: f64,
+        prev: &ActuatorMotion<6>,
+        act: &mut ActuatorMotion<6>,
+    ) -> bool {
+        self.continue_motion(x, xd, xdd, dt, prev, act)
+    }
+}
+
+impl SerialArm {
+    /// [`Mechanism::actuator_motion`] at the joints `q` of `x` (one inverse solution):
+    /// `q' = J^-1 [v; w]`, `q'' = J^-1 ([a; al] - J' q')`.
+    fn motion_at(
+        &self,
+        q: Vector6<f64>,
+        x: &Vector6<f64>,
+        xd: &Vector6<f64>,
+        xdd: &Vector6<f64>,
+    ) -> Result<ActuatorMotion<6>> {
         // One pass along the chain: the axes give J and, once q' is known, J' q'.
         let (t, axes) = self.tool.axes::<6>(&q.into());
         let p = Vector3::new(t[(0, 3)], t[(1, 3)], t[(2, 3)]);
@@ -817,6 +854,8 @@ impl Mechanism<6, 6> for SerialArm {
         })
     }
 }
+
+mod follow;
 
 #[cfg(test)]
 mod tests;

@@ -5,9 +5,13 @@
 
 use nalgebra::{SVector, Vector6};
 use pkm::analysis::motion::{run_motion_with, MotionSource, SampleRow, SampleSink};
+use pkm::machine::Model;
 use pkm::motion::program::FeedOptions;
 use pkm::motion::{Sampling, Segment, MIN_MOVE};
-use pkm::{Machine, Quantity};
+use pkm::rotation::wrap_angle;
+use pkm::serial::arm::SerialArm;
+use pkm::serial::mechanism::SerialAny;
+use pkm::{Machine, Mechanism, Quantity};
 
 use super::common::example as load;
 
@@ -127,4 +131,175 @@ fn a_move_to_the_pose_already_reached_turns_no_joint() {
         a6.peak_velocity
     );
     assert!((a6.travel - 10.0).abs() < 1e-6, "{}", a6.travel);
+}
+
+/// Turning the tool about Z by 300 deg and back to -40 deg turns A6 through 300 deg
+/// and back, continuously: each joint moves between two samples no more than its rate
+/// allows. The inverse alone keeps A6 within half a turn of home: it jumped by 360 deg
+/// at C = 180 and its travel read 709.9 deg instead of 640.
+#[test]
+fn a_joint_turned_past_half_a_turn_from_home_keeps_turning() {
+    let m = load("kr30-dh.toml");
+    let program = "G90 G21\nG1 C300 F3000\nG1 C-40\n";
+    let (keep, summary) = gcode_run(&m, program, Sampling::Rate(1000.0));
+    assert_eq!(keep.rows.len(), 12801);
+    continuous(&keep, 1e-3);
+    // A6 turns against C (the tool points down): 0 -> -300 -> +40 deg.
+    let a6 = |r: &Row| r.2[5].to_degrees();
+    let at = |t: f64| &keep.rows[(t * 1000.0).round() as usize];
+    assert!((a6(at(6.0)) + 300.0).abs() < 1e-9, "{}", a6(at(6.0)));
+    assert!((a6(keep.rows.last().unwrap()) - 40.0).abs() < 1e-9);
+    let s = &summary.actuators[5].1;
+    assert!((s.travel - 640.0).abs() < 1e-6, "{}", s.travel);
+    assert!((s.min + 300.0).abs() < 1e-9 && (s.max - 40.0).abs() < 1e-9);
+    // Within the +-350 deg range: no violation.
+    assert!(summary.violations.is_empty(), "{:?}", summary.violations);
+
+    // On to C = 400: A6 would pass -350 deg. The limit is reported from C = 350 on
+    // (t = 7 s) to the end, worst -400 deg; the inverse alone never saw it.
+    let (keep, summary) = gcode_run(&m, "G90 G21\nG1 C400 F3000\n", Sampling::Rate(1000.0));
+    continuous(&keep, 1e-3);
+    assert_eq!(summary.violations.len(), 1, "{:?}", summary.violations);
+    let v = &summary.violations[0];
+    assert!(v.limit.contains("A6"), "{}", v.limit);
+    assert!(
+        (v.start_s - 7.001).abs() < 1e-9 && (v.end_s - 8.0).abs() < 1e-9,
+        "{v:?}"
+    );
+    assert!(
+        (v.worst + 400.0).abs() < 1e-6 && (v.bound + 350.0).abs() < 1e-9,
+        "{v:?}"
+    );
+
+    // A6 limited to [-350, 100] deg and C to 250: the continuing A6 (-250 deg) is
+    // within its range; the inverse alone gives +110 deg past C = 180 (> 100), a
+    // violation checked on the first solution and dropped with it.
+    let path = format!(
+        "{}/../../examples/machines/kr30-dh.toml",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let text = std::fs::read_to_string(&path).unwrap();
+    let from = r#"name = "A6", type = "revolute", range = [-350.0, 350.0]"#;
+    assert!(text.contains(from));
+    let text = text.replace(
+        from,
+        r#"name = "A6", type = "revolute", range = [-350.0, 100.0]"#,
+    );
+    let m = Machine::from_toml_str(&text, &path).unwrap();
+    let (keep, summary) = gcode_run(&m, "G90 G21\nG1 C250 F3000\n", Sampling::Rate(1000.0));
+    continuous(&keep, 1e-3);
+    assert!((keep.rows.last().unwrap().2[5].to_degrees() + 250.0).abs() < 1e-9);
+    assert!(summary.violations.is_empty(), "{:?}", summary.violations);
+}
+
+/// No joint moves between two samples by more than `slack` (rad) beyond what its
+/// velocity over the interval explains (the trapezoid rule on q').
+fn continuous(keep: &Keep, slack: f64) {
+    for w in keep.rows.windows(2) {
+        let (t0, _, q0, qd0, _) = &w[0];
+        let (t1, _, q1, qd1, _) = &w[1];
+        let dt = t1 - t0;
+        for i in 0..q0.len() {
+            let expected = 0.5 * dt * (qd0[i] + qd1[i]);
+            assert!(
+                (q1[i] - q0[i] - expected).abs() < slack,
+                "joint {} jumps {} -> {} at t = {t1}",
+                i + 1,
+                q0[i],
+                q1[i]
+            );
+        }
+    }
+}
+
+/// Tool poses along a joint-space curve `q(s) = q0 + s dq`, `s` in `[0, 1]` at `n + 1`
+/// points, by forward kinematics, their angles unwrapped from one point to the next
+/// (a straight move between two poses then turns the short way).
+fn poses_along(a: &SerialArm, q0: &Vector6<f64>, dq: &Vector6<f64>, n: usize) -> Vec<Vec<f64>> {
+    let mut out: Vec<Vec<f64>> = Vec::new();
+    for k in 0..=n {
+        let q = q0 + dq * (k as f64 / n as f64);
+        let mut x = a.coords_of_joints(&q);
+        if let Some(p) = out.last() {
+            for i in 3..6 {
+                x[i] = p[i] + wrap_angle(x[i] - p[i]);
+            }
+        }
+        out.push(x.iter().copied().collect());
+    }
+    out
+}
+
+/// A path whose joints follow a known curve: straight moves through its poses, three
+/// points per move (start, middle, end; the end is the next move's start), so every
+/// other sample is one of the curve's points. The run returns the curve's joints there (1e-9 rad), although the solution nearest home
+/// changes posture along the way (checked: the curve leaves it). `points`: how many
+/// moves.
+fn follows_the_curve(m: &Machine, q0: Vector6<f64>, dq: Vector6<f64>, points: usize) {
+    let Model::Serial(s) = &m.model else { panic!() };
+    let SerialAny::Arm(a) = &s.mechanism else {
+        panic!()
+    };
+    // The curve starts where the run starts: the home rule's solution at its first
+    // pose (a robot whose home rule lands in another posture there starts in it).
+    let q0 = a.inverse(&a.coords_of_joints(&q0)).unwrap();
+    let poses = poses_along(a, &q0, &dq, points);
+    let left_home_posture = (0..=points).any(|k| {
+        let q = q0 + dq * (k as f64 / points as f64);
+        let x = Vector6::from_column_slice(&poses[k]);
+        a.inverse(&x).map_or(true, |h| (h - q).amax() > 1e-3)
+    });
+    assert!(
+        left_home_posture,
+        "the curve never leaves the home rule's posture"
+    );
+    let mut keep = Keep::default();
+    let feed = FeedOptions {
+        feed: Some(100.0),
+        ..Default::default()
+    };
+    run_motion_with(
+        m,
+        MotionSource::Polyline { points: poses },
+        &feed,
+        Sampling::Points(3),
+        None,
+        &mut keep,
+    )
+    .unwrap();
+    assert_eq!(keep.rows.len(), 2 * points + 1);
+    for k in 0..=points {
+        let q = q0 + dq * (k as f64 / points as f64);
+        let got = Vector6::from_column_slice(&keep.rows[2 * k].2);
+        assert!((got - q).amax() < 1e-9, "point {k}: {got:?} against {q:?}");
+    }
+}
+
+/// The KR 30 (closed form): the wrist turns 150 deg at A4 and A6 while A5 opens to
+/// 60 deg, the shoulder and elbow move too. Past some point the wrist-flipped posture
+/// (A4 - 180, -A5, A6 - 180) lies nearer home; the run stays in the posture it started
+/// in.
+#[test]
+fn a_robot_keeps_its_posture_along_a_path() {
+    let d = std::f64::consts::PI / 180.0;
+    let home = Vector6::new(0.0, 0.0, 0.0, 0.0, 90.0, 0.0) * d;
+    let dq = Vector6::new(30.0, 10.0, -20.0, 150.0, -30.0, 150.0) * d;
+    follows_the_curve(&load("kr30-dh.toml"), home, dq, 150);
+}
+
+/// A UR5-like robot (no spherical wrist: Newton's inverse from home, with restarts):
+/// along a curve clear of its singular configurations (elbow and wrist 2 away from 0
+/// and 180 deg), the run continues from each sample (Newton from the previous joints)
+/// where the home rule lands in other postures.
+#[test]
+fn a_robot_without_closed_form_keeps_its_posture_along_a_path() {
+    let m = Machine::from_path(format!(
+        "{}/../../examples/robots/ur5-like.urdf",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let d = std::f64::consts::PI / 180.0;
+    let q0 = Vector6::new(0.0, -60.0, 80.0, -100.0, 60.0, 0.0) * d;
+    let dq = Vector6::new(120.0, -40.0, 50.0, 150.0, 90.0, 200.0) * d;
+    follows_the_curve(&m, q0, dq, 200);
 }

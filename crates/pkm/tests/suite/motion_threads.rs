@@ -205,6 +205,20 @@ fn a_robot_run_out_of_reach_fails_after_the_same_samples() {
     assert!(one.rows.rows.len() > 4096, "{}", one.rows.rows.len());
 }
 
+/// The KR 30 turning its wrist past half a turn and beyond A6's range: blocks computed
+/// apart, then continued in order (`motion/follow.rs`), give the same samples and
+/// limit stretches on one thread and many.
+#[test]
+fn a_robot_run_carrying_its_turns_on_is_the_same_on_one_thread_and_many() {
+    let m = load("kr30-dh.toml");
+    let text = "G21 G90\nG1 C300 F3000\nG1 X1000 C-40\nG1 C400\nG1 X1170 Z1400 C100\n";
+    let (one, _) = both(&m, text, Default::default(), 1000.0, None, None);
+    let summary = &one.result.as_ref().unwrap().summary;
+    assert!(one.rows.rows.len() > 5 * 4096, "{}", one.rows.rows.len());
+    assert_eq!(summary.violations.len(), 1, "{:?}", summary.violations);
+    assert!(summary.actuators[5].1.min < -350.0);
+}
+
 #[test]
 fn a_five_axis_run_with_tool_changes_is_the_same_on_one_thread_and_many() {
     // LinuxCNC's boat program through the MC 300: G43 H1 at line 12, G49 at 1863; the
