@@ -274,7 +274,8 @@ impl Machine {
     /// `qdd` (N, A) arrays (mm, rad, s; empty with `samples=False`), `columns` (their
     /// names), `summary` (as `pkm motion` writes it: per actuator and serial axis
     /// statistics in mm and deg, ratios, violations, feed override, singular
-    /// passages) and `notes`.
+    /// passages) and `notes`. A robot's joints continue from sample to sample (its
+    /// posture and the whole turns of its wrist), as a controller moves it.
     #[pyo3(signature = (gcode = None, path = None, *, feed = None, profile = "constant",
         acceleration = None, jerk = None, rapid = None, rate = None, points = None,
         start = None, tool_length = None, max_samples = 2_000_000, samples = true))]

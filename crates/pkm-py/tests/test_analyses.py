@@ -134,6 +134,20 @@ def test_motion_along_a_path_of_waypoints():
     assert (err < 1e-3).mean() > 0.97, np.sort(err.ravel())[-10:]
 
 
+def test_a_robot_motion_keeps_turning_its_wrist():
+    # The KR 30 turns the tool 300 deg about Z: A6 turns 300 deg the other way,
+    # continuously (each sample continues the one before, not the solution nearest
+    # home, which jumped 360 deg at C = 180), and its positions integrate its rates.
+    m = pkm.load(example("kr30-dh.toml"))
+    r = m.motion(gcode="G90 G21\nG1 C300 F3000\n", rate=1000)
+    a6 = r["q"][:, 5]
+    assert math.degrees(a6[-1]) == pytest.approx(-300.0, abs=1e-9)
+    dt = np.diff(r["t"])
+    step = np.diff(a6) - 0.5 * dt * (r["qd"][1:, 5] + r["qd"][:-1, 5])
+    assert np.abs(step).max() < 1e-9
+    assert r["summary"]["actuators"]["A6"]["travel"] == pytest.approx(300.0, rel=1e-9)
+
+
 def test_errors_equal_the_command(tmp_path):
     m = pkm.load(HEX)
     e = m.errors()
