@@ -54,7 +54,8 @@ enum Command {
         pkm ik examples/machines/tripod-seed000.toml --pose=-20,45.54,-286.25,15,0,0\n  \
         pkm ik examples/machines/tripod-seed000.toml --pose 0,0,-290 --json\n  \
         pkm ik examples/machines/tripod-seed000.toml --pose=10,0,-280,0,5,0 --rotation zyx\n  \
-        pkm ik MACHINE.toml --input poses.csv --output actuators.csv\n\n\
+        pkm ik MACHINE.toml --input poses.csv --output actuators.csv\n  \
+        pkm ik ROBOT.toml --input path.csv --output joints.csv --continuous   # rows of a path\n\n\
         Spatial machines take X,Y,Z (mm) and optionally three angles (deg) in the chosen\n\
         convention; without angles the machine's own orientation is used (the home\n\
         orientation of a translational tripod, the one its centre leg sets for a Tricept).\n\

@@ -210,13 +210,18 @@ impl Machine {
     /// a wrong shape or a value that is not finite; a pose without solution is a row
     /// with NaN actuators (batch) or `pkm.NotAttainableError` (one pose). With
     /// `check=False` the limits are not checked: `reachable` then says the pose has a
-    /// geometric solution (the inverse kinematics alone, fastest).
-    #[pyo3(signature = (poses, check = true))]
+    /// geometric solution (the inverse kinematics alone, fastest). With
+    /// `continuous=True` the rows are a path: each solved from the previous row's
+    /// solution (a robot keeps its posture and the whole turns of its joints, as a
+    /// controller moving it does; without it each row takes the solution nearest
+    /// home), in order on one thread.
+    #[pyo3(signature = (poses, check = true, continuous = false))]
     fn ik<'py>(
         &self,
         py: Python<'py>,
         poses: &Bound<'py, PyAny>,
         check: bool,
+        continuous: bool,
     ) -> PyResult<Bound<'py, PyAny>> {
         let p = self.m().coordinates().len();
         let r = convert::rows_ref(poses, p, "poses")?;
@@ -236,7 +241,13 @@ impl Machine {
         }
         let inner = &self.inner;
         let b = py
-            .detach(|| pkm::analysis::batch::inverse_batch_with(inner, x, check))
+            .detach(|| {
+                if continuous {
+                    pkm::analysis::batch::inverse_path(inner, x, check)
+                } else {
+                    pkm::analysis::batch::inverse_batch_with(inner, x, check)
+                }
+            })
             .map_err(to_py)?;
         let width = self.m().actuators().len();
         Ok(Bound::new(py, IkBatch::new(py, b, width)?)?.into_any())

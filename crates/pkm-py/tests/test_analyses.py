@@ -148,6 +148,32 @@ def test_a_robot_motion_keeps_turning_its_wrist():
     assert r["summary"]["actuators"]["A6"]["travel"] == pytest.approx(300.0, rel=1e-9)
 
 
+def test_a_robot_path_through_ik_keeps_turning_its_wrist(tmp_path):
+    # Rows of a path: A6 = -C continues to -300 deg with continuous=True, as
+    # `pkm ik --continuous` writes it; each row nearest home comes back within half
+    # a turn of 0.
+    m = pkm.load(example("kr30-dh.toml"))
+    c = np.radians(np.arange(0.0, 301.0, 10.0))
+    poses = np.column_stack(
+        [np.full_like(c, 1170.0), 0 * c, np.full_like(c, 1540.0), np.full_like(c, -math.pi), 0 * c, c]
+    )
+    path = m.ik(poses, continuous=True)
+    assert path.reachable.all()
+    assert np.allclose(np.degrees(path.actuators[:, 5]), -np.degrees(c), atol=1e-9)
+    each = m.ik(poses)
+    assert np.abs(np.degrees(each.actuators[:, 5])).max() <= 180.0 + 1e-9
+    csv_in = tmp_path / "path.csv"
+    rows = "\n".join(
+        f"1170,0,1540,-180,0,{math.degrees(v):.12g}" for v in c
+    )
+    csv_in.write_text("X,Y,Z,A,B,C\n" + rows + "\n")
+    out = tmp_path / "joints.csv"
+    cli("ik", example("kr30-dh.toml"), "--input", str(csv_in), "--output", str(out), "--continuous")
+    with open(out) as f:
+        a6 = [float(r["A6_deg"]) for r in csv.DictReader(f)]
+    assert np.allclose(a6, np.degrees(path.actuators[:, 5]), atol=1e-6)
+
+
 def test_errors_equal_the_command(tmp_path):
     m = pkm.load(HEX)
     e = m.errors()

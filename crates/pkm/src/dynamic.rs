@@ -41,6 +41,8 @@ pub trait DynMechanism: Send + Sync {
     fn home(&self) -> Vec<f64>;
     /// See [`crate::Mechanism::inverse`].
     fn inverse(&self, x: &[f64]) -> Result<Vec<f64>>;
+    /// See [`crate::mechanism::inverse_continuing`].
+    fn inverse_continuing(&self, x: &[f64], last: Option<&[f64]>) -> Result<Vec<f64>>;
     /// See [`crate::Mechanism::jacobian`].
     fn jacobian(&self, x: &[f64]) -> Result<DMatrix<f64>>;
     /// See [`crate::Mechanism::forward`].
@@ -109,6 +111,22 @@ macro_rules! impl_dyn_mechanism {
                 Ok($crate::Mechanism::<$p, $a>::inverse(self, &x)?
                     .as_slice()
                     .to_vec())
+            }
+            fn inverse_continuing(
+                &self,
+                x: &[f64],
+                last: Option<&[f64]>,
+            ) -> $crate::Result<Vec<f64>> {
+                let x = $crate::dynamic::fixed::<$p>("pose", x)?;
+                let last = match last {
+                    Some(q) => Some($crate::dynamic::fixed::<$a>("previous actuators", q)?),
+                    None => None,
+                };
+                Ok(
+                    $crate::mechanism::inverse_continuing(self, &x, last.as_ref())?
+                        .as_slice()
+                        .to_vec(),
+                )
             }
             fn jacobian(&self, x: &[f64]) -> $crate::Result<nalgebra::DMatrix<f64>> {
                 let x = $crate::dynamic::fixed::<$p>("pose", x)?;

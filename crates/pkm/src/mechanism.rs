@@ -574,6 +574,29 @@ pub fn driven_jacobian<const P: usize, const A: usize>(
     SMatrix::<f64, A, A>::from_fn(|r, c| j[(r, driven[c])])
 }
 
+/// Inverse kinematics of `x` continuing `last`, the previous pose's actuators along a
+/// path: [`Mechanism::inverse_near`] from them (a robot keeps its posture and the whole
+/// turns of its joints, as a controller moving it does); [`Mechanism::inverse`] for the
+/// first pose (`None`) and where Newton from `last` stalls ([`Error::NotConverged`]:
+/// robots without a closed form). Mechanisms with one solution per pose give
+/// [`Mechanism::inverse`]'s.
+pub fn inverse_continuing<M, const P: usize, const A: usize>(
+    m: &M,
+    x: &SVector<f64, P>,
+    last: Option<&SVector<f64, A>>,
+) -> Result<SVector<f64, A>>
+where
+    M: Mechanism<P, A> + ?Sized,
+{
+    match last {
+        Some(q0) => match m.inverse_near(x, q0) {
+            Err(Error::NotConverged { .. }) => m.inverse(x),
+            solved => solved,
+        },
+        None => m.inverse(x),
+    }
+}
+
 /// Forward kinematics by damped Newton iteration on the driven coordinates:
 /// `x <- x - t Jd^-1 (IK(x) - q)`, with `Jd` the driven columns of the analytic
 /// inverse Jacobian and the step `t` halved until the residual decreases.

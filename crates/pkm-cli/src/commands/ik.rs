@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use pkm::analysis::kinematics::{
-    inverse, inverse_for_tool_axis, inverse_solutions, transmission, InverseSolution,
+    inverse, inverse_for_tool_axis, inverse_solutions, transmission, InverseSolution, InverseStream,
 };
 use pkm::{Machine, PoseSpace};
 use serde_json::{json, Map, Value};
@@ -40,6 +40,11 @@ pub struct IkArgs {
     /// `.parquet` (full precision, typed columns, nulls for empty cells).
     #[arg(long, requires = "input")]
     pub output: Option<PathBuf>,
+    /// With --input: the rows are a path, each solved from the previous row's
+    /// actuators (a robot keeps its posture and the whole turns of its joints, as a
+    /// controller moving it does); without it every row takes the solution nearest home.
+    #[arg(long, requires = "input")]
+    pub continuous: bool,
     /// Six-axis robots: every inverse solution found (postures: shoulder, elbow, wrist),
     /// nearest to home first, each with its limit status.
     #[arg(long, conflicts_with = "input")]
@@ -279,13 +284,17 @@ fn batch(
     let mut unreachable = 0usize;
     let mut counts: BTreeMap<String, usize> = BTreeMap::new();
     let mut text = String::new();
+    let mut stream = a.continuous.then(|| InverseStream::new(machine));
     for (line, vals) in &table.rows {
         for v in vals {
             out.num(Some(*v));
         }
         let res = pose_from_user(m, vals, conv)
             .map_err(anyhow::Error::from)
-            .and_then(|x| solve(machine, x));
+            .and_then(|x| match stream.as_mut() {
+                Some(s) => Ok(s.next(&x)?),
+                None => solve(machine, x),
+            });
         text.clear();
         match res {
             Ok(r) => {

@@ -534,6 +534,7 @@ fn every_help_example_runs_as_printed() {
     let dir = tempfile::tempdir().unwrap();
     let placeholders = [
         "MACHINE",
+        "ROBOT",
         "POSE",
         "my-",
         "devs.toml",

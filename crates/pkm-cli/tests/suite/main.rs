@@ -11,5 +11,6 @@ mod linuxcnc_cli;
 mod motion_cli;
 mod pipes_cli;
 mod report_cli;
+mod robot_cli;
 mod seed002_cli;
 mod workspace_cli;

@@ -129,7 +129,7 @@ class Machine:
     @property
     def parameters(self) -> list[dict[str, Any]]: ...
     def ik(
-        self, poses: ArrayLike, check: bool = True
+        self, poses: ArrayLike, check: bool = True, continuous: bool = False
     ) -> Union[tuple[F64, bool, Optional[str]], IkBatch]: ...
     """(P,) -> (actuators, reachable, message); (N, P) -> IkBatch."""
     def fk(

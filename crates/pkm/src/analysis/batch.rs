@@ -10,6 +10,7 @@ use serde::Serialize;
 use crate::error::{Error, Result};
 use crate::limits::{FirstLimit, LimitCode, LimitKind, Side, Violation};
 use crate::machine::{Analysable, Machine, Visitor};
+use crate::mechanism::inverse_continuing;
 
 /// Rows per rayon task (per-task overhead small against the work: a hexapod solves
 /// 4 096 poses in about 20 us). A batch of at most one chunk runs on the calling
@@ -296,10 +297,17 @@ struct Outputs<'a, E> {
 }
 
 /// Runs `work(input rows, value rows, flags, records, cause rows)` over chunks of
-/// [`BATCH_CHUNK`] rows (on the calling thread for one chunk), then merges the
+/// [`BATCH_CHUNK`] rows (on the calling thread for one chunk, or for all of them in
+/// order when `sequential`: rows that depend on the rows before), then merges the
 /// chunks' cause tables and solver messages into `causes`.
-fn chunked<E, F>(input: &[f64], width_in: usize, out: Outputs<E>, causes: &mut Causes, work: F)
-where
+fn chunked<E, F>(
+    input: &[f64],
+    width_in: usize,
+    out: Outputs<E>,
+    causes: &mut Causes,
+    sequential: bool,
+    work: F,
+) where
     E: Send,
     F: Fn(&[f64], &mut [f64], &mut [bool], &mut [E], &mut CauseRows) + Sync,
 {
@@ -328,16 +336,27 @@ where
             &mut causes.bound[..],
         ))]
     } else {
-        input
-            .par_chunks(width_in * BATCH_CHUNK)
-            .zip(out.values.par_chunks_mut(out.width * BATCH_CHUNK))
-            .zip(out.flags.par_chunks_mut(BATCH_CHUNK))
-            .zip(out.records.par_chunks_mut(BATCH_CHUNK))
-            .zip(causes.reason.par_chunks_mut(BATCH_CHUNK))
-            .zip(causes.value.par_chunks_mut(BATCH_CHUNK))
-            .zip(causes.bound.par_chunks_mut(BATCH_CHUNK))
-            .map(task)
-            .collect()
+        // The chunks of every column zipped, by `chunks`/`chunks_mut` (in order) or
+        // rayon's `par_chunks`/`par_chunks_mut`.
+        macro_rules! each_chunk {
+            ($chunks:ident, $chunks_mut:ident) => {
+                input
+                    .$chunks(width_in * BATCH_CHUNK)
+                    .zip(out.values.$chunks_mut(out.width * BATCH_CHUNK))
+                    .zip(out.flags.$chunks_mut(BATCH_CHUNK))
+                    .zip(out.records.$chunks_mut(BATCH_CHUNK))
+                    .zip(causes.reason.$chunks_mut(BATCH_CHUNK))
+                    .zip(causes.value.$chunks_mut(BATCH_CHUNK))
+                    .zip(causes.bound.$chunks_mut(BATCH_CHUNK))
+                    .map(task)
+                    .collect()
+            };
+        }
+        if sequential {
+            each_chunk!(chunks, chunks_mut)
+        } else {
+            each_chunk!(par_chunks, par_chunks_mut)
+        }
     };
     // One table for the batch: the chunks' codes renumbered into it.
     let mut all = Interner::default();
@@ -377,66 +396,105 @@ pub fn inverse_batch(machine: &Machine, poses: &[f64]) -> Result<BatchInverse> {
 /// pose counts as reachable when it has a geometric solution (the inverse kinematics
 /// alone, for callers that check limits of their own).
 pub fn inverse_batch_with(machine: &Machine, poses: &[f64], check: bool) -> Result<BatchInverse> {
-    struct Job<'a>(&'a [f64], bool);
-    impl Visitor for Job<'_> {
-        type Output = Result<BatchInverse>;
-        fn visit<M: Analysable<P, A>, const P: usize, const A: usize>(self, m: &M) -> Self::Output {
-            let n = rows(self.0, P, "poses")?;
-            let mut actuators = filled(n * A, f64::NAN);
-            let mut reachable = filled(n, false);
-            let mut causes = Causes::new(n);
-            chunked(
-                self.0,
-                P,
-                Outputs {
-                    values: &mut actuators,
-                    width: A,
-                    flags: &mut reachable,
-                    records: &mut vec![(); n],
-                },
-                &mut causes,
-                |xs, qs, ok, _, why| {
-                    let mut buf = Vec::new();
-                    // The mechanism's block kernel, where it has one, settles the rows
-                    // it clears; the rest go through the per-pose path.
-                    let screened = m.inverse_screened(xs, qs, ok, self.1);
-                    for (i, x) in xs.chunks_exact(P).enumerate() {
-                        if screened && ok[i] {
-                            continue;
-                        }
-                        let x = nalgebra::SVector::<f64, P>::from_column_slice(x);
-                        let solved = if self.1 {
-                            m.inverse_first_limit(&x, &mut buf)
-                        } else {
-                            m.inverse(&x).map(|q| (q, None))
-                        };
-                        match solved {
-                            Ok((q, v)) => {
-                                qs[i * A..(i + 1) * A].copy_from_slice(q.as_slice());
-                                match v {
-                                    None => ok[i] = true,
-                                    Some(FirstLimit::Violation(v)) => why.violation(i, v),
-                                    Some(FirstLimit::Code(c)) => {
-                                        why.coded(i, &c, || m.limit_violation(&c))
-                                    }
+    machine.visit(InverseJob {
+        poses,
+        check,
+        continuous: false,
+    })
+}
+
+/// [`inverse_batch_with`] for the rows of a path: each pose solved from the previous
+/// row's solution ([`crate::mechanism::inverse_continuing`]; the first from home), so
+/// a robot keeps its posture and the whole turns of its joints, as a controller moving
+/// it does, where [`inverse_batch`] takes each row's solution nearest home. Rows
+/// depend on each other: solved in order on the calling thread. A row without a
+/// solution leaves the next to continue the last row solved.
+pub fn inverse_path(machine: &Machine, poses: &[f64], check: bool) -> Result<BatchInverse> {
+    machine.visit(InverseJob {
+        poses,
+        check,
+        continuous: true,
+    })
+}
+
+/// [`inverse_batch_with`] and [`inverse_path`] on the machine's own type.
+struct InverseJob<'a> {
+    poses: &'a [f64],
+    check: bool,
+    continuous: bool,
+}
+
+impl Visitor for InverseJob<'_> {
+    type Output = Result<BatchInverse>;
+    fn visit<M: Analysable<P, A>, const P: usize, const A: usize>(self, m: &M) -> Self::Output {
+        let n = rows(self.poses, P, "poses")?;
+        let mut actuators = filled(n * A, f64::NAN);
+        let mut reachable = filled(n, false);
+        let mut causes = Causes::new(n);
+        // The last row solved, along a path (chunks run in order then: no contention).
+        let last = std::sync::Mutex::new(None::<nalgebra::SVector<f64, A>>);
+        chunked(
+            self.poses,
+            P,
+            Outputs {
+                values: &mut actuators,
+                width: A,
+                flags: &mut reachable,
+                records: &mut vec![(); n],
+            },
+            &mut causes,
+            self.continuous,
+            |xs, qs, ok, _, why| {
+                let mut buf = Vec::new();
+                // Locked along a path only: independent rows run in parallel.
+                let mut last = self
+                    .continuous
+                    .then(|| last.lock().unwrap_or_else(|e| e.into_inner()));
+                // The mechanism's block kernel, where it has one, settles the rows it
+                // clears; the rest go through the per-pose path.
+                let screened = !self.continuous && m.inverse_screened(xs, qs, ok, self.check);
+                for (i, x) in xs.chunks_exact(P).enumerate() {
+                    if screened && ok[i] {
+                        continue;
+                    }
+                    let x = nalgebra::SVector::<f64, P>::from_column_slice(x);
+                    let solved = match last.as_deref_mut() {
+                        Some(last) => inverse_continuing(m, &x, last.as_ref()).map(|q| {
+                            *last = Some(q);
+                            buf.clear();
+                            if self.check {
+                                m.check_limits(&x, &q, &mut buf);
+                            }
+                            (q, buf.drain(..).next().map(FirstLimit::Violation))
+                        }),
+                        None if self.check => m.inverse_first_limit(&x, &mut buf),
+                        None => m.inverse(&x).map(|q| (q, None)),
+                    };
+                    match solved {
+                        Ok((q, v)) => {
+                            qs[i * A..(i + 1) * A].copy_from_slice(q.as_slice());
+                            match v {
+                                None => ok[i] = true,
+                                Some(FirstLimit::Violation(v)) => why.violation(i, v),
+                                Some(FirstLimit::Code(c)) => {
+                                    why.coded(i, &c, || m.limit_violation(&c))
                                 }
                             }
-                            Err(e) => {
-                                qs[i * A..(i + 1) * A].fill(f64::NAN);
-                                why.error(i, &e)
-                            }
+                        }
+                        Err(e) => {
+                            qs[i * A..(i + 1) * A].fill(f64::NAN);
+                            why.error(i, &e)
                         }
                     }
-                },
-            );
-            Ok(BatchInverse {
-                actuators,
-                reachable,
-                causes,
-            })
-        }
+                }
+            },
+        );
+        Ok(BatchInverse {
+            actuators,
+            reachable,
+            causes,
+        })
     }
-    machine.visit(Job(poses, check))
 }
 
 /// Forward kinematics with the limit check of every actuator set in `actuators`
@@ -474,6 +532,7 @@ pub fn forward_batch(
                     records: &mut solver,
                 },
                 &mut causes,
+                false,
                 |qs, xs, ok, rec, why| {
                     let mut buf = Vec::new();
                     for (i, q) in qs.chunks_exact(A).enumerate() {

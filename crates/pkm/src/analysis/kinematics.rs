@@ -32,6 +32,42 @@ pub fn inverse(machine: &Machine, x: &[f64]) -> Result<InverseSolution> {
     })
 }
 
+/// Inverse kinematics along a stream of poses, each solved from the previous pose's
+/// actuators ([`crate::mechanism::inverse_continuing`]): rows of a path, where a robot
+/// keeps its posture and the whole turns of its joints as a controller moving it does,
+/// where [`inverse`] takes each pose's solution nearest home. Mechanisms with one
+/// solution per pose give [`inverse`]'s. [`crate::analysis::batch::inverse_path`] does
+/// the same for a whole array of poses.
+pub struct InverseStream<'a> {
+    machine: &'a Machine,
+    last: Option<Vec<f64>>,
+}
+
+impl<'a> InverseStream<'a> {
+    /// A stream whose first pose is solved from home.
+    pub fn new(machine: &'a Machine) -> Self {
+        InverseStream {
+            machine,
+            last: None,
+        }
+    }
+
+    /// Pose `x` (internal units) solved from the previous solution, its limits
+    /// checked; the next pose starts from it. A pose without a solution leaves the
+    /// stream where it was.
+    pub fn next(&mut self, x: &[f64]) -> Result<InverseSolution> {
+        let m = self.machine.mechanism();
+        let q = m.inverse_continuing(x, self.last.as_deref())?;
+        let violations = m.check_limits(x, &q)?;
+        self.last = Some(q.clone());
+        Ok(InverseSolution {
+            pose: x.to_vec(),
+            actuators: q,
+            violations,
+        })
+    }
+}
+
 /// The inverse kinematics for a tool tip and a tool axis vector: every branch of the
 /// rotary axes with its limit check.
 #[derive(Debug, Clone, PartialEq, Serialize)]

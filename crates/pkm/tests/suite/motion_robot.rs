@@ -4,6 +4,8 @@
 //! and the posture are carried on, not taken afresh nearest the home joints.
 
 use nalgebra::{SVector, Vector6};
+use pkm::analysis::batch::inverse_path;
+use pkm::analysis::kinematics::InverseStream;
 use pkm::analysis::motion::{run_motion_with, MotionSource, SampleRow, SampleSink};
 use pkm::machine::Model;
 use pkm::motion::program::FeedOptions;
@@ -233,8 +235,8 @@ fn poses_along(a: &SerialArm, q0: &Vector6<f64>, dq: &Vector6<f64>, n: usize) ->
 /// A path whose joints follow a known curve: straight moves through its poses, three
 /// points per move (start, middle, end; the end is the next move's start), so every
 /// other sample is one of the curve's points. The run returns the curve's joints there (1e-9 rad), although the solution nearest home
-/// changes posture along the way (checked: the curve leaves it). `points`: how many
-/// moves.
+/// changes posture along the way (checked: the curve leaves it); so does an inverse
+/// kinematics stream of the poses ([`InverseStream`]). `points`: how many moves.
 fn follows_the_curve(m: &Machine, q0: Vector6<f64>, dq: Vector6<f64>, points: usize) {
     let Model::Serial(s) = &m.model else { panic!() };
     let SerialAny::Arm(a) = &s.mechanism else {
@@ -260,7 +262,9 @@ fn follows_the_curve(m: &Machine, q0: Vector6<f64>, dq: Vector6<f64>, points: us
     };
     run_motion_with(
         m,
-        MotionSource::Polyline { points: poses },
+        MotionSource::Polyline {
+            points: poses.clone(),
+        },
         &feed,
         Sampling::Points(3),
         None,
@@ -272,6 +276,19 @@ fn follows_the_curve(m: &Machine, q0: Vector6<f64>, dq: Vector6<f64>, points: us
         let q = q0 + dq * (k as f64 / points as f64);
         let got = Vector6::from_column_slice(&keep.rows[2 * k].2);
         assert!((got - q).amax() < 1e-9, "point {k}: {got:?} against {q:?}");
+    }
+    // The same poses as rows of an inverse-kinematics stream (`pkm ik --continuous`)
+    // and of a batch along a path (Python's `ik(..., continuous=True)`).
+    let mut stream = InverseStream::new(m);
+    let flat: Vec<f64> = poses.iter().flatten().copied().collect();
+    let batch = inverse_path(m, &flat, true).unwrap();
+    assert!(batch.reachable.iter().all(|r| *r));
+    for (k, x) in poses.iter().enumerate() {
+        let q = q0 + dq * (k as f64 / points as f64);
+        let got = Vector6::from_column_slice(&stream.next(x).unwrap().actuators);
+        assert!((got - q).amax() < 1e-9, "row {k}: {got:?} against {q:?}");
+        let row = Vector6::from_column_slice(&batch.actuators[6 * k..6 * k + 6]);
+        assert_eq!(row, got, "row {k}");
     }
 }
 
@@ -302,4 +319,34 @@ fn a_robot_without_closed_form_keeps_its_posture_along_a_path() {
     let q0 = Vector6::new(0.0, -60.0, 80.0, -100.0, 60.0, 0.0) * d;
     let dq = Vector6::new(120.0, -40.0, 50.0, 150.0, 90.0, 200.0) * d;
     follows_the_curve(&m, q0, dq, 200);
+}
+
+/// A path longer than a batch chunk (`BATCH_CHUNK` rows): the chunks run in order and
+/// each continues the last row of the one before, row for row as the stream does;
+/// A6 turns on to -300 deg across the chunk boundaries. Without `continuous` the rows
+/// come back within half a turn of home.
+#[test]
+fn a_long_path_continues_across_batch_chunks() {
+    let m = load("kr30-dh.toml");
+    let n = 3 * pkm::analysis::batch::BATCH_CHUNK + 17;
+    let c = |k: usize| (300.0 * k as f64 / (n - 1) as f64).to_radians();
+    let flat: Vec<f64> = (0..n)
+        .flat_map(|k| [1170.0, 0.0, 1540.0, -std::f64::consts::PI, 0.0, c(k)])
+        .collect();
+    let path = inverse_path(&m, &flat, true).unwrap();
+    let mut stream = InverseStream::new(&m);
+    for k in 0..n {
+        let s = stream.next(&flat[6 * k..6 * k + 6]).unwrap();
+        assert_eq!(
+            &path.actuators[6 * k..6 * k + 6],
+            &s.actuators[..],
+            "row {k}"
+        );
+        assert!((s.actuators[5] + c(k)).abs() < 1e-9, "row {k}");
+    }
+    assert!(path.reachable.iter().all(|r| *r));
+    let each = pkm::analysis::batch::inverse_batch(&m, &flat).unwrap();
+    let a6: Vec<f64> = each.actuators.chunks(6).map(|q| q[5]).collect();
+    assert!(a6.iter().all(|v| v.abs() <= std::f64::consts::PI + 1e-12));
+    assert!((a6[n - 1] - 60f64.to_radians()).abs() < 1e-9);
 }

@@ -1,0 +1,80 @@
+//! A robot's path through `pkm ik --input ... --continuous`: each row solved from the
+//! previous row's joints, so a wrist turned past half a turn from home keeps turning.
+
+use super::common::{csv_rows, ok, path, pkm, Cell};
+
+/// The KR 30 turning its tool 0 -> 300 deg about Z in 10 deg rows: A6 = -C. Without
+/// `--continuous` every row takes the solution nearest home, so A6 comes back within
+/// half a turn of it (+160 deg at C = 200); with it A6 reaches -300 deg, within its
+/// +-350 deg range, and every row is reachable.
+#[test]
+fn continuous_rows_keep_a_robot_joint_turning() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("path.csv");
+    let mut text = String::from("X,Y,Z,A,B,C\n");
+    for k in 0..=30 {
+        text.push_str(&format!("1170,0,1540,-180,0,{}\n", 10 * k));
+    }
+    std::fs::write(&input, text).unwrap();
+    let machine = path("examples/machines/kr30-dh.toml");
+    let a6 = |continuous: bool| -> Vec<f64> {
+        let output = dir.path().join(format!("joints-{continuous}.csv"));
+        let mut cmd = pkm();
+        cmd.args(["ik", &machine, "--input"])
+            .arg(&input)
+            .arg("--output")
+            .arg(&output);
+        if continuous {
+            cmd.arg("--continuous");
+        }
+        ok(&cmd.output().unwrap());
+        let (names, rows) = csv_rows(&output);
+        let col = names.iter().position(|n| n == "A6_deg").unwrap();
+        let reach = names.iter().position(|n| n == "reachable").unwrap();
+        rows.iter()
+            .map(|r| {
+                assert_eq!(r[reach], Cell::Text("true".into()));
+                match r[col] {
+                    Cell::Num(v) => v,
+                    ref c => panic!("{c:?}"),
+                }
+            })
+            .collect()
+    };
+    let cont = a6(true);
+    let home = a6(false);
+    for (k, (c, h)) in cont.iter().zip(&home).enumerate() {
+        let expected = -10.0 * k as f64;
+        assert!(
+            (c - expected).abs() < 1e-6,
+            "row {k}: {c} against {expected}"
+        );
+        // Nearest home: the same angle, within half a turn of 0 (at C = 180 either
+        // end of it).
+        let d = (h - expected).rem_euclid(360.0);
+        assert!(
+            d.min(360.0 - d) < 1e-6 && h.abs() <= 180.0 + 1e-9,
+            "row {k}: {h}"
+        );
+    }
+    assert!((home[20] - 160.0).abs() < 1e-6, "{}", home[20]);
+}
+
+/// `--continuous` needs rows to continue: it is refused without `--input`.
+#[test]
+fn continuous_needs_an_input() {
+    let machine = path("examples/machines/kr30-dh.toml");
+    let out = pkm()
+        .args([
+            "ik",
+            &machine,
+            "--pose",
+            "1170,0,1540,-180,0,0",
+            "--continuous",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--input"), "{err}");
+}
