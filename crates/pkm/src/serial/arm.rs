@@ -805,9 +805,10 @@ impl Mechanism<6, 6> for SerialArm {
 
     /// The solution continuing `prev`: each revolute joint shifted by whole turns to
     /// within half a turn of `prev`; then, when a joint still moved more than the two
-    /// samples' rates explain (`|q - q_prev| > 2 dt max|q'| + dt^2 max|q''| + 1e-9`:
-    /// another posture), the inverse solved again from `prev` (closed form: the
-    /// posture nearest `prev`; else Newton from `prev`) and taken when nearer `prev`.
+    /// samples' rates explain (`|q - q_prev| > r = 2 dt max|q'| + dt^2 max|q''| +
+    /// 1e-9`: another posture) or the rates cannot tell (`r > 0.25` rad: coarse
+    /// samples), the inverse solved again from `prev` (closed form: the posture
+    /// nearest `prev`; else Newton from `prev`) and taken when nearer `prev`.
     fn follow(
         &self,
         x: &Vector6<f64>,

@@ -350,3 +350,55 @@ fn a_long_path_continues_across_batch_chunks() {
     assert!(a6.iter().all(|v| v.abs() <= std::f64::consts::PI + 1e-12));
     assert!((a6[n - 1] - 60f64.to_radians()).abs() < 1e-9);
 }
+
+/// The KR 30's curve of `a_robot_keeps_its_posture_along_a_path` in a few long moves,
+/// sampled only at their ends (`Points(2)`): the rates over seconds between samples
+/// cannot tell a posture from another, so each sample takes the posture nearest the
+/// one before. In two or more moves that is the curve's to its end (the home rule
+/// ends wrist-flipped); in one move the flipped posture is the nearer one to home's
+/// start and is taken (continuity is judged from the samples alone).
+#[test]
+fn coarse_samples_take_the_posture_nearest_the_previous() {
+    let m = load("kr30-dh.toml");
+    let Model::Serial(s) = &m.model else { panic!() };
+    let SerialAny::Arm(a) = &s.mechanism else {
+        panic!()
+    };
+    let d = std::f64::consts::PI / 180.0;
+    let home = Vector6::new(0.0, 0.0, 0.0, 0.0, 90.0, 0.0) * d;
+    let dq = Vector6::new(30.0, 10.0, -20.0, 150.0, -30.0, 150.0) * d;
+    let end = |moves: usize| {
+        let mut keep = Keep::default();
+        run_motion_with(
+            &m,
+            MotionSource::Polyline {
+                points: poses_along(a, &home, &dq, moves),
+            },
+            &FeedOptions {
+                feed: Some(100.0),
+                ..Default::default()
+            },
+            Sampling::Points(2),
+            None,
+            &mut keep,
+        )
+        .unwrap();
+        assert_eq!(keep.rows.len(), moves + 1);
+        Vector6::from_column_slice(&keep.rows[moves].2)
+    };
+    let curve = home + dq;
+    let flipped = Vector6::new(
+        curve[0],
+        curve[1],
+        curve[2],
+        curve[3] - std::f64::consts::PI,
+        -curve[4],
+        curve[5] - std::f64::consts::PI,
+    );
+    for moves in [2, 3, 5] {
+        let q = end(moves);
+        assert!((q - curve).amax() < 1e-9, "{moves} moves: {q:?}");
+    }
+    let q = end(1);
+    assert!((q - flipped).amax() < 1e-9, "one move: {q:?}");
+}

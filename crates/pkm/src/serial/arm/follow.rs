@@ -10,10 +10,16 @@ use super::SerialArm;
 use crate::mechanism::ActuatorMotion;
 #[cfg(doc)]
 use crate::mechanism::Mechanism;
+use crate::units::Quantity;
 
 /// Absolute slack (rad or mm) of the jump test: the rounding of two solutions of
 /// neighbouring poses, far below any joint step a rate could explain.
 const SLACK: f64 = 1e-9;
+
+/// A revolute joint's step (rad) the rates allow beyond which they cannot tell a
+/// posture from another (coarse samples: a few points per move, or a singular
+/// passage): the posture nearest the previous sample's is then solved for.
+const COARSE: f64 = 0.25;
 
 impl SerialArm {
     /// The motion at `x` (rates `xd`, `xdd`) continuing `prev`, the previous sample's,
@@ -22,11 +28,12 @@ impl SerialArm {
     /// 1. Each revolute joint is shifted by whole turns to within half a turn of
     ///    `prev` (its rates do not change).
     /// 2. When a joint then still moved more than the two samples' rates explain,
-    ///    `|q - q_prev| > 2 dt max(|q'|, |q'_prev|) + dt^2 max(|q''|, |q''_prev|)`
-    ///    (plus 1e-9), the solution is another posture: the inverse is solved again
-    ///    from `prev` ([`SerialArm::inverse_from`]: in closed form the posture nearest
-    ///    `prev`, else Newton from `prev`) and its motion taken when it lies nearer
-    ///    `prev` (sum of squared joint differences).
+    ///    `|q - q_prev| > r = 2 dt max(|q'|, |q'_prev|) + dt^2 max(|q''|, |q''_prev|)`
+    ///    (plus 1e-9), the solution is another posture; so it may be when the rates
+    ///    allow a revolute joint more than 0.25 rad (`r > 0.25`: coarse samples). The
+    ///    inverse is then solved again from `prev` ([`SerialArm::inverse_from`]: in
+    ///    closed form the posture nearest `prev`, else Newton from `prev`) and its
+    ///    motion taken when it lies nearer `prev` (sum of squared joint differences).
     ///
     /// Returns whether `act.q` changed. Two postures within the rates' reach of each
     /// other (near a singular configuration, where branches meet) are not told apart.
@@ -50,8 +57,12 @@ impl SerialArm {
                 + dt * dt * m.qdd[i].abs().max(prev.qdd[i].abs())
                 + SLACK
         };
-        let jumped = (0..6).any(|i| (shifted[i] - prev.q[i]).abs() > reach(i, act));
-        if jumped {
+        let unsure = (0..6).any(|i| {
+            let r = reach(i, act);
+            (shifted[i] - prev.q[i]).abs() > r
+                || (self.actuators[i].quantity == Quantity::Angle && r > COARSE)
+        });
+        if unsure {
             let other = self
                 .inverse_from(x, &prev.q)
                 .and_then(|q| self.motion_at(q, x, xd, xdd));
