@@ -528,17 +528,20 @@ pub fn run(a: &MotionArgs) -> Result<u8> {
     if s.violations.is_empty() {
         Ok(0)
     } else {
+        // The first stretch: where it starts, and the worst value in it (not the
+        // value at its start).
         let v = &s.violations[0];
+        let n = s.violations.len() as u64 + s.violations_not_listed;
         eprintln!(
-            "error: {} limit violations along the path; first: {} {:.3} {} beyond {:.3} {} at t = {:.4} s{}",
-            s.violations.len() as u64 + s.violations_not_listed,
+            "error: {n} limit violation{} along the path; first: {} beyond {:.3} {} from t = {:.4} s{}, worst {:.3} {}",
+            if n == 1 { "" } else { "s" },
             v.limit,
-            v.worst,
-            v.unit,
             v.bound,
             v.unit,
             v.start_s,
-            v.line.map(|l| format!(" (G-code line {l})")).unwrap_or_default()
+            v.line.map(|l| format!(" (G-code line {l})")).unwrap_or_default(),
+            v.worst,
+            v.unit,
         );
         Ok(EXIT_UNREACHABLE)
     }

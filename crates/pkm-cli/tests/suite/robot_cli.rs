@@ -78,3 +78,31 @@ fn continuous_needs_an_input() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("--input"), "{err}");
 }
+
+/// `pkm motion` turning the KR 30's A6 past its -350 deg (C to 400 deg, A6 = -C):
+/// exit 3 and one violation named with where it starts and its worst value, which
+/// the joints' continuation brings (each sample solved nearest home never left the
+/// range).
+#[test]
+fn a_joint_turned_beyond_its_range_is_reported_with_its_start_and_worst() {
+    let dir = tempfile::tempdir().unwrap();
+    let program = dir.path().join("turn.ngc");
+    std::fs::write(&program, "G90 G21\nG1 C400 F3000\n").unwrap();
+    let out = pkm()
+        .args(["motion", &path("examples/machines/kr30-dh.toml"), "--gcode"])
+        .arg(&program)
+        .arg("--summary-only")
+        .arg("--out")
+        .arg(dir.path().join("out"))
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(3));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains(
+            "error: 1 limit violation along the path; first: joint A6 position beyond \
+             -350.000 deg from t = 7.0010 s (G-code line 2), worst -400.000 deg"
+        ),
+        "{err}"
+    );
+}

@@ -408,7 +408,9 @@ pub fn inverse_batch_with(machine: &Machine, poses: &[f64], check: bool) -> Resu
 /// a robot keeps its posture and the whole turns of its joints, as a controller moving
 /// it does, where [`inverse_batch`] takes each row's solution nearest home. Rows
 /// depend on each other: solved in order on the calling thread. A row without a
-/// solution leaves the next to continue the last row solved.
+/// solution leaves the next to continue the last row solved. A type whose inverse has
+/// one solution ([`crate::Mechanism::follows`] false) gives [`inverse_batch_with`]'s
+/// rows, solved as those are, on all cores.
 pub fn inverse_path(machine: &Machine, poses: &[f64], check: bool) -> Result<BatchInverse> {
     machine.visit(InverseJob {
         poses,
@@ -428,6 +430,8 @@ impl Visitor for InverseJob<'_> {
     type Output = Result<BatchInverse>;
     fn visit<M: Analysable<P, A>, const P: usize, const A: usize>(self, m: &M) -> Self::Output {
         let n = rows(self.poses, P, "poses")?;
+        // Only a type with several solutions per pose has a path to continue.
+        let continuous = self.continuous && m.follows();
         let mut actuators = filled(n * A, f64::NAN);
         let mut reachable = filled(n, false);
         let mut causes = Causes::new(n);
@@ -443,16 +447,14 @@ impl Visitor for InverseJob<'_> {
                 records: &mut vec![(); n],
             },
             &mut causes,
-            self.continuous,
+            continuous,
             |xs, qs, ok, _, why| {
                 let mut buf = Vec::new();
                 // Locked along a path only: independent rows run in parallel.
-                let mut last = self
-                    .continuous
-                    .then(|| last.lock().unwrap_or_else(|e| e.into_inner()));
+                let mut last = continuous.then(|| last.lock().unwrap_or_else(|e| e.into_inner()));
                 // The mechanism's block kernel, where it has one, settles the rows it
                 // clears; the rest go through the per-pose path.
-                let screened = !self.continuous && m.inverse_screened(xs, qs, ok, self.check);
+                let screened = !continuous && m.inverse_screened(xs, qs, ok, self.check);
                 for (i, x) in xs.chunks_exact(P).enumerate() {
                     if screened && ok[i] {
                         continue;

@@ -9,6 +9,7 @@ use pkm::analysis::kinematics::InverseStream;
 use pkm::analysis::motion::{run_motion_with, MotionSource, SampleRow, SampleSink};
 use pkm::machine::Model;
 use pkm::motion::program::FeedOptions;
+use pkm::motion::run::quantities;
 use pkm::motion::{Sampling, Segment, MIN_MOVE};
 use pkm::rotation::wrap_angle;
 use pkm::serial::arm::SerialArm;
@@ -16,6 +17,17 @@ use pkm::serial::mechanism::SerialAny;
 use pkm::{Machine, Mechanism, Quantity};
 
 use super::common::example as load;
+
+/// The six-axis robot of machine `m` (tool-pose coordinates).
+fn arm_of(m: &Machine) -> &SerialArm {
+    let Model::Serial(s) = &m.model else {
+        panic!("not a serial machine")
+    };
+    let SerialAny::Arm(a) = &s.mechanism else {
+        panic!("not a six-axis robot")
+    };
+    a
+}
 
 /// One sample's t, pose, q, q', q'' (internal units).
 type Row = (f64, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>);
@@ -57,28 +69,24 @@ fn gcode_run(m: &Machine, program: &str, sampling: Sampling) -> (Keep, pkm::moti
     (keep, run.summary)
 }
 
-/// A straight move whose change is rounding (a forward-kinematics pose's 2e-14 mm and
-/// 4e-27 rad) has length zero and no rates; one at [`MIN_MOVE`] or above is a move;
-/// a reorientation with a tip change below it is fed in deg along the angles.
+/// A straight move whose change is rounding (the KR 30's home pose by forward
+/// kinematics against the same pose as a program prints it, to 1e-4 mm and deg) has
+/// length zero and no rates; one at [`MIN_MOVE`] or above is a move; a reorientation
+/// with a tip change below it is fed in deg along the angles.
 #[test]
 fn a_change_below_the_shortest_move_is_no_motion() {
-    let q = [
-        Quantity::Length,
-        Quantity::Length,
-        Quantity::Length,
-        Quantity::Angle,
-        Quantity::Angle,
-        Quantity::Angle,
-    ];
-    let start = Vector6::new(
-        1170.0,
-        2.234980408443919e-14,
-        1540.0,
-        -std::f64::consts::PI,
-        3.5e-27,
-        0.0,
-    );
-    let end = Vector6::new(1170.0, 0.0, 1540.0, -std::f64::consts::PI, 0.0, 0.0);
+    let m = load("kr30-dh.toml");
+    let a = arm_of(&m);
+    let q = quantities(a);
+    let start = a.home();
+    let end = Vector6::from_fn(|k, _| {
+        let user = (q[k].to_user(start[k]) * 1e4).round() / 1e4;
+        match q[k] {
+            Quantity::Angle => user.to_radians(),
+            Quantity::Length => user,
+        }
+    });
+    assert!(start != end, "the test needs the rounding: {start:?}");
     let s = Segment::line(start, end, &q, true);
     assert_eq!(s.length, 0.0);
     let (x, xd, xdd) = s.eval(0.0);
@@ -144,7 +152,8 @@ fn a_joint_turned_past_half_a_turn_from_home_keeps_turning() {
     let m = load("kr30-dh.toml");
     let program = "G90 G21\nG1 C300 F3000\nG1 C-40\n";
     let (keep, summary) = gcode_run(&m, program, Sampling::Rate(1000.0));
-    assert_eq!(keep.rows.len(), 12801);
+    // 300 + 340 deg of C at 3000 deg/min, sampled at 1 kHz with both ends.
+    assert_eq!(keep.rows.len(), (640.0 / 50.0 * 1000.0) as usize + 1);
     continuous(&keep, 1e-3);
     // A6 turns against C (the tool points down): 0 -> -300 -> +40 deg.
     let a6 = |r: &Row| r.2[5].to_degrees();
@@ -238,10 +247,7 @@ fn poses_along(a: &SerialArm, q0: &Vector6<f64>, dq: &Vector6<f64>, n: usize) ->
 /// changes posture along the way (checked: the curve leaves it); so does an inverse
 /// kinematics stream of the poses ([`InverseStream`]). `points`: how many moves.
 fn follows_the_curve(m: &Machine, q0: Vector6<f64>, dq: Vector6<f64>, points: usize) {
-    let Model::Serial(s) = &m.model else { panic!() };
-    let SerialAny::Arm(a) = &s.mechanism else {
-        panic!()
-    };
+    let a = arm_of(m);
     // The curve starts where the run starts: the home rule's solution at its first
     // pose (a robot whose home rule lands in another posture there starts in it).
     let q0 = a.inverse(&a.coords_of_joints(&q0)).unwrap();
@@ -360,10 +366,7 @@ fn a_long_path_continues_across_batch_chunks() {
 #[test]
 fn coarse_samples_take_the_posture_nearest_the_previous() {
     let m = load("kr30-dh.toml");
-    let Model::Serial(s) = &m.model else { panic!() };
-    let SerialAny::Arm(a) = &s.mechanism else {
-        panic!()
-    };
+    let a = arm_of(&m);
     let d = std::f64::consts::PI / 180.0;
     let home = Vector6::new(0.0, 0.0, 0.0, 0.0, 90.0, 0.0) * d;
     let dq = Vector6::new(30.0, 10.0, -20.0, 150.0, -30.0, 150.0) * d;
@@ -401,4 +404,37 @@ fn coarse_samples_take_the_posture_nearest_the_previous() {
     }
     let q = end(1);
     assert!((q - flipped).amax() < 1e-9, "one move: {q:?}");
+}
+
+/// A machine with one inverse solution per pose has no path to continue: its
+/// `inverse_path` is `inverse_batch`'s, row for row (the hexapod's: rows within and
+/// beyond its struts' range, more than one batch chunk, its block kernel and causes).
+#[test]
+fn a_path_of_a_machine_with_one_solution_is_the_batch() {
+    let m = load("hexapod-linuxcnc.toml");
+    let n = pkm::analysis::batch::BATCH_CHUNK + 500;
+    let flat: Vec<f64> = (0..n)
+        .flat_map(|k| {
+            let t = k as f64 / n as f64;
+            // Z from 300 to 900 mm leaves the struts' range at both ends.
+            [
+                30.0 * t,
+                -20.0 * t,
+                300.0 + 600.0 * t,
+                0.1 * t,
+                -0.05 * t,
+                0.2 * t,
+            ]
+        })
+        .collect();
+    let path = inverse_path(&m, &flat, true).unwrap();
+    let batch = pkm::analysis::batch::inverse_batch(&m, &flat).unwrap();
+    assert_eq!(path.reachable, batch.reachable);
+    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&path.actuators), bits(&batch.actuators));
+    let reachable = batch.reachable.iter().filter(|r| **r).count();
+    assert!(reachable > 100 && reachable < n - 100, "{reachable} of {n}");
+    for i in (0..n).step_by(97) {
+        assert_eq!(path.causes.message(i), batch.causes.message(i), "row {i}");
+    }
 }
