@@ -53,7 +53,7 @@ pub mod workspace;
 
 pub use dynamic::DynMechanism;
 pub use error::{Error, Result};
-pub use limits::{LimitKind, Range, Side, Violation};
+pub use limits::{LimitKind, LimitName, Range, Side, Violation};
 pub use machine::{Machine, Visitor};
 pub use mechanism::{
     inverse_checked, newton_forward, Actuator, ActuatorMotion, Coordinate, Forward, Mechanism,

@@ -5,6 +5,7 @@
 //! person can see which limit binds and by how much.
 
 use std::fmt;
+use std::sync::Arc;
 
 use serde::Serialize;
 
@@ -46,11 +47,112 @@ pub enum LimitKind {
     AxisTravel,
 }
 
+/// The name of a limit (`strut 3 length`), as shared text: a mechanism can name its
+/// limits once, and a motion that stays beyond a limit for a million samples then
+/// clones a pointer per sample instead of formatting and allocating a string (a
+/// hexapod program beyond its struts' stroke ran five times slower than one within
+/// them). Reads as a `str` (`Deref`), compares equal to strings, prints and
+/// serialises as its text.
+#[derive(Clone, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct LimitName(Arc<str>);
+
+impl LimitName {
+    /// The name's text.
+    pub fn as_str(&self) -> &str {
+        &self.0
+    }
+}
+
+impl std::ops::Deref for LimitName {
+    type Target = str;
+    fn deref(&self) -> &str {
+        &self.0
+    }
+}
+
+impl std::borrow::Borrow<str> for LimitName {
+    fn borrow(&self) -> &str {
+        &self.0
+    }
+}
+
+impl AsRef<str> for LimitName {
+    fn as_ref(&self) -> &str {
+        &self.0
+    }
+}
+
+impl fmt::Display for LimitName {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl fmt::Debug for LimitName {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        fmt::Debug::fmt(&*self.0, f)
+    }
+}
+
+impl Serialize for LimitName {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(&self.0)
+    }
+}
+
+impl From<String> for LimitName {
+    fn from(s: String) -> Self {
+        LimitName(s.into())
+    }
+}
+
+impl From<&str> for LimitName {
+    fn from(s: &str) -> Self {
+        LimitName(s.into())
+    }
+}
+
+impl From<LimitName> for String {
+    fn from(n: LimitName) -> Self {
+        n.0.to_string()
+    }
+}
+
+impl PartialEq<str> for LimitName {
+    fn eq(&self, other: &str) -> bool {
+        &*self.0 == other
+    }
+}
+
+impl PartialEq<&str> for LimitName {
+    fn eq(&self, other: &&str) -> bool {
+        &*self.0 == *other
+    }
+}
+
+impl PartialEq<String> for LimitName {
+    fn eq(&self, other: &String) -> bool {
+        *self.0 == **other
+    }
+}
+
+impl PartialEq<LimitName> for String {
+    fn eq(&self, other: &LimitName) -> bool {
+        **self == *other.0
+    }
+}
+
+impl PartialEq<LimitName> for &str {
+    fn eq(&self, other: &LimitName) -> bool {
+        **self == *other.0
+    }
+}
+
 /// One violated limit.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Violation {
     /// Human-readable name of the limit, e.g. `strut e length`.
-    pub limit: String,
+    pub limit: LimitName,
     /// Family of the limit.
     pub kind: LimitKind,
     /// Minimum or maximum.
@@ -68,7 +170,7 @@ pub struct Violation {
 impl Violation {
     /// Builds a violation from internal values (mm / rad), converting to user units.
     pub fn new(
-        limit: impl Into<String>,
+        limit: impl Into<LimitName>,
         kind: LimitKind,
         side: Side,
         quantity: Quantity,
@@ -165,9 +267,9 @@ impl Range {
     /// Pushes a violation when `value` is outside the range; the name is only built
     /// (allocated) when there is something to report.
     #[inline]
-    pub fn check(
+    pub fn check<N: Into<LimitName>>(
         &self,
-        name: impl FnOnce() -> String,
+        name: impl FnOnce() -> N,
         kind: LimitKind,
         quantity: Quantity,
         value: f64,
@@ -211,5 +313,48 @@ impl AxisLimits {
     /// Whether no coordinate is limited.
     pub fn is_empty(&self) -> bool {
         self.ranges.is_empty()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{LimitKind, LimitName, Side, Violation};
+    use crate::units::Quantity;
+
+    /// A limit's name reads, compares, prints and serialises as its text, whether it
+    /// was formatted for the call or cloned from a machine's table.
+    #[test]
+    fn a_limit_name_is_its_text() {
+        let shared = LimitName::from("strut 3 length");
+        let formatted = LimitName::from(format!("strut {} length", 3));
+        assert_eq!(shared, formatted);
+        assert_eq!(shared.clone(), shared);
+        assert_ne!(shared, LimitName::from("strut 4 length"));
+        let (text, owned) = ("strut 3 length", String::from("strut 3 length"));
+        assert!(shared == text);
+        assert!(text == shared);
+        assert!(shared == owned);
+        assert!(owned == shared);
+        assert_eq!(shared.len(), 14);
+        assert!(shared.starts_with("strut"));
+        assert_eq!(
+            format!("{shared} / {shared:?}"),
+            "strut 3 length / \"strut 3 length\""
+        );
+        assert_eq!(String::from(shared.clone()), "strut 3 length");
+        let v = Violation::new(
+            shared,
+            LimitKind::ActuatorPosition,
+            Side::Max,
+            Quantity::Length,
+            1002.0,
+            1000.0,
+        );
+        let json = serde_json::to_value(&v).unwrap();
+        assert_eq!(json["limit"], "strut 3 length");
+        assert_eq!(json["excess"], 2.0);
+        let mut m = std::collections::HashMap::new();
+        m.insert(v.limit.clone(), 1);
+        assert_eq!(m.get("strut 3 length"), Some(&1));
     }
 }

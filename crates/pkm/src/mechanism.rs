@@ -360,15 +360,24 @@ pub trait Mechanism<const P: usize, const A: usize>: Send + Sync {
     /// [`Mechanism::inverse_screened`], for the motion engine: `x` holds the samples'
     /// poses, rates and accelerations (each whole rows of `P`, row-major), `q` receives
     /// the actuators' positions, rates and accelerations (`A` per row) of the rows it
-    /// clears (other rows may be overwritten and are not to be read), and `clear[i]`
-    /// is set where row `i` is certainly within every limit
-    /// ([`Mechanism::actuator_motion_checked`] finds no violation) and its motion is
-    /// written, equal bit for bit to [`Mechanism::actuator_motion`]'s. Rows left
-    /// uncleared are computed again by [`Mechanism::actuator_motion_checked`].
+    /// computes (other rows may be overwritten and are not to be read):
+    /// `computed[i]` is set where row `i`'s motion is written, equal bit for bit to
+    /// [`Mechanism::actuator_motion`]'s, and `clear[i]` where it is moreover certainly
+    /// within every limit ([`Mechanism::actuator_motion_checked`] finds no
+    /// violation). A row computed but not cleared has its limits checked by
+    /// [`Mechanism::check_limits`] with the written positions (what
+    /// `actuator_motion_checked` finds: a type with this kernel must keep the two
+    /// equal); a row not computed is computed again by `actuator_motion_checked`.
     /// Returns `false` (nothing written) for a type without such a kernel, the
     /// default; the hexapod's runs eight samples at a time across SIMD lanes.
-    fn motion_screened(&self, x: [&[f64]; 3], q: [&mut [f64]; 3], clear: &mut [bool]) -> bool {
-        let _ = (x, q, clear);
+    fn motion_screened(
+        &self,
+        x: [&[f64]; 3],
+        q: [&mut [f64]; 3],
+        clear: &mut [bool],
+        computed: &mut [bool],
+    ) -> bool {
+        let _ = (x, q, clear, computed);
         false
     }
 

@@ -305,7 +305,7 @@ fn batch(
                 if !r.violations.is_empty() {
                     unreachable += 1;
                     for (k, v) in r.violations.iter().enumerate() {
-                        *counts.entry(v.limit.clone()).or_default() += 1;
+                        *counts.entry(v.limit.to_string()).or_default() += 1;
                         if k > 0 {
                             text.push_str("; ");
                         }

@@ -8,7 +8,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::error::{Error, Result};
-use crate::limits::{FirstLimit, LimitCode, LimitKind, Side, Violation};
+use crate::limits::{FirstLimit, LimitCode, LimitKind, LimitName, Side, Violation};
 use crate::machine::{Analysable, Machine, Visitor};
 use crate::mechanism::inverse_continuing;
 
@@ -77,7 +77,7 @@ impl Causes {
         let kind = r.kind?;
         let (value, bound) = (self.value[i], self.bound[i]);
         Some(Violation {
-            limit: r.text.clone(),
+            limit: r.text.as_str().into(),
             kind,
             side: if value < bound { Side::Min } else { Side::Max },
             value,
@@ -170,21 +170,26 @@ impl std::hash::Hasher for WordHash {
 struct Interner {
     reasons: Vec<BatchReason>,
     index: std::collections::HashMap<
-        (String, Option<LimitKind>),
+        (LimitName, Option<LimitKind>),
         i32,
         std::hash::BuildHasherDefault<WordHash>,
     >,
 }
 
 impl Interner {
-    fn code(&mut self, text: String, kind: Option<LimitKind>, unit: &'static str) -> i32 {
+    fn code(
+        &mut self,
+        text: impl Into<LimitName>,
+        kind: Option<LimitKind>,
+        unit: &'static str,
+    ) -> i32 {
         let next = self.reasons.len() as i32;
         *self
             .index
-            .entry((text, kind))
+            .entry((text.into(), kind))
             .or_insert_with_key(|(text, kind)| {
                 self.reasons.push(BatchReason {
-                    text: text.clone(),
+                    text: text.to_string(),
                     kind: *kind,
                     unit,
                 });

@@ -24,15 +24,18 @@ use super::block::{Screen, LANES};
 
 /// The motion of the rows of `x = [poses, rates, accelerations]` (row-major X, Y, Z,
 /// A, B, C and their derivatives) into `q = [lengths, rates, accelerations]` (six per
-/// row), with `clear[i]` set where row `i` is certainly within every limit. The rows
-/// of whole blocks of eight are all written, their values meaningful where cleared;
-/// rows past the last whole block are neither written nor cleared. Returns `false`
-/// (nothing written) on a CPU without AVX-512F.
+/// row), with `computed[i]` set where row `i`'s motion is the scalar path's (its
+/// angles within the sine kernel's range) and `clear[i]` where it is moreover
+/// certainly within every limit. The rows of whole blocks of eight are all written,
+/// their values meaningful where computed; rows past the last whole block are
+/// neither written nor computed. Returns `false` (nothing written) on a CPU without
+/// AVX-512F.
 pub(crate) fn motion_rows(
     s: &Screen,
     x: [&[f64]; 3],
     q: [&mut [f64]; 3],
     clear: &mut [bool],
+    computed: &mut [bool],
 ) -> bool {
     #[cfg(target_arch = "x86_64")]
     {
@@ -51,16 +54,22 @@ pub(crate) fn motion_rows(
                 ];
                 // SAFETY: `avx512` is the hexapod's detection of AVX-512F, the one
                 // feature the kernel enables.
-                let mask = unsafe { avx512::block(s, rows, out) };
-                for (l, c) in clear[b * LANES..(b + 1) * LANES].iter_mut().enumerate() {
-                    *c = mask & (1 << l) != 0;
+                let (mask, ok) = unsafe { avx512::block(s, rows, out) };
+                let lanes = b * LANES..(b + 1) * LANES;
+                for (l, (c, k)) in clear[lanes.clone()]
+                    .iter_mut()
+                    .zip(&mut computed[lanes])
+                    .enumerate()
+                {
+                    (*c, *k) = (mask & (1 << l) != 0, ok & (1 << l) != 0);
                 }
             }
             clear[n / LANES * LANES..].fill(false);
+            computed[n / LANES * LANES..].fill(false);
             return true;
         }
     }
-    let _ = (s, x, q, clear);
+    let _ = (s, x, q, clear, computed);
     false
 }
 
@@ -72,14 +81,14 @@ mod avx512 {
     use super::{Screen, LANES};
     use crate::lane::Zmm;
 
-    /// One block of eight samples: their motion into `q`, the mask of cleared lanes
-    /// returned.
+    /// One block of eight samples: their motion into `q`; returns the mask of cleared
+    /// lanes and that of the lanes computed (angles within the sine kernel's range).
     #[target_feature(enable = "avx512f")]
     pub(super) unsafe fn block(
         s: &Screen,
         x: [&[f64; 6 * LANES]; 3],
         q: [&mut [f64; 6 * LANES]; 3],
-    ) -> u8 {
+    ) -> (u8, u8) {
         let pose = columns(x[0]);
         let rate = columns(x[1]);
         let acc = columns(x[2]);
@@ -135,8 +144,8 @@ mod avx512 {
         rows(&out[1], q1);
         rows(&out[2], q2);
         if ok == 0 {
-            return 0;
+            return (0, 0);
         }
-        limits(s, &pose, &r, &d, &out[0], ok)
+        (limits(s, &pose, &r, &d, &out[0], ok), ok)
     }
 }

@@ -76,13 +76,18 @@ pub(crate) fn strut_interference<const N: usize>(
 /// The violation of struts `a` and `b` whose axes are `d` apart, closer than `dia`.
 pub(crate) fn interference_violation(a: &str, b: &str, d: f64, dia: f64) -> Violation {
     Violation::new(
-        format!("struts {a}/{b} interference (axis distance)"),
+        interference_name(a, b),
         LimitKind::StrutInterference,
         Side::Min,
         Quantity::Length,
         d,
         dia,
     )
+}
+
+/// The name of the interference limit of struts `a` and `b`.
+pub(crate) fn interference_name(a: &str, b: &str) -> String {
+    format!("struts {a}/{b} interference (axis distance)")
 }
 
 /// Calls `found(i, k, distance)` for every pair of struts (base joint `base[i]` to

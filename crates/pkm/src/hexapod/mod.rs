@@ -14,11 +14,13 @@ pub mod forward;
 mod interference;
 mod simd;
 
+use std::sync::Arc;
+
 use nalgebra::{Matrix3, SMatrix, Vector3, Vector6};
 
 use crate::error::Result;
 use crate::legs::{split_pose, StrutSet};
-use crate::limits::{FirstLimit, LimitCode, LimitKind, Side, Violation};
+use crate::limits::{FirstLimit, LimitCode, LimitKind, LimitName, Side, Violation};
 use crate::mechanism::{
     spatial_coordinates, Actuator, ActuatorMotion, Coordinate, Forward, LinkKind, Mechanism,
     PointRole, PoseSpace, Skeleton,
@@ -29,7 +31,7 @@ use crate::units::Quantity;
 
 pub use forward::{FkOptions, FkReport, FkTracker};
 pub use interference::segment_distance;
-use interference::{interference_scan, interference_violation};
+use interference::{interference_name, interference_scan};
 
 /// First codes of [`Hexapod::scan`]'s families: axis travel from 0, strut lengths,
 /// base cones, platform cones, strut pairs.
@@ -132,6 +134,8 @@ pub struct Hexapod {
     coordinates: [Coordinate; 6],
     /// Pairs of struts that share a joint (never checked for interference).
     shares: [[bool; 6]; 6],
+    /// The name of every limit code of [`Hexapod::scan`], built with the machine.
+    limit_names: Arc<[LimitName]>,
 }
 
 /// What a hexapod derives from its joint centres and tool: the strut set, the
@@ -152,6 +156,45 @@ fn derived(
 /// The mean distance of the platform joints from the tool tip (at least 1e-9 mm).
 fn characteristic_length(set: &StrutSet<6>) -> f64 {
     (set.arms.iter().map(|a| a.norm()).sum::<f64>() / 6.0).max(1e-9)
+}
+
+/// Codes of [`Hexapod::scan`]: the six axes' travel, then per strut its length, its
+/// base and platform joint cones, then the 36 ordered pairs' interference.
+const LIMIT_CODES: usize = PAIR + 36;
+
+/// The name of limit code `id` ([`Hexapod::scan`]'s numbering).
+fn limit_name(struts: &[HexStrut; 6], coordinates: &[Coordinate; 6], id: usize) -> LimitName {
+    let strut = |i: usize| &struts[i % 6];
+    match id {
+        0..RANGE => format!("axis {} travel", coordinates[id].name),
+        RANGE..BASE_CONE => format!("strut {} length", strut(id - RANGE).actuator.name),
+        BASE_CONE..PLATFORM_CONE => {
+            let s = strut(id - BASE_CONE);
+            format!(
+                "base joint {} angle (strut {})",
+                s.base_name, s.actuator.name
+            )
+        }
+        PLATFORM_CONE..PAIR => {
+            let s = strut(id - PLATFORM_CONE);
+            format!(
+                "platform joint {} angle (strut {})",
+                s.platform_name, s.actuator.name
+            )
+        }
+        _ => {
+            let (i, k) = ((id - PAIR) / 6 % 6, (id - PAIR) % 6);
+            interference_name(&strut(i).actuator.name, &strut(k).actuator.name)
+        }
+    }
+    .into()
+}
+
+/// Every limit code's name, in code order.
+fn limit_names(struts: &[HexStrut; 6], coordinates: &[Coordinate; 6]) -> Arc<[LimitName]> {
+    (0..LIMIT_CODES)
+        .map(|id| limit_name(struts, coordinates, id))
+        .collect()
 }
 
 impl Hexapod {
@@ -252,48 +295,19 @@ impl Hexapod {
     }
 
     /// The violation a code of [`Hexapod::scan`] stands for, named as
-    /// [`Mechanism::check_limits`] names it.
+    /// [`Mechanism::check_limits`] names it (the name from the table built with the
+    /// machine: a motion beyond a limit clones it per sample, formats nothing).
     fn violation_of(&self, c: &LimitCode) -> Violation {
         let id = c.id as usize;
-        let strut = |i: usize| &self.struts[i % 6];
-        let (name, kind) = match id {
-            0..RANGE => (
-                format!("axis {} travel", self.coordinates[id].name),
-                LimitKind::AxisTravel,
-            ),
-            RANGE..BASE_CONE => (
-                format!("strut {} length", strut(id - RANGE).actuator.name),
-                LimitKind::ActuatorPosition,
-            ),
-            BASE_CONE..PLATFORM_CONE => {
-                let s = strut(id - BASE_CONE);
-                (
-                    format!(
-                        "base joint {} angle (strut {})",
-                        s.base_name, s.actuator.name
-                    ),
-                    LimitKind::JointAngle,
-                )
-            }
-            PLATFORM_CONE..PAIR => {
-                let s = strut(id - PLATFORM_CONE);
-                (
-                    format!(
-                        "platform joint {} angle (strut {})",
-                        s.platform_name, s.actuator.name
-                    ),
-                    LimitKind::JointAngle,
-                )
-            }
-            _ => {
-                let (i, k) = ((id - PAIR) / 6 % 6, (id - PAIR) % 6);
-                return interference_violation(
-                    &strut(i).actuator.name,
-                    &strut(k).actuator.name,
-                    c.value,
-                    c.bound,
-                );
-            }
+        let kind = match id {
+            0..RANGE => LimitKind::AxisTravel,
+            RANGE..BASE_CONE => LimitKind::ActuatorPosition,
+            BASE_CONE..PAIR => LimitKind::JointAngle,
+            _ => LimitKind::StrutInterference,
+        };
+        let name = match self.limit_names.get(id) {
+            Some(n) => n.clone(),
+            None => limit_name(&self.struts, &self.coordinates, id),
         };
         Violation::new(name, kind, c.side, c.quantity, c.value, c.bound)
     }
@@ -319,7 +333,9 @@ impl Hexapod {
                         || struts[i].platform_name == struts[k].platform_name)
             })
         });
+        let coordinates = spatial_coordinates();
         Hexapod {
+            limit_names: limit_names(&struts, &coordinates),
             name,
             struts,
             tool,
@@ -332,7 +348,7 @@ impl Hexapod {
             lanes,
             set,
             actuators,
-            coordinates: spatial_coordinates(),
+            coordinates,
             shares,
         }
     }
@@ -577,12 +593,21 @@ impl Mechanism<6, 6> for Hexapod {
         block::screen_rows(&block::Screen::new(self), xs, qs, clear, check)
     }
 
-    fn motion_screened(&self, x: [&[f64]; 3], q: [&mut [f64]; 3], clear: &mut [bool]) -> bool {
+    fn motion_screened(
+        &self,
+        x: [&[f64]; 3],
+        q: [&mut [f64]; 3],
+        clear: &mut [bool],
+        computed: &mut [bool],
+    ) -> bool {
         let n = clear.len();
-        if x.iter().any(|x| x.len() != 6 * n) || q.iter().any(|q| q.len() != 6 * n) {
+        if computed.len() != n
+            || x.iter().any(|x| x.len() != 6 * n)
+            || q.iter().any(|q| q.len() != 6 * n)
+        {
             return false;
         }
-        block_motion::motion_rows(&block::Screen::new(self), x, q, clear)
+        block_motion::motion_rows(&block::Screen::new(self), x, q, clear, computed)
     }
 
     fn limit_violation(&self, code: &LimitCode) -> Violation {

@@ -26,7 +26,7 @@ pub(super) fn check(m: &HybridAm, x: &Vector6<f64>, q: &SVector<f64, 5>, out: &m
         );
     }
     Range { min: 0.0, max: 0.0 }.check(
-        || "nozzle angle A (the platform tilts about Y only)".into(),
+        || "nozzle angle A (the platform tilts about Y only)",
         LimitKind::Tilt,
         Quantity::Angle,
         x[3],
@@ -35,7 +35,7 @@ pub(super) fn check(m: &HybridAm, x: &Vector6<f64>, q: &SVector<f64, 5>, out: &m
     let pl = m.placement(x);
     if let Some(r) = &m.tilt {
         r.check(
-            || "platform tilt (B minus the nozzle's tilt on the platform)".into(),
+            || "platform tilt (B minus the nozzle's tilt on the platform)",
             LimitKind::Tilt,
             Quantity::Angle,
             pl.beta,

@@ -162,12 +162,14 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Block<M, P, A> {
 ///
 /// The poses come first, then the mechanism's block kernel where it has one:
 /// [`Mechanism::motion_screened`] (the hexapod's: the motion of eight samples per
-/// AVX-512 register, with the limit screen) computes the motion of the samples it
-/// clears of every limit; else [`Mechanism::inverse_screened`]'s screen clears poses
-/// whose motion is then [`Mechanism::actuator_motion`] with no violation to look for.
-/// The others, and every sample of a type with neither, go through
-/// [`Mechanism::actuator_motion_checked`]. All give the same motion, bit for bit: the
-/// screen only decides which code makes it.
+/// AVX-512 register, with the limit screen) computes the motion of the samples; those
+/// it does not clear of every limit have their limits checked by
+/// [`Mechanism::check_limits`] (a program beyond a limit costs the check, not a second
+/// motion). Else [`Mechanism::inverse_screened`]'s screen clears poses whose motion
+/// is then [`Mechanism::actuator_motion`] with no violation to look for. The others,
+/// and every sample of a type with neither, go through
+/// [`Mechanism::actuator_motion_checked`]. All give the same motion and violations,
+/// bit for bit: the screen only decides which code makes them.
 #[allow(clippy::type_complexity)]
 fn compute_range<M: Mechanism<P, A>, const P: usize, const A: usize>(
     m: &M,
@@ -190,7 +192,12 @@ fn compute_range<M: Mechanism<P, A>, const P: usize, const A: usize>(
     }
     let n = out.len();
     ROWS.with_borrow_mut(|rows| {
-        let Rows { x, q, clear } = rows;
+        let Rows {
+            x,
+            q,
+            clear,
+            computed,
+        } = rows;
         for v in x.iter_mut() {
             v.clear();
         }
@@ -207,25 +214,45 @@ fn compute_range<M: Mechanism<P, A>, const P: usize, const A: usize>(
         }
         if clear.len() < n {
             clear.resize(n, false);
+            computed.resize(n, false);
         }
-        let clear = &mut clear[..n];
+        let (clear, computed) = (&mut clear[..n], &mut computed[..n]);
         let [q0, q1, q2] = q;
         let (q0, q1, q2) = (&mut q0[..A * n], &mut q1[..A * n], &mut q2[..A * n]);
         // The motion kernel where the type has one, else the inverse's screen.
-        let kernel =
-            m.motion_screened([&x[0], &x[1], &x[2]], [&mut *q0, &mut *q1, &mut *q2], clear);
-        if !kernel && !m.inverse_screened(&x[0], q0, clear, true) {
-            clear.fill(false);
+        let kernel = m.motion_screened(
+            [&x[0], &x[1], &x[2]],
+            [&mut *q0, &mut *q1, &mut *q2],
+            clear,
+            computed,
+        );
+        if !kernel {
+            computed.fill(false);
+            if !m.inverse_screened(&x[0], q0, clear, true) {
+                clear.fill(false);
+            }
         }
         let q = [&*q0, &*q1, &*q2];
-        for (j, (s, &clear)) in out.iter_mut().zip(clear.iter()).enumerate() {
-            if clear && kernel {
+        for (j, (s, (&clear, &computed))) in out
+            .iter_mut()
+            .zip(clear.iter().zip(computed.iter()))
+            .enumerate()
+        {
+            if computed {
                 // In place: a 144-byte `ActuatorMotion` moved through a `Result` is two
                 // `memcpy` calls per sample.
                 for i in 0..A {
                     s.act.q[i] = q[0][A * j + i];
                     s.act.qd[i] = q[1][A * j + i];
                     s.act.qdd[i] = q[2][A * j + i];
+                }
+                if !clear {
+                    // Beyond a limit, or near one: its limits checked with the motion
+                    // the kernel wrote (not computed a second time).
+                    buf.clear();
+                    m.check_limits(&s.x, &s.act.q, &mut buf);
+                    let k = (offset + j) as u32;
+                    violations.extend(buf.drain(..).map(|v| (k, v)));
                 }
                 continue;
             }
@@ -249,7 +276,7 @@ fn compute_range<M: Mechanism<P, A>, const P: usize, const A: usize>(
 }
 
 /// Per-thread rows of [`compute_range`]: the samples' poses, rates and accelerations,
-/// the kernel's actuator rows and the clear mask, kept between calls (a run allocates
+/// the kernel's actuator rows and its masks, kept between calls (a run allocates
 /// them once per thread, not per chunk). Borrowed for the whole of one call: nothing
 /// inside it may run rayon work on the same thread (a stolen `compute_range` would
 /// borrow them again and panic); the mechanism calls it makes are plain per-pose code.
@@ -258,6 +285,7 @@ struct Rows {
     x: [Vec<f64>; 3],
     q: [Vec<f64>; 3],
     clear: Vec<bool>,
+    computed: Vec<bool>,
 }
 
 thread_local! {

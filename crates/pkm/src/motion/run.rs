@@ -11,7 +11,7 @@ use super::profile::Profile;
 use super::singular::{SingularReport, SingularTracker, DEFAULT_SINGULAR_ANGLE};
 use super::stats::{ratios, AxisBank, AxisStats, Ratios};
 use crate::error::{Error, Result};
-use crate::limits::{LimitKind, Side, Violation};
+use crate::limits::{LimitKind, LimitName, Side, Violation};
 use crate::mechanism::{ActuatorMotion, Mechanism, PoseSpace};
 use crate::units::Quantity;
 
@@ -126,7 +126,11 @@ struct Recorder<'m, M, const P: usize, const A: usize> {
     serial: AxisBank<P>,
     serial_idx: Vec<usize>,
     runs: Vec<ViolationRun>,
-    open: Vec<(String, usize)>,
+    /// The stretches still open: their limit and index in `runs`, in the order of
+    /// the last sample's violations.
+    open: Vec<(LimitName, usize)>,
+    /// Storage for the next `open` (kept: no allocation per sample).
+    spare_open: Vec<(LimitName, usize)>,
     dropped: u64,
     buf: Vec<Violation>,
     /// Per actuator, `Quantity::to_user`'s factor.
@@ -135,11 +139,23 @@ struct Recorder<'m, M, const P: usize, const A: usize> {
     serial_scale: [f64; P],
     /// Per actuator, the velocity and acceleration limits (infinite where none).
     rate_limits: [(f64, f64); A],
+    /// Per actuator, the names of its velocity and acceleration limits (`actuator 3
+    /// velocity`), named once: a program beyond one clones them per sample.
+    rate_names: Vec<[LimitName; 2]>,
     /// Per actuator, the largest |q'| and |q''| seen.
     peak_rates: [(f64, f64); A],
     singular: SingularTracker,
     /// The last sample recorded, which the next continues ([`super::follow`]).
     last: Last<A>,
+}
+
+/// Extends stretch `r` to time `t` with violation `v` of its limit (its worst value
+/// kept).
+fn extend_run(r: &mut ViolationRun, v: &Violation, t: f64) {
+    r.end_s = t;
+    if v.excess > (r.worst - r.bound).abs() {
+        r.worst = v.value;
+    }
 }
 
 /// The default work limit of a run: 2e7 samples (about 10 s on one core for a hexapod;
@@ -177,6 +193,7 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
                 serial: AxisBank::default(),
                 runs: Vec::new(),
                 open: Vec::new(),
+                spare_open: Vec::new(),
                 dropped: 0,
                 buf: Vec::new(),
                 act_scale: std::array::from_fn(|i| m.actuators()[i].quantity.user_scale()),
@@ -192,6 +209,14 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
                         a.max_acceleration.unwrap_or(f64::INFINITY),
                     )
                 }),
+                rate_names: m
+                    .actuators()
+                    .iter()
+                    .map(|a| {
+                        ["velocity", "acceleration"]
+                            .map(|what| format!("actuator {} {what}", a.name).into())
+                    })
+                    .collect(),
                 peak_rates: [(0.0, 0.0); A],
                 serial_idx,
                 singular: SingularTracker::new(m.actuators(), DEFAULT_SINGULAR_ANGLE)?,
@@ -398,20 +423,12 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
     /// by `value` (internal units).
     fn rate_violation(&self, i: usize, order: u8, value: f64) -> Violation {
         let a = &self.m.actuators()[i];
-        let (what, kind, bound) = match order {
-            1 => (
-                "velocity",
-                LimitKind::ActuatorVelocity,
-                self.rate_limits[i].0,
-            ),
-            _ => (
-                "acceleration",
-                LimitKind::ActuatorAcceleration,
-                self.rate_limits[i].1,
-            ),
+        let (kind, bound) = match order {
+            1 => (LimitKind::ActuatorVelocity, self.rate_limits[i].0),
+            _ => (LimitKind::ActuatorAcceleration, self.rate_limits[i].1),
         };
         let mut x = Violation::new(
-            format!("actuator {} {what}", a.name),
+            self.rate_names[i][usize::from(order != 1)].clone(),
             kind,
             Side::Max,
             a.quantity,
@@ -426,17 +443,36 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
         if self.buf.is_empty() && self.open.is_empty() {
             return;
         }
-        // Close stretches whose limit is no longer violated.
-        let buf = &self.buf;
-        self.open
-            .retain(|(name, _)| buf.iter().any(|v| &v.limit == name));
+        // The limits of the sample before, in its order (a stretch beyond them): the
+        // names compare by pointer when the mechanism names its limits once.
+        if self.buf.len() == self.open.len()
+            && self
+                .buf
+                .iter()
+                .zip(&self.open)
+                .all(|(v, (n, _))| v.limit == *n)
+        {
+            for (v, &(_, idx)) in self.buf.iter().zip(&self.open) {
+                extend_run(&mut self.runs[idx], v, t);
+            }
+            return;
+        }
+        // Otherwise: stretches whose limit is no longer violated close, the others
+        // go on, new ones open; `open` then lists them in this sample's order.
+        let old = std::mem::take(&mut self.open);
+        let mut open = std::mem::take(&mut self.spare_open);
+        open.clear();
         for v in &self.buf {
-            match self.open.iter().find(|(n, _)| n == &v.limit) {
-                Some(&(_, idx)) => {
-                    let r = &mut self.runs[idx];
-                    r.end_s = t;
-                    if v.excess > (r.worst - r.bound).abs() {
-                        r.worst = v.value;
+            let found = open
+                .iter()
+                .chain(old.iter())
+                .find(|(n, _)| *n == v.limit)
+                .map(|&(_, idx)| idx);
+            match found {
+                Some(idx) => {
+                    extend_run(&mut self.runs[idx], v, t);
+                    if !open.iter().any(|(_, i)| *i == idx) {
+                        open.push((v.limit.clone(), idx));
                     }
                 }
                 None => {
@@ -445,7 +481,7 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
                         continue;
                     }
                     self.runs.push(ViolationRun {
-                        limit: v.limit.clone(),
+                        limit: v.limit.to_string(),
                         kind: v.kind,
                         line,
                         start_s: t,
@@ -454,10 +490,12 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
                         bound: v.bound,
                         unit: v.unit.to_string(),
                     });
-                    self.open.push((v.limit.clone(), self.runs.len() - 1));
+                    open.push((v.limit.clone(), self.runs.len() - 1));
                 }
             }
         }
+        self.open = open;
+        self.spare_open = old;
     }
 
     /// The summary, with the serial axes' `names`, the run's duration and samples.

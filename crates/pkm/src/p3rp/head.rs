@@ -300,7 +300,7 @@ impl HeadGeometry {
         }
         if let Some(r) = &self.theta_range {
             r.check(
-                || "hinge A deflection theta".into(),
+                || "hinge A deflection theta",
                 LimitKind::JointAngle,
                 Quantity::Angle,
                 theta,
@@ -309,7 +309,7 @@ impl HeadGeometry {
         }
         if let (Some(r), Ok(phi)) = (&self.rod_angle_range, self.rod_angle(theta)) {
             r.check(
-                || "rod angle phi (hinge C)".into(),
+                || "rod angle phi (hinge C)",
                 LimitKind::JointAngle,
                 Quantity::Angle,
                 phi,

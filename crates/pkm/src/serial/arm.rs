@@ -20,7 +20,7 @@ use super::mechanism::chain_skeleton;
 use super::spherical_wrist::SphericalWrist;
 use super::PreparedChain;
 use crate::error::{Error, Result};
-use crate::limits::{LimitKind, Violation};
+use crate::limits::{LimitKind, LimitName, Violation};
 use crate::mechanism::{
     spatial_coordinates, Actuator, ActuatorMotion, Coordinate, Forward, Mechanism, PoseSpace,
     Skeleton,
@@ -70,6 +70,9 @@ pub struct SerialArm {
     part_inverse: Matrix4<f64>,
     coordinates: [Coordinate; 6],
     actuators: [Actuator; 6],
+    /// The joints' position limits by name (`joint A4 position`), named once: a
+    /// motion beyond one clones the name per sample.
+    position_limits: std::sync::Arc<[LimitName; 6]>,
     characteristic_length: f64,
     /// Links whose angular deviations are completed from a triple (accuracy engine).
     pub(crate) completions: Vec<crate::accuracy::LinkCompletion>,
@@ -110,7 +113,12 @@ impl SerialArm {
             .try_inverse()
             .ok_or_else(|| invalid("the workpiece frame is not invertible".into()))?;
         let joints: Vec<_> = machine.tool.joints().cloned().collect();
-        let actuators = std::array::from_fn(|i| joints[i].actuator());
+        let actuators: [Actuator; 6] = std::array::from_fn(|i| joints[i].actuator());
+        let position_limits = std::sync::Arc::new(
+            actuators
+                .each_ref()
+                .map(|a| LimitName::from(format!("joint {} position", a.name))),
+        );
         let tool = PreparedChain::new(&machine.tool, &[], &[]);
         let mut arm = SerialArm {
             machine,
@@ -120,6 +128,7 @@ impl SerialArm {
             part_inverse,
             coordinates: spatial_coordinates(),
             actuators,
+            position_limits,
             completions: Vec::new(),
             characteristic_length: 1.0,
             base_origin: Vector3::zeros(),
@@ -764,9 +773,14 @@ impl Mechanism<6, 6> for SerialArm {
     }
 
     fn check_limits(&self, _x: &Vector6<f64>, q: &Vector6<f64>, out: &mut Vec<Violation>) {
-        for (a, v) in self.actuators.iter().zip(q.iter()) {
+        for ((a, name), v) in self
+            .actuators
+            .iter()
+            .zip(self.position_limits.iter())
+            .zip(q.iter())
+        {
             a.range.check(
-                || format!("joint {} position", a.name),
+                || name.clone(),
                 LimitKind::ActuatorPosition,
                 a.quantity,
                 *v,

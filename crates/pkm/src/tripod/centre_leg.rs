@@ -245,7 +245,7 @@ impl Mechanism<3, 3> for CentreLegTripod {
         self.geometry.check_limits(x, &st.rotation, q, out);
         if let Some(r) = &self.leg.length {
             r.check(
-                || "centre leg length".into(),
+                || "centre leg length",
                 LimitKind::PassiveJoint,
                 Quantity::Length,
                 st.length,

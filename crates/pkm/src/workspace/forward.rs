@@ -63,7 +63,7 @@ where
                     ForwardPoint {
                         pose: Some(f.pose),
                         reachable: v.is_empty(),
-                        binding: v.first().map(|x| x.limit.clone()),
+                        binding: v.first().map(|x| x.limit.to_string()),
                     }
                 }
                 Err(e) => ForwardPoint {

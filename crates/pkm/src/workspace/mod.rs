@@ -224,7 +224,7 @@ fn limits_at<M: Mechanism<P, A>, const P: usize, const A: usize>(
 ) -> (Option<SVector<f64, A>>, Option<String>) {
     v.clear();
     m.check_limits(x, &q, v);
-    (Some(q), v.first().map(|f| f.limit.clone()))
+    (Some(q), v.first().map(|f| f.limit.to_string()))
 }
 
 /// The point result at `x` once inverse kinematics has answered `q`; `v` is left with
@@ -536,7 +536,7 @@ impl Tally {
             match self.0.get_mut(x.limit.as_str()) {
                 Some(n) => *n += 1,
                 None => {
-                    self.0.insert(x.limit.clone(), 1);
+                    self.0.insert(x.limit.to_string(), 1);
                 }
             }
         }

@@ -297,9 +297,12 @@ fn the_screened_motion_equals_the_checked_call_sample_by_sample() {
         .map(|gm| to_move(&h, &gm, &o).unwrap())
         .collect();
     let mut r = Runner::new(&h, Sampling::Rate(1000.0)).unwrap();
-    // Per limit (rates aside): violated at the previous sample, and the starts.
-    let mut before: Vec<String> = Vec::new();
-    let mut starts: Vec<(String, u64)> = Vec::new();
+    // Per limit (rates aside): its stretches of consecutive violating samples (start,
+    // end, worst value), built here by name from the per-sample violations.
+    type Stretch = (String, u64, u64, u64);
+    let mut open: std::collections::HashMap<String, usize> = Default::default();
+    let mut stretches: Vec<Stretch> = Vec::new();
+    let mut worst_excess: Vec<f64> = Vec::new();
     let mut samples = 0;
     let n = moves.len();
     for (k, mv) in moves.iter().enumerate() {
@@ -309,13 +312,23 @@ fn the_screened_motion_equals_the_checked_call_sample_by_sample() {
             for (a, b) in [(act.q, s.act.q), (act.qd, s.act.qd), (act.qdd, s.act.qdd)] {
                 assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits), "t = {}", s.t);
             }
-            let now: Vec<String> = v.into_iter().map(|v| v.limit).collect();
-            for l in &now {
-                if !before.contains(l) {
-                    starts.push((l.clone(), s.t.to_bits()));
+            open.retain(|name, _| v.iter().any(|x| x.limit == *name));
+            for x in &v {
+                let t = s.t.to_bits();
+                match open.get(x.limit.as_str()) {
+                    Some(&k) => {
+                        stretches[k].2 = t;
+                        if x.excess > worst_excess[k] {
+                            (stretches[k].3, worst_excess[k]) = (x.value.to_bits(), x.excess);
+                        }
+                    }
+                    None => {
+                        open.insert(x.limit.to_string(), stretches.len());
+                        stretches.push((x.limit.to_string(), t, t, x.value.to_bits()));
+                        worst_excess.push(x.excess);
+                    }
                 }
             }
-            before = now;
             samples += 1;
             Ok(())
         })
@@ -323,11 +336,14 @@ fn the_screened_motion_equals_the_checked_call_sample_by_sample() {
     }
     let summary = r.finish();
     let rates = [LimitKind::ActuatorVelocity, LimitKind::ActuatorAcceleration];
-    let mut runs: Vec<(String, u64)> = summary
+    let mut runs: Vec<Stretch> = summary
         .violations
         .iter()
         .filter(|v| !rates.contains(&v.kind))
-        .map(|v| (v.limit.clone(), v.start_s.to_bits()))
+        .map(|v| {
+            let (a, b, w) = (v.start_s, v.end_s, v.worst);
+            (v.limit.clone(), a.to_bits(), b.to_bits(), w.to_bits())
+        })
         .collect();
     let kinds: std::collections::BTreeSet<String> = summary
         .violations
@@ -336,9 +352,10 @@ fn the_screened_motion_equals_the_checked_call_sample_by_sample() {
         .collect();
     assert!(samples > 8 * 4096, "{samples}");
     assert_eq!(kinds.len(), 4, "{kinds:?}");
-    starts.sort();
+    assert!(stretches.len() > 20, "{} stretches", stretches.len());
+    stretches.sort();
     runs.sort();
-    assert_eq!(starts, runs);
+    assert_eq!(stretches, runs);
 }
 
 #[test]
