@@ -148,6 +148,18 @@ impl PartialEq<LimitName> for &str {
     }
 }
 
+/// The position limits of `actuators` by name (`"{prefix} {name} position"`), named
+/// once for a machine that checks them per pose.
+pub(crate) fn position_limit_names(
+    prefix: &str,
+    actuators: &[crate::mechanism::Actuator],
+) -> Arc<[LimitName]> {
+    actuators
+        .iter()
+        .map(|a| LimitName::from(format!("{prefix} {} position", a.name)))
+        .collect()
+}
+
 /// One violated limit.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Violation {

@@ -5,11 +5,13 @@
 //! The joint count is a const parameter (`N` = tool joints + workpiece joints), so the
 //! hot paths stay fixed-size; [`SerialAny`] holds the sizes pkm loads from files.
 
+use std::sync::Arc;
+
 use nalgebra::{Isometry3, Matrix3, SMatrix, SVector, Translation3, UnitQuaternion, Vector3};
 
 use super::machine::SerialMachine;
 use crate::error::{Error, Result};
-use crate::limits::{LimitKind, Violation};
+use crate::limits::{position_limit_names, LimitKind, LimitName, Violation};
 use crate::mechanism::{
     Actuator, ActuatorMotion, Coordinate, LinkKind, Mechanism, PointRole, PoseSpace, Skeleton,
 };
@@ -24,6 +26,8 @@ pub struct SerialMechanism<const N: usize> {
     pub home: SVector<f64, N>,
     coordinates: [Coordinate; N],
     actuators: [Actuator; N],
+    /// The axes' position limits by name, named once.
+    position_limits: Arc<[LimitName]>,
     /// Joints of the tool chain (the first ones).
     tool_joints: usize,
     /// Links whose angular deviations are completed from a triple (accuracy engine).
@@ -44,8 +48,9 @@ impl<const N: usize> SerialMechanism<N> {
             name: joints[i].name.clone(),
             quantity: joints[i].quantity(),
         });
-        let actuators = std::array::from_fn(|i| joints[i].actuator());
+        let actuators: [Actuator; N] = std::array::from_fn(|i| joints[i].actuator());
         Ok(SerialMechanism {
+            position_limits: position_limit_names("axis", &actuators),
             tool_joints: machine.tool.dof(),
             machine,
             home,
@@ -143,9 +148,9 @@ impl<const N: usize> Mechanism<N, N> for SerialMechanism<N> {
     }
 
     fn check_limits(&self, x: &SVector<f64, N>, _q: &SVector<f64, N>, out: &mut Vec<Violation>) {
-        for (a, v) in self.actuators.iter().zip(x.iter()) {
+        for (i, (a, v)) in self.actuators.iter().zip(x.iter()).enumerate() {
             a.range.check(
-                || format!("axis {} position", a.name),
+                || self.position_limits[i].clone(),
                 LimitKind::ActuatorPosition,
                 a.quantity,
                 *v,

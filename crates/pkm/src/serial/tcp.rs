@@ -33,13 +33,15 @@
 //! towards the spindle), in the part frame; [`TcpMachine::rotary_for_axis`] gives the
 //! rotary angles for one (both branches; [`super::tcp_axis`]).
 
+use std::sync::Arc;
+
 use nalgebra::{Isometry3, Matrix3, SMatrix, SVector, Translation3, UnitQuaternion, Vector3};
 
 use super::machine::SerialMachine;
 use super::mechanism::chain_skeleton;
 use super::{JointKind, PreparedChain};
 use crate::error::{Error, Result};
-use crate::limits::{LimitKind, Violation};
+use crate::limits::{position_limit_names, LimitKind, LimitName, Violation};
 use crate::mechanism::{
     Actuator, ActuatorMotion, Coordinate, Forward, Mechanism, PoseSpace, Skeleton,
 };
@@ -97,6 +99,8 @@ pub struct TcpMachine<const N: usize> {
     pub(super) order: [usize; N],
     tool: PreparedChain,
     work: Option<PreparedChain>,
+    /// The axes' position limits by name, named once.
+    position_limits: Arc<[LimitName]>,
     characteristic_length: f64,
     /// The relative kinematics at zero joint values: the rotary axes and the tool axis
     /// the tool-axis inverse turns ([`super::tcp_axis`]).
@@ -140,7 +144,8 @@ impl<const N: usize> TcpMachine<N> {
                 )));
             }
         }
-        let actuators = std::array::from_fn(|i| joints[i].actuator());
+        let actuators: [Actuator; N] = std::array::from_fn(|i| joints[i].actuator());
+        let position_limits = position_limit_names("axis", &actuators);
         let coordinates = std::array::from_fn(|i| match i {
             0 => Coordinate::length("X"),
             1 => Coordinate::length("Y"),
@@ -172,6 +177,7 @@ impl<const N: usize> TcpMachine<N> {
             home: SVector::zeros(),
             coordinates,
             actuators,
+            position_limits,
             kinds: std::array::from_fn(|i| joints[i].kind),
             tool_joints,
             linear: [prismatic[0], prismatic[1], prismatic[2]],
@@ -512,9 +518,9 @@ impl<const N: usize> Mechanism<N, N> for TcpMachine<N> {
     }
 
     fn check_limits(&self, _x: &SVector<f64, N>, q: &SVector<f64, N>, out: &mut Vec<Violation>) {
-        for (a, v) in self.actuators.iter().zip(q.iter()) {
+        for (i, (a, v)) in self.actuators.iter().zip(q.iter()).enumerate() {
             a.range.check(
-                || format!("axis {} position", a.name),
+                || self.position_limits[i].clone(),
                 LimitKind::ActuatorPosition,
                 a.quantity,
                 *v,
