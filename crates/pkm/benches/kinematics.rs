@@ -295,6 +295,24 @@ fn program_motion(c: &mut Criterion) {
             |b| b.iter(|| run(&m, black_box(&text))),
         );
     }
+    // The hexapod's program 400 mm higher: every strut beyond its 1000 mm stroke from
+    // the first moves, so every sample reports six violations (a design or a program
+    // that does not fit, as a sweep meets them).
+    let m = machine("hexapod-linuxcnc.toml");
+    let text = wave_program(10_000, [0.0, 0.0, 908.0], 0.0);
+    let samples = run(&m, &text);
+    g.throughput(criterion::Throughput::Elements(samples));
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    g.bench_function(
+        format!(
+            "hexapod-linuxcnc.toml: the program 400 mm higher, beyond every stroke \
+             ({samples} samples), 1 thread"
+        ),
+        |b| b.iter(|| one.install(|| run(&m, black_box(&text)))),
+    );
     g.finish();
 }
 

@@ -396,9 +396,14 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
 
     #[inline(always)]
     fn add_stats_plain(&mut self, samples: &[Sample<P, A>]) {
-        let (mut act, mut serial, mut peaks) = (self.act, self.serial, self.peak_rates);
+        // Two passes, the actuators' then the serial axes': each bank's statistics see
+        // the samples in order, as in one pass, and each loop keeps its bank in
+        // registers (one loop with both spilled, and its code changed with unrelated
+        // changes elsewhere: 9 to 12 % of a hexapod's run). The two passes read
+        // different parts of each sample, so no more memory than one.
+        let (mut act, mut peaks) = (self.act, self.peak_rates);
         // `v * scale` is `Quantity::to_user(v)` bit for bit (1 or 180 / pi).
-        let (c, cs, idx) = (self.act_scale, self.serial_scale, &self.serial_idx);
+        let c = self.act_scale;
         for s in samples {
             let a = &s.act;
             act.add(
@@ -406,17 +411,22 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
                 &std::array::from_fn(|i| a.qd[i] * c[i]),
                 &std::array::from_fn(|i| a.qdd[i] * c[i]),
             );
+            for (i, peak) in peaks.iter_mut().enumerate() {
+                *peak = (peak.0.max(a.qd[i].abs()), peak.1.max(a.qdd[i].abs()));
+            }
+        }
+        (self.act, self.peak_rates) = (act, peaks);
+        let mut serial = self.serial;
+        let (cs, idx) = (self.serial_scale, &self.serial_idx);
+        for s in samples {
             let lane = |v: &SVector<f64, P>, j: usize| idx.get(j).map_or(0.0, |&k| v[k] * cs[j]);
             serial.add(
                 &std::array::from_fn(|j| lane(&s.x, j)),
                 &std::array::from_fn(|j| lane(&s.xd, j)),
                 &std::array::from_fn(|j| lane(&s.xdd, j)),
             );
-            for (i, peak) in peaks.iter_mut().enumerate() {
-                *peak = (peak.0.max(a.qd[i].abs()), peak.1.max(a.qdd[i].abs()));
-            }
         }
-        (self.act, self.serial, self.peak_rates) = (act, serial, peaks);
+        self.serial = serial;
     }
 
     /// The violation of actuator `i`'s velocity (`order` 1) or acceleration (2) limit
