@@ -266,6 +266,11 @@ fn program_motion(c: &mut Criterion) {
     };
     let mut g = c.benchmark_group("program motion");
     g.sample_size(10);
+    // One thread: everything inline, in a pool of one.
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
     for (file, centre, a0) in [
         ("hexapod-linuxcnc.toml", [0.0, 0.0, 508.0], 0.0),
         // A = -180 deg as the KR 30's home pose reads: from A-180, A180 would be a
@@ -277,11 +282,6 @@ fn program_motion(c: &mut Criterion) {
         let text = wave_program(10_000, centre, a0);
         let samples = run(&m, &text);
         g.throughput(criterion::Throughput::Elements(samples));
-        // One thread: everything inline, in a pool of one.
-        let one = rayon::ThreadPoolBuilder::new()
-            .num_threads(1)
-            .build()
-            .unwrap();
         g.bench_function(
             format!("{file}: 10k-line program at 1 kHz ({samples} samples), 1 thread"),
             |b| b.iter(|| one.install(|| run(&m, black_box(&text)))),
@@ -302,10 +302,6 @@ fn program_motion(c: &mut Criterion) {
     let text = wave_program(10_000, [0.0, 0.0, 908.0], 0.0);
     let samples = run(&m, &text);
     g.throughput(criterion::Throughput::Elements(samples));
-    let one = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .unwrap();
     g.bench_function(
         format!(
             "hexapod-linuxcnc.toml: the program 400 mm higher, beyond every stroke \
