@@ -148,16 +148,41 @@ impl PartialEq<LimitName> for &str {
     }
 }
 
-/// The position limits of `actuators` by name (`"{prefix} {name} position"`), named
-/// once for a machine that checks them per pose.
-pub(crate) fn position_limit_names(
-    prefix: &str,
-    actuators: &[crate::mechanism::Actuator],
-) -> Arc<[LimitName]> {
-    actuators
-        .iter()
-        .map(|a| LimitName::from(format!("{prefix} {} position", a.name)))
-        .collect()
+/// The position limits of a machine's actuators, each named once when the machine is
+/// built (`"{prefix} {actuator} position"`): checked per pose without formatting a
+/// name (a motion beyond one clones it per sample).
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct PositionLimits(Arc<[LimitName]>);
+
+impl PositionLimits {
+    /// The names of `actuators`' position limits.
+    pub(crate) fn new(prefix: &str, actuators: &[crate::mechanism::Actuator]) -> Self {
+        PositionLimits(
+            actuators
+                .iter()
+                .map(|a| LimitName::from(format!("{prefix} {} position", a.name)))
+                .collect(),
+        )
+    }
+
+    /// Pushes a violation for every actuator (of those the names were made for)
+    /// whose value in `values` is outside its range.
+    pub(crate) fn check(
+        &self,
+        actuators: &[crate::mechanism::Actuator],
+        values: &[f64],
+        out: &mut Vec<Violation>,
+    ) {
+        for ((a, name), v) in actuators.iter().zip(self.0.iter()).zip(values) {
+            a.range.check(
+                || name.clone(),
+                LimitKind::ActuatorPosition,
+                a.quantity,
+                *v,
+                out,
+            );
+        }
+    }
 }
 
 /// One violated limit.

@@ -20,7 +20,7 @@ use super::mechanism::chain_skeleton;
 use super::spherical_wrist::SphericalWrist;
 use super::PreparedChain;
 use crate::error::{Error, Result};
-use crate::limits::{position_limit_names, LimitKind, LimitName, Violation};
+use crate::limits::{PositionLimits, Violation};
 use crate::mechanism::{
     spatial_coordinates, Actuator, ActuatorMotion, Coordinate, Forward, Mechanism, PoseSpace,
     Skeleton,
@@ -72,7 +72,7 @@ pub struct SerialArm {
     actuators: [Actuator; 6],
     /// The joints' position limits by name (`joint A4 position`), named once: a
     /// motion beyond one clones the name per sample.
-    position_limits: std::sync::Arc<[LimitName]>,
+    position_limits: PositionLimits,
     characteristic_length: f64,
     /// Links whose angular deviations are completed from a triple (accuracy engine).
     pub(crate) completions: Vec<crate::accuracy::LinkCompletion>,
@@ -114,7 +114,7 @@ impl SerialArm {
             .ok_or_else(|| invalid("the workpiece frame is not invertible".into()))?;
         let joints: Vec<_> = machine.tool.joints().cloned().collect();
         let actuators: [Actuator; 6] = std::array::from_fn(|i| joints[i].actuator());
-        let position_limits = position_limit_names("joint", &actuators);
+        let position_limits = PositionLimits::new("joint", &actuators);
         let tool = PreparedChain::new(&machine.tool, &[], &[]);
         let mut arm = SerialArm {
             machine,
@@ -769,20 +769,8 @@ impl Mechanism<6, 6> for SerialArm {
     }
 
     fn check_limits(&self, _x: &Vector6<f64>, q: &Vector6<f64>, out: &mut Vec<Violation>) {
-        for ((a, name), v) in self
-            .actuators
-            .iter()
-            .zip(self.position_limits.iter())
-            .zip(q.iter())
-        {
-            a.range.check(
-                || name.clone(),
-                LimitKind::ActuatorPosition,
-                a.quantity,
-                *v,
-                out,
-            );
-        }
+        self.position_limits
+            .check(&self.actuators, q.as_slice(), out);
     }
 
     fn skeleton(&self, x: &Vector6<f64>) -> Result<Skeleton> {

@@ -5,13 +5,11 @@
 //! The joint count is a const parameter (`N` = tool joints + workpiece joints), so the
 //! hot paths stay fixed-size; [`SerialAny`] holds the sizes pkm loads from files.
 
-use std::sync::Arc;
-
 use nalgebra::{Isometry3, Matrix3, SMatrix, SVector, Translation3, UnitQuaternion, Vector3};
 
 use super::machine::SerialMachine;
 use crate::error::{Error, Result};
-use crate::limits::{position_limit_names, LimitKind, LimitName, Violation};
+use crate::limits::{PositionLimits, Violation};
 use crate::mechanism::{
     Actuator, ActuatorMotion, Coordinate, LinkKind, Mechanism, PointRole, PoseSpace, Skeleton,
 };
@@ -27,7 +25,7 @@ pub struct SerialMechanism<const N: usize> {
     coordinates: [Coordinate; N],
     actuators: [Actuator; N],
     /// The axes' position limits by name, named once.
-    position_limits: Arc<[LimitName]>,
+    position_limits: PositionLimits,
     /// Joints of the tool chain (the first ones).
     tool_joints: usize,
     /// Links whose angular deviations are completed from a triple (accuracy engine).
@@ -50,7 +48,7 @@ impl<const N: usize> SerialMechanism<N> {
         });
         let actuators: [Actuator; N] = std::array::from_fn(|i| joints[i].actuator());
         Ok(SerialMechanism {
-            position_limits: position_limit_names("axis", &actuators),
+            position_limits: PositionLimits::new("axis", &actuators),
             tool_joints: machine.tool.dof(),
             machine,
             home,
@@ -148,15 +146,8 @@ impl<const N: usize> Mechanism<N, N> for SerialMechanism<N> {
     }
 
     fn check_limits(&self, x: &SVector<f64, N>, _q: &SVector<f64, N>, out: &mut Vec<Violation>) {
-        for (i, (a, v)) in self.actuators.iter().zip(x.iter()).enumerate() {
-            a.range.check(
-                || self.position_limits[i].clone(),
-                LimitKind::ActuatorPosition,
-                a.quantity,
-                *v,
-                out,
-            );
-        }
+        self.position_limits
+            .check(&self.actuators, x.as_slice(), out);
     }
 
     /// Frame origins of both chains (bed frame), consecutive ones linked.

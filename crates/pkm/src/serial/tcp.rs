@@ -33,15 +33,13 @@
 //! towards the spindle), in the part frame; [`TcpMachine::rotary_for_axis`] gives the
 //! rotary angles for one (both branches; [`super::tcp_axis`]).
 
-use std::sync::Arc;
-
 use nalgebra::{Isometry3, Matrix3, SMatrix, SVector, Translation3, UnitQuaternion, Vector3};
 
 use super::machine::SerialMachine;
 use super::mechanism::chain_skeleton;
 use super::{JointKind, PreparedChain};
 use crate::error::{Error, Result};
-use crate::limits::{position_limit_names, LimitKind, LimitName, Violation};
+use crate::limits::{PositionLimits, Violation};
 use crate::mechanism::{
     Actuator, ActuatorMotion, Coordinate, Forward, Mechanism, PoseSpace, Skeleton,
 };
@@ -100,7 +98,7 @@ pub struct TcpMachine<const N: usize> {
     tool: PreparedChain,
     work: Option<PreparedChain>,
     /// The axes' position limits by name, named once.
-    position_limits: Arc<[LimitName]>,
+    position_limits: PositionLimits,
     characteristic_length: f64,
     /// The relative kinematics at zero joint values: the rotary axes and the tool axis
     /// the tool-axis inverse turns ([`super::tcp_axis`]).
@@ -145,7 +143,7 @@ impl<const N: usize> TcpMachine<N> {
             }
         }
         let actuators: [Actuator; N] = std::array::from_fn(|i| joints[i].actuator());
-        let position_limits = position_limit_names("axis", &actuators);
+        let position_limits = PositionLimits::new("axis", &actuators);
         let coordinates = std::array::from_fn(|i| match i {
             0 => Coordinate::length("X"),
             1 => Coordinate::length("Y"),
@@ -518,15 +516,8 @@ impl<const N: usize> Mechanism<N, N> for TcpMachine<N> {
     }
 
     fn check_limits(&self, _x: &SVector<f64, N>, q: &SVector<f64, N>, out: &mut Vec<Violation>) {
-        for (i, (a, v)) in self.actuators.iter().zip(q.iter()).enumerate() {
-            a.range.check(
-                || self.position_limits[i].clone(),
-                LimitKind::ActuatorPosition,
-                a.quantity,
-                *v,
-                out,
-            );
-        }
+        self.position_limits
+            .check(&self.actuators, q.as_slice(), out);
     }
 
     fn skeleton(&self, x: &SVector<f64, N>) -> Result<Skeleton> {
