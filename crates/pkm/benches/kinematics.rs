@@ -474,6 +474,36 @@ fn random_hexapod_ik(c: &mut Criterion, h: &pkm::hexapod::Hexapod) {
             out[n - 1][0]
         })
     });
+    // The memory floor under the two batches: the same inputs read and as many values
+    // written, with one addition per value instead of the kinematics. A batch cannot
+    // run faster than its inputs stream from memory on one core.
+    g.bench_function(
+        "memory floor: 200k X..C read, 6 values written, one thread",
+        |b| {
+            b.iter(|| {
+                for (o, x) in qs.chunks_exact_mut(6).zip(black_box(&many).chunks_exact(6)) {
+                    for k in 0..6 {
+                        o[k] = x[k] + 1.0;
+                    }
+                }
+                qs[6 * n - 1]
+            })
+        },
+    );
+    g.bench_function(
+        "memory floor: 200k positions, matrices read, 6 values written, one thread",
+        |b| {
+            b.iter(|| {
+                for ((o, p), r) in out.iter_mut().zip(black_box(&ps)).zip(black_box(&rs)) {
+                    for k in 0..3 {
+                        o[k] = p[k] + r[k];
+                        o[k + 3] = r[k + 3] + r[k + 6];
+                    }
+                }
+                out[n - 1][0]
+            })
+        },
+    );
     g.finish();
 }
 
