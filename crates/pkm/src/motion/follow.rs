@@ -9,7 +9,7 @@
 //! order. The result depends only on the samples, never on how the run was split
 //! across threads. Limits are checked again where the positions changed.
 
-use super::plan::Block;
+use super::block::Block;
 use crate::limits::Violation;
 use crate::mechanism::{ActuatorMotion, Mechanism};
 

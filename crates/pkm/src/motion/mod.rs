@@ -2,6 +2,7 @@
 //! velocity and acceleration, a serial-machine comparison (seed 000) and limits along
 //! the path.
 
+mod block;
 pub mod decimated;
 mod follow;
 pub mod gcode;
@@ -9,6 +10,7 @@ pub mod path;
 pub mod plan;
 pub mod profile;
 pub mod program;
+mod recorder;
 pub mod run;
 pub mod singular;
 pub mod stats;

@@ -1,0 +1,268 @@
+//! A block of a run: the sample instants the planner laid out, on their moves, and
+//! their computation (the compute stage of [`super::plan`]): poses from the time laws
+//! and the geometry, then the mechanism's block kernel or its screen, then the exact
+//! `q, q', q''` and the mechanism's own limits of every sample, across the rayon pool
+//! when asked.
+
+use std::sync::Arc;
+
+use rayon::prelude::*;
+
+use super::plan::BLOCK;
+use super::run::{Move, Sample};
+use crate::error::Error;
+use crate::limits::Violation;
+use crate::mechanism::{ActuatorMotion, Mechanism};
+
+/// Samples a task of the compute stage takes at once.
+const CHUNK: usize = 512;
+
+/// Planned instants of a stretch of the run, then their computed samples.
+pub(crate) struct Block<M, const P: usize, const A: usize> {
+    /// The moves the instants lie on, with the time each starts and its serial number.
+    pub moves: Vec<(Move<P>, f64, u64)>,
+    /// Per instant: index into `moves`, time from the move's start (s).
+    pub plan: Vec<(u32, f64)>,
+    /// The mechanism with the program's tool, when it differs from the machine file's.
+    pub tooled: Option<Arc<M>>,
+    /// A tool length set before the block's first sample (the recorder passes it on).
+    pub tool: Option<f64>,
+    /// The computed samples, one per instant (up to `failed`); slots beyond the plan
+    /// are left over from earlier use of the block.
+    pub samples: Vec<Sample<P, A>>,
+    /// Violations of the mechanism's own limits: (instant, violation), in order.
+    pub violations: Vec<(u32, Violation)>,
+    /// The first instant whose computation failed, and why.
+    pub failed: Option<(usize, Error)>,
+    /// An error after the block's samples (the planner stopped there).
+    pub tail: Option<Error>,
+}
+
+impl<M, const P: usize, const A: usize> Block<M, P, A> {
+    pub(crate) fn new() -> Self {
+        Block {
+            moves: Vec::new(),
+            plan: Vec::with_capacity(BLOCK),
+            tooled: None,
+            tool: None,
+            samples: Vec::new(),
+            violations: Vec::new(),
+            failed: None,
+            tail: None,
+        }
+    }
+
+    /// Empties the block for reuse (its buffers stay allocated).
+    pub(crate) fn clear(&mut self) {
+        self.moves.clear();
+        self.plan.clear();
+        self.tooled = None;
+        self.tool = None;
+        self.violations.clear();
+        self.failed = None;
+        self.tail = None;
+    }
+
+    /// Whether nothing was planned into it.
+    pub(crate) fn is_empty(&self) -> bool {
+        self.plan.is_empty() && self.tool.is_none() && self.tail.is_none()
+    }
+}
+
+impl<M: Mechanism<P, A>, const P: usize, const A: usize> Block<M, P, A> {
+    /// Computes every planned instant on `base` (or the block's tooled mechanism),
+    /// across the rayon pool when `parallel`.
+    pub(crate) fn compute(&mut self, base: &M, parallel: bool) {
+        let m = self.tooled.as_deref().unwrap_or(base);
+        let n = self.plan.len();
+        let zero = Sample {
+            t: 0.0,
+            line: None,
+            x: nalgebra::SVector::zeros(),
+            xd: nalgebra::SVector::zeros(),
+            xdd: nalgebra::SVector::zeros(),
+            act: ActuatorMotion {
+                q: nalgebra::SVector::zeros(),
+                qd: nalgebra::SVector::zeros(),
+                qdd: nalgebra::SVector::zeros(),
+            },
+        };
+        // Every slot up to n is written below: the buffer only grows, never cleared.
+        if self.samples.len() < n {
+            self.samples.resize(n, zero);
+        }
+        self.violations.clear();
+        self.failed = None;
+        let moves = &self.moves;
+        let samples = &mut self.samples[..n];
+        if parallel && n > CHUNK {
+            let parts: Vec<_> = self
+                .plan
+                .par_chunks(CHUNK)
+                .zip(samples.par_chunks_mut(CHUNK))
+                .enumerate()
+                .map(|(c, (plan, out))| compute_range(m, moves, plan, out, c * CHUNK))
+                .collect();
+            for (violations, failed) in parts {
+                if self.failed.is_some() {
+                    break;
+                }
+                self.violations.extend(violations);
+                self.failed = failed;
+            }
+        } else {
+            let (violations, failed) = compute_range(m, moves, &self.plan, samples, 0);
+            self.violations = violations;
+            self.failed = failed;
+        }
+    }
+}
+
+/// Computes the instants `plan` into `out`; `offset` is the first instant's index in
+/// its block. Stops at the first failure.
+///
+/// The poses come first, then the mechanism's block kernel where it has one:
+/// [`Mechanism::motion_screened`] (the hexapod's: the motion of eight samples per
+/// AVX-512 register, with the limit screen) computes the motion of the samples; those
+/// it does not clear of every limit have their limits checked by
+/// [`Mechanism::check_limits`] (a program beyond a limit costs the check, not a second
+/// motion). Else [`Mechanism::inverse_screened`]'s screen clears poses whose motion
+/// is then [`Mechanism::actuator_motion`] with no violation to look for. The others,
+/// and every sample of a type with neither, go through
+/// [`Mechanism::actuator_motion_checked`]. All give the same motion and violations,
+/// bit for bit: the screen only decides which code makes them.
+#[allow(clippy::type_complexity)]
+fn compute_range<M: Mechanism<P, A>, const P: usize, const A: usize>(
+    m: &M,
+    moves: &[(Move<P>, f64, u64)],
+    plan: &[(u32, f64)],
+    out: &mut [Sample<P, A>],
+    offset: usize,
+) -> (Vec<(u32, Violation)>, Option<(usize, Error)>) {
+    let mut violations = Vec::new();
+    let mut buf = Vec::new();
+    for (&(mi, tl), out) in plan.iter().zip(out.iter_mut()) {
+        let (mv, t0, _) = &moves[mi as usize];
+        let (s, sd, sdd) = mv.profile.eval(tl);
+        let (x, xs, xss) = mv.segment.eval(s);
+        out.t = t0 + tl;
+        out.line = mv.line;
+        out.x = x;
+        out.xd = xs * sd;
+        out.xdd = xss * (sd * sd) + xs * sdd;
+    }
+    let n = out.len();
+    ROWS.with_borrow_mut(|rows| {
+        let Rows {
+            x,
+            q,
+            clear,
+            computed,
+        } = rows;
+        for v in x.iter_mut() {
+            v.clear();
+        }
+        for s in out.iter() {
+            x[0].extend_from_slice(s.x.as_slice());
+            x[1].extend_from_slice(s.xd.as_slice());
+            x[2].extend_from_slice(s.xdd.as_slice());
+        }
+        // Grown, never cleared: every row a kernel clears is written by it.
+        for v in q.iter_mut() {
+            if v.len() < A * n {
+                v.resize(A * n, 0.0);
+            }
+        }
+        if clear.len() < n {
+            clear.resize(n, false);
+            computed.resize(n, false);
+        }
+        let (clear, computed) = (&mut clear[..n], &mut computed[..n]);
+        let [q0, q1, q2] = q;
+        let (q0, q1, q2) = (&mut q0[..A * n], &mut q1[..A * n], &mut q2[..A * n]);
+        // The motion kernel where the type has one, else the inverse's screen.
+        let kernel = m.motion_screened(
+            [&x[0], &x[1], &x[2]],
+            [&mut *q0, &mut *q1, &mut *q2],
+            clear,
+            computed,
+        );
+        if !kernel {
+            computed.fill(false);
+            if !m.inverse_screened(&x[0], q0, clear, true) {
+                clear.fill(false);
+            }
+        }
+        let q = [&*q0, &*q1, &*q2];
+        for (j, (s, (&clear, &computed))) in out
+            .iter_mut()
+            .zip(clear.iter().zip(computed.iter()))
+            .enumerate()
+        {
+            if computed {
+                // In place: a 144-byte `ActuatorMotion` moved through a `Result` is two
+                // `memcpy` calls per sample.
+                for i in 0..A {
+                    s.act.q[i] = q[0][A * j + i];
+                    s.act.qd[i] = q[1][A * j + i];
+                    s.act.qdd[i] = q[2][A * j + i];
+                }
+                if !clear {
+                    // Beyond a limit, or near one: its limits checked with the motion
+                    // the kernel wrote (not computed a second time).
+                    buf.clear();
+                    m.check_limits(&s.x, &s.act.q, &mut buf);
+                    let k = (offset + j) as u32;
+                    violations.extend(buf.drain(..).map(|v| (k, v)));
+                }
+                continue;
+            }
+            buf.clear();
+            let act = if clear {
+                m.actuator_motion(&s.x, &s.xd, &s.xdd)
+            } else {
+                m.actuator_motion_checked(&s.x, &s.xd, &s.xdd, &mut buf)
+            };
+            match act {
+                Ok(act) => {
+                    s.act = act;
+                    let k = (offset + j) as u32;
+                    violations.extend(buf.drain(..).map(|v| (k, v)));
+                }
+                Err(e) => return (violations, Some((offset + j, at_sample(e, s.line, s.t)))),
+            }
+        }
+        (violations, None)
+    })
+}
+
+/// Per-thread rows of [`compute_range`]: the samples' poses, rates and accelerations,
+/// the kernel's actuator rows and its masks, kept between calls (a run allocates
+/// them once per thread, not per chunk). Borrowed for the whole of one call: nothing
+/// inside it may run rayon work on the same thread (a stolen `compute_range` would
+/// borrow them again and panic); the mechanism calls it makes are plain per-pose code.
+#[derive(Default)]
+struct Rows {
+    x: [Vec<f64>; 3],
+    q: [Vec<f64>; 3],
+    clear: Vec<bool>,
+    computed: Vec<bool>,
+}
+
+thread_local! {
+    static ROWS: std::cell::RefCell<Rows> = std::cell::RefCell::new(Rows::default());
+}
+
+/// Error `e` of the sample at time `t` of G-code line `line`: a pose out of reach says
+/// where in the program it is.
+fn at_sample(e: Error, line: Option<u64>, t: f64) -> Error {
+    match e {
+        Error::NotAttainable { reason } => Error::NotAttainable {
+            reason: format!(
+                "{}t = {t:.4} s: {reason}",
+                line.map(|l| format!("line {l}, ")).unwrap_or_default()
+            ),
+        },
+        e => e,
+    }
+}
