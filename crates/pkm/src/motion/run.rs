@@ -167,7 +167,7 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
     }
 
     /// Sets the threshold (rad, 0 to pi/2) of a passage near the singular direction
-    /// ([`SingularTracker`]); default [`DEFAULT_SINGULAR_ANGLE`].
+    /// ([`SingularTracker`]); default [`super::singular::DEFAULT_SINGULAR_ANGLE`].
     pub fn set_singular_angle(&mut self, angle: f64) -> Result<()> {
         self.rec.singular = SingularTracker::new(self.rec.m.actuators(), angle)?;
         Ok(())

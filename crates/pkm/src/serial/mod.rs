@@ -23,6 +23,7 @@ pub mod deviations;
 pub mod jacobian;
 pub mod machine;
 pub mod mechanism;
+mod prepared;
 pub mod sensitivity;
 pub mod spherical_wrist;
 pub mod tcp;
@@ -312,83 +313,6 @@ impl Chain {
     }
 }
 
-/// The geometric Jacobian (`6 x N`: velocity of the point `p` over angular velocity)
-/// of joints with `axes` (from [`PreparedChain::axes`]): a revolute joint with axis
-/// `z_i` through `o_i` contributes `[z_i x (p - o_i); z_i]`, a prismatic one `[z_i; 0]`.
-pub fn jacobian_of_axes<const N: usize>(
-    p: &Vector3<f64>,
-    axes: &[JointAxis; N],
-) -> nalgebra::SMatrix<f64, 6, N> {
-    let mut j = nalgebra::SMatrix::<f64, 6, N>::zeros();
-    for (c, (z, o, kind)) in axes.iter().enumerate() {
-        let (v, w) = match kind {
-            JointKind::Revolute => (z.cross(&(p - o)), *z),
-            JointKind::Prismatic => (*z, Vector3::zeros()),
-        };
-        for r in 0..3 {
-            j[(r, c)] = v[r];
-            j[(r + 3, c)] = w[r];
-        }
-    }
-    j
-}
-
-/// `J'(q) q'` of [`jacobian_of_axes`], exactly: the point `p`'s acceleration and the
-/// angular acceleration the joint rates `qd` give with the joints at rest
-/// (`[p''; w'] = J q'' + J' q'`), from the axes at `q` alone (no finite differences).
-///
-/// Axis `i` turns with the links before it: `z_i' = w_i x z_i`, with
-/// `w_i = sum_(k<i, revolute) z_k q_k'` the angular velocity of the link carrying it,
-/// and its point moves at `o_i' = o_(i-1)' + [z_(i-1) q_(i-1)' if joint i-1 slides] +
-/// w_i x (o_i - o_(i-1))` (the forward velocity recursion). Differentiating the
-/// columns:
-///
-/// `J_i' = [z_i' x (p - o_i) + z_i x (p' - o_i'); z_i']` (revolute), `[z_i'; 0]`
-/// (prismatic), with `p' = J_v q'`,
-///
-/// the time derivative of [`jacobian_of_axes`]'s columns (derived here; tested against
-/// central differences of the Jacobian along `q'`).
-pub fn jacobian_rate_times_rates<const N: usize>(
-    p: &Vector3<f64>,
-    axes: &[JointAxis; N],
-    qd: &[f64; N],
-) -> nalgebra::Vector6<f64> {
-    // p' = J_v q'.
-    let mut pd = Vector3::zeros();
-    for ((z, o, kind), v) in axes.iter().zip(qd) {
-        pd += match kind {
-            JointKind::Revolute => z.cross(&(p - o)) * *v,
-            JointKind::Prismatic => z * *v,
-        };
-    }
-    let mut acc = Vector3::zeros();
-    let mut alpha = Vector3::zeros();
-    // Forward recursion: the angular velocity `w` of the link carrying the next axis
-    // and the velocity `od` of that axis' point, from the previous axis' point.
-    let mut w = Vector3::zeros();
-    let mut od = Vector3::zeros();
-    let mut prev: Option<(&Vector3<f64>, &Vector3<f64>, JointKind, f64)> = None;
-    for ((z, o, kind), v) in axes.iter().zip(qd) {
-        if let Some((zp, op, kp, vp)) = prev {
-            match kp {
-                JointKind::Revolute => w += zp * vp,
-                JointKind::Prismatic => od += zp * vp,
-            }
-            od += w.cross(&(o - op));
-        }
-        let zd = w.cross(z);
-        match kind {
-            JointKind::Revolute => {
-                acc += (zd.cross(&(p - o)) + z.cross(&(pd - od))) * *v;
-                alpha += zd * *v;
-            }
-            JointKind::Prismatic => acc += zd * *v,
-        }
-        prev = Some((z, o, *kind, *v));
-    }
-    nalgebra::Vector6::new(acc.x, acc.y, acc.z, alpha.x, alpha.y, alpha.z)
-}
-
 /// Joints whose sines and cosines are computed in one vectorised pass.
 const MAX_VECTOR_JOINTS: usize = 8;
 
@@ -413,21 +337,6 @@ fn joint_sin_cos(
         crate::trig::sin_cos_array(v)
     }
 }
-
-/// A chain with one deviation set applied, prepared for fast repeated evaluation: the
-/// deviated link transforms are computed once (consecutive fixed links multiplied
-/// together), stored as 3 x 4 affine blocks, and each joint is applied as the column
-/// operation it is (a turn mixes two columns, a slide adds to the translation).
-#[derive(Debug, Clone, PartialEq)]
-pub struct PreparedChain {
-    /// The fixed links before the first joint.
-    head: Affine,
-    /// Each joint with its positioning deviation and the fixed links after it.
-    steps: Vec<(JointKind, f64, Affine)>,
-}
-
-/// A joint's axis: unit direction, a point of it, the joint's kind.
-pub type JointAxis = (Vector3<f64>, Vector3<f64>, JointKind);
 
 /// A 3 x 4 affine transform, row-major (the bottom row `0 0 0 1` implied).
 type Affine = [[f64; 4]; 3];
@@ -462,95 +371,9 @@ fn matrix_of(a: &Affine) -> Matrix4<f64> {
     m
 }
 
-impl PreparedChain {
-    /// Prepares `chain` with positioning deviations `dq` and link deviations `dev`
-    /// (empty slices: none).
-    pub fn new(chain: &Chain, dq: &[f64], dev: &[LinkDeviation]) -> Self {
-        let zero = LinkDeviation::default();
-        let mut head = AFFINE_IDENTITY;
-        let mut steps: Vec<(JointKind, f64, Affine)> = Vec::with_capacity(chain.links.len());
-        let mut k = 0;
-        for (i, link) in chain.links.iter().enumerate() {
-            if let Some(j) = &link.joint {
-                steps.push((j.kind, dq.get(k).copied().unwrap_or(0.0), AFFINE_IDENTITY));
-                k += 1;
-            }
-            let l = link_affine(link, dev.get(i).unwrap_or(&zero));
-            match steps.last_mut() {
-                Some(s) => s.2 = affine_mul(&s.2, &l),
-                None => head = affine_mul(&head, &l),
-            }
-        }
-        PreparedChain { head, steps }
-    }
-
-    /// The pose and each joint's axis at joint values `q`: its unit direction `z_i`
-    /// (the frame's Z before the joint's motion), a point `o_i` of it (that frame's
-    /// origin), both in the base frame, and its kind (`N` must be the joint count).
-    #[inline]
-    pub fn axes<const N: usize>(&self, q: &[f64; N]) -> (Matrix4<f64>, [JointAxis; N]) {
-        let mut axes = [(Vector3::zeros(), Vector3::zeros(), JointKind::Prismatic); N];
-        let mut k = 0;
-        let t = self.walk(q, |t: &Affine, kind| {
-            if k < N {
-                axes[k] = (
-                    Vector3::new(t[0][2], t[1][2], t[2][2]),
-                    Vector3::new(t[0][3], t[1][3], t[2][3]),
-                    kind,
-                );
-            }
-            k += 1;
-        });
-        (matrix_of(&t), axes)
-    }
-
-    /// The pose and the geometric Jacobian (`6 x N`: tool-point velocity over angular
-    /// velocity, base frame) at joint values `q`, in one pass: a revolute joint with
-    /// axis `z_i` through `o_i` contributes `[z_i x (p - o_i); z_i]`, a prismatic one
-    /// `[z_i; 0]` (allocation-free; `N` must be the joint count).
-    #[inline]
-    pub fn jacobian<const N: usize>(
-        &self,
-        q: &[f64; N],
-    ) -> (Matrix4<f64>, nalgebra::SMatrix<f64, 6, N>) {
-        let (t, axes) = self.axes(q);
-        let p = Vector3::new(t[(0, 3)], t[(1, 3)], t[(2, 3)]);
-        (t, jacobian_of_axes(&p, &axes))
-    }
-
-    /// The chain's pose at joint values `q` (exactly [`Chain::pose`] with the prepared
-    /// deviations, up to rounding). `q` must hold one value per joint.
-    #[inline]
-    pub fn pose(&self, q: &[f64]) -> Matrix4<f64> {
-        matrix_of(&self.walk(q, |_, _| {}))
-    }
-
-    /// Runs through the chain, calling `at_joint` with the frame of each joint (before
-    /// its motion) and its kind.
-    #[inline(always)]
-    fn walk<F: FnMut(&Affine, JointKind)>(&self, q: &[f64], mut at_joint: F) -> Affine {
-        let mut v = [0.0; MAX_VECTOR_JOINTS];
-        for ((vk, (_, dq, _)), qk) in v.iter_mut().zip(&self.steps).zip(q) {
-            *vk = qk + dq;
-        }
-        let (sn, cs) = joint_sin_cos(&v, self.steps.len());
-        let mut t = self.head;
-        for (k, ((kind, dq, link), qk)) in self.steps.iter().zip(q).enumerate() {
-            at_joint(&t, *kind);
-            let v = qk + dq;
-            let sc = match kind {
-                JointKind::Revolute if k < MAX_VECTOR_JOINTS => (sn[k], cs[k]),
-                JointKind::Revolute => v.sin_cos(),
-                JointKind::Prismatic => (0.0, 1.0),
-            };
-            apply_joint(&mut t, *kind, v, sc);
-            t = affine_mul(&t, link);
-        }
-        t
-    }
-}
-
+pub use jacobian::{jacobian_of_axes, jacobian_rate_times_rates};
 pub use machine::{ChainDeviations, Parameter as Deviation, SerialMachine};
+pub use prepared::{JointAxis, PreparedChain};
 
 #[cfg(test)]
 mod tests {
