@@ -149,7 +149,7 @@ impl PartialEq<LimitName> for &str {
 }
 
 /// The position limits of a machine's actuators, each named once when the machine is
-/// built (`"{prefix} {actuator} position"`): checked per pose without formatting a
+/// built (`"{prefix} {actuator} position"`: `joint`, `axis`, `slider`, `carriage`, ...): checked per pose without formatting a
 /// name (a motion beyond one clones it per sample).
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct PositionLimits(Arc<[LimitName]>);
@@ -157,10 +157,20 @@ pub(crate) struct PositionLimits(Arc<[LimitName]>);
 impl PositionLimits {
     /// The names of `actuators`' position limits.
     pub(crate) fn new(prefix: &str, actuators: &[crate::mechanism::Actuator]) -> Self {
+        Self::named(actuators, |_| prefix)
+    }
+
+    /// The names of `actuators`' position limits, each with its own prefix
+    /// (`prefix(i)` for actuator `i`: a machine whose drives are of several kinds).
+    pub(crate) fn named<'a>(
+        actuators: &[crate::mechanism::Actuator],
+        prefix: impl Fn(usize) -> &'a str,
+    ) -> Self {
         PositionLimits(
             actuators
                 .iter()
-                .map(|a| LimitName::from(format!("{prefix} {} position", a.name)))
+                .enumerate()
+                .map(|(i, a)| LimitName::from(format!("{} {} position", prefix(i), a.name)))
                 .collect(),
         )
     }

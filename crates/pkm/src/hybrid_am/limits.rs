@@ -11,20 +11,7 @@ use crate::units::Quantity;
 /// Pushes every violated limit at pose `x` with readings `q` onto `out`; allocates only
 /// for a violation.
 pub(super) fn check(m: &HybridAm, x: &Vector6<f64>, q: &SVector<f64, 5>, out: &mut Vec<Violation>) {
-    for (i, a) in m.actuators.iter().enumerate() {
-        let (what, quantity) = if i < 4 {
-            ("carriage", Quantity::Length)
-        } else {
-            ("table", Quantity::Angle)
-        };
-        a.range.check(
-            || format!("{what} {} position", a.name),
-            LimitKind::ActuatorPosition,
-            quantity,
-            q[i],
-            out,
-        );
-    }
+    m.position_limits.check(&m.actuators, q.as_slice(), out);
     Range { min: 0.0, max: 0.0 }.check(
         || "nozzle angle A (the platform tilts about Y only)",
         LimitKind::Tilt,

@@ -50,6 +50,7 @@ use nalgebra::{Matrix3, SMatrix, SVector, Vector3, Vector6};
 
 use crate::error::{Error, Result};
 use crate::hexapod::JointCone;
+use crate::limits::PositionLimits;
 use crate::limits::{Range, Violation};
 use crate::mechanism::{
     spatial_coordinates, Actuator, ActuatorMotion, Coordinate, LinkKind, Mechanism, PointRole,
@@ -119,6 +120,8 @@ pub struct HybridAm {
     actuators: [Actuator; 5],
     coordinates: [Coordinate; 6],
     characteristic_length: f64,
+    /// The carriages' and the table's position limits, named once.
+    position_limits: PositionLimits,
 }
 
 /// The four driven coordinates and the table: `X, Y, Z, B, C`.
@@ -154,6 +157,13 @@ impl HybridAm {
             platform_cone: None,
             strut_diameter: None,
             home,
+            position_limits: PositionLimits::named(&actuators, |i| {
+                if i < 4 {
+                    "carriage"
+                } else {
+                    "table"
+                }
+            }),
             actuators,
             coordinates: spatial_coordinates(),
             characteristic_length: 1.0,

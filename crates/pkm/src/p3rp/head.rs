@@ -6,6 +6,7 @@ use nalgebra::{Matrix2, Vector2, Vector3};
 use serde::Serialize;
 
 use crate::error::{Error, Result};
+use crate::limits::PositionLimits;
 use crate::limits::{LimitKind, Range, Side, Violation};
 use crate::mechanism::{
     Actuator, ActuatorMotion, Coordinate, LinkKind, Mechanism, PointRole, PoseSpace, Skeleton,
@@ -281,7 +282,7 @@ impl HeadGeometry {
     }
 
     /// Pushes the violated limits of pose `(z, theta)` with sliders `q` (strokes from
-    /// `actuators`).
+    /// `actuators`): the sliders' strokes, then [`HeadGeometry::check_joint_limits`].
     pub fn check_limits(
         &self,
         actuators: &[Actuator],
@@ -298,6 +299,12 @@ impl HeadGeometry {
                 out,
             );
         }
+        self.check_joint_limits(theta, out);
+    }
+
+    /// Pushes the violated limits of the head's joints at deflection `theta`: the
+    /// deflection's range, the rod angle's, the transmission angle's least value.
+    pub fn check_joint_limits(&self, theta: f64, out: &mut Vec<Violation>) {
         if let Some(r) = &self.theta_range {
             r.check(
                 || "hinge A deflection theta",
@@ -349,6 +356,8 @@ pub struct P3rpHead {
     pub home: Vector2<f64>,
     actuators: [Actuator; 2],
     coordinates: [Coordinate; 2],
+    /// The sliders' position limits, named once (`slider U position`).
+    position_limits: PositionLimits,
 }
 
 impl P3rpHead {
@@ -363,6 +372,7 @@ impl P3rpHead {
             name,
             geometry,
             home,
+            position_limits: PositionLimits::new("slider", &actuators),
             actuators,
             coordinates: [Coordinate::length("z"), Coordinate::angle("theta")],
         }
@@ -517,9 +527,11 @@ impl Mechanism<2, 2> for P3rpHead {
         Ok(Vector2::new(p.z + l * theta.cos(), theta))
     }
 
+    /// [`HeadGeometry::check_limits`], the sliders' names made once.
     fn check_limits(&self, x: &Vector2<f64>, q: &Vector2<f64>, out: &mut Vec<Violation>) {
-        self.geometry
-            .check_limits(&self.actuators, x[1], q.as_slice(), out);
+        self.position_limits
+            .check(&self.actuators, q.as_slice(), out);
+        self.geometry.check_joint_limits(x[1], out);
     }
 
     fn skeleton(&self, x: &Vector2<f64>) -> Result<Skeleton> {

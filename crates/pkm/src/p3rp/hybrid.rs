@@ -4,6 +4,7 @@ use nalgebra::{SMatrix, Vector2, Vector3, Vector4, Vector6};
 
 use super::head::{head_motion, head_skeleton, HeadGeometry};
 use crate::error::{Error, Result};
+use crate::limits::PositionLimits;
 use crate::limits::{LimitKind, Range, Violation};
 use crate::mechanism::{
     spatial_coordinates, Actuator, ActuatorMotion, Coordinate, Forward, LinkKind, Mechanism,
@@ -42,6 +43,8 @@ pub struct HybridMachine {
     pub home: Vector6<f64>,
     actuators: [Actuator; 4],
     coordinates: [Coordinate; 6],
+    /// The table axes' and sliders' position limits, named once.
+    position_limits: PositionLimits,
 }
 
 impl HybridMachine {
@@ -56,6 +59,13 @@ impl HybridMachine {
             name,
             head,
             home,
+            position_limits: PositionLimits::named(&actuators, |i| {
+                if i < 2 {
+                    "table axis"
+                } else {
+                    "slider"
+                }
+            }),
             actuators,
             coordinates: spatial_coordinates(),
         }
@@ -183,18 +193,11 @@ impl Mechanism<6, 4> for HybridMachine {
     }
 
     fn check_limits(&self, x: &Vector6<f64>, q: &Vector4<f64>, out: &mut Vec<Violation>) {
-        for i in 0..2 {
-            let a = &self.actuators[i];
-            a.range.check(
-                || format!("table axis {} position", a.name),
-                LimitKind::ActuatorPosition,
-                Quantity::Length,
-                q[i],
-                out,
-            );
-        }
-        self.head
-            .check_limits(&self.actuators[2..], x[3], &q.as_slice()[2..], out);
+        // The table axes and the sliders, then the head's joints (the order of
+        // `HeadGeometry::check_limits` after the table's).
+        self.position_limits
+            .check(&self.actuators, q.as_slice(), out);
+        self.head.check_joint_limits(x[3], out);
         for (k, n) in [(4, "B"), (5, "C")] {
             Range { min: 0.0, max: 0.0 }.check(
                 || format!("spindle angle {n} (the head turns about X only)"),

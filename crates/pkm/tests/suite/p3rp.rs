@@ -463,3 +463,65 @@ fn transmission_figures_of_the_head() {
         assert!(t.distance_to_singularity > 0.0);
     }
 }
+
+/// The head's and the hybrid machine's position limits, named when the machine is
+/// built, give the violations the names formatted per call gave: the same names,
+/// kinds, sides, values, bounds and units, in the same order, over a grid of poses and
+/// slider values within and beyond every stroke, deflection and rod-angle limit.
+#[test]
+fn position_limits_named_once_give_the_formatted_violations() {
+    use pkm::Range;
+    let h = head();
+    let acts = h.actuators().clone();
+    let m = hybrid();
+    let macts = m.actuators().clone();
+    let (mut seen_head, mut seen_hybrid) = (0, 0);
+    for i in 0..=20 {
+        for k in 0..=20 {
+            let (s, t) = (i as f64 / 20.0, k as f64 / 20.0);
+            let x = Vector2::new(100.0 + 500.0 * s, -0.5 + 2.5 * t);
+            let q = Vector2::new(-100.0 + 900.0 * t, 800.0 - 900.0 * s);
+            let (mut named, mut formatted) = (Vec::new(), Vec::new());
+            Mechanism::check_limits(&h, &x, &q, &mut named);
+            h.geometry
+                .check_limits(&acts, x[1], q.as_slice(), &mut formatted);
+            assert_eq!(named, formatted, "head at {x:?}, {q:?}");
+            seen_head += named.len();
+
+            // The hybrid machine: table axes, then the head (sliders, joints), then
+            // the spindle's B and C, as before the names were made once.
+            let xm = Vector6::new(-900.0 + 1800.0 * s, 900.0 - 1800.0 * t, 0.0, x[1], 0.0, t);
+            let qm = nalgebra::Vector4::new(-900.0 + 1800.0 * t, 900.0 - 1800.0 * s, q[0], q[1]);
+            let mut named = Vec::new();
+            Mechanism::check_limits(&m, &xm, &qm, &mut named);
+            let mut expected = Vec::new();
+            for j in 0..2 {
+                macts[j].range.check(
+                    || format!("table axis {} position", macts[j].name),
+                    LimitKind::ActuatorPosition,
+                    Quantity::Length,
+                    qm[j],
+                    &mut expected,
+                );
+            }
+            m.head
+                .check_limits(&macts[2..], xm[3], &qm.as_slice()[2..], &mut expected);
+            for (j, n) in [(4, "B"), (5, "C")] {
+                Range { min: 0.0, max: 0.0 }.check(
+                    || format!("spindle angle {n} (the head turns about X only)"),
+                    LimitKind::Tilt,
+                    Quantity::Angle,
+                    xm[j],
+                    &mut expected,
+                );
+            }
+            assert_eq!(named, expected, "hybrid at {xm:?}, {qm:?}");
+            seen_hybrid += named.len();
+        }
+    }
+    // Not vacuous: most of the grid is beyond some limit.
+    assert!(
+        seen_head > 300 && seen_hybrid > 600,
+        "{seen_head} {seen_hybrid}"
+    );
+}
