@@ -149,30 +149,54 @@ impl PartialEq<LimitName> for &str {
 }
 
 /// The position limits of a machine's actuators, each named once when the machine is
-/// built (`"{prefix} {actuator} position"`: `joint`, `axis`, `slider`, `carriage`, ...): checked per pose without formatting a
+/// built (`joint A1 position`, `slider U position`, `strut 3 length`, ...): checked per pose without formatting a
 /// name (a motion beyond one clones it per sample).
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct PositionLimits(Arc<[LimitName]>);
 
 impl PositionLimits {
-    /// The names of `actuators`' position limits.
+    /// The names of `actuators`' position limits: `"{prefix} {actuator} position"`.
     pub(crate) fn new(prefix: &str, actuators: &[crate::mechanism::Actuator]) -> Self {
-        Self::named(actuators, |_| prefix)
+        Self::from_fn(actuators, |_, a| format!("{prefix} {} position", a.name))
     }
 
-    /// The names of `actuators`' position limits, each with its own prefix
-    /// (`prefix(i)` for actuator `i`: a machine whose drives are of several kinds).
-    pub(crate) fn named<'a>(
+    /// The names of `actuators`' position limits, `name(i, actuator)` for actuator
+    /// `i` (a machine whose drives are of several kinds, a strut's `length`).
+    pub(crate) fn from_fn(
         actuators: &[crate::mechanism::Actuator],
-        prefix: impl Fn(usize) -> &'a str,
+        name: impl Fn(usize, &crate::mechanism::Actuator) -> String,
     ) -> Self {
         PositionLimits(
             actuators
                 .iter()
                 .enumerate()
-                .map(|(i, a)| LimitName::from(format!("{} {} position", prefix(i), a.name)))
+                .map(|(i, a)| LimitName::from(name(i, a)))
                 .collect(),
         )
+    }
+
+    /// The length limits of struts `actuators`: `"strut {actuator} length"`.
+    pub(crate) fn strut_lengths(actuators: &[crate::mechanism::Actuator]) -> Self {
+        Self::from_fn(actuators, |_, a| format!("strut {} length", a.name))
+    }
+
+    /// Pushes a violation when actuator `i`'s `value` is outside its range (a check
+    /// interleaved with others per actuator; `actuator` is the one the names were made
+    /// for at `i`).
+    pub(crate) fn check_one(
+        &self,
+        i: usize,
+        actuator: &crate::mechanism::Actuator,
+        value: f64,
+        out: &mut Vec<Violation>,
+    ) {
+        actuator.range.check(
+            || self.0[i].clone(),
+            LimitKind::ActuatorPosition,
+            actuator.quantity,
+            value,
+            out,
+        );
     }
 
     /// Pushes a violation for every actuator (of those the names were made for)

@@ -157,12 +157,9 @@ impl HybridAm {
             platform_cone: None,
             strut_diameter: None,
             home,
-            position_limits: PositionLimits::named(&actuators, |i| {
-                if i < 4 {
-                    "carriage"
-                } else {
-                    "table"
-                }
+            position_limits: PositionLimits::from_fn(&actuators, |i, a| {
+                let what = if i < 4 { "carriage" } else { "table" };
+                format!("{what} {} position", a.name)
             }),
             actuators,
             coordinates: spatial_coordinates(),

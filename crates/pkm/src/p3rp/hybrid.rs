@@ -59,12 +59,9 @@ impl HybridMachine {
             name,
             head,
             home,
-            position_limits: PositionLimits::named(&actuators, |i| {
-                if i < 2 {
-                    "table axis"
-                } else {
-                    "slider"
-                }
+            position_limits: PositionLimits::from_fn(&actuators, |i, a| {
+                let what = if i < 2 { "table axis" } else { "slider" };
+                format!("{what} {} position", a.name)
             }),
             actuators,
             coordinates: spatial_coordinates(),

@@ -28,13 +28,12 @@ use nalgebra::{Matrix3, SMatrix, SVector, Vector3, Vector6};
 use crate::error::{Error, Result};
 use crate::hexapod::{strut_interference, JointCone};
 use crate::legs::split_pose;
-use crate::limits::{AxisLimits, LimitKind, Violation};
+use crate::limits::{AxisLimits, PositionLimits, Violation};
 use crate::mechanism::{
     spatial_coordinates, Actuator, ActuatorMotion, Coordinate, LinkKind, Mechanism, PointRole,
     PoseSpace, Skeleton,
 };
 use crate::pose::Pose;
-use crate::units::Quantity;
 
 /// One strut of a pentapod.
 #[derive(Debug, Clone, PartialEq)]
@@ -77,6 +76,8 @@ pub struct Pentapod {
     pub characteristic_length: f64,
     actuators: [Actuator; 5],
     coordinates: [Coordinate; 6],
+    /// The struts' length limits, named once (`strut 1 length`).
+    position_limits: PositionLimits,
 }
 
 /// One strut's geometry at a pose: what the length, the Jacobian and the motion share.
@@ -129,6 +130,7 @@ impl Pentapod {
             home,
             zero_lengths: None,
             characteristic_length,
+            position_limits: PositionLimits::strut_lengths(&actuators),
             actuators,
             coordinates: spatial_coordinates(),
         }
@@ -344,13 +346,8 @@ impl Mechanism<6, 5> for Pentapod {
         let joints = self.ring_joints(x);
         for i in 0..5 {
             let s = &self.struts[i];
-            s.actuator.range.check(
-                || format!("strut {} length", s.actuator.name),
-                LimitKind::ActuatorPosition,
-                Quantity::Length,
-                q[i],
-                out,
-            );
+            self.position_limits
+                .check_one(i, &self.actuators[i], q[i], out);
             if let Some(c) = &s.base_cone {
                 let d = joints[i] - s.base;
                 let cos = if d.norm() > 0.0 {

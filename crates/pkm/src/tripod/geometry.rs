@@ -1,6 +1,6 @@
 use nalgebra::{Matrix3, SMatrix, Vector3};
 
-use crate::limits::{AxisLimits, LimitKind, Side, Violation};
+use crate::limits::{AxisLimits, LimitKind, PositionLimits, Side, Violation};
 use crate::mechanism::{Actuator, LinkKind, PointRole, Skeleton};
 use crate::units::Quantity;
 
@@ -46,6 +46,8 @@ pub struct TripodGeometry {
     pub axes: AxisLimits,
     /// Cached: the actuators of the three struts.
     actuators: [Actuator; 3],
+    /// Cached: their length limits, named once (`strut 1 length`).
+    position_limits: PositionLimits,
     /// Cached: base joints and arms (`c_i - t`) for the shared strut computations.
     set: crate::legs::StrutSet<3>,
 }
@@ -73,6 +75,7 @@ impl TripodGeometry {
             min_strut_spindle_angle,
             zero_lengths: None,
             axes: AxisLimits::default(),
+            position_limits: PositionLimits::strut_lengths(&actuators),
             actuators,
             set,
         }
@@ -152,16 +155,8 @@ impl TripodGeometry {
         q: &Vector3<f64>,
         out: &mut Vec<Violation>,
     ) {
-        for i in 0..3 {
-            let a = &self.struts[i].actuator;
-            a.range.check(
-                || format!("strut {} length", a.name),
-                LimitKind::ActuatorPosition,
-                Quantity::Length,
-                q[i],
-                out,
-            );
-        }
+        self.position_limits
+            .check(&self.actuators, q.as_slice(), out);
         if let Some(max) = self.max_tilt {
             // tilt > max  <=>  R22 < cos(max); the angle itself only when violated.
             if r[(2, 2)] < max.cos() {
