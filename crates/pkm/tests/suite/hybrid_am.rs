@@ -385,40 +385,13 @@ fn file_errors_name_line_and_field() {
 }
 
 /// The carriages' and the table's position limits, named when the machine is built:
-/// the names, units and values of the violations beyond every stroke, in actuator order.
+/// beyond every stroke, one violation per drive in order, in mm and degrees.
 #[test]
 fn position_limits_name_the_carriages_and_the_table() {
-    let m = machine();
-    let acts = m.actuators().clone();
-    let x = m.home;
-    for (sign, side) in [(1.0, pkm::Side::Max), (-1.0, pkm::Side::Min)] {
-        let q = SVector::<f64, 5>::from_fn(|i, _| {
-            let r = &acts[i].range;
-            if sign > 0.0 {
-                r.max + 1.0
-            } else {
-                r.min - 1.0
-            }
-        });
-        let mut v = Vec::new();
-        m.check_limits(&x, &q, &mut v);
-        let pos: Vec<_> = v
-            .iter()
-            .filter(|v| v.kind == LimitKind::ActuatorPosition)
-            .collect();
-        assert_eq!(pos.len(), 5);
-        for (i, v) in pos.iter().enumerate() {
+    for by in [1.0, -0.01] {
+        crate::common::check_position_names(&machine(), by, |i, a| {
             let what = if i < 4 { "carriage" } else { "table" };
-            assert_eq!(v.limit, format!("{what} {} position", acts[i].name));
-            assert_eq!(v.side, side);
-            // In user units: mm, and degrees for the table.
-            let user = if i < 4 { q[i] } else { q[i].to_degrees() };
-            assert!(
-                (v.value - user).abs() <= 1e-12 * user.abs(),
-                "{} {user}",
-                v.value
-            );
-            assert_eq!(v.unit, if i < 4 { "mm" } else { "deg" });
-        }
+            format!("{what} {} position", a.name)
+        });
     }
 }

@@ -48,3 +48,47 @@ pub fn moved_by_hand(file: &str, pose: &[f64], moves: &[(&str, [f64; 3])]) -> Ve
     let p = dm.tool_pose(&f.pose).unwrap().translation.vector;
     p - m0.tool_pose(pose).unwrap().translation.vector
 }
+
+/// The actuator-position violations of `m` at its home pose with every actuator
+/// `by` beyond its range (past the maximum for `by > 0`, the minimum for `by < 0`),
+/// checked against `name(i, actuator)`: one per actuator, in actuator order, with
+/// that name, the side crossed and the value in user units (mm, deg).
+pub fn check_position_names<M, const P: usize, const A: usize>(
+    m: &M,
+    by: f64,
+    name: impl Fn(usize, &pkm::Actuator) -> String,
+) where
+    M: pkm::Mechanism<P, A>,
+{
+    let acts = m.actuators();
+    let q = nalgebra::SVector::<f64, A>::from_fn(|i, _| {
+        let r = &acts[i].range;
+        if by > 0.0 {
+            r.max + by
+        } else {
+            r.min + by
+        }
+    });
+    let mut v = Vec::new();
+    m.check_limits(&m.home(), &q, &mut v);
+    let pos: Vec<_> = v
+        .iter()
+        .filter(|v| v.kind == pkm::LimitKind::ActuatorPosition)
+        .collect();
+    assert_eq!(pos.len(), A, "{v:?}");
+    let side = if by > 0.0 {
+        pkm::Side::Max
+    } else {
+        pkm::Side::Min
+    };
+    for (i, v) in pos.iter().enumerate() {
+        assert_eq!(v.limit, name(i, &acts[i]));
+        assert_eq!(v.side, side);
+        let user = acts[i].quantity.to_user(q[i]);
+        assert!(
+            (v.value - user).abs() <= 1e-12 * user.abs(),
+            "{} {user}",
+            v.value
+        );
+    }
+}
