@@ -149,8 +149,8 @@ impl PartialEq<LimitName> for &str {
 }
 
 /// The position limits of a machine's actuators, each named once when the machine is
-/// built (`joint A1 position`, `slider U position`, `strut 3 length`, ...): checked per pose without formatting a
-/// name (a motion beyond one clones it per sample).
+/// built (`joint A1 position`, `slider U position`, `strut 3 length`, ...): checked
+/// per pose without formatting a name (a motion beyond one clones it per sample).
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct PositionLimits(Arc<[LimitName]>);
 

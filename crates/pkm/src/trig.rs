@@ -4,8 +4,9 @@
 //! call), then the Taylor series of sine (to `x^15`) and cosine (to `x^16`) on
 //! `[-pi/4, pi/4]`, whose first omitted terms are below `5e-17`, evaluated by Estrin's
 //! scheme (a shorter chain of dependent operations than Horner's rule: a single pose's
-//! latency), and a branch-free quadrant fix-up. Within 2 units in the last place of `f64::sin_cos` for
-//! `|x| <= 1e4` (tested over 10^6 points); beyond that it defers to `f64::sin_cos`.
+//! latency), and a branch-free quadrant fix-up. Within 2 units in the last place of
+//! `f64::sin_cos` for `|x| <= 1e4` (tested over 10^6 points); beyond that it defers to
+//! `f64::sin_cos`.
 
 /// `pi/2` split so that `k * PIO2_HI` is exact for `|k| < 2^20`: its first 33 bits
 /// (1.5707963267341256) and the rest (6.077100506506192e-11).
@@ -103,7 +104,8 @@ fn kernel(x: f64) -> (f64, f64) {
     let k = y - MAGIC;
     let r = (x - k * PIO2_HI) - k * PIO2_LO;
     let z = r * r;
-    let (z2, z4) = (z * z, (z * z) * (z * z));
+    let z2 = z * z;
+    let z4 = z2 * z2;
     let ps = estrin7(z, z2, z4, &S);
     let s = r + r * z * ps;
     let pc = estrin7(z, z2, z4, &[C[1], C[2], C[3], C[4], C[5], C[6], C[7]]);

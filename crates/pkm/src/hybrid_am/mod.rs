@@ -50,8 +50,7 @@ use nalgebra::{Matrix3, SMatrix, SVector, Vector3, Vector6};
 
 use crate::error::{Error, Result};
 use crate::hexapod::JointCone;
-use crate::limits::PositionLimits;
-use crate::limits::{Range, Violation};
+use crate::limits::{PositionLimits, Range, Violation};
 use crate::mechanism::{
     spatial_coordinates, Actuator, ActuatorMotion, Coordinate, LinkKind, Mechanism, PointRole,
     PoseSpace, Skeleton,

@@ -6,8 +6,7 @@ use nalgebra::{Matrix2, Vector2, Vector3};
 use serde::Serialize;
 
 use crate::error::{Error, Result};
-use crate::limits::PositionLimits;
-use crate::limits::{LimitKind, Range, Side, Violation};
+use crate::limits::{LimitKind, PositionLimits, Range, Side, Violation};
 use crate::mechanism::{
     Actuator, ActuatorMotion, Coordinate, LinkKind, Mechanism, PointRole, PoseSpace, Skeleton,
 };

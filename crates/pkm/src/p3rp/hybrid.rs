@@ -4,8 +4,7 @@ use nalgebra::{SMatrix, Vector2, Vector3, Vector4, Vector6};
 
 use super::head::{head_motion, head_skeleton, HeadGeometry};
 use crate::error::{Error, Result};
-use crate::limits::PositionLimits;
-use crate::limits::{LimitKind, Range, Violation};
+use crate::limits::{LimitKind, PositionLimits, Range, Violation};
 use crate::mechanism::{
     spatial_coordinates, Actuator, ActuatorMotion, Coordinate, Forward, LinkKind, Mechanism,
     PointRole, PoseSpace, Skeleton,
