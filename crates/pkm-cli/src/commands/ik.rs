@@ -172,9 +172,15 @@ pub fn run(a: &IkArgs) -> Result<u8> {
                 }
             );
         }
+        // Actuator names as long as a user's file makes them stay in one column too.
+        let aw = m
+            .actuators()
+            .iter()
+            .map(|a| a.name.len())
+            .fold(8, usize::max);
         for (act, v) in m.actuators().iter().zip(&r.actuators) {
             println!(
-                "actuator   {:<8} {:>12.4} {}   range [{:.3}, {:.3}]",
+                "actuator   {:<aw$} {:>12.4} {}   range [{:.3}, {:.3}]",
                 act.name,
                 act.quantity.to_user(*v),
                 act.quantity.unit(),

@@ -639,3 +639,33 @@ fn batches_written_as_parquet_hold_the_csv_rows() {
     assert!(matches!(rows[0][col("iterations")], Cell::Num(_)));
     assert!(matches!(rows[0][col("X_mm")], Cell::Num(_)));
 }
+
+/// Actuator names longer than the usual column (a user's own `left-front-upper`) keep
+/// `pkm ik`'s values in one column.
+#[test]
+fn ik_keeps_long_actuator_names_in_one_column() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../tests/fixtures/own-hexapod.toml"
+    ))
+    .unwrap()
+    .replace("name = \"L3\"", "name = \"left-front-upper\"");
+    let file = dir.path().join("long-names.toml");
+    std::fs::write(&file, text).unwrap();
+    let out = pkm()
+        .arg("ik")
+        .arg(&file)
+        .arg("--pose")
+        .arg("0,0,600,0,0,0")
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    let columns: Vec<usize> = text
+        .lines()
+        .filter(|l| l.starts_with("actuator "))
+        .map(|l| l.find(" mm").unwrap())
+        .collect();
+    assert_eq!(columns.len(), 6, "{text}");
+    assert!(columns.iter().all(|c| *c == columns[0]), "{text}");
+}
