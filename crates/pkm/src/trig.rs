@@ -87,6 +87,13 @@ pub fn sin_cos_small<const N: usize>(x: &[f64; N]) -> ([f64; N], [f64; N]) {
 /// The bound of [`sin_cos_small`]'s series, `2^-7`.
 const SMALL: f64 = 0.0078125;
 
+/// Angles with `|x| <= 0.78` (just inside `pi/4`) reduce to themselves: `x (2/pi)` is
+/// at most 0.4966 after rounding, so `k = 0`, `r = (x - 0) - 0 = x` (signed zeros
+/// kept) and the quadrant is 0. The AVX-512 lanes skip the reduction when every lane
+/// is within it (a hexapod's A, B, C), with the same bits.
+#[cfg(target_arch = "x86_64")]
+const FIRST_OCTANT: f64 = 0.78;
+
 /// `c_0 + c_1 z + ... + c_6 z^6` by Estrin's scheme (`z2 = z^2`, `z4 = z^4`): pairs,
 /// then pairs of pairs, three multiply-add levels deep where Horner's rule is six; the
 /// AVX-512 kernel makes the same operations in the same order.
@@ -132,7 +139,9 @@ pub(crate) mod avx512 {
 
     /// `((sin x, cos x), in range)` by lane: [`super::sin_cos`]'s kernel, the same
     /// operations in the same order (so equal to it bit for bit), and the mask of lanes
-    /// within its range `|x| <= 1e4` (the others, NaN included, are not cleared).
+    /// within its range `|x| <= 1e4` (the others, NaN included, are not cleared). When
+    /// every lane is within [`super::FIRST_OCTANT`] the reduction, the identity there,
+    /// is skipped: a shorter chain for a hexapod's angles, the same bits.
     #[target_feature(enable = "avx512f")]
     #[inline]
     pub(crate) fn sin_cos(x: __m512d) -> ((__m512d, __m512d), u8) {
@@ -140,24 +149,18 @@ pub(crate) mod avx512 {
         let add = |a: __m512d, b: __m512d| _mm512_add_pd(a, b);
         let mul = |a: __m512d, b: __m512d| _mm512_mul_pd(a, b);
         let sub = |a: __m512d, b: __m512d| _mm512_sub_pd(a, b);
-        let in_range = _mm512_cmp_pd_mask::<_CMP_LE_OQ>(_mm512_abs_pd(x), c(1e4));
+        let ax = _mm512_abs_pd(x);
+        if _mm512_cmp_pd_mask::<_CMP_LE_OQ>(ax, c(super::FIRST_OCTANT)) == 0xff {
+            // Every lane in the first octant: the reduction is the identity (k = 0,
+            // r = x, quadrant 0), so skipping it changes no bit.
+            return (series(x), 0xff);
+        }
+        let in_range = _mm512_cmp_pd_mask::<_CMP_LE_OQ>(ax, c(1e4));
         let y = add(mul(x, c(TWO_OVER_PI)), c(MAGIC));
         let q = _mm512_castpd_si512(y);
         let k = sub(y, c(MAGIC));
         let r = sub(sub(x, mul(k, c(PIO2_HI))), mul(k, c(PIO2_LO)));
-        let z = mul(r, r);
-        let z2 = mul(z, z);
-        let z4 = mul(z2, z2);
-        // `super::estrin7`, the same operations in the same order.
-        let estrin = |k: &[f64]| {
-            let pair = |j: usize| add(c(k[j]), mul(z, c(k[j + 1])));
-            let (p0, p1, p2) = (pair(0), pair(2), pair(4));
-            add(add(p0, mul(z2, p1)), mul(z4, add(p2, mul(z2, c(k[6])))))
-        };
-        let ps = estrin(&S);
-        let sn = add(r, mul(mul(r, z), ps));
-        let pc = estrin(&C[1..]);
-        let cs = add(c(1.0), mul(z, add(c(C[0]), mul(z, pc))));
+        let (sn, cs) = series(r);
         let swap = _mm512_test_epi64_mask(q, _mm512_set1_epi64(1));
         let (a, b) = (
             _mm512_mask_blend_pd(swap, sn, cs),
@@ -173,6 +176,30 @@ pub(crate) mod avx512 {
             _mm512_castsi512_pd(_mm512_xor_si512(_mm512_castpd_si512(v), sign))
         };
         ((flip(a, sa), flip(b, sb)), in_range)
+    }
+
+    /// The series of sine and cosine on the reduced argument `r` (`|r| <= pi/4`), as
+    /// the scalar kernel evaluates them.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn series(r: __m512d) -> (__m512d, __m512d) {
+        let c = |v: f64| _mm512_set1_pd(v);
+        let add = |a: __m512d, b: __m512d| _mm512_add_pd(a, b);
+        let mul = |a: __m512d, b: __m512d| _mm512_mul_pd(a, b);
+        let z = mul(r, r);
+        let z2 = mul(z, z);
+        let z4 = mul(z2, z2);
+        // `super::estrin7`, the same operations in the same order.
+        let estrin = |k: &[f64]| {
+            let pair = |j: usize| add(c(k[j]), mul(z, c(k[j + 1])));
+            let (p0, p1, p2) = (pair(0), pair(2), pair(4));
+            add(add(p0, mul(z2, p1)), mul(z4, add(p2, mul(z2, c(k[6])))))
+        };
+        let ps = estrin(&S);
+        let sn = add(r, mul(mul(r, z), ps));
+        let pc = estrin(&C[1..]);
+        let cs = add(c(1.0), mul(z, add(c(C[0]), mul(z, pc))));
+        (sn, cs)
     }
 }
 
@@ -242,26 +269,99 @@ mod tests {
         assert_eq!(super::sin_cos_small(&big), super::sin_cos_array(&big));
     }
 
+    /// The AVX-512 kernel on eight lanes, stored: `(sin, cos, in range)`.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    fn lanes(x: &[f64; 8]) -> ([f64; 8], [f64; 8], u8) {
+        use std::arch::x86_64::*;
+        // SAFETY: 8 f64 loaded from and stored to arrays of 8.
+        unsafe {
+            let ((s, c), m) = super::avx512::sin_cos(_mm512_loadu_pd(x.as_ptr()));
+            let (mut so, mut co) = ([0.0; 8], [0.0; 8]);
+            _mm512_storeu_pd(so.as_mut_ptr(), s);
+            _mm512_storeu_pd(co.as_mut_ptr(), c);
+            (so, co, m)
+        }
+    }
+
+    /// Every block of eight of `xs` in range, and equal to the scalar kernel lane by
+    /// lane, bit for bit.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    fn assert_lanes_equal_the_kernel(xs: &[f64]) {
+        for x in xs.chunks_exact(8) {
+            let (s, c, m) = lanes(x.try_into().unwrap());
+            assert_eq!(m, 0xff);
+            for l in 0..8 {
+                let (s0, c0) = super::kernel(x[l]);
+                assert_eq!(
+                    (s[l].to_bits(), c[l].to_bits()),
+                    (s0.to_bits(), c0.to_bits()),
+                    "{:e}",
+                    x[l]
+                );
+            }
+        }
+    }
+
+    /// Blocks of eight angles all within the first octant (where the lanes skip the
+    /// reduction), to its bound and just past it, signed zeros and subnormals
+    /// included: equal to the scalar kernel, which reduces, bit for bit. A block with
+    /// one lane past the bound takes the reducing path, equal as well.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn avx512_first_octant_equals_the_reducing_kernel() {
+        if !std::arch::is_x86_feature_detected!("avx512f") {
+            return;
+        }
+        let b = super::FIRST_OCTANT;
+        let mut xs: Vec<f64> = (0..80_000)
+            .map(|i| -b + 2.0 * b * i as f64 / 79_999.0)
+            .collect();
+        xs.extend([
+            0.0,
+            -0.0,
+            5e-324,
+            -5e-324,
+            1e-300,
+            b,
+            -b,
+            f64::from_bits(b.to_bits() - 1),
+            1e-8,
+            -0.5,
+            0.3,
+            0.78,
+            -0.77,
+            0.1,
+            0.2,
+            0.4,
+        ]);
+        while !xs.len().is_multiple_of(8) {
+            xs.push(0.25);
+        }
+        // The last block has a lane past the bound (pi/4 + 1e-3), the others not.
+        xs.extend([
+            0.1,
+            0.2,
+            0.3,
+            std::f64::consts::FRAC_PI_4 + 1e-3,
+            -0.1,
+            0.0,
+            b,
+            -b,
+        ]);
+        // SAFETY: the CPU has AVX-512F (checked above).
+        unsafe { assert_lanes_equal_the_kernel(&xs) };
+    }
+
     /// The AVX-512 lanes equal the scalar kernel bit for bit over 2e4 rad (both signs,
     /// the quadrant boundaries, zero), and flag what is out of its range (NaN, beyond
     /// 1e4 rad, infinities).
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn avx512_lanes_equal_the_scalar_kernel() {
-        use std::arch::x86_64::*;
         if !std::arch::is_x86_feature_detected!("avx512f") {
             return;
-        }
-        #[target_feature(enable = "avx512f")]
-        fn lanes(x: &[f64; 8]) -> ([f64; 8], [f64; 8], u8) {
-            // SAFETY: 8 f64 loaded from and stored to arrays of 8.
-            unsafe {
-                let ((s, c), m) = super::avx512::sin_cos(_mm512_loadu_pd(x.as_ptr()));
-                let (mut so, mut co) = ([0.0; 8], [0.0; 8]);
-                _mm512_storeu_pd(so.as_mut_ptr(), s);
-                _mm512_storeu_pd(co.as_mut_ptr(), c);
-                (so, co, m)
-            }
         }
         let pio2 = std::f64::consts::FRAC_PI_2;
         let mut xs: Vec<f64> = (0..200_000).map(|i| -1e4 + 0.1 * i as f64 + 1e-3).collect();
@@ -275,21 +375,8 @@ mod tests {
         while !xs.len().is_multiple_of(8) {
             xs.push(0.5);
         }
-        for x in xs.chunks_exact(8) {
-            let x: &[f64; 8] = x.try_into().unwrap();
-            // SAFETY: the CPU has AVX-512F (checked above).
-            let (s, c, m) = unsafe { lanes(x) };
-            assert_eq!(m, 0xff);
-            for l in 0..8 {
-                let (s0, c0) = super::kernel(x[l]);
-                assert_eq!(
-                    (s[l].to_bits(), c[l].to_bits()),
-                    (s0.to_bits(), c0.to_bits()),
-                    "{}",
-                    x[l]
-                );
-            }
-        }
+        // SAFETY: as above.
+        unsafe { assert_lanes_equal_the_kernel(&xs) };
         let odd = [f64::NAN, 1.0001e4, -2e4, f64::INFINITY, 0.3, 1.0, 2.0, 3.0];
         // SAFETY: as above.
         let (_, _, m) = unsafe { lanes(&odd) };

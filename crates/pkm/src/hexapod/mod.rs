@@ -197,14 +197,14 @@ impl Hexapod {
     /// [`crate::rotation::rpy_matrix`]): on a CPU with AVX-512F one pass from the
     /// angles to the lengths, equal bit for bit to [`Hexapod::lengths`] of
     /// [`crate::legs::split_pose`] (tested).
+    #[inline]
     pub fn pose_lengths(&self, x: &Vector6<f64>) -> Vector6<f64> {
-        match self.lanes.pose_lengths(x) {
-            Some(l) => l,
-            None => {
-                let (p, r) = split_pose(x);
-                self.lengths(&p, &r)
-            }
+        let mut q = Vector6::zeros();
+        if self.lanes.pose_lengths(x, &mut q) {
+            return q;
         }
+        let (p, r) = split_pose(x);
+        self.lengths(&p, &r)
     }
 
     /// Strut lengths by the portable code only (the reference the AVX-512 kernel is

@@ -68,24 +68,24 @@ impl Lanes {
 
 impl Lanes {
     /// The six strut lengths of spatial coordinates `x = [X, Y, Z, A, B, C]` in one
-    /// AVX-512 pass: the three sines and cosines in one register
+    /// AVX-512 pass, written to `out`: the three sines and cosines in one register
     /// ([`crate::trig::avx512::sin_cos`], bit for bit the scalar kernel), the rotation
-    /// by [`crate::rotation::rpy_from_sin_cos`], then [`Lanes::lengths`]' kernel; so
-    /// equal bit for bit to `lengths(split_pose(x))`. `None` without AVX-512F or with
-    /// an angle beyond the kernel's range (`|angle| > 1e4` rad, NaN): the caller
-    /// takes the portable path, which defers those to libm.
+    /// by [`crate::rotation::rpy_entries`] in registers (each entry in every lane),
+    /// then [`Lanes::lengths`]' kernel; so equal bit for bit to
+    /// `lengths(split_pose(x))`. `false` (nothing written) without AVX-512F or with an
+    /// angle beyond the kernel's range (`|angle| > 1e4` rad, NaN): the caller takes the
+    /// portable path, which defers those to libm.
     #[inline]
-    pub(crate) fn pose_lengths(&self, x: &Vector6<f64>) -> Option<Vector6<f64>> {
+    pub(crate) fn pose_lengths(&self, x: &Vector6<f64>, out: &mut Vector6<f64>) -> bool {
         #[cfg(target_arch = "x86_64")]
         {
             if self.available {
                 // SAFETY: as in `lengths`: the CPU reported AVX-512F.
-                let l = unsafe { pose_lengths_avx512(self, x) }?;
-                return Some(Vector6::new(l[0], l[1], l[2], l[3], l[4], l[5]));
+                return unsafe { pose_lengths_avx512(self, x, out) };
             }
         }
-        let _ = x;
-        None
+        let _ = (x, out);
+        false
     }
 
     /// Lengths of many poses; `false` when AVX-512F is not available (nothing
@@ -141,31 +141,34 @@ fn detect() -> bool {
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
-#[inline]
-unsafe fn pose_lengths_avx512(s: &Lanes, x: &Vector6<f64>) -> Option<[f64; 8]> {
+unsafe fn pose_lengths_avx512(s: &Lanes, x: &Vector6<f64>, out: &mut Vector6<f64>) -> bool {
     use std::arch::x86_64::*;
-    let p = Vector3::new(x[0], x[1], x[2]);
     let r = if x[3] == 0.0 && x[4] == 0.0 && x[5] == 0.0 {
         // As `rotation::rpy_matrix`: exactly the identity.
-        Matrix3::identity()
+        let (one, zero) = (_mm512_set1_pd(1.0), _mm512_setzero_pd());
+        [one, zero, zero, zero, one, zero, zero, zero, one]
     } else {
         // SAFETY: the masked load reads lanes 0..3 only, x[3..6] (six contiguous f64
-        // in `x`); the stores write the 8 f64 of two arrays.
-        let (sn, cs) = unsafe {
-            let ang = _mm512_maskz_loadu_pd(0b111, x.as_slice().as_ptr().add(3));
-            let ((sn, cs), in_range) = crate::trig::avx512::sin_cos(ang);
-            if in_range != 0xff {
-                return None;
-            }
-            let (mut so, mut co) = ([0.0; 8], [0.0; 8]);
-            _mm512_storeu_pd(so.as_mut_ptr(), sn);
-            _mm512_storeu_pd(co.as_mut_ptr(), cs);
-            (so, co)
-        };
-        crate::rotation::rpy_from_sin_cos([sn[0], sn[1], sn[2]], [cs[0], cs[1], cs[2]])
+        // in `x`).
+        let ang = unsafe { _mm512_maskz_loadu_pd(0b111, x.as_slice().as_ptr().add(3)) };
+        let ((sn, cs), in_range) = crate::trig::avx512::sin_cos(ang);
+        if in_range != 0xff {
+            return false;
+        }
+        // Lane `j` of `v` in every lane.
+        let lane = |v: __m512d, j: i64| _mm512_permutexvar_pd(_mm512_set1_epi64(j), v);
+        use crate::lane::Zmm;
+        crate::rotation::rpy_entries(
+            [lane(sn, 0), lane(sn, 1), lane(sn, 2)].map(Zmm::of),
+            [lane(cs, 0), lane(cs, 1), lane(cs, 2)].map(Zmm::of),
+        )
+        .map(Zmm::reg)
     };
-    // SAFETY: same feature.
-    Some(unsafe { lengths_avx512(s, &p, &r) })
+    let p = x.as_slice().first_chunk::<3>().expect("six coordinates");
+    let l = lengths_of_entries(s, p, &r);
+    // SAFETY: the masked store writes lanes 0..6 only, the six contiguous f64 of `out`.
+    unsafe { _mm512_mask_storeu_pd(out.as_mut_slice().as_mut_ptr(), 0b0011_1111, l) };
+    true
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -183,19 +186,34 @@ unsafe fn lengths_avx512(s: &Lanes, p: &Vector3<f64>, r: &Matrix3<f64>) -> [f64;
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
 #[inline]
-unsafe fn lengths_zmm(s: &Lanes, p: &Vector3<f64>, r: &Matrix3<f64>) -> std::arch::x86_64::__m512d {
+fn lengths_zmm(s: &Lanes, p: &Vector3<f64>, r: &Matrix3<f64>) -> std::arch::x86_64::__m512d {
+    use std::arch::x86_64::_mm512_set1_pd;
+    let e = std::array::from_fn(|k| _mm512_set1_pd(r[(k / 3, k % 3)]));
+    lengths_of_entries(s, p.as_ref(), &e)
+}
+
+/// The lengths of the struts in the lanes of one pose: tool tip `p` (by reference, so
+/// each coordinate is broadcast from memory, not from a copy on the stack), rotation
+/// entries `r` row by row, each in every lane.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+#[inline]
+fn lengths_of_entries(
+    s: &Lanes,
+    p: &[f64; 3],
+    r: &[std::arch::x86_64::__m512d; 9],
+) -> std::arch::x86_64::__m512d {
     use std::arch::x86_64::*;
     // SAFETY (whole body): the loads read 8 f64 from arrays of exactly 8 f64
     // (unaligned forms); everything else is register arithmetic.
     unsafe {
         let ld = |a: &[f64; 8]| _mm512_loadu_pd(a.as_ptr());
         let (ax, ay, az) = (ld(&s.ax), ld(&s.ay), ld(&s.az));
-        let b = |v: f64| _mm512_set1_pd(v);
-        let row = |i: usize, base: &[f64; 8], pc: f64| {
-            let r = [b(r[(i, 0)]), b(r[(i, 1)]), b(r[(i, 2)])];
-            strut_component(r, [ax, ay, az], _mm512_sub_pd(b(pc), ld(base)))
+        let row = |i: usize, base: &[f64; 8]| {
+            let offset = _mm512_sub_pd(_mm512_set1_pd(p[i]), ld(base));
+            strut_component([r[3 * i], r[3 * i + 1], r[3 * i + 2]], [ax, ay, az], offset)
         };
-        strut_length([row(0, &s.bx, p.x), row(1, &s.by, p.y), row(2, &s.bz, p.z)])
+        strut_length([row(0, &s.bx), row(1, &s.by), row(2, &s.bz)])
     }
 }
 
