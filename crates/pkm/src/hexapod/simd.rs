@@ -166,8 +166,17 @@ unsafe fn pose_lengths_avx512(s: &Lanes, x: &Vector6<f64>, out: &mut Vector6<f64
     };
     let p = x.as_slice().first_chunk::<3>().expect("six coordinates");
     let l = lengths_of_entries(s, p, &r);
-    // SAFETY: the masked store writes lanes 0..6 only, the six contiguous f64 of `out`.
-    unsafe { _mm512_mask_storeu_pd(out.as_mut_slice().as_mut_ptr(), 0b0011_1111, l) };
+    // Lanes 0..4 and 4..6 by two plain stores, not one masked store: a caller's loads
+    // of the result are then forwarded from the stores, where after a masked store they
+    // wait for it to retire (which serialised successive calls).
+    // SAFETY: the stores write 4 + 2 f64 at offsets 0 and 4 of the six contiguous f64
+    // of `out`.
+    unsafe {
+        let o = out.as_mut_slice().as_mut_ptr();
+        _mm256_storeu_pd(o, _mm512_castpd512_pd256(l));
+        let high = _mm512_extractf64x4_pd::<1>(l);
+        _mm_storeu_pd(o.add(4), _mm256_castpd256_pd128(high));
+    }
     true
 }
 
