@@ -190,18 +190,72 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
     /// back once per block, not once per sample around the sink's call.
     fn add_stats(&mut self, samples: &[Sample<P, A>]) {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx512f") {
-            // SAFETY: the CPU has AVX-512F.
+        if A <= 8 && P <= 8 && std::arch::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the CPU has AVX-512F; A, P <= 8.
             unsafe { self.add_stats_avx512(samples) };
             return;
         }
         self.add_stats_plain(samples);
     }
 
+    /// [`Self::add_stats_plain`] with each bank in AVX-512 registers
+    /// ([`super::stats::avx512::Bank`]: the same bits) and both in one pass.
+    ///
+    /// # Safety
+    /// The CPU must have AVX-512F, and `A, P <= 8`.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f")]
     unsafe fn add_stats_avx512(&mut self, samples: &[Sample<P, A>]) {
-        self.add_stats_plain(samples);
+        use std::arch::x86_64::*;
+
+        use super::stats::avx512::{abs, lanes, load, Bank};
+        // SAFETY (whole body): every load reads the A or P f64 of a vector or array
+        // of that length (A, P <= 8, the caller's promise), every store the A f64 of
+        // an array; the feature is this function's.
+        unsafe {
+            let (mut act, mut serial) = (Bank::of(&self.act), Bank::of(&self.serial));
+            let c = load(self.act_scale.as_ptr(), A);
+            let cs = load(self.serial_scale.as_ptr(), P);
+            let (pv, pa): ([f64; A], [f64; A]) = (
+                std::array::from_fn(|i| self.peak_rates[i].0),
+                std::array::from_fn(|i| self.peak_rates[i].1),
+            );
+            let (mut pv, mut pa) = (load(pv.as_ptr(), A), load(pa.as_ptr(), A));
+            // Serial lane j is coordinate serial_idx[j] scaled (zero past the serial
+            // axes, where the scale is zero too).
+            let idx: [i64; 8] =
+                std::array::from_fn(|j| self.serial_idx.get(j).map_or(0, |&k| k as i64));
+            let idx = _mm512_loadu_si512(idx.as_ptr().cast());
+            let keep = lanes(self.serial_idx.len());
+            let lane = |v: &SVector<f64, P>| {
+                _mm512_mul_pd(
+                    _mm512_maskz_permutexvar_pd(keep, idx, load(v.as_ptr(), P)),
+                    cs,
+                )
+            };
+            for s in samples {
+                let a = &s.act;
+                let (q, qd, qdd) = (
+                    load(a.q.as_ptr(), A),
+                    load(a.qd.as_ptr(), A),
+                    load(a.qdd.as_ptr(), A),
+                );
+                act.add(
+                    _mm512_mul_pd(q, c),
+                    _mm512_mul_pd(qd, c),
+                    _mm512_mul_pd(qdd, c),
+                );
+                pv = _mm512_max_pd(abs(qd), pv);
+                pa = _mm512_max_pd(abs(qdd), pa);
+                serial.add(lane(&s.x), lane(&s.xd), lane(&s.xdd));
+            }
+            act.store(&mut self.act);
+            serial.store(&mut self.serial);
+            let (mut v, mut w) = ([0.0; A], [0.0; A]);
+            _mm512_mask_storeu_pd(v.as_mut_ptr(), lanes(A), pv);
+            _mm512_mask_storeu_pd(w.as_mut_ptr(), lanes(A), pa);
+            self.peak_rates = std::array::from_fn(|i| (v[i], w[i]));
+        }
     }
 
     #[inline(always)]
@@ -413,8 +467,19 @@ mod tests {
             })
             .collect();
         let m: &crate::hexapod::Hexapod = m;
-        // X, Y, Z as the serial axes, as a runner sets them for a spatial machine.
-        let new = || Recorder::new(m, (0..3).collect()).unwrap();
+        // X, Y, Z as the serial axes, as a runner sets them for a spatial machine; and
+        // coordinates in another order, some left out.
+        for serial in [vec![0, 1, 2], vec![5, 0, 3, 1]] {
+            check_statistics_loop(m, &samples, serial);
+        }
+    }
+
+    fn check_statistics_loop(
+        m: &crate::hexapod::Hexapod,
+        samples: &[Sample<6, 6>],
+        serial: Vec<usize>,
+    ) {
+        let new = || Recorder::new(m, serial.clone()).unwrap();
         let bits = |r: &Recorder<'_, crate::hexapod::Hexapod, 6, 6>| {
             let stats = (0..6).flat_map(|i| [r.act.axis(i), r.serial.axis(i)]);
             let mut v: Vec<u64> = stats.flat_map(|s| s.bits()).collect();
