@@ -159,19 +159,29 @@ fn compute_range<M: Mechanism<P, A>, const P: usize, const A: usize>(
             clear,
             computed,
         } = rows;
+        // Grown, never cleared: every row up to n is written here (x) or, where a
+        // kernel clears or computes it, by the kernel (q).
         for v in x.iter_mut() {
-            v.clear();
+            if v.len() < P * n {
+                v.resize(P * n, 0.0);
+            }
         }
-        for s in out.iter() {
-            x[0].extend_from_slice(s.x.as_slice());
-            x[1].extend_from_slice(s.xd.as_slice());
-            x[2].extend_from_slice(s.xdd.as_slice());
-        }
-        // Grown, never cleared: every row a kernel clears is written by it.
         for v in q.iter_mut() {
             if v.len() < A * n {
                 v.resize(A * n, 0.0);
             }
+        }
+        // Whole rows of P copied at once (a fixed size: moves, not `memcpy` calls).
+        let [x0, x1, x2] = x;
+        let (x0, x1, x2) = (&mut x0[..P * n], &mut x1[..P * n], &mut x2[..P * n]);
+        for (s, ((r0, r1), r2)) in out.iter().zip(
+            x0.chunks_exact_mut(P)
+                .zip(x1.chunks_exact_mut(P))
+                .zip(x2.chunks_exact_mut(P)),
+        ) {
+            r0.copy_from_slice(s.x.as_slice());
+            r1.copy_from_slice(s.xd.as_slice());
+            r2.copy_from_slice(s.xdd.as_slice());
         }
         if clear.len() < n {
             clear.resize(n, false);
@@ -182,31 +192,33 @@ fn compute_range<M: Mechanism<P, A>, const P: usize, const A: usize>(
         let (q0, q1, q2) = (&mut q0[..A * n], &mut q1[..A * n], &mut q2[..A * n]);
         // The motion kernel where the type has one, else the inverse's screen.
         let kernel = m.motion_screened(
-            [&x[0], &x[1], &x[2]],
+            [&*x0, &*x1, &*x2],
             [&mut *q0, &mut *q1, &mut *q2],
             clear,
             computed,
         );
         if !kernel {
             computed.fill(false);
-            if !m.inverse_screened(&x[0], q0, clear, true) {
+            if !m.inverse_screened(x0, q0, clear, true) {
                 clear.fill(false);
             }
         }
-        let q = [&*q0, &*q1, &*q2];
-        for (j, (s, (&clear, &computed))) in out
+        let rows = q0
+            .chunks_exact(A)
+            .zip(q1.chunks_exact(A))
+            .zip(q2.chunks_exact(A));
+        for (j, ((s, (&clear, &computed)), ((q0, q1), q2))) in out
             .iter_mut()
             .zip(clear.iter().zip(computed.iter()))
+            .zip(rows)
             .enumerate()
         {
             if computed {
-                // In place: a 144-byte `ActuatorMotion` moved through a `Result` is two
-                // `memcpy` calls per sample.
-                for i in 0..A {
-                    s.act.q[i] = q[0][A * j + i];
-                    s.act.qd[i] = q[1][A * j + i];
-                    s.act.qdd[i] = q[2][A * j + i];
-                }
+                // In place, whole rows: a 144-byte `ActuatorMotion` moved through a
+                // `Result` is two `memcpy` calls per sample.
+                s.act.q.as_mut_slice().copy_from_slice(q0);
+                s.act.qd.as_mut_slice().copy_from_slice(q1);
+                s.act.qdd.as_mut_slice().copy_from_slice(q2);
                 if !clear {
                     // Beyond a limit, or near one: its limits checked with the motion
                     // the kernel wrote (not computed a second time).
