@@ -5,6 +5,7 @@
 //! strokes ([`forward`]).
 
 pub mod atlas;
+mod connected;
 pub mod forward;
 mod reach;
 mod summary;
@@ -13,6 +14,8 @@ pub use reach::{
     default_grid, default_span, map_reach, reach_grid, reachable_tilt, tilt_orientations, ReachGrid,
 };
 pub use summary::WorkspaceSummary;
+
+use connected::{keep_connected, nearest_index, neighbours};
 
 use nalgebra::SVector;
 use rayon::prelude::*;
@@ -460,68 +463,6 @@ where
     })
 }
 
-/// The per-axis grid indices nearest the pose `base`.
-fn nearest_index<const N: usize>(
-    base: &SVector<f64, N>,
-    axes: &[GridAxis],
-    counts: &[usize],
-) -> Vec<usize> {
-    axes.iter()
-        .zip(counts)
-        .map(|(a, &n)| {
-            let i = ((base[a.coordinate] - a.min) / a.step).round();
-            (i.max(0.0) as usize).min(n - 1)
-        })
-        .collect()
-}
-
-/// Marks [`PointStatus::Separate`] every reachable point not connected (through
-/// reachable grid neighbours, one step along one axis) to the region of the grid point
-/// `start`, or, when that point is not reachable, of the reachable point nearest it
-/// (fewest steps; none reachable: nothing to do). The map then measures the region the
-/// machine can move through at this orientation, not a mirror assembly mode beyond a
-/// singular configuration.
-fn keep_connected(points: &mut [PointResult], counts: &[usize], start: &[usize]) {
-    let mut idx = vec![0; counts.len()];
-    let flat = |i: &[usize]| i.iter().zip(counts).fold(0, |k, (i, n)| k * n + i);
-    let seed = if points[flat(start)].reachable {
-        flat(start)
-    } else {
-        let steps = |k: usize, idx: &mut Vec<usize>| {
-            unflatten(counts, k, idx);
-            idx.iter()
-                .zip(start)
-                .map(|(a, b)| a.abs_diff(*b))
-                .sum::<usize>()
-        };
-        match (0..points.len())
-            .filter(|&k| points[k].reachable)
-            .min_by_key(|&k| steps(k, &mut idx))
-        {
-            Some(k) => k,
-            None => return,
-        }
-    };
-    let mut seen = vec![false; points.len()];
-    let mut stack = vec![seed];
-    seen[seed] = true;
-    while let Some(k) = stack.pop() {
-        for nb in neighbours(counts, k) {
-            if !seen[nb] && points[nb].reachable {
-                seen[nb] = true;
-                stack.push(nb);
-            }
-        }
-    }
-    for (p, s) in points.iter_mut().zip(seen) {
-        if p.reachable && !s {
-            p.reachable = false;
-            p.status = PointStatus::Separate;
-            p.binding = Some("separate region (not connected to the base pose)".into());
-        }
-    }
-}
-
 /// Points per violated limit, each point counted once per limit it violates.
 #[derive(Default)]
 struct Tally(std::collections::HashMap<String, usize>);
@@ -553,22 +494,4 @@ impl Tally {
         v.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
         v
     }
-}
-
-/// Flat indices of the grid neighbours (one step along one axis) of point `k`.
-fn neighbours(counts: &[usize], k: usize) -> Vec<usize> {
-    let mut idx = vec![0; counts.len()];
-    unflatten(counts, k, &mut idx);
-    let mut out = Vec::new();
-    let mut stride = 1;
-    for (&n, &i) in counts.iter().zip(&idx).rev() {
-        if i > 0 {
-            out.push(k - stride);
-        }
-        if i + 1 < n {
-            out.push(k + stride);
-        }
-        stride *= n;
-    }
-    out
 }
