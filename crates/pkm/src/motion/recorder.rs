@@ -208,7 +208,7 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
     unsafe fn add_stats_avx512(&mut self, samples: &[Sample<P, A>]) {
         use std::arch::x86_64::*;
 
-        use super::stats::avx512::{abs, lanes, load, Bank};
+        use super::stats::avx512::{lanes, load, Bank};
         // SAFETY (whole body): every load reads the A or P f64 of a vector or array
         // of that length (A, P <= 8, the caller's promise), every store the A f64 of
         // an array; the feature is this function's.
@@ -245,8 +245,8 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
                     _mm512_mul_pd(qd, c),
                     _mm512_mul_pd(qdd, c),
                 );
-                pv = _mm512_max_pd(abs(qd), pv);
-                pa = _mm512_max_pd(abs(qdd), pa);
+                pv = _mm512_max_pd(_mm512_abs_pd(qd), pv);
+                pa = _mm512_max_pd(_mm512_abs_pd(qdd), pa);
                 serial.add(lane(&s.x), lane(&s.xd), lane(&s.xdd));
             }
             act.store(&mut self.act);

@@ -194,13 +194,6 @@ pub(crate) mod avx512 {
         ((1u16 << n.min(8)) - 1) as u8
     }
 
-    /// `|v|` by lane (the sign bit cleared, as `f64::abs`).
-    #[target_feature(enable = "avx512f")]
-    #[inline]
-    pub(crate) fn abs(v: __m512d) -> __m512d {
-        _mm512_abs_pd(v)
-    }
-
     /// A bank in registers.
     pub(crate) struct Bank {
         travel: __m512d,
@@ -264,11 +257,13 @@ pub(crate) mod avx512 {
         #[inline]
         pub(crate) fn add(&mut self, q: __m512d, v: __m512d, a: __m512d) {
             if self.n > 0 {
-                self.travel = _mm512_add_pd(self.travel, abs(_mm512_sub_pd(q, self.last)));
+                self.travel =
+                    _mm512_add_pd(self.travel, _mm512_abs_pd(_mm512_sub_pd(q, self.last)));
             }
             self.last = q;
             self.n += 1;
-            let (av, aa) = (abs(v), abs(a));
+            // `_mm512_abs_pd` clears the sign bit, as `f64::abs`.
+            let (av, aa) = (_mm512_abs_pd(v), _mm512_abs_pd(a));
             self.min = _mm512_min_pd(q, self.min);
             self.max = _mm512_max_pd(q, self.max);
             self.peak_v = _mm512_max_pd(av, self.peak_v);
