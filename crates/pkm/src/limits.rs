@@ -148,6 +148,12 @@ impl PartialEq<LimitName> for &str {
     }
 }
 
+/// The name of strut `strut`'s length limit, `strut {strut} length`: every strut
+/// machine's (the hexapod's limit table and [`PositionLimits::strut_lengths`]).
+pub(crate) fn strut_length_name(strut: &str) -> String {
+    format!("strut {strut} length")
+}
+
 /// The position limits of a machine's actuators, each named once when the machine is
 /// built (`joint A1 position`, `slider U position`, `strut 3 length`, ...): checked
 /// per pose without formatting a name (a motion beyond one clones it per sample).
@@ -175,9 +181,9 @@ impl PositionLimits {
         )
     }
 
-    /// The length limits of struts `actuators`: `"strut {actuator} length"`.
+    /// The length limits of struts `actuators` ([`strut_length_name`]).
     pub(crate) fn strut_lengths(actuators: &[crate::mechanism::Actuator]) -> Self {
-        Self::from_fn(actuators, |_, a| format!("strut {} length", a.name))
+        Self::from_fn(actuators, |_, a| strut_length_name(&a.name))
     }
 
     /// Pushes a violation when actuator `i`'s `value` is outside its range (a check

@@ -75,7 +75,7 @@ fn limit_name(struts: &[HexStrut; 6], coordinates: &[Coordinate; 6], id: usize) 
     let strut = |i: usize| &struts[i % 6];
     match id {
         0..RANGE => format!("axis {} travel", coordinates[id].name),
-        RANGE..BASE_CONE => format!("strut {} length", strut(id - RANGE).actuator.name),
+        RANGE..BASE_CONE => crate::limits::strut_length_name(&strut(id - RANGE).actuator.name),
         BASE_CONE..PLATFORM_CONE => {
             let s = strut(id - BASE_CONE);
             format!(
