@@ -1,21 +1,16 @@
 //! A block of a run: the sample instants the planner laid out, on their moves, and
 //! their computation (the compute stage of [`super::plan`]): poses from the time laws
 //! and the geometry, then the mechanism's block kernel or its screen, then the exact
-//! `q, q', q''` and the mechanism's own limits of every sample, across the rayon pool
-//! when asked.
+//! `q, q', q''` and the mechanism's own limits of every sample, on one thread (a run
+//! hands whole blocks to the rayon pool).
 
 use std::sync::Arc;
-
-use rayon::prelude::*;
 
 use super::plan::BLOCK;
 use super::run::{Move, Sample};
 use crate::error::Error;
 use crate::limits::Violation;
 use crate::mechanism::{ActuatorMotion, Mechanism};
-
-/// Samples a task of the compute stage takes at once.
-const CHUNK: usize = 512;
 
 /// Planned instants of a stretch of the run, then their computed samples.
 pub(crate) struct Block<M, const P: usize, const A: usize> {
@@ -70,9 +65,10 @@ impl<M, const P: usize, const A: usize> Block<M, P, A> {
 }
 
 impl<M: Mechanism<P, A>, const P: usize, const A: usize> Block<M, P, A> {
-    /// Computes every planned instant on `base` (or the block's tooled mechanism),
-    /// across the rayon pool when `parallel`.
-    pub(crate) fn compute(&mut self, base: &M, parallel: bool) {
+    /// Computes every planned instant on `base` (or the block's tooled mechanism), on
+    /// the calling thread: a run spreads its blocks, not their samples, over the pool
+    /// ([`super::plan::drive`]).
+    pub(crate) fn compute(&mut self, base: &M) {
         let m = self.tooled.as_deref().unwrap_or(base);
         let n = self.plan.len();
         let zero = Sample {
@@ -93,28 +89,10 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Block<M, P, A> {
         }
         self.violations.clear();
         self.failed = None;
-        let moves = &self.moves;
-        let samples = &mut self.samples[..n];
-        if parallel && n > CHUNK {
-            let parts: Vec<_> = self
-                .plan
-                .par_chunks(CHUNK)
-                .zip(samples.par_chunks_mut(CHUNK))
-                .enumerate()
-                .map(|(c, (plan, out))| compute_range(m, moves, plan, out, c * CHUNK))
-                .collect();
-            for (violations, failed) in parts {
-                if self.failed.is_some() {
-                    break;
-                }
-                self.violations.extend(violations);
-                self.failed = failed;
-            }
-        } else {
-            let (violations, failed) = compute_range(m, moves, &self.plan, samples, 0);
-            self.violations = violations;
-            self.failed = failed;
-        }
+        let (violations, failed) =
+            compute_range(m, &self.moves, &self.plan, &mut self.samples[..n], 0);
+        self.violations = violations;
+        self.failed = failed;
     }
 }
 

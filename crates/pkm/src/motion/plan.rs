@@ -7,7 +7,7 @@
 //! rate `t_k = k / rate` over the whole program, or `n` points per move. The *compute*
 //! stage evaluates each instant: time law, geometry, exact `q, q', q''` and the
 //! mechanism's own limits ([`Mechanism::actuator_motion_checked`]); samples do not
-//! depend on each other, so a block splits across cores. The *recorder*
+//! depend on each other, so blocks are computed on several cores at once. The *recorder*
 //! ([`super::Runner`], the caller's thread again) takes the blocks back in order for
 //! the statistics, the rate limits, the stretches of violations and the sink. Every
 //! sample is computed by the same code in the same way whichever stage runs where, so
@@ -21,9 +21,13 @@ use crate::error::{Error, Result};
 use crate::mechanism::Mechanism;
 
 /// Samples per block: large enough to amortise a hand-over between threads (a few
-/// microseconds) over about a millisecond of work, small enough (1.3 MB for a
-/// hexapod) to stay in cache.
-pub(crate) const BLOCK: usize = 4096;
+/// microseconds) over a tenth of a millisecond of a hexapod's work (most of a
+/// millisecond of a serial robot's), small enough for the block's samples and the
+/// compute stage's rows (about 300 kB for a hexapod) to stay in the second-level
+/// cache from one stage to the next. Measured on a hexapod's and a 6R robot's
+/// programs (`docs/performance.md`, session 27): 512 beat 256, 1024 and 4096 on one
+/// thread and on two.
+pub(crate) const BLOCK: usize = 512;
 
 /// Blocks in flight between the planner and the recorder.
 const IN_FLIGHT: usize = 3;
@@ -290,7 +294,7 @@ where
 {
     let base = planner.m;
     let mut dispatch = |b: &mut Block<M, P, A>| -> Result<()> {
-        b.compute(base, false);
+        b.compute(base);
         let r = record(b);
         b.clear();
         r
@@ -348,7 +352,7 @@ where
             let (seq, tx) = (queue.sent, done_tx.clone());
             queue.sent += 1;
             scope.spawn(move |_| {
-                full.compute(base, true);
+                full.compute(base);
                 // The receiver is gone only when the run stopped on an error.
                 let _ = tx.send((seq, full));
             });

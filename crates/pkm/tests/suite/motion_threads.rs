@@ -175,7 +175,7 @@ fn a_hexapod_run_is_the_same_on_one_thread_and_many() {
     );
 
     // A sink that fails stops the run at once, with its error, whatever the threads.
-    for k in [0, 4095, 4096, 9000] {
+    for k in [0, 511, 512, 4095, 4096, 9000] {
         let (_, many) = both(&m, &text, Default::default(), 1000.0, None, Some(k));
         assert_eq!((many.rows.rows.len(), many.rows.after_failure), (k, 1));
         let e = many.result.as_ref().err().unwrap().to_string();
@@ -360,8 +360,8 @@ fn the_screened_motion_equals_the_checked_call_sample_by_sample() {
 
 #[test]
 fn run_move_stops_at_a_failing_sink() {
-    // One move of ~10 000 samples (three blocks) through `Runner::run_move`: a sink
-    // failing at sample k sees no sample after it.
+    // One move of ~10 000 samples (about twenty blocks) through `Runner::run_move`: a
+    // sink failing at sample k sees no sample after it.
     use pkm::machine::Model;
     use pkm::motion::{Move, Profile, Runner, Segment};
     let Model::Hexapod(h) = load("hexapod-linuxcnc.toml").model else {
@@ -379,7 +379,7 @@ fn run_move_stops_at_a_failing_sink() {
         line: Some(1),
         rapid: false,
     };
-    for k in [0usize, 4095, 4096, 9000] {
+    for k in [0usize, 511, 512, 4095, 4096, 9000] {
         let mut r = Runner::new(&h, Sampling::Rate(1000.0)).unwrap();
         let mut calls = 0usize;
         let e = r
