@@ -31,6 +31,8 @@ pub(super) struct Recorder<'m, M, const P: usize, const A: usize> {
     /// Storage for the next `open` (kept: no allocation per sample).
     spare_open: Vec<(LimitName, usize)>,
     dropped: u64,
+    /// The rate limits' violations of the sample being recorded (kept: no allocation
+    /// per sample).
     buf: Vec<Violation>,
     /// Per actuator, `Quantity::to_user`'s factor.
     act_scale: [f64; A],
@@ -118,23 +120,29 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
         // Each sample continues the one before (a robot's posture and turns).
         follow_block(self.m, b, &mut self.last);
         let n = b.failed.as_ref().map_or(b.plan.len(), |f| f.0);
-        let mut violations = b.violations.drain(..).peekable();
+        // Each sample's violations are read where the compute stage left them, in
+        // sample order (a 72-byte violation moved per sample through a `Peekable` was
+        // a stalled store-to-load copy).
+        let violations = &b.violations[..];
+        let mut next = 0;
         // The samples in order, then their statistics: the statistics see the same
         // samples in the same order as if they were taken sample by sample (up to the
         // one a sink refused), in a loop of their own.
         let mut recorded = Ok(());
         let mut taken = n;
         for k in 0..n {
-            self.buf.clear();
-            while let Some((_, v)) = violations.next_if(|v| v.0 as usize == k) {
-                self.buf.push(v);
+            let from = next;
+            while violations.get(next).is_some_and(|v| v.0 as usize == k) {
+                next += 1;
             }
             let rapid = b.moves[b.plan[k].0 as usize].0.rapid;
-            if let Err(e) = self.record_sample(&b.samples[k], rapid, sink) {
+            if let Err(e) = self.record_sample(&b.samples[k], &violations[from..next], rapid, sink)
+            {
                 (recorded, taken) = (Err(e), k + 1);
                 break;
             }
         }
+        b.violations.clear();
         self.add_stats(&b.samples[..taken]);
         recorded?;
         if let Some((_, e)) = b.failed.take() {
@@ -146,14 +154,21 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
         }
     }
 
-    /// Records sample `s` of a move (a rapid when `rapid`); `self.buf` holds the
-    /// violations of the mechanism's own limits found with it, the rate limits are
-    /// checked here.
-    fn record_sample<F>(&mut self, s: &Sample<P, A>, rapid: bool, sink: &mut F) -> Result<()>
+    /// Records sample `s` of a move (a rapid when `rapid`) with `found`, the
+    /// violations of the mechanism's own limits found with it (by sample index); the
+    /// rate limits are checked here.
+    fn record_sample<F>(
+        &mut self,
+        s: &Sample<P, A>,
+        found: &[(u32, Violation)],
+        rapid: bool,
+        sink: &mut F,
+    ) -> Result<()>
     where
         F: FnMut(&Sample<P, A>) -> Result<()>,
     {
         let (t, act, x) = (s.t, &s.act, &s.x);
+        self.buf.clear();
         // Rate limits (infinite where none is given): a violation is rare. One pass over
         // the actuators for whether any limit is exceeded, then (rarely) the violations
         // in order; the peaks are the statistics' ([`Self::add_stats`]).
@@ -173,7 +188,12 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
                 }
             }
         }
-        self.track(t, s.line);
+        if !(found.is_empty() && self.buf.is_empty() && self.open.is_empty()) {
+            // The sample's violations: the mechanism's, then the rate limits'.
+            let rate = std::mem::take(&mut self.buf);
+            self.track(t, s.line, found.iter().map(|(_, v)| v).chain(&rate));
+            self.buf = rate;
+        }
         // The singular direction does not depend on the tool length. Rapids run each
         // axis at its rapid rate whatever the direction: what a passage costs is the
         // feed moves'.
@@ -313,20 +333,21 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
         x
     }
 
-    fn track(&mut self, t: f64, line: Option<u64>) {
-        if self.buf.is_empty() && self.open.is_empty() {
-            return;
-        }
+    /// Extends, opens and closes the stretches of violations with `found`, the
+    /// violations of the sample at time `t` on G-code line `line`, in order.
+    fn track<'v, I>(&mut self, t: f64, line: Option<u64>, found: I)
+    where
+        I: Iterator<Item = &'v Violation> + Clone,
+    {
         // The limits of the sample before, in its order (a stretch beyond them): the
         // names compare by pointer when the mechanism names its limits once.
-        if self.buf.len() == self.open.len()
-            && self
-                .buf
-                .iter()
+        if found.clone().count() == self.open.len()
+            && found
+                .clone()
                 .zip(&self.open)
                 .all(|(v, (n, _))| v.limit == *n)
         {
-            for (v, &(_, idx)) in self.buf.iter().zip(&self.open) {
+            for (v, &(_, idx)) in found.zip(&self.open) {
                 extend_run(&mut self.runs[idx], v, t);
             }
             return;
@@ -336,7 +357,7 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
         let old = std::mem::take(&mut self.open);
         let mut open = std::mem::take(&mut self.spare_open);
         open.clear();
-        for v in &self.buf {
+        for v in found {
             let found = open
                 .iter()
                 .chain(old.iter())
