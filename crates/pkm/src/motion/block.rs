@@ -119,16 +119,6 @@ fn compute_range<M: Mechanism<P, A>, const P: usize, const A: usize>(
 ) -> (Vec<(u32, Violation)>, Option<(usize, Error)>) {
     let mut violations = Vec::new();
     let mut buf = Vec::new();
-    for (&(mi, tl), out) in plan.iter().zip(out.iter_mut()) {
-        let (mv, t0, _) = &moves[mi as usize];
-        let (s, sd, sdd) = mv.profile.eval(tl);
-        let (x, xs, xss) = mv.segment.eval(s);
-        out.t = t0 + tl;
-        out.line = mv.line;
-        out.x = x;
-        out.xd = xs * sd;
-        out.xdd = xss * (sd * sd) + xs * sdd;
-    }
     let n = out.len();
     ROWS.with_borrow_mut(|rows| {
         let Rows {
@@ -149,17 +139,25 @@ fn compute_range<M: Mechanism<P, A>, const P: usize, const A: usize>(
                 v.resize(A * n, 0.0);
             }
         }
-        // Whole rows of P copied at once (a fixed size: moves, not `memcpy` calls).
+        // Each pose written from registers into its sample and into the kernel's
+        // rows, whole rows of P at once (not stored, then loaded back for a copy).
         let [x0, x1, x2] = x;
         let (x0, x1, x2) = (&mut x0[..P * n], &mut x1[..P * n], &mut x2[..P * n]);
-        for (s, ((r0, r1), r2)) in out.iter().zip(
+        for ((&(mi, tl), out), ((r0, r1), r2)) in plan.iter().zip(out.iter_mut()).zip(
             x0.chunks_exact_mut(P)
                 .zip(x1.chunks_exact_mut(P))
                 .zip(x2.chunks_exact_mut(P)),
         ) {
-            r0.copy_from_slice(s.x.as_slice());
-            r1.copy_from_slice(s.xd.as_slice());
-            r2.copy_from_slice(s.xdd.as_slice());
+            let (mv, t0, _) = &moves[mi as usize];
+            let (s, sd, sdd) = mv.profile.eval(tl);
+            let (x, xs, xss) = mv.segment.eval(s);
+            let (xd, xdd) = (xs * sd, xss * (sd * sd) + xs * sdd);
+            out.t = t0 + tl;
+            out.line = mv.line;
+            (out.x, out.xd, out.xdd) = (x, xd, xdd);
+            r0.copy_from_slice(x.as_slice());
+            r1.copy_from_slice(xd.as_slice());
+            r2.copy_from_slice(xdd.as_slice());
         }
         if clear.len() < n {
             clear.resize(n, false);
