@@ -90,14 +90,14 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Block<M, P, A> {
         self.violations.clear();
         self.failed = None;
         let (violations, failed) =
-            compute_range(m, &self.moves, &self.plan, &mut self.samples[..n], 0);
+            compute_range(m, &self.moves, &self.plan, &mut self.samples[..n]);
         self.violations = violations;
         self.failed = failed;
     }
 }
 
-/// Computes the instants `plan` into `out`; `offset` is the first instant's index in
-/// its block. Stops at the first failure.
+/// Computes the instants `plan` of a block into `out` (its samples, by index). Stops
+/// at the first failure.
 ///
 /// The poses come first, then the mechanism's block kernel where it has one:
 /// [`Mechanism::motion_screened`] (the hexapod's: the motion of eight samples per
@@ -115,7 +115,6 @@ fn compute_range<M: Mechanism<P, A>, const P: usize, const A: usize>(
     moves: &[(Move<P>, f64, u64)],
     plan: &[(u32, f64)],
     out: &mut [Sample<P, A>],
-    offset: usize,
 ) -> (Vec<(u32, Violation)>, Option<(usize, Error)>) {
     let mut violations = Vec::new();
     let mut buf = Vec::new();
@@ -200,7 +199,7 @@ fn compute_range<M: Mechanism<P, A>, const P: usize, const A: usize>(
                     // the kernel wrote (not computed a second time).
                     buf.clear();
                     m.check_limits(&s.x, &s.act.q, &mut buf);
-                    let k = (offset + j) as u32;
+                    let k = j as u32;
                     violations.extend(buf.drain(..).map(|v| (k, v)));
                 }
                 continue;
@@ -214,10 +213,10 @@ fn compute_range<M: Mechanism<P, A>, const P: usize, const A: usize>(
             match act {
                 Ok(act) => {
                     s.act = act;
-                    let k = (offset + j) as u32;
+                    let k = j as u32;
                     violations.extend(buf.drain(..).map(|v| (k, v)));
                 }
-                Err(e) => return (violations, Some((offset + j, at_sample(e, s.line, s.t)))),
+                Err(e) => return (violations, Some((j, at_sample(e, s.line, s.t)))),
             }
         }
         (violations, None)

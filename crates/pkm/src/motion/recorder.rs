@@ -333,21 +333,18 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
         x
     }
 
-    /// Extends, opens and closes the stretches of violations with `found`, the
+    /// Extends, opens and closes the stretches of violations with `now`, the
     /// violations of the sample at time `t` on G-code line `line`, in order.
-    fn track<'v, I>(&mut self, t: f64, line: Option<u64>, found: I)
+    fn track<'v, I>(&mut self, t: f64, line: Option<u64>, now: I)
     where
         I: Iterator<Item = &'v Violation> + Clone,
     {
         // The limits of the sample before, in its order (a stretch beyond them): the
         // names compare by pointer when the mechanism names its limits once.
-        if found.clone().count() == self.open.len()
-            && found
-                .clone()
-                .zip(&self.open)
-                .all(|(v, (n, _))| v.limit == *n)
+        if now.clone().count() == self.open.len()
+            && now.clone().zip(&self.open).all(|(v, (n, _))| v.limit == *n)
         {
-            for (v, &(_, idx)) in found.zip(&self.open) {
+            for (v, &(_, idx)) in now.zip(&self.open) {
                 extend_run(&mut self.runs[idx], v, t);
             }
             return;
@@ -357,7 +354,7 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
         let old = std::mem::take(&mut self.open);
         let mut open = std::mem::take(&mut self.spare_open);
         open.clear();
-        for v in found {
+        for v in now {
             let found = open
                 .iter()
                 .chain(old.iter())
