@@ -189,9 +189,8 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
             }
         }
         if !(found.is_empty() && self.buf.is_empty() && self.open.is_empty()) {
-            // The sample's violations: the mechanism's, then the rate limits'.
             let rate = std::mem::take(&mut self.buf);
-            self.track(t, s.line, found.iter().map(|(_, v)| v).chain(&rate));
+            self.track(t, s.line, found, &rate);
             self.buf = rate;
         }
         // The singular direction does not depend on the tool length. Rapids run each
@@ -333,18 +332,17 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
         x
     }
 
-    /// Extends, opens and closes the stretches of violations with `now`, the
-    /// violations of the sample at time `t` on G-code line `line`, in order.
-    fn track<'v, I>(&mut self, t: f64, line: Option<u64>, now: I)
-    where
-        I: Iterator<Item = &'v Violation> + Clone,
-    {
+    /// Extends, opens and closes the stretches of violations with the violations of
+    /// the sample at time `t` on G-code line `line`: the mechanism's own, `found`, then
+    /// the rate limits', `rate`, in that order.
+    fn track(&mut self, t: f64, line: Option<u64>, found: &[(u32, Violation)], rate: &[Violation]) {
+        let now = || found.iter().map(|(_, v)| v).chain(rate);
         // The limits of the sample before, in its order (a stretch beyond them): the
         // names compare by pointer when the mechanism names its limits once.
-        if now.clone().count() == self.open.len()
-            && now.clone().zip(&self.open).all(|(v, (n, _))| v.limit == *n)
+        if found.len() + rate.len() == self.open.len()
+            && now().zip(&self.open).all(|(v, (n, _))| v.limit == *n)
         {
-            for (v, &(_, idx)) in now.zip(&self.open) {
+            for (v, &(_, idx)) in now().zip(&self.open) {
                 extend_run(&mut self.runs[idx], v, t);
             }
             return;
@@ -354,13 +352,13 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
         let old = std::mem::take(&mut self.open);
         let mut open = std::mem::take(&mut self.spare_open);
         open.clear();
-        for v in now {
-            let found = open
+        for v in now() {
+            let tracked = open
                 .iter()
                 .chain(old.iter())
                 .find(|(n, _)| *n == v.limit)
                 .map(|&(_, idx)| idx);
-            match found {
+            match tracked {
                 Some(idx) => {
                     extend_run(&mut self.runs[idx], v, t);
                     if !open.iter().any(|(_, i)| *i == idx) {
