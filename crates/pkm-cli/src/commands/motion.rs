@@ -316,14 +316,24 @@ pub fn run(a: &MotionArgs) -> Result<u8> {
             s.samples,
             s.duration_s
         );
+        // The first column as wide as the longest axis label (a machine's own
+        // actuator names, `actuator north-west`, keep the columns aligned).
+        let lists = [("actuator", &s.actuators), ("serial", &s.serial)];
+        let w = lists
+            .iter()
+            .flat_map(|(kind, list)| {
+                list.iter()
+                    .map(move |(n, _)| kind.len() + 1 + n.chars().count())
+            })
+            .fold(10, usize::max);
         println!(
-            "{:<10} {:>12} {:>14} {:>14} {:>16} {:>16}",
+            "{:<w$} {:>12} {:>14} {:>14} {:>16} {:>16}",
             "axis", "travel", "peak |v|", "mean |v|", "peak |a|", "mean |a|"
         );
-        for (kind, list) in [("actuator", &s.actuators), ("serial", &s.serial)] {
+        for (kind, list) in lists {
             for (n, st) in list.iter() {
                 println!(
-                    "{:<10} {:>12.4} {:>14.4} {:>14.4} {:>16.4} {:>16.4}",
+                    "{:<w$} {:>12.4} {:>14.4} {:>14.4} {:>16.4} {:>16.4}",
                     format!("{kind} {n}"),
                     st.travel,
                     st.peak_velocity,

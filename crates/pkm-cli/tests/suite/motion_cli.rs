@@ -579,3 +579,66 @@ fn parquet_series_hold_the_csv_rows() {
     assert!(!none.join("actuators.parquet").exists());
     assert!(none.join("summary.json").exists());
 }
+
+/// The printed table keeps its columns aligned whatever the machine's own actuator
+/// names: the header and every row end at the same column (names of 1 to 24
+/// characters, one with a non-ASCII letter).
+#[test]
+fn the_printed_table_is_aligned_for_long_actuator_names() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut text =
+        std::fs::read_to_string(path("examples/machines/hexapod-linuxcnc.toml")).unwrap();
+    text.truncate(text.find("[[reference]]").unwrap());
+    let names = [
+        "0",
+        "north-west",
+        "strut-3-with-a-long-name",
+        "süd",
+        "e",
+        "west",
+    ];
+    for (k, n) in names.iter().enumerate() {
+        text = text.replace(&format!("name = \"{k}\""), &format!("name = \"{n}\""));
+    }
+    let machine = dir.path().join("named.toml");
+    std::fs::write(&machine, text).unwrap();
+    let program = dir.path().join("p.ngc");
+    std::fs::write(
+        &program,
+        "G21 G90\nG0 X0 Y0 Z508 A0 B0 C0\nG1 X20 Y5 F600\n",
+    )
+    .unwrap();
+    let o = pkm()
+        .arg("motion")
+        .arg(&machine)
+        .arg("--gcode")
+        .arg(&program)
+        .arg("--summary-only")
+        .arg("--out")
+        .arg(dir.path().join("out"))
+        .output()
+        .unwrap();
+    ok(&o);
+    let stdout = String::from_utf8(o.stdout).unwrap();
+    let table: Vec<&str> = stdout
+        .lines()
+        .filter(|l| {
+            l.starts_with("axis ") || l.starts_with("actuator ") || l.starts_with("serial ")
+        })
+        .collect();
+    let rows = |p: &str| table.iter().filter(|l| l.starts_with(p)).count();
+    assert_eq!((rows("axis "), rows("actuator ")), (1, 6), "{stdout}");
+    assert!(rows("serial ") >= 3, "{stdout}");
+    for n in names {
+        assert!(
+            table
+                .iter()
+                .any(|l| l.starts_with(&format!("actuator {n} "))),
+            "{n}: {stdout}"
+        );
+    }
+    let width = table[0].chars().count();
+    for l in &table {
+        assert_eq!(l.chars().count(), width, "{stdout}");
+    }
+}
