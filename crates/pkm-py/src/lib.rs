@@ -20,6 +20,7 @@ mod errors;
 mod identification;
 mod kinematics;
 mod machine;
+mod motion;
 
 pub use machine::Machine;
 

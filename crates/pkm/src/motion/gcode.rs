@@ -24,7 +24,10 @@ use super::words::LineWords;
 use crate::error::{Error, Result};
 
 mod arc;
+mod screen;
 pub use arc::plane_axes;
+use screen::exponent_hint;
+pub(super) use screen::oversized_code;
 
 /// Active plane for arcs: in-plane axes `(e1, e2)` and normal `e1 x e2`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -160,70 +163,6 @@ pub(super) fn err(line: u64, message: String) -> Error {
 }
 
 const TWO_PI: f64 = std::f64::consts::TAU;
-
-/// When a word `E` follows a digit directly (`F1e300`), the writer meant an exponent,
-/// which G-code numbers do not have: the hint to add to the "unsupported word" error.
-fn exponent_hint(text: &str) -> &'static str {
-    let b = text.as_bytes();
-    let glued = (1..b.len()).any(|i| {
-        b[i].eq_ignore_ascii_case(&b'e') && b[i - 1].is_ascii_digit() && {
-            let next = b.get(i + 1).copied().unwrap_or(b' ');
-            next.is_ascii_digit() || next == b'-' || next == b'+'
-        }
-    });
-    if glued {
-        " (G-code numbers have no exponent: `1e300` reads as 1 and a word E300; write the \
-         number out)"
-    } else {
-        ""
-    }
-}
-
-/// The first G, M or T code whose number has more than six digits before its point
-/// (leading zeros aside), outside comments. The `gcode` crate multiplies the number by
-/// ten in a `u32`: `G2147483649` wraps to `G1` in a release build (a silent move) and
-/// panics in a checked one, so such a word is refused before it gets there.
-pub(super) fn oversized_code(text: &str) -> Option<String> {
-    let b = text.as_bytes();
-    // Such a number is a run of seven digits or more: a line without one (nearly every
-    // line) is settled by one pass over its bytes.
-    let mut run = 0u32;
-    let mut longest = 0u32;
-    for &c in b {
-        run = if c.is_ascii_digit() { run + 1 } else { 0 };
-        longest = longest.max(run);
-    }
-    if longest <= 6 {
-        return None;
-    }
-    let mut i = 0;
-    let mut depth = 0usize;
-    while i < b.len() {
-        match b[i] {
-            b';' if depth == 0 => return None,
-            b'(' => depth += 1,
-            b')' => depth = depth.saturating_sub(1),
-            c if depth == 0 && matches!(c.to_ascii_uppercase(), b'G' | b'M' | b'T') => {
-                let start = i;
-                let mut j = i + 1;
-                while j < b.len() && (b[j] == b' ' || b[j] == b'\t' || b[j] == b'+') {
-                    j += 1;
-                }
-                while j < b.len() && b[j] == b'0' {
-                    j += 1;
-                }
-                let digits = b[j..].iter().take_while(|c| c.is_ascii_digit()).count();
-                if digits > 6 {
-                    let end = j + digits;
-                    return Some(text[start..end].to_string());
-                }
-            }
-            _ => {}
-        }
-        i += 1;
-    }
-    None
-}
 
 impl Interpreter {
     /// A program starting at `position` (mm, rad), G17 G21 G90 G91.1, no feed.

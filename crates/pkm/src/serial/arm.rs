@@ -30,7 +30,7 @@ use crate::rotation::{rpy_angular_motion, rpy_rate_matrix, Convention};
 use crate::units::Quantity;
 
 /// Up to eight postures and how many there are.
-type Postures = [Vector6<f64>; 8];
+pub(super) type Postures = [Vector6<f64>; 8];
 
 /// A six-joint serial robot with tool-pose coordinates.
 #[derive(Debug, Clone, PartialEq)]
@@ -141,83 +141,6 @@ impl SerialArm {
     /// second and third axes; [`super::spherical_wrist`]).
     pub fn closed_form_inverse(&self) -> bool {
         self.wrist.is_some()
-    }
-
-    /// The closed form's solutions of the pose `(p, r)`, each polished by Newton and
-    /// wrapped to within half a turn of `near`, nearest `near` first (sum of squared
-    /// joint differences); with `all` false only the nearest one Newton can polish
-    /// (one Newton step instead of eight). `Ok(None)` when the closed form does not
-    /// apply, `Err` with the reason when the pose is out of reach.
-    ///
-    /// With `all` false the closed form skips the branches that cannot hold the
-    /// nearest solution ([`super::spherical_wrist::Nearest`]); should Newton fail to
-    /// polish the nearest (a singular pose), every branch is solved and the next
-    /// nearest tried, as with `all`. The answer is the same either way.
-    ///
-    /// The solutions are written into `sols`, the first `n` of the returned
-    /// `Some(n)` (eight 48-byte vectors: written in place, not moved through the
-    /// results).
-    fn closed_form(
-        &self,
-        p: &Vector3<f64>,
-        r: &Matrix3<f64>,
-        near: &Vector6<f64>,
-        all: bool,
-        sols: &mut Postures,
-    ) -> std::result::Result<Option<usize>, String> {
-        if self.wrist.is_none() {
-            return Ok(None);
-        }
-        if !all {
-            let nearest = super::spherical_wrist::Nearest {
-                near,
-                wrapped: std::array::from_fn(|i| self.actuators[i].quantity == Quantity::Angle),
-            };
-            let n = self.polished(p, r, near, false, Some(&nearest), sols)?;
-            if n > 0 {
-                return Ok(Some(n));
-            }
-        }
-        self.polished(p, r, near, all, None, sols).map(Some)
-    }
-
-    /// [`SerialArm::closed_form`] with the arm's wrist, over the branches `nearest`
-    /// leaves; with `nearest`, only the first (the nearest) may be polished.
-    fn polished(
-        &self,
-        p: &Vector3<f64>,
-        r: &Matrix3<f64>,
-        near: &Vector6<f64>,
-        all: bool,
-        nearest: Option<&super::spherical_wrist::Nearest>,
-        sols: &mut Postures,
-    ) -> std::result::Result<usize, String> {
-        let Some(wrist) = &self.wrist else {
-            return Ok(0);
-        };
-        let mut raw = [Vector6::zeros(); 8];
-        let n = wrist.solve(p, r, near, nearest, &mut raw)?;
-        for q in &mut raw[..n] {
-            *q = self.wrap(*q, near);
-        }
-        raw[..n].sort_by(|a, b| {
-            (a - near)
-                .norm_squared()
-                .total_cmp(&(b - near).norm_squared())
-        });
-        let mut count = 0;
-        // Of a partial set, only the first is sure to be where it is in the whole.
-        let tries = if nearest.is_some() { n.min(1) } else { n };
-        for q in &raw[..tries] {
-            if let Ok(q) = self.newton(p, r, *q) {
-                sols[count] = self.wrap(q, near);
-                count += 1;
-                if !all {
-                    break;
-                }
-            }
-        }
-        Ok(count)
     }
 
     /// Tool pose relative to the part (homogeneous) and geometric Jacobian (tool-point
@@ -528,6 +451,7 @@ impl SerialArm {
     }
 }
 
+mod closed_form;
 mod follow;
 mod numeric;
 
