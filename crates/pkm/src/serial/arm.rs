@@ -201,7 +201,7 @@ impl SerialArm {
         use std::f64::consts::TAU;
         for (i, a) in self.actuators.iter().enumerate() {
             if a.quantity == Quantity::Angle {
-                q[i] -= TAU * ((q[i] - near[i]) / TAU).round();
+                q[i] -= TAU * crate::rotation::whole_turns(q[i] - near[i]);
             }
         }
         q

@@ -347,7 +347,7 @@ impl<'a> Search<'a> {
         let near = n.near[i];
         // `SerialArm::wrap`'s operations, so the same wrapped value.
         let w = if n.wrapped[i] {
-            q - TAU * ((q - near) / TAU).round()
+            q - TAU * crate::rotation::whole_turns(q - near)
         } else {
             q
         };

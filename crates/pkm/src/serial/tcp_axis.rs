@@ -77,7 +77,7 @@ fn turn_about(w: &Vector3<f64>, u: &Vector3<f64>, v: &Vector3<f64>) -> Option<f6
 /// The equivalent `t + 2 pi k` nearest `near`, preferring those within `[lo, hi]`.
 fn unwrap_near(t: f64, near: f64, lo: f64, hi: f64) -> f64 {
     let tau = std::f64::consts::TAU;
-    let base = t + ((near - t) / tau).round() * tau;
+    let base = t + crate::rotation::whole_turns(near - t) * tau;
     let mut best = base;
     let mut best_key = (true, f64::INFINITY);
     for k in -2..=2 {
