@@ -14,7 +14,8 @@ use crate::units::Quantity;
 use crate::Visitor;
 
 /// Central finite-difference inverse Jacobian `dq/dx` with steps `h_len` (mm) for
-/// length coordinates and `h_ang` (rad) for angles: `(IK(x + h e_k) - IK(x - h e_k)) / 2h`.
+/// length coordinates and `h_ang` (rad) for angles: `(IK(x + h e_k) - IK(x - h e_k)) / 2h`,
+/// each side solved from `IK(x)` ([`Mechanism::inverse_near`]: the branch at `x`).
 pub fn numeric_jacobian<M, const P: usize, const A: usize>(
     m: &M,
     x: &SVector<f64, P>,
@@ -25,6 +26,11 @@ where
     M: Mechanism<P, A> + ?Sized,
 {
     let mut j = SMatrix::<f64, A, P>::zeros();
+    // The differences of the solution branch at `x`: each side solved from it. A
+    // robot's inverse (the solution nearest home) may change posture between two
+    // nearby poses where two postures are equally near home; the Jacobian is that of
+    // one branch.
+    let q = m.inverse(x)?;
     for k in 0..P {
         let h = match m.coordinates()[k].quantity {
             Quantity::Length => h_len,
@@ -34,7 +40,7 @@ where
         let mut xm = *x;
         xp[k] += h;
         xm[k] -= h;
-        let d = (m.inverse(&xp)? - m.inverse(&xm)?) / (2.0 * h);
+        let d = (m.inverse_near(&xp, &q)? - m.inverse_near(&xm, &q)?) / (2.0 * h);
         j.set_column(k, &d);
     }
     Ok(j)

@@ -94,11 +94,19 @@ pub fn run(a: &CheckArgs) -> Result<u8> {
             })
             .collect();
         println!("coordinates {}", c.join(", "));
+        // The names in a column as wide as the longest (`wrist 1`, `north-west`).
+        let width = m
+            .actuators()
+            .iter()
+            .map(|x| x.name.chars().count())
+            .max()
+            .unwrap_or(0)
+            .max(6);
         for (x, v) in m.actuators().iter().zip(&q) {
             let u = |v: f64| x.quantity.to_user(v);
             let unit = x.quantity.unit();
             let mut line = format!(
-                "actuator    {:<6} range [{:.3}, {:.3}] {unit}, at home {:.4} {unit}",
+                "actuator    {:<width$} range [{:.3}, {:.3}] {unit}, at home {:.4} {unit}",
                 x.name,
                 u(x.range.min),
                 u(x.range.max),

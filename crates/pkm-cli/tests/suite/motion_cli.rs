@@ -641,4 +641,15 @@ fn the_printed_table_is_aligned_for_long_actuator_names() {
     for l in &table {
         assert_eq!(l.chars().count(), width, "{stdout}");
     }
+    // `pkm check` lists the same names with their ranges in one column.
+    let o = pkm().arg("check").arg(&machine).output().unwrap();
+    ok(&o);
+    let stdout = String::from_utf8(o.stdout).unwrap();
+    let at: Vec<usize> = stdout
+        .lines()
+        .filter(|l| l.starts_with("actuator "))
+        .map(|l| l.chars().count() - l.split_once(" range [").unwrap().1.chars().count())
+        .collect();
+    assert_eq!(at.len(), 6, "{stdout}");
+    assert!(at.iter().all(|&c| c == at[0]), "{stdout}");
 }

@@ -3,8 +3,10 @@
 //! without joints is the fixed part the tool pose is taken relative to), its actuators
 //! the six joints. Inverse kinematics is in closed form for arms with a spherical wrist
 //! and parallel second and third axes (most industrial robots;
-//! [`super::spherical_wrist`]), and numeric otherwise (Newton on SE(3) with the
-//! geometric Jacobian, damped near singular configurations), so any geometry works.
+//! [`super::spherical_wrist`]) and for arms with parallel second, third and fourth axes
+//! and meeting fifth and sixth (the Universal Robots; `serial/parallel_axes.rs`), and
+//! numeric otherwise (Newton on SE(3) with the geometric Jacobian, damped near singular
+//! configurations), so any geometry works.
 //!
 //! Which of a robot's inverse solutions (up to 8 in closed form, up to 16 for a general
 //! 6R) is returned: in closed form the one nearest the home joint values (or the joint
@@ -17,7 +19,6 @@ use nalgebra::{Matrix3, Matrix4, Matrix6, SMatrix, Vector3, Vector6};
 
 use super::machine::SerialMachine;
 use super::mechanism::chain_skeleton;
-use super::spherical_wrist::SphericalWrist;
 use super::PreparedChain;
 use crate::error::{Error, Result};
 use crate::limits::{PositionLimits, Violation};
@@ -57,7 +58,7 @@ pub struct SerialArm {
     base_origin: Vector3<f64>,
     reach: f64,
     /// The closed form's geometry, when it applies.
-    wrist: Option<SphericalWrist>,
+    wrist: Option<closed_form::ClosedForm>,
 }
 
 impl SerialArm {
@@ -133,12 +134,14 @@ impl SerialArm {
         arm.characteristic_length = Vector3::new(t[(0, 3)], t[(1, 3)], t[(2, 3)])
             .norm()
             .max(1.0);
-        arm.wrist = SphericalWrist::detect(&arm.tool, &part_inverse, arm.characteristic_length);
+        arm.wrist =
+            closed_form::ClosedForm::detect(&arm.tool, &part_inverse, arm.characteristic_length);
         Ok(arm)
     }
 
-    /// Whether inverse kinematics is in closed form (a spherical wrist and parallel
-    /// second and third axes; [`super::spherical_wrist`]).
+    /// Whether inverse kinematics is in closed form: a spherical wrist and parallel
+    /// second and third axes ([`super::spherical_wrist`]), or parallel second, third
+    /// and fourth axes with the fifth and sixth meeting (the Universal Robots).
     pub fn closed_form_inverse(&self) -> bool {
         self.wrist.is_some()
     }

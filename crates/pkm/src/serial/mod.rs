@@ -23,6 +23,7 @@ pub mod deviations;
 pub mod jacobian;
 pub mod machine;
 pub mod mechanism;
+mod parallel_axes;
 mod prepared;
 pub mod sensitivity;
 pub mod spherical_wrist;

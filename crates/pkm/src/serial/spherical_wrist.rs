@@ -34,10 +34,10 @@ use super::{JointKind, PreparedChain};
 
 /// How far (relative) two axes may be off parallel, or three axes off meeting, for the
 /// closed form to apply: the rounding of a Denavit-Hartenberg table or a URDF's angles.
-const GEOMETRY_TOLERANCE: f64 = 1e-10;
+pub(super) const GEOMETRY_TOLERANCE: f64 = 1e-10;
 /// How far beyond 1 the cosine of a subproblem may be and still count as reached (the
 /// boundary of the workspace, computed with rounding).
-const REACH_TOLERANCE: f64 = 1e-10;
+pub(super) const REACH_TOLERANCE: f64 = 1e-10;
 
 /// The zero-configuration geometry of an arm the closed form applies to (part frame).
 #[derive(Debug, Clone, PartialEq)]
@@ -45,17 +45,14 @@ pub(super) struct SphericalWrist {
     /// Joint axes: unit directions and a point of each.
     w: [Vector3<f64>; 6],
     p: [Vector3<f64>; 6],
-    /// `w_3 = sigma w_2`.
-    sigma: f64,
     /// The wrist centre (where axes 4, 5, 6 meet).
     centre: Vector3<f64>,
     /// The wrist centre in the tool frame.
     centre_tool: Vector3<f64>,
     /// The tool orientation at zero.
     r0: Matrix3<f64>,
-    /// `(p_3 - p_2)` and `(c - p_3)` normal to `n`: the planar arm's two links.
-    e: Vector3<f64>,
-    f: Vector3<f64>,
+    /// The planar arm: `(p_3 - p_2)` and `(c - p_3)` normal to `n`.
+    elbow: Elbow,
     /// A unit vector normal to `w_6`.
     across6: Vector3<f64>,
     /// Length scale (mm) of the tolerances.
@@ -63,19 +60,19 @@ pub(super) struct SphericalWrist {
 }
 
 /// `Rot(w, t)`, `w` unit.
-fn rot(w: &Vector3<f64>, t: f64) -> Matrix3<f64> {
+pub(super) fn rot(w: &Vector3<f64>, t: f64) -> Matrix3<f64> {
     Rotation3::from_axis_angle(&Unit::new_unchecked(*w), t).into_inner()
 }
 
 /// The component of `v` normal to unit `n`.
-fn normal(v: &Vector3<f64>, n: &Vector3<f64>) -> Vector3<f64> {
+pub(super) fn normal(v: &Vector3<f64>, n: &Vector3<f64>) -> Vector3<f64> {
     v - n * n.dot(v)
 }
 
 /// The solutions of `a cos t + b sin t = g` (`(a, b)` not zero): `t = atan2(b, a) +-
 /// acos(g / hypot(a, b))`, the cosine clamped within [`REACH_TOLERANCE`]; `None`
 /// beyond it.
-fn cos_sin(a: f64, b: f64, g: f64) -> Option<[f64; 2]> {
+pub(super) fn cos_sin(a: f64, b: f64, g: f64) -> Option<[f64; 2]> {
     let rho = a.hypot(b);
     let ratio = g / rho;
     if !(ratio.abs() <= 1.0 + REACH_TOLERANCE) {
@@ -87,8 +84,161 @@ fn cos_sin(a: f64, b: f64, g: f64) -> Option<[f64; 2]> {
 }
 
 /// The angle about unit `n` that turns `a` onto `b` (both normal to `n`).
-fn angle_about(n: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>) -> f64 {
+pub(super) fn angle_about(n: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>) -> f64 {
     n.dot(&a.cross(b)).atan2(a.dot(b))
+}
+
+/// An arm's joint axes at the zero configuration, in the part frame, and the tool
+/// pose there: what both closed forms are written on.
+pub(super) struct ZeroPose {
+    /// Unit directions and a point of each axis.
+    pub w: [Vector3<f64>; 6],
+    pub p: [Vector3<f64>; 6],
+    /// The tool's rotation and position.
+    pub r0: Matrix3<f64>,
+    pub t0: Vector3<f64>,
+}
+
+impl ZeroPose {
+    /// The zero pose of `chain` seen from the part (`part_inverse`); `None` unless
+    /// every joint is revolute.
+    pub(super) fn of(chain: &PreparedChain, part_inverse: &Matrix4<f64>) -> Option<ZeroPose> {
+        let (t0, axes) = chain.axes::<6>(&[0.0; 6]);
+        if axes.iter().any(|a| a.2 != JointKind::Revolute) {
+            return None;
+        }
+        let r = part_inverse.fixed_view::<3, 3>(0, 0).into_owned();
+        let o = Vector3::new(
+            part_inverse[(0, 3)],
+            part_inverse[(1, 3)],
+            part_inverse[(2, 3)],
+        );
+        let tool = part_inverse * t0;
+        Some(ZeroPose {
+            w: std::array::from_fn(|k| (r * axes[k].0).normalize()),
+            p: std::array::from_fn(|k| r * axes[k].1 + o),
+            r0: tool.fixed_view::<3, 3>(0, 0).into_owned(),
+            t0: Vector3::new(tool[(0, 3)], tool[(1, 3)], tool[(2, 3)]),
+        })
+    }
+}
+
+/// Two axes parallel within [`GEOMETRY_TOLERANCE`].
+pub(super) fn parallel(a: &Vector3<f64>, b: &Vector3<f64>) -> bool {
+    a.cross(b).norm() <= GEOMETRY_TOLERANCE
+}
+
+/// Two axes clearly not parallel (1e-6 rad apart or more).
+pub(super) fn apart(a: &Vector3<f64>, b: &Vector3<f64>) -> bool {
+    a.cross(b).norm() >= 1e-6
+}
+
+/// A unit vector normal to unit `w`.
+pub(super) fn across(w: &Vector3<f64>) -> Vector3<f64> {
+    let pick = if w.x.abs() < 0.9 {
+        Vector3::x()
+    } else {
+        Vector3::y()
+    };
+    w.cross(&pick).normalize()
+}
+
+/// The shoulder step of both closed forms: the angles `q_1` that bring the point `zero`
+/// (zero configuration) to `target`, given that turns 2 onwards are about axes
+/// parallel to `n = w_2` (or fix the point): `n . E_1(q_1)^-1 target = n . zero`.
+/// With `target` on axis 1, any `q_1` when the arm's plane passes through it (`start`
+/// kept). Else out of reach: `Err` with the target's distance from axis 1 and the
+/// plane's offset from it (mm).
+pub(super) fn shoulder(
+    w: &[Vector3<f64>; 6],
+    p: &[Vector3<f64>; 6],
+    zero: &Vector3<f64>,
+    target: &Vector3<f64>,
+    tol: f64,
+    start: f64,
+) -> Result<[f64; 2], (f64, f64)> {
+    let n = w[1];
+    let x = target - p[0];
+    let x_axial = w[0].dot(&x);
+    let x_normal = x - w[0] * x_axial;
+    let a = n.dot(&x_normal);
+    let b = -n.dot(&w[0].cross(&x));
+    let g = n.dot(&(zero - p[0])) - x_axial * n.dot(&w[0]);
+    let found = if x_normal.norm() <= tol {
+        (g.abs() <= tol).then_some([start, start])
+    } else {
+        cos_sin(a, b, g)
+    };
+    found.ok_or_else(|| (x_normal.norm(), g.abs() / normal(&n, &w[0]).norm()))
+}
+
+/// The planar two-link elbow of both closed forms, in the plane normal to `n = w_2`:
+/// link `e` from axis 2 to axis 3, link `f` from axis 3 to the point the elbow places,
+/// `w_3 = sigma n`.
+#[derive(Debug, Clone, PartialEq)]
+pub(super) struct Elbow {
+    pub e: Vector3<f64>,
+    pub f: Vector3<f64>,
+    pub sigma: f64,
+}
+
+impl Elbow {
+    /// The elbow angles `q_3` that put the point at the distance `|d|` from axis 2
+    /// (`d` normal to `n`): the law of cosines `|e + Rot(w_3, q_3) f|^2 = |d|^2`. Else
+    /// `Err` with how far `|d|` lies outside the span `[| |e| - |f| |, |e| + |f|]` and
+    /// `|d|` (mm).
+    pub(super) fn bend(&self, n: &Vector3<f64>, d: &Vector3<f64>) -> Result<[f64; 2], (f64, f64)> {
+        let (e2, f2, r2) = (
+            self.e.norm_squared(),
+            self.f.norm_squared(),
+            d.norm_squared(),
+        );
+        let a3 = 2.0 * self.e.dot(&self.f);
+        let b3 = 2.0 * self.sigma * self.e.dot(&n.cross(&self.f));
+        cos_sin(a3, b3, r2 - e2 - f2).ok_or_else(|| {
+            let (e, f, r) = (e2.sqrt(), f2.sqrt(), r2.sqrt());
+            (((e - f).abs() - r).max(r - (e + f)), r)
+        })
+    }
+
+    /// The shoulder lift `q_2`: the turn about `n` taking the bent elbow `e + r_3 f`
+    /// (`r_3 = Rot(w_3, q_3)`) onto `d`; `start` where either is within `tol` of zero.
+    pub(super) fn lift(
+        &self,
+        n: &Vector3<f64>,
+        r3: &Matrix3<f64>,
+        d: &Vector3<f64>,
+        tol: f64,
+        start: f64,
+    ) -> f64 {
+        let u = self.e + r3 * self.f;
+        if u.norm() <= tol || d.norm() <= tol {
+            start
+        } else {
+            angle_about(n, &u, d)
+        }
+    }
+
+    /// Why the elbow cannot place `what` at `r` mm from axis 2.
+    pub(super) fn miss(&self, what: &str, r: f64) -> String {
+        let (e, f) = (self.e.norm(), self.f.norm());
+        format!(
+            "{what} would be {r:.3} mm from axis 2, outside the {:.3} to {:.3} mm the \
+             elbow spans",
+            (e - f).abs(),
+            e + f
+        )
+    }
+}
+
+/// The solutions in `slots` (in slot order) into the front of `out`; their number.
+pub(super) fn gather(slots: [Option<Vector6<f64>>; 8], out: &mut [Vector6<f64>; 8]) -> usize {
+    let mut count = 0;
+    for q in slots.into_iter().flatten() {
+        out[count] = q;
+        count += 1;
+    }
+    count
 }
 
 impl SphericalWrist {
@@ -102,23 +252,7 @@ impl SphericalWrist {
         part_inverse: &Matrix4<f64>,
         scale: f64,
     ) -> Option<SphericalWrist> {
-        let (t0, axes) = chain.axes::<6>(&[0.0; 6]);
-        if axes.iter().any(|a| a.2 != JointKind::Revolute) {
-            return None;
-        }
-        let r = part_inverse.fixed_view::<3, 3>(0, 0).into_owned();
-        let o = Vector3::new(
-            part_inverse[(0, 3)],
-            part_inverse[(1, 3)],
-            part_inverse[(2, 3)],
-        );
-        let w: [Vector3<f64>; 6] = std::array::from_fn(|k| (r * axes[k].0).normalize());
-        let p: [Vector3<f64>; 6] = std::array::from_fn(|k| r * axes[k].1 + o);
-        let tool = part_inverse * t0;
-        let r0 = tool.fixed_view::<3, 3>(0, 0).into_owned();
-        let t = Vector3::new(tool[(0, 3)], tool[(1, 3)], tool[(2, 3)]);
-        let parallel = |a: &Vector3<f64>, b: &Vector3<f64>| a.cross(b).norm() <= GEOMETRY_TOLERANCE;
-        let apart = |a: &Vector3<f64>, b: &Vector3<f64>| a.cross(b).norm() >= 1e-6;
+        let ZeroPose { w, p, r0, t0: t } = ZeroPose::of(chain, part_inverse)?;
         if !parallel(&w[1], &w[2]) || !apart(&w[0], &w[1]) {
             return None;
         }
@@ -140,21 +274,18 @@ impl SphericalWrist {
         if e.norm() <= tol || f.norm() <= tol {
             return None;
         }
-        let pick = if w[5].x.abs() < 0.9 {
-            Vector3::x()
-        } else {
-            Vector3::y()
-        };
         Some(SphericalWrist {
-            sigma: w[2].dot(&n).signum(),
+            elbow: Elbow {
+                e,
+                f,
+                sigma: w[2].dot(&n).signum(),
+            },
             centre_tool: r0.transpose() * (centre - t),
-            across6: w[5].cross(&pick).normalize(),
+            across6: across(&w[5]),
             w,
             p,
             centre,
             r0,
-            e,
-            f,
             scale,
         })
     }
@@ -179,33 +310,17 @@ impl SphericalWrist {
         let tol = GEOMETRY_TOLERANCE * self.scale;
         let centre = target_p + target_r * self.centre_tool;
         // 1. Shoulder: n . E_1(q_1)^-1 centre = n . c.
-        let x = centre - p[0];
-        let x_axial = w[0].dot(&x);
-        let x_normal = x - w[0] * x_axial;
-        let a = n.dot(&x_normal);
-        let b = -n.dot(&w[0].cross(&x));
-        let g = n.dot(&(self.centre - p[0])) - x_axial * n.dot(&w[0]);
-        let n_across = normal(&n, &w[0]).norm();
-        let shoulder = if x_normal.norm() <= tol {
-            // On axis 1: any q_1 when the arm's plane passes through it.
-            (g.abs() <= tol).then_some([start[0], start[0]])
-        } else {
-            cos_sin(a, b, g)
-        };
-        let Some(q1s) = shoulder else {
-            return Err(format!(
-                "the wrist centre would be {:.3} mm from axis 1, closer than the {:.3} mm \
-                 the arm's plane is offset from it",
-                x_normal.norm(),
-                g.abs() / n_across
-            ));
-        };
+        let q1s = shoulder(w, p, &self.centre, &centre, tol, start[0]).map_err(|(r, off)| {
+            format!(
+                "the wrist centre would be {r:.3} mm from axis 1, closer than the {off:.3} mm \
+                 the arm's plane is offset from it"
+            )
+        })?;
         // Slot `4 i + 2 j + k` holds the solution of shoulder `i`, elbow `j`, wrist `k`.
         let mut slots = [None::<Vector6<f64>>; 8];
         let mut search = Search::new(nearest);
         let mut elbow_miss = None;
         let mut wrist_miss = false;
-        let (e2, f2) = (self.e.norm_squared(), self.f.norm_squared());
         for i in search.order(0, &q1s) {
             let q1 = q1s[i];
             let d1 = search.term(0, q1);
@@ -214,20 +329,18 @@ impl SphericalWrist {
             }
             let r1 = rot(&w[0], q1);
             // 2. Elbow: the planar distance from axis 2.
-            let v = p[0] + r1.transpose() * x;
+            let v = p[0] + r1.transpose() * (centre - p[0]);
             let d = normal(&(v - p[1]), &n);
-            let r2 = d.norm_squared();
-            let a3 = 2.0 * self.e.dot(&self.f);
-            let b3 = 2.0 * self.sigma * self.e.dot(&n.cross(&self.f));
-            let Some(q3s) = cos_sin(a3, b3, r2 - e2 - f2) else {
-                // Of the shoulder's two solutions, report the nearer miss (the first
-                // shoulder's on a tie, whatever the order they were tried in).
-                let (e, f, r) = (e2.sqrt(), f2.sqrt(), r2.sqrt());
-                let miss = ((e - f).abs() - r).max(r - (e + f));
-                if elbow_miss.is_none_or(|(m, _, k)| miss < m || (miss == m && i < k)) {
-                    elbow_miss = Some((miss, r, i));
+            let q3s = match self.elbow.bend(&n, &d) {
+                Ok(q3s) => q3s,
+                Err((miss, r)) => {
+                    // Of the shoulder's two solutions, report the nearer miss (the first
+                    // shoulder's on a tie, whatever the order they were tried in).
+                    if elbow_miss.is_none_or(|(m, _, k)| miss < m || (miss == m && i < k)) {
+                        elbow_miss = Some((miss, r, i));
+                    }
+                    continue;
                 }
-                continue;
             };
             for j in search.order(2, &q3s) {
                 let q3 = q3s[j];
@@ -236,12 +349,7 @@ impl SphericalWrist {
                     continue;
                 }
                 let r3 = rot(&w[2], q3);
-                let u = self.e + r3 * self.f;
-                let q2 = if u.norm() <= tol || d.norm() <= tol {
-                    start[1]
-                } else {
-                    angle_about(&n, &u, &d)
-                };
+                let q2 = self.elbow.lift(&n, &r3, &d, tol, start[1]);
                 let d123 = d13 + search.term(1, q2);
                 if search.beyond(d123) {
                     continue;
@@ -283,24 +391,12 @@ impl SphericalWrist {
                 }
             }
         }
-        let mut count = 0;
-        for q in slots.into_iter().flatten() {
-            out[count] = q;
-            count += 1;
-        }
+        let count = gather(slots, out);
         if count > 0 {
             return Ok(count);
         }
         Err(match elbow_miss {
-            Some((_, r, _)) if !wrist_miss => {
-                let (e, f) = (e2.sqrt(), f2.sqrt());
-                format!(
-                    "the wrist centre would be {r:.3} mm from axis 2, outside the {:.3} to \
-                     {:.3} mm the elbow spans",
-                    (e - f).abs(),
-                    e + f
-                )
-            }
+            Some((_, r, _)) if !wrist_miss => self.elbow.miss("the wrist centre", r),
             _ => "the tool orientation needs a wrist bend the wrist's axes cannot make".into(),
         })
     }
@@ -325,13 +421,13 @@ pub(super) struct Nearest<'a> {
 /// sum by more than 1e-9 relative: far beyond the few ulps by which sums of the same
 /// terms in another order (the caller's ranking) can differ, so a skipped solution is
 /// strictly farther than one kept and never the nearest, nor tied with it.
-struct Search<'a> {
+pub(super) struct Search<'a> {
     nearest: Option<&'a Nearest<'a>>,
     best: f64,
 }
 
 impl<'a> Search<'a> {
-    fn new(nearest: Option<&'a Nearest<'a>>) -> Self {
+    pub(super) fn new(nearest: Option<&'a Nearest<'a>>) -> Self {
         Search {
             nearest,
             best: f64::INFINITY,
@@ -339,7 +435,7 @@ impl<'a> Search<'a> {
     }
 
     /// Joint `i`'s term `(wrap(q) - near_i)^2`; 0 without [`Nearest`].
-    fn term(&self, i: usize, q: f64) -> f64 {
+    pub(super) fn term(&self, i: usize, q: f64) -> f64 {
         use std::f64::consts::TAU;
         let Some(n) = self.nearest else {
             return 0.0;
@@ -355,12 +451,12 @@ impl<'a> Search<'a> {
     }
 
     /// Whether a branch whose joints so far sum to `partial` cannot hold the nearest.
-    fn beyond(&self, partial: f64) -> bool {
+    pub(super) fn beyond(&self, partial: f64) -> bool {
         partial > self.best * (1.0 + 1e-9)
     }
 
     /// A whole solution at squared distance `whole` was found.
-    fn found(&mut self, whole: f64) {
+    pub(super) fn found(&mut self, whole: f64) {
         if whole < self.best {
             self.best = whole;
         }
@@ -368,7 +464,7 @@ impl<'a> Search<'a> {
 
     /// The indices of a subproblem's two solutions `qs` of joint `i` (one when they are
     /// equal), nearer first with [`Nearest`], else in order.
-    fn order(&self, i: usize, qs: &[f64; 2]) -> impl Iterator<Item = usize> {
+    pub(super) fn order(&self, i: usize, qs: &[f64; 2]) -> impl Iterator<Item = usize> {
         let order = if qs[1] == qs[0] {
             [Some(0), None]
         } else if self.nearest.is_some() && self.term(i, qs[1]) < self.term(i, qs[0]) {

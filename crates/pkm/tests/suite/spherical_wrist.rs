@@ -1,5 +1,7 @@
 //! Closed-form inverse kinematics of spherical-wrist robots (issue 19: `pkm report` on
-//! the KR 30), checked against forward kinematics and against the numeric solver.
+//! the KR 30) and of robots with three parallel axes (the Universal Robots' geometry,
+//! `serial/parallel_axes.rs`), checked against forward kinematics and against the
+//! numeric solver.
 
 use super::serial_arm::arm;
 use nalgebra::Vector6;
@@ -8,7 +10,14 @@ use pkm::serial::arm::SerialArm;
 use rand::{Rng, SeedableRng};
 use std::f64::consts::{PI, TAU};
 
-const WRISTS: [&str; 2] = ["machines/kr30-dh.toml", "robots/puma560-dh.toml"];
+/// Spherical wrists (the KR 30, the PUMA 560) and parallel axes 2, 3, 4 (a UR5 from its
+/// published DH table, and the UR5-like URDF whose joint 2 turns about -Y).
+const WRISTS: [&str; 4] = [
+    "machines/kr30-dh.toml",
+    "robots/puma560-dh.toml",
+    "../tests/fixtures/ur5-dh.toml",
+    "robots/ur5-like.urdf",
+];
 
 /// Joint values uniform over each joint's range (clipped to one turn).
 fn random_joints(a: &SerialArm, rng: &mut impl Rng) -> Vector6<f64> {
@@ -37,12 +46,34 @@ fn pose_gap(a: &SerialArm, x: &Vector6<f64>, q: &Vector6<f64>) -> (f64, f64) {
 }
 
 #[test]
-fn the_closed_form_applies_to_spherical_wrists_only() {
+fn the_closed_form_applies_to_spherical_wrists_and_parallel_axes() {
     for f in WRISTS {
         assert!(arm(f).closed_form_inverse(), "{f}");
     }
-    // The UR5 has no spherical wrist (its axes 2, 3, 4 are parallel instead).
-    assert!(!arm("robots/ur5-like.urdf").closed_form_inverse());
+    // The UR5 with axis 6 at 60 deg to axis 5 instead of 90 (the axes still meet:
+    // still the parallel-axes form), and with axis 6 moved 20 mm off axis 5 (a5 = 20:
+    // neither form, Newton).
+    let text = std::fs::read_to_string(format!(
+        "{}/../../tests/fixtures/ur5-dh.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let load = |t: &str| {
+        let m = pkm::Machine::from_toml_str(t, "ur5-variant.toml").unwrap();
+        let pkm::machine::Model::Serial(s) = m.model else {
+            panic!()
+        };
+        let pkm::serial::mechanism::SerialAny::Arm(a) = s.mechanism else {
+            panic!()
+        };
+        a
+    };
+    let tilted = text.replacen("alpha = -90.0", "alpha = -60.0", 1);
+    assert_ne!(tilted, text);
+    assert!(load(&tilted).closed_form_inverse());
+    let offset = text.replacen("a = 0.0\nalpha = -90.0", "a = 20.0\nalpha = -90.0", 1);
+    assert_ne!(offset, text);
+    assert!(!load(&offset).closed_form_inverse());
 }
 
 /// Forward kinematics of random joints over the whole ranges: every posture the
@@ -83,12 +114,21 @@ fn every_posture_is_found_and_reaches_the_pose() {
                 }
             }
         }
-        // Generic poses have four postures (shoulder on one side, elbow, wrist flip)
-        // or eight.
-        assert!(
-            counts[4] + counts[8] > 1900,
-            "{f}: solutions per pose {counts:?}"
-        );
+        // Generic poses of a spherical wrist have four postures (shoulder on one
+        // side, elbow, wrist flip) or eight; a UR's an even number up to eight (each
+        // shoulder and wrist flip with its two elbows or none), mostly eight.
+        if f.contains("ur5") {
+            let odd: usize = counts.iter().skip(1).step_by(2).sum();
+            assert!(
+                odd == 0 && counts[0] == 0 && counts[8] > 1400,
+                "{f}: solutions per pose {counts:?}"
+            );
+        } else {
+            assert!(
+                counts[4] + counts[8] > 1900,
+                "{f}: solutions per pose {counts:?}"
+            );
+        }
     }
 }
 
@@ -175,6 +215,17 @@ fn out_of_reach_names_the_distances() {
         Err(pkm::Error::NotAttainable { reason }) => {
             assert!(reason.contains("from axis 2, outside the"), "{reason}");
             assert!(reason.contains("the elbow spans"), "{reason}");
+        }
+        other => panic!("{other:?}"),
+    }
+    // A UR5 reaching 1000 mm ahead at the height of axis 2, tool down: axis 4 beyond
+    // the elbow's two links (425 + 392.25 mm).
+    let a = arm("../tests/fixtures/ur5-dh.toml");
+    let x = Vector6::new(1000.0, 0.0, 89.159, PI, 0.0, 0.0);
+    match a.inverse(&x) {
+        Err(pkm::Error::NotAttainable { reason }) => {
+            assert!(reason.contains("axis 4 would be"), "{reason}");
+            assert!(reason.contains("to 817.250 mm the elbow spans"), "{reason}");
         }
         other => panic!("{other:?}"),
     }

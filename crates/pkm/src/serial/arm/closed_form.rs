@@ -1,12 +1,56 @@
-//! The arm's closed-form inverse kinematics ([`crate::serial::spherical_wrist`]): every
-//! solution of a pose, or only the nearest branch, each polished by one Newton step and
-//! wrapped to within half a turn of the joint values asked for.
+//! The arm's closed-form inverse kinematics: a spherical wrist
+//! ([`crate::serial::spherical_wrist`]) or three parallel axes with axes 5 and 6
+//! meeting (`serial/parallel_axes.rs`, the Universal Robots' geometry). Every solution
+//! of a pose, or only the nearest branch, each polished by one Newton step and wrapped
+//! to within half a turn of the joint values asked for.
 
-use nalgebra::{Matrix3, Vector3, Vector6};
+use nalgebra::{Matrix3, Matrix4, Vector3, Vector6};
 
 use super::{Postures, SerialArm};
-use crate::serial::spherical_wrist::Nearest;
+use crate::serial::parallel_axes::ParallelAxes;
+use crate::serial::spherical_wrist::{Nearest, SphericalWrist};
+use crate::serial::PreparedChain;
 use crate::units::Quantity;
+
+/// The geometry an arm's closed form solves.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) enum ClosedForm {
+    /// Axes 4, 5 and 6 meet; axes 2 and 3 are parallel (most industrial robots).
+    Spherical(SphericalWrist),
+    /// Axes 2, 3 and 4 are parallel; axes 5 and 6 meet (the Universal Robots).
+    ParallelAxes(ParallelAxes),
+}
+
+impl ClosedForm {
+    /// The closed form of `chain` seen from the part, if one applies (the spherical
+    /// wrist's first).
+    pub(super) fn detect(
+        chain: &PreparedChain,
+        part_inverse: &Matrix4<f64>,
+        scale: f64,
+    ) -> Option<ClosedForm> {
+        SphericalWrist::detect(chain, part_inverse, scale)
+            .map(ClosedForm::Spherical)
+            .or_else(|| {
+                ParallelAxes::detect(chain, part_inverse, scale).map(ClosedForm::ParallelAxes)
+            })
+    }
+
+    /// Every solution of the pose, unpolished ([`SphericalWrist::solve`]).
+    pub(super) fn solve(
+        &self,
+        target_p: &Vector3<f64>,
+        target_r: &Matrix3<f64>,
+        start: &Vector6<f64>,
+        nearest: Option<&Nearest>,
+        out: &mut [Vector6<f64>; 8],
+    ) -> Result<usize, String> {
+        match self {
+            ClosedForm::Spherical(w) => w.solve(target_p, target_r, start, nearest, out),
+            ClosedForm::ParallelAxes(w) => w.solve(target_p, target_r, start, nearest, out),
+        }
+    }
+}
 
 impl SerialArm {
     /// The closed form's solutions of the pose `(p, r)`, each polished by Newton and
@@ -66,15 +110,23 @@ impl SerialArm {
         for q in &mut raw[..n] {
             *q = self.wrap(*q, near);
         }
-        raw[..n].sort_by(|a, b| {
-            (a - near)
-                .norm_squared()
-                .total_cmp(&(b - near).norm_squared())
-        });
+        // Nearest first; near-ties (mirror-image postures equally near `near` up to
+        // rounding: the elbow up and down of a UR stretched at its zero home) in the
+        // closed form's order of branches, not as rounding falls, so that neighbouring
+        // poses take the same posture.
+        let dist: [f64; 8] =
+            std::array::from_fn(|i| raw.get(i).map_or(0.0, |q| (q - near).norm_squared()));
+        let mut order: [usize; 8] = std::array::from_fn(|i| i);
+        order[..n].sort_by(|&a, &b| dist[a].total_cmp(&dist[b]));
+        if let Some(&first) = order[..n].first() {
+            let band = dist[first] * (1.0 + 1e-9);
+            let ties = order[..n].iter().take_while(|&&i| dist[i] <= band).count();
+            order[..ties].sort_unstable();
+        }
         let mut count = 0;
         // Of a partial set, only the first is sure to be where it is in the whole.
         let tries = if nearest.is_some() { n.min(1) } else { n };
-        for q in &raw[..tries] {
+        for q in order[..tries].iter().map(|&i| &raw[i]) {
             if let Ok(q) = self.newton(p, r, *q) {
                 sols[count] = self.wrap(q, near);
                 count += 1;

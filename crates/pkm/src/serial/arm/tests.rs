@@ -147,3 +147,41 @@ fn the_nearest_branch_search_equals_the_whole_closed_form() {
         );
     }
 }
+
+/// The parallel-axes closed form (axes 2, 3, 4 parallel, axes 5 and 6 meeting: the
+/// UR5-like URDF, whose joint 2 turns about -Y) before Newton's polish: every raw
+/// solution reaches the pose, and the joints the pose was made from are among them,
+/// over random joints of the whole ranges.
+#[test]
+fn the_parallel_axes_closed_form_solves_a_ur5_exactly() {
+    let a = example_arm("robots/ur5-like.urdf");
+    let Some(super::closed_form::ClosedForm::ParallelAxes(w)) = &a.wrist else {
+        panic!(
+            "the UR5's axes 2, 3, 4 are parallel: {:?}",
+            a.wrist.is_some()
+        )
+    };
+    let mut rng = rand::rngs::StdRng::seed_from_u64(5);
+    let mut eight = 0;
+    for _ in 0..2000 {
+        let q = Vector6::from_fn(|_, _| rng.random_range(-PI..PI));
+        let (t, _) = a.pose_and_jacobian(&q);
+        let p = Vector3::new(t[(0, 3)], t[(1, 3)], t[(2, 3)]);
+        let r: Matrix3<f64> = t.fixed_view::<3, 3>(0, 0).into_owned();
+        let mut raw = [Vector6::zeros(); 8];
+        let n = w.solve(&p, &r, &a.home_joints, None, &mut raw).unwrap();
+        eight += usize::from(n == 8);
+        let mut found = false;
+        for s in &raw[..n] {
+            let (ts, _) = a.pose_and_jacobian(s);
+            assert!(
+                (ts - t).amax() < 1e-8,
+                "q {q:?}: {s:?} reaches {ts} not {t}"
+            );
+            let d = (s - q).map(|d| (d + PI).rem_euclid(2.0 * PI) - PI);
+            found |= d.amax() < 1e-7;
+        }
+        assert!(found, "q {q:?} not among {:?}", &raw[..n]);
+    }
+    assert!(eight > 1000, "{eight}");
+}

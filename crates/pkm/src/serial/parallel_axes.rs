@@ -1,0 +1,227 @@
+//! Closed-form inverse kinematics of a six-revolute arm whose second, third and fourth
+//! axes are parallel and whose fifth and sixth axes meet: the geometry of the Universal
+//! Robots arms (UR3, UR5, UR10, UR16, UR20, UR30 and their e-Series), of Kinova's Gen3
+//! lite-class and Techman arms, and of other collaborative robots, whose wrist is not
+//! spherical (axes 4, 5 and 6 do not meet), so [`super::spherical_wrist`] does not
+//! apply.
+//!
+//! The arm is written as a product of exponentials, `T(q) = E_1(q_1) ... E_6(q_6) T_0`
+//! (Murray, Li and Sastry, 1994, ch. 3), with joint `k` turning about its axis
+//! `(w_k, p_k)` at the zero configuration, `n = w_2`, `w_3 = sigma_3 n`,
+//! `w_4 = sigma_4 n`. The product `E_2 E_3 E_4` turns about `n` by
+//! `theta = q_2 + sigma_3 q_3 + sigma_4 q_4` (Hawkins, *Analytic inverse kinematics for
+//! the Universal Robots UR-5/UR-10 arms*, 2013, solves the same structure from its
+//! Denavit-Hartenberg table; this is that solution for any zero pose, tool and base):
+//!
+//! 1. **Shoulder** `q_1`. The point `c` where axes 5 and 6 meet is fixed by `E_5` and
+//!    `E_6`, so at the target it is `c* = T* T_0^-1 c`, and `E_1^-1 c* = E_2 E_3 E_4 c`.
+//!    Turns about axes parallel to `n` keep the component along `n`:
+//!    `n . E_1(q_1)^-1 c* = n . c`, a subproblem `a cos q_1 + b sin q_1 = g`.
+//! 2. **Wrist** `q_5`. Axis 6 at the target has the direction `w_6* = R* R_0^T w_6`
+//!    (`E_6` fixes it), and `R_1^T w_6* = Rot(n, theta) Rot(w_5, q_5) w_6`; the
+//!    component along `n` gives `n . Rot(w_5, q_5) w_6 = n . R_1^T w_6*`.
+//! 3. **The parallel axes' turn** `theta`: the angle about `n` from
+//!    `Rot(w_5, q_5) w_6` to `R_1^T w_6*`.
+//! 4. **Elbow** `q_3`, `q_2`. Axis 4's point `p_4` is then at
+//!    `p_4* = c* - R_1 Rot(n, theta) (c - p_4)`, and `E_1^-1 p_4* = E_2 E_3 p_4` is the
+//!    planar two-link arm of the spherical wrist's elbow (a law of cosines in `q_3`,
+//!    then `q_2` the angle about `n`); `q_4 = sigma_4 (theta - q_2 - sigma_3 q_3)`.
+//! 5. **Flange** `q_6`: what `Rot(w_6, q_6) = (R_1 Rot(n, theta) Rot(w_5, q_5))^T R*
+//!    R_0^T` turns about `w_6`.
+//!
+//! Up to eight solutions (shoulder, elbow, wrist flip). Where a step has infinitely
+//! many (the point `c` on axis 1; axis 6 parallel to axes 2 to 4, `q_5 = 0` on a UR)
+//! the joint keeps its start value, as Newton would. Where one has none (beyond a
+//! tolerance of 1e-10 relative) the pose is out of reach, proven, and the reason names
+//! the distances involved. The solutions are polished by one Newton step, as the
+//! spherical wrist's are ([`super::arm::SerialArm`]).
+
+use nalgebra::{Matrix3, Matrix4, Vector3, Vector6};
+
+use super::spherical_wrist::{
+    across, angle_about, apart, cos_sin, gather, normal, parallel, rot, shoulder, Elbow, Nearest,
+    Search, ZeroPose, GEOMETRY_TOLERANCE,
+};
+use super::PreparedChain;
+
+/// The zero-configuration geometry of an arm the closed form applies to (part frame).
+#[derive(Debug, Clone, PartialEq)]
+pub(super) struct ParallelAxes {
+    /// Joint axes: unit directions and a point of each.
+    w: [Vector3<f64>; 6],
+    p: [Vector3<f64>; 6],
+    /// `w_4 = sigma_4 w_2` (`w_3 = sigma_3 w_2` is the elbow's).
+    sigma4: f64,
+    /// The point where axes 5 and 6 meet.
+    c: Vector3<f64>,
+    /// The tool pose at zero: rotation and position.
+    r0: Matrix3<f64>,
+    t0: Vector3<f64>,
+    /// The planar arm: `(p_3 - p_2)` and `(p_4 - p_3)` normal to `n`.
+    elbow: Elbow,
+    /// A unit vector normal to `w_6`.
+    across6: Vector3<f64>,
+    /// Length scale (mm) of the tolerances.
+    scale: f64,
+}
+
+impl ParallelAxes {
+    /// The closed form's geometry of `chain` seen from the part (`part_inverse`), if it
+    /// applies: six revolute joints, axes 2, 3 and 4 parallel, axis 1 and axis 5 not
+    /// parallel to them, axes 5 and 6 meeting in one point and not parallel, axis 3
+    /// apart from axis 2 and axis 4 apart from axis 3. `scale` is the arm's length
+    /// scale (mm).
+    pub(super) fn detect(
+        chain: &PreparedChain,
+        part_inverse: &Matrix4<f64>,
+        scale: f64,
+    ) -> Option<ParallelAxes> {
+        let ZeroPose { w, p, r0, t0 } = ZeroPose::of(chain, part_inverse)?;
+        let n = w[1];
+        if !parallel(&n, &w[2]) || !parallel(&n, &w[3]) {
+            return None;
+        }
+        if !apart(&w[0], &n) || !apart(&w[4], &n) || !apart(&w[4], &w[5]) {
+            return None;
+        }
+        // The point of axis 5 closest to axis 6, on axis 6 within the tolerance.
+        let (d, d56) = (p[5] - p[4], w[4].dot(&w[5]));
+        let s = (w[4].dot(&d) - d56 * w[5].dot(&d)) / (1.0 - d56 * d56);
+        let c = p[4] + w[4] * s;
+        let tol = GEOMETRY_TOLERANCE * scale;
+        if normal(&(c - p[5]), &w[5]).norm() > tol {
+            return None;
+        }
+        let e = normal(&(p[2] - p[1]), &n);
+        let f = normal(&(p[3] - p[2]), &n);
+        if e.norm() <= tol || f.norm() <= tol {
+            return None;
+        }
+        Some(ParallelAxes {
+            sigma4: w[3].dot(&n).signum(),
+            elbow: Elbow {
+                e,
+                f,
+                sigma: w[2].dot(&n).signum(),
+            },
+            c,
+            r0,
+            t0,
+            across6: across(&w[5]),
+            w,
+            p,
+            scale,
+        })
+    }
+
+    /// Every solution of the tool pose `(target_p, target_r)` (at most eight; joints
+    /// with infinitely many solutions at `start`'s values) into `out`, not polished and
+    /// not wrapped, in the order shoulder, elbow, wrist flip; their number, or why the
+    /// pose is out of reach. With `nearest`, the branches that cannot hold the solution
+    /// nearest its joint values are skipped, as in [`super::spherical_wrist`].
+    pub(super) fn solve(
+        &self,
+        target_p: &Vector3<f64>,
+        target_r: &Matrix3<f64>,
+        start: &Vector6<f64>,
+        nearest: Option<&Nearest>,
+        out: &mut [Vector6<f64>; 8],
+    ) -> Result<usize, String> {
+        let (w, p, n) = (&self.w, &self.p, self.w[1]);
+        let tol = GEOMETRY_TOLERANCE * self.scale;
+        // T* T_0^-1: the turn and the point c where it takes axes 5 and 6.
+        let turn = target_r * self.r0.transpose();
+        let c_star = target_p + turn * (self.c - self.t0);
+        let w6_star = turn * w[5];
+        // 1. Shoulder: n . E_1(q_1)^-1 c* = n . c.
+        let q1s = shoulder(w, p, &self.c, &c_star, tol, start[0]).map_err(|(r, off)| {
+            format!(
+                "axes 5 and 6 would meet {r:.3} mm from axis 1, closer than the {off:.3} mm \
+                 the arm's plane is offset from it"
+            )
+        })?;
+        let (w5, w6) = (&w[4], &w[5]);
+        let c56 = w5.dot(w6);
+        let (a5, b5) = (n.dot(&(w6 - w5 * c56)), n.dot(&w5.cross(w6)));
+        let sigma3 = self.elbow.sigma;
+        let theta_start = start[1] + sigma3 * start[2] + self.sigma4 * start[3];
+        // Slot `4 i + 2 j + k` holds the solution of shoulder `i`, elbow `j`, wrist `k`.
+        let mut slots = [None::<Vector6<f64>>; 8];
+        let mut search = Search::new(nearest);
+        let mut elbow_miss = None;
+        let mut wrist_miss = false;
+        for i in search.order(0, &q1s) {
+            let q1 = q1s[i];
+            let d1 = search.term(0, q1);
+            if search.beyond(d1) {
+                continue;
+            }
+            let r1 = rot(&w[0], q1);
+            // 2. Wrist: n . Rot(w_5, q_5) w_6 = n . R_1^T w_6*.
+            let v = r1.transpose() * w6_star;
+            let Some(q5s) = cos_sin(a5, b5, n.dot(&v) - n.dot(w5) * c56) else {
+                wrist_miss = true;
+                continue;
+            };
+            for k in search.order(4, &q5s) {
+                let q5 = q5s[k];
+                let d15 = d1 + search.term(4, q5);
+                if search.beyond(d15) {
+                    continue;
+                }
+                let r5 = rot(w5, q5);
+                // 3. The parallel axes' turn.
+                let (u_n, v_n) = (normal(&(r5 * w6), &n), normal(&v, &n));
+                let theta = if u_n.norm() <= 1e-9 || v_n.norm() <= 1e-9 {
+                    theta_start
+                } else {
+                    angle_about(&n, &u_n, &v_n)
+                };
+                let r_theta = rot(&n, theta);
+                // 4. Elbow: axis 4's point, seen from before the shoulder's turn.
+                let p4 = c_star - r1 * r_theta * (self.c - p[3]);
+                let d = normal(&(p[0] + r1.transpose() * (p4 - p[0]) - p[1]), &n);
+                let q3s = match self.elbow.bend(&n, &d) {
+                    Ok(q3s) => q3s,
+                    Err((miss, r)) => {
+                        if elbow_miss.is_none_or(|(m, _)| miss < m) {
+                            elbow_miss = Some((miss, r));
+                        }
+                        continue;
+                    }
+                };
+                for j in search.order(2, &q3s) {
+                    let q3 = q3s[j];
+                    let d135 = d15 + search.term(2, q3);
+                    if search.beyond(d135) {
+                        continue;
+                    }
+                    let q2 = self.elbow.lift(&n, &rot(&w[2], q3), &d, tol, start[1]);
+                    let q4 = self.sigma4 * (theta - q2 - sigma3 * q3);
+                    let d12345 = d135 + search.term(1, q2) + search.term(3, q4);
+                    if search.beyond(d12345) {
+                        continue;
+                    }
+                    // 5. Flange.
+                    let k6 = (r1 * r_theta * r5).transpose() * turn;
+                    let q6 = angle_about(w6, &self.across6, &(k6 * self.across6));
+                    search.found(d12345 + search.term(5, q6));
+                    slots[4 * i + 2 * j + k] = Some(Vector6::new(q1, q2, q3, q4, q5, q6));
+                }
+            }
+        }
+        let count = gather(slots, out);
+        if count > 0 {
+            return Ok(count);
+        }
+        Err(match elbow_miss {
+            Some((_, r)) => self.elbow.miss("axis 4", r),
+            None if wrist_miss => {
+                "the tool axis would need a tilt to axes 2 to 4 that axes 5 and 6 cannot \
+                 make"
+                    .into()
+            }
+            None => "no solution".into(),
+        })
+    }
+}
