@@ -28,11 +28,96 @@ fn part_axis(a: &SerialArm, q: &Vector6<f64>, k: usize) -> (Vector3<f64>, Vector
     (r * axes[k].0, r * axes[k].1 + t)
 }
 
-/// The wrist centre at joints `q`: the point of axis 4 nearest axis 5 (part frame).
-fn wrist_centre(a: &SerialArm, q: &Vector6<f64>) -> Vector3<f64> {
-    let ((z4, o4), (z5, o5)) = (part_axis(a, q, 3), part_axis(a, q, 4));
-    let (d, c45) = (o5 - o4, z4.dot(&z5));
-    o4 + z4 * ((z4.dot(&d) - c45 * z5.dot(&d)) / (1.0 - c45 * c45))
+/// The point of axis `i` nearest axis `j` at joints `q` (part frame): the wrist centre
+/// for axes 4 and 5 (`i, j = 3, 4`).
+fn nearest_point(a: &SerialArm, q: &Vector6<f64>, i: usize, j: usize) -> Vector3<f64> {
+    let ((zi, oi), (zj, oj)) = (part_axis(a, q, i), part_axis(a, q, j));
+    let (d, c) = (oj - oi, zi.dot(&zj));
+    oi + zi * ((zi.dot(&d) - c * zj.dot(&d)) / (1.0 - c * c))
+}
+
+/// The pose of joints `q` for case `case` of the branch-and-bound tests and the joints
+/// to start from: case 4 (of 6) the position pushed out by 1 to 3 times, case 5 moved
+/// so that the point of axis `meet.0` nearest axis `meet.1` lies on axis 1; the start
+/// (cases of 5) at `q`, within 0.01 rad of it, within 9 rad, or random.
+fn case_pose(
+    a: &SerialArm,
+    q: &Vector6<f64>,
+    case: usize,
+    meet: (usize, usize),
+    rng: &mut impl Rng,
+) -> (Vector3<f64>, Matrix3<f64>, Vector6<f64>) {
+    let (t, _) = a.pose_and_jacobian(q);
+    let mut p = Vector3::new(t[(0, 3)], t[(1, 3)], t[(2, 3)]);
+    let r: Matrix3<f64> = t.fixed_view::<3, 3>(0, 0).into_owned();
+    if case % 6 == 4 {
+        p *= rng.random_range(1.0..3.0);
+    }
+    if case % 6 == 5 {
+        let c = nearest_point(a, q, meet.0, meet.1);
+        let (z1, o1) = part_axis(a, q, 0);
+        p -= c - (o1 + z1 * z1.dot(&(c - o1)));
+    }
+    let near = match case % 5 {
+        0 => *q,
+        1 => q + Vector6::from_fn(|_, _| rng.random_range(-0.01..0.01)),
+        2 => q + Vector6::from_fn(|_, _| rng.random_range(-9.0..9.0)),
+        _ => Vector6::from_fn(|_, _| rng.random_range(-PI..PI)),
+    };
+    (p, r, near)
+}
+
+/// The closed form toward the nearest solution against the whole closed form's at the
+/// pose `(p, r)` from `near`: the same count and the nearest bit for bit, or the same
+/// error (`what` names the case). Returns the answer, the whole's answer, the
+/// nearest-branch solutions and whether the bound skipped branches.
+fn nearest_and_whole(
+    a: &SerialArm,
+    p: &Vector3<f64>,
+    r: &Matrix3<f64>,
+    near: &Vector6<f64>,
+    what: &str,
+) -> (
+    std::result::Result<usize, String>,
+    std::result::Result<usize, String>,
+    Postures,
+    bool,
+) {
+    let (mut fast, mut whole) = ([Vector6::zeros(); 8], [Vector6::zeros(); 8]);
+    let nf = a
+        .closed_form(p, r, near, false, &mut fast)
+        .map(|n| n.expect("a closed form"));
+    let nw = a.polished(p, r, near, false, None, &mut whole);
+    match (&nf, &nw) {
+        (Ok(nf), Ok(nw)) => {
+            assert_eq!(nf, nw, "{what}");
+            if *nw > 0 {
+                for k in 0..6 {
+                    assert_eq!(
+                        fast[0][k].to_bits(),
+                        whole[0][k].to_bits(),
+                        "{what} joint {k}"
+                    );
+                }
+            }
+        }
+        (Err(e), Err(g)) => assert_eq!(e, g, "{what}"),
+        _ => panic!("{what}: {nf:?} vs {nw:?}"),
+    }
+    let wrist = a.wrist.as_ref().unwrap();
+    let nearest = super::super::spherical_wrist::Nearest {
+        near,
+        wrapped: [true; 6],
+    };
+    let mut raw = [Vector6::zeros(); 8];
+    let pruned = matches!(
+        (
+            wrist.solve(p, r, near, Some(&nearest), &mut raw),
+            wrist.solve(p, r, near, None, &mut raw),
+        ),
+        (Ok(kept), Ok(n)) if kept < n
+    );
+    (nf, nw, fast, pruned)
 }
 
 /// The closed form toward the nearest solution (branches that cannot hold it
@@ -64,27 +149,11 @@ fn the_nearest_branch_search_equals_the_whole_closed_form() {
                 3 => q[2] = -PI / 2.0 + (145.0f64 / 820.0).atan(),
                 _ => {}
             }
-            let (t, _) = a.pose_and_jacobian(&q);
-            let mut p = Vector3::new(t[(0, 3)], t[(1, 3)], t[(2, 3)]);
-            let r: Matrix3<f64> = t.fixed_view::<3, 3>(0, 0).into_owned();
-            if case % 6 == 4 {
-                p *= rng.random_range(1.0..3.0);
-            }
-            if case % 6 == 5 {
-                // The pose moved so that its wrist centre is on axis 1 (any q1 then).
-                let c = wrist_centre(&a, &q);
-                let (z1, o1) = part_axis(&a, &q, 0);
-                p -= c - (o1 + z1 * z1.dot(&(c - o1)));
-            }
-            let near = match case % 5 {
-                0 => q,
-                1 => q + Vector6::from_fn(|_, _| rng.random_range(-0.01..0.01)),
-                2 => q + Vector6::from_fn(|_, _| rng.random_range(-9.0..9.0)),
-                _ => Vector6::from_fn(|_, _| rng.random_range(-PI..PI)),
-            };
-            let (mut fast, mut whole) = ([Vector6::zeros(); 8], [Vector6::zeros(); 8]);
-            let nf = a.closed_form(&p, &r, &near, false, &mut fast);
-            let nw = a.polished(&p, &r, &near, false, None, &mut whole);
+            // Case 5: the wrist centre moved onto axis 1 (any q1 then).
+            let (p, r, near) = case_pose(&a, &q, case, (3, 4), &mut rng);
+            let (nf, nw, _, pruned) =
+                nearest_and_whole(&a, &p, &r, &near, &format!("{file} case {case}"));
+            pruned_some += usize::from(pruned);
             if case % 6 == 5 {
                 match &nw {
                     Ok(n) if *n > 0 => on_axis.0 += 1,
@@ -92,35 +161,12 @@ fn the_nearest_branch_search_equals_the_whole_closed_form() {
                     _ => {}
                 }
             }
-            match (&nf, &nw) {
-                (Ok(Some(nf)), Ok(nw)) => {
-                    assert_eq!(nf, nw, "{file} case {case}");
-                    if *nw > 0 {
-                        for k in 0..6 {
-                            assert_eq!(
-                                fast[0][k].to_bits(),
-                                whole[0][k].to_bits(),
-                                "{file} case {case} joint {k}"
-                            );
-                        }
-                    }
-                }
-                (Err(e), Err(g)) => assert_eq!(e, g, "{file} case {case}"),
-                _ => panic!("{file} case {case}: {nf:?} vs {nw:?}"),
-            }
-            let wrist = a.wrist.as_ref().unwrap();
             let nearest = super::super::spherical_wrist::Nearest {
                 near: &near,
                 wrapped: [true; 6],
             };
             let mut raw = [Vector6::zeros(); 8];
-            if let (Ok(kept), Ok(n)) = (
-                wrist.solve(&p, &r, &near, Some(&nearest), &mut raw),
-                wrist.solve(&p, &r, &near, None, &mut raw),
-            ) {
-                pruned_some += usize::from(kept < n);
-            }
-            if let Ok(Some(1)) = nf {
+            if let Ok(1) = nf {
                 singular_fallbacks += usize::from(
                     a.polished(&p, &r, &near, false, Some(&nearest), &mut raw)
                         .is_ok_and(|n| n == 0),
@@ -184,4 +230,64 @@ fn the_parallel_axes_closed_form_solves_a_ur5_exactly() {
         assert!(found, "q {q:?} not among {:?}", &raw[..n]);
     }
     assert!(eight > 1000, "{eight}");
+}
+
+/// The parallel-axes closed form toward the nearest solution gives the whole closed
+/// form's nearest bit for bit (or the same error), on the UR5-like URDF: random
+/// joints, the wrist singularity (q5 = 0 and within 1e-7: axes 4 and 6 parallel, q4
+/// and q6 one freedom), the elbow stretched (q3 = 0), the point where axes 5 and 6
+/// meet moved onto axis 1 (out of reach: the arm's plane is offset from axis 1), and
+/// poses out of reach; starts at the joints, near them, far and random. Every
+/// polished solution reaches the pose.
+#[test]
+fn the_parallel_axes_nearest_branch_equals_the_whole_closed_form() {
+    let a = example_arm("robots/ur5-like.urdf");
+    let mut rng = rand::rngs::StdRng::seed_from_u64(29);
+    let (mut pruned_some, mut singular, mut on_axis, mut out) = (0, 0, 0, 0);
+    for case in 0..6000 {
+        let mut q = Vector6::from_fn(|_, _| rng.random_range(-PI..PI));
+        match case % 6 {
+            1 => q[4] = 0.0,
+            2 => q[4] = rng.random_range(-1e-7..1e-7),
+            3 => q[2] = 0.0,
+            _ => {}
+        }
+        // Case 5: axes 5 and 6 meet on axis 1.
+        let (p, r, near) = case_pose(&a, &q, case, (4, 5), &mut rng);
+        let (nf, _, fast, pruned) = nearest_and_whole(&a, &p, &r, &near, &format!("case {case}"));
+        pruned_some += usize::from(pruned);
+        match nf {
+            Ok(n) => {
+                if n > 0 {
+                    let (ts, _) = a.pose_and_jacobian(&fast[0]);
+                    let tp = Vector3::new(ts[(0, 3)], ts[(1, 3)], ts[(2, 3)]);
+                    let rs: Matrix3<f64> = ts.fixed_view::<3, 3>(0, 0).into_owned();
+                    assert!(
+                        (tp - p).norm() < 1e-9 && (rs - r).amax() < 1e-12,
+                        "case {case}: {:e} mm",
+                        (tp - p).norm()
+                    );
+                    singular += usize::from(case % 6 == 1 || case % 6 == 2);
+                }
+            }
+            Err(e) => {
+                out += 1;
+                // The arm's plane is d4 = 109.15 mm off axis 1: axes 5 and 6 cannot
+                // meet on it.
+                if case % 6 == 5 {
+                    assert!(
+                        e.contains("0.000 mm from axis 1, closer than the 109.150 mm"),
+                        "case {case}: {e}"
+                    );
+                    on_axis += 1;
+                }
+            }
+        }
+    }
+    // Covered: skipped branches, solved singular wrists, poses with axes 5 and 6
+    // meeting on axis 1 proven out of reach, other poses out of reach.
+    assert!(pruned_some > 3000, "{pruned_some} poses pruned");
+    assert!(singular > 1500, "{singular} singular wrists solved");
+    assert!(on_axis == 1000, "{on_axis} on axis 1 refused");
+    assert!(out > 1300, "{out} out of reach");
 }
