@@ -47,6 +47,8 @@ pub trait DynMechanism: Send + Sync {
     fn jacobian(&self, x: &[f64]) -> Result<DMatrix<f64>>;
     /// See [`crate::Mechanism::forward`].
     fn forward(&self, q: &[f64], start: &[f64]) -> Result<DynForward>;
+    /// See [`crate::Mechanism::inverse_method`].
+    fn inverse_method(&self) -> &'static str;
     /// See [`crate::Mechanism::forward_closed_form`].
     fn forward_closed_form(&self) -> bool;
     /// See [`crate::Mechanism::tool_pose`].
@@ -146,6 +148,9 @@ macro_rules! impl_dyn_mechanism {
                     iterations: f.iterations,
                     residual: f.residual,
                 })
+            }
+            fn inverse_method(&self) -> &'static str {
+                $crate::Mechanism::<$p, $a>::inverse_method(self)
             }
             fn forward_closed_form(&self) -> bool {
                 $crate::Mechanism::<$p, $a>::forward_closed_form(self)

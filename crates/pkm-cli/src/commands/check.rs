@@ -75,6 +75,7 @@ pub fn run(a: &CheckArgs) -> Result<u8> {
                 "singular": !cond.is_finite(),
                 "characteristic_length_mm": lc,
             },
+            "inverse_method": m.inverse_method(),
             "references": references,
         });
         println!("{}", serde_json::to_string_pretty(&v)?);
@@ -130,6 +131,7 @@ pub fn run(a: &CheckArgs) -> Result<u8> {
             String::new()
         };
         println!("jacobian    condition number {cond:.3} at home (driven columns, 2-norm{scale})");
+        println!("inverse     {}", m.inverse_method());
         if !cond.is_finite() {
             println!(
                 "warning     the home pose is singular: the Jacobian loses rank there (a robot's \

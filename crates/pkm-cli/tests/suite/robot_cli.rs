@@ -106,3 +106,47 @@ fn a_joint_turned_beyond_its_range_is_reported_with_its_start_and_worst() {
         "{err}"
     );
 }
+
+/// `pkm check` says how a robot's inverse kinematics is solved: in closed form for a
+/// spherical wrist (the KR 30) and for three parallel axes (the UR5-like URDF), by
+/// Newton for other geometry (the UR5 with axis 6 moved 20 mm off axis 5); a hexapod's
+/// in closed form. The same in `--json`.
+#[test]
+fn check_names_the_inverse_kinematics_method() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(path("tests/fixtures/ur5-dh.toml")).unwrap();
+    let offset = text.replacen("a = 0.0\nalpha = -90.0", "a = 20.0\nalpha = -90.0", 1);
+    assert_ne!(offset, text);
+    let off = dir.path().join("ur5-offset.toml");
+    std::fs::write(&off, offset).unwrap();
+    for (file, method) in [
+        (
+            path("examples/machines/kr30-dh.toml"),
+            "closed form (spherical wrist, axes 2 and 3 parallel)",
+        ),
+        (
+            path("examples/robots/ur5-like.urdf"),
+            "closed form (axes 2, 3, 4 parallel, axes 5 and 6 meeting)",
+        ),
+        (
+            off.to_string_lossy().into_owned(),
+            "numeric (Newton on SE(3) from the start, 32 spread restarts)",
+        ),
+        (
+            path("examples/machines/hexapod-linuxcnc.toml"),
+            "closed form",
+        ),
+    ] {
+        let o = pkm().args(["check", &file]).output().unwrap();
+        ok(&o);
+        let stdout = String::from_utf8(o.stdout).unwrap();
+        assert!(
+            stdout.lines().any(|l| l == format!("inverse     {method}")),
+            "{file}: {stdout}"
+        );
+        let o = pkm().args(["check", &file, "--json"]).output().unwrap();
+        ok(&o);
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(v["inverse_method"], method, "{file}");
+    }
+}

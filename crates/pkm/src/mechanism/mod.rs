@@ -211,6 +211,13 @@ pub trait Mechanism<const P: usize, const A: usize>: Send + Sync {
         false
     }
 
+    /// How [`Mechanism::inverse`] solves, in words (`pkm check` prints it): `closed
+    /// form`, the default (every type's inverse but a robot's of general geometry), or
+    /// the robot's method.
+    fn inverse_method(&self) -> &'static str {
+        "closed form"
+    }
+
     /// Whether [`Mechanism::forward`] is a closed-form solution: then its
     /// [`Forward::iterations`] is 0 by construction, not a count of iterations.
     fn forward_closed_form(&self) -> bool {

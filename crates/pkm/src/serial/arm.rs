@@ -343,6 +343,18 @@ impl Mechanism<6, 6> for SerialArm {
         self.condition_at(x, &q)
     }
 
+    fn inverse_method(&self) -> &'static str {
+        match &self.wrist {
+            Some(closed_form::ClosedForm::Spherical(_)) => {
+                "closed form (spherical wrist, axes 2 and 3 parallel)"
+            }
+            Some(closed_form::ClosedForm::ParallelAxes(_)) => {
+                "closed form (axes 2, 3, 4 parallel, axes 5 and 6 meeting)"
+            }
+            None => "numeric (Newton on SE(3) from the start, 32 spread restarts)",
+        }
+    }
+
     fn forward_closed_form(&self) -> bool {
         true
     }
