@@ -114,8 +114,11 @@ impl SerialArm {
         // rounding: the elbow up and down of a UR stretched at its zero home) in the
         // closed form's order of branches, not as rounding falls, so that neighbouring
         // poses take the same posture.
-        let dist: [f64; 8] =
-            std::array::from_fn(|i| raw.get(i).map_or(0.0, |q| (q - near).norm_squared()));
+        // Only the `n` solutions found (usually one or two on the nearest branch).
+        let mut dist = [f64::INFINITY; 8];
+        for (d, q) in dist.iter_mut().zip(&raw[..n]) {
+            *d = (q - near).norm_squared();
+        }
         let mut order: [usize; 8] = std::array::from_fn(|i| i);
         order[..n].sort_by(|&a, &b| dist[a].total_cmp(&dist[b]));
         if let Some(&first) = order[..n].first() {
