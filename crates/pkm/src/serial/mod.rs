@@ -29,6 +29,7 @@ pub mod sensitivity;
 pub mod spherical_wrist;
 pub mod tcp;
 pub mod tcp_axis;
+mod walk;
 
 use nalgebra::{Matrix3, Matrix4, Vector3};
 
@@ -156,11 +157,12 @@ pub fn link_transform(link: &Link, dev: &LinkDeviation) -> Matrix4<f64> {
 /// nine tenths of [`Chain::pose`]; the two agree within 1e-15 per entry (tested).
 ///
 /// On a CPU with AVX2 the same code runs compiled for it (the same operations in the
-/// same order, so the same bits: Rust does not contract `a * b + c`; tested): 218 ns
-/// per deviated 6R [`Chain::pose`] instead of 243 ns (EPYC; an AVX-512 build took
-/// 229 ns, and the whole walk built for AVX2 290 ns). Its range tests are folds that
-/// vectorise rather than nine compare-and-branch pairs each: 240-246 -> 212 ns (a
-/// Xeon, 2026-11-27).
+/// same order, so the same bits: Rust does not contract `a * b + c`; tested); inside
+/// [`Chain::pose`] it is inlined into the AVX2 walk (`walk.rs`). Its range tests are
+/// folds that vectorise rather than nine compare-and-branch pairs each, and the
+/// deviations are read in place (a copy, stored and read back at other offsets,
+/// waited for its stores): a deviated 6R [`Chain::pose`] took 243 ns on an EPYC
+/// (2026-11-26), 211 ns on a Xeon (2026-11-27) and 168-178 ns since (2026-11-28).
 #[inline]
 pub fn deviated_block(link: &Link, dev: &LinkDeviation) -> Matrix3<f64> {
     #[cfg(target_arch = "x86_64")]
@@ -185,11 +187,14 @@ fn deviated_block_body(link: &Link, dev: &LinkDeviation) -> Matrix3<f64> {
         return *b;
     }
     let mut b = link.rotation;
-    if dev.alpha.iter().all(|a| *a == 0.0) {
+    // A fold, not `all`: nine comparisons in a few vector instructions.
+    if dev.alpha.iter().fold(true, |none, a| none & (*a == 0.0)) {
         return b;
     }
-    let alpha: [f64; 9] = std::array::from_fn(|k| dev.alpha[k]);
-    let (sa, ca) = crate::trig::sin_cos_small(&alpha);
+    // Read in place: a copy (stored as two 32-byte halves, read back at other offsets)
+    // would wait for the stores to retire.
+    let alpha: &[f64; 9] = dev.alpha.as_slice().try_into().expect("3 x 3");
+    let (sa, ca) = crate::trig::sin_cos_small(alpha);
     // Axis-aligned links (every nominal cosine 0 or +-1, exactly: `c^2 = |c|` holds
     // for nothing else) have `sqrt(1 - c^2) = 1 - |c|` exactly: no square root.
     // A fold, not `all`: nine comparisons in a few vector instructions instead of nine
@@ -209,7 +214,19 @@ fn deviated_block_body(link: &Link, dev: &LinkDeviation) -> Matrix3<f64> {
 /// `A_(i,i*)` with deviations as a 3 x 4 affine block.
 #[inline(always)]
 fn link_affine(link: &Link, dev: &LinkDeviation) -> Affine {
-    let r = deviated_block(link, dev);
+    affine_of(link, dev, deviated_block(link, dev))
+}
+
+/// [`link_affine`] with the deviated block's code inlined (for a caller compiled for
+/// AVX2, which then needs no second test of the CPU).
+#[inline(always)]
+fn link_affine_body(link: &Link, dev: &LinkDeviation) -> Affine {
+    affine_of(link, dev, deviated_block_body(link, dev))
+}
+
+/// The 3 x 4 block of rotation `r` and the link's deviated translation.
+#[inline(always)]
+fn affine_of(link: &Link, dev: &LinkDeviation, r: Matrix3<f64>) -> Affine {
     let t = link.translation + dev.delta;
     [
         [r[(0, 0)], r[(0, 1)], r[(0, 2)], t.x],
@@ -292,55 +309,51 @@ impl Chain {
                 ),
             });
         }
-        // 3 x 4 affine products and joints as column operations: the same product as
-        // `prod joint_transform * link_transform`, in half the arithmetic.
-        let zero = LinkDeviation::default();
-        let mut v = [0.0; MAX_VECTOR_JOINTS];
-        for (k, vk) in v.iter_mut().enumerate().take(n) {
-            *vk = q[k] + dq.get(k).copied().unwrap_or(0.0);
-        }
-        let (sn, cs) = joint_sin_cos(&v, n);
-        let mut t = AFFINE_IDENTITY;
-        let mut k = 0;
-        for (i, link) in self.links.iter().enumerate() {
-            if let Some(j) = &link.joint {
-                let v = q[k] + dq.get(k).copied().unwrap_or(0.0);
-                let sc = match j.kind {
-                    JointKind::Revolute if k < MAX_VECTOR_JOINTS => (sn[k], cs[k]),
-                    JointKind::Revolute => v.sin_cos(),
-                    JointKind::Prismatic => (0.0, 1.0),
-                };
-                apply_joint(&mut t, j.kind, v, sc);
-                k += 1;
-            }
-            t = affine_mul(&t, &link_affine(link, dev.get(i).unwrap_or(&zero)));
-        }
-        Ok(matrix_of(&t))
+        // The walk in column form (`walk.rs`): joints as column operations, each
+        // link's deviated block made as it is reached; AVX2 registers where the CPU
+        // has them.
+        Ok(walk::fast(DeviatedWalk {
+            chain: self,
+            q,
+            dq,
+            dev,
+        }))
     }
 }
 
-/// Joints whose sines and cosines are computed in one vectorised pass.
-const MAX_VECTOR_JOINTS: usize = 8;
+/// [`Chain::pose`] over any column arithmetic (its arguments checked).
+struct DeviatedWalk<'a> {
+    chain: &'a Chain,
+    q: &'a [f64],
+    dq: &'a [f64],
+    dev: &'a [LinkDeviation],
+}
 
-/// The sines and cosines of the first `n` joint values `v` (the rest: `(0, 1)`): first,
-/// in one fixed-length, branch-free pass the compiler vectorises
-/// ([`crate::trig::sin_cos_array`]). Independent of each other and of the matrix
-/// products, they then overlap instead of sitting on the products' chain.
-#[inline(always)]
-fn joint_sin_cos(
-    v: &[f64; MAX_VECTOR_JOINTS],
-    n: usize,
-) -> ([f64; MAX_VECTOR_JOINTS], [f64; MAX_VECTOR_JOINTS]) {
-    // Six joints or fewer (robots, machine tools): half the work of eight.
-    if n <= 6 {
-        let (s6, c6) = crate::trig::sin_cos_array::<6>(&[v[0], v[1], v[2], v[3], v[4], v[5]]);
-        let mut sn = [0.0; MAX_VECTOR_JOINTS];
-        let mut cs = [1.0; MAX_VECTOR_JOINTS];
-        sn[..6].copy_from_slice(&s6);
-        cs[..6].copy_from_slice(&c6);
-        (sn, cs)
-    } else {
-        crate::trig::sin_cos_array(v)
+impl walk::Walk for DeviatedWalk<'_> {
+    type Out = Matrix4<f64>;
+
+    #[inline(always)]
+    fn run<C: walk::Column>(self) -> Matrix4<f64> {
+        let DeviatedWalk { chain, q, dq, dev } = self;
+        let zero = LinkDeviation::default();
+        let value = |k: usize| q[k] + dq.get(k).copied().unwrap_or(0.0);
+        let (sn, cs) = walk::joint_sines(q.len(), value);
+        let mut t = walk::Frame::<C>::of(&AFFINE_IDENTITY);
+        let mut k = 0;
+        for (i, link) in chain.links.iter().enumerate() {
+            if let Some(j) = &link.joint {
+                let v = value(k);
+                let sc = match j.kind {
+                    JointKind::Revolute if k < walk::VECTOR_JOINTS => (sn[k], cs[k]),
+                    JointKind::Revolute => v.sin_cos(),
+                    JointKind::Prismatic => (0.0, 1.0),
+                };
+                t.joint(j.kind, v, sc);
+                k += 1;
+            }
+            t.times(&link_affine_body(link, dev.get(i).unwrap_or(&zero)));
+        }
+        t.matrix()
     }
 }
 

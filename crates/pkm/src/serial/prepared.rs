@@ -4,9 +4,10 @@
 
 use nalgebra::{Matrix4, Vector3};
 
+use super::walk::{fast, joint_sines, Column, Frame, Walk, VECTOR_JOINTS};
 use super::{
-    affine_mul, apply_joint, jacobian_of_axes, joint_sin_cos, link_affine, matrix_of, Affine,
-    Chain, JointKind, LinkDeviation, AFFINE_IDENTITY, MAX_VECTOR_JOINTS,
+    affine_mul, jacobian_of_axes, link_affine, Affine, Chain, JointKind, LinkDeviation,
+    AFFINE_IDENTITY,
 };
 
 /// A chain with one deviation set applied, prepared for fast repeated evaluation: the
@@ -53,17 +54,13 @@ impl PreparedChain {
     pub fn axes<const N: usize>(&self, q: &[f64; N]) -> (Matrix4<f64>, [JointAxis; N]) {
         let mut axes = [(Vector3::zeros(), Vector3::zeros(), JointKind::Prismatic); N];
         let mut k = 0;
-        let t = self.walk(q, |t: &Affine, kind| {
+        let t = self.walk(q, |z, o, kind| {
             if k < N {
-                axes[k] = (
-                    Vector3::new(t[0][2], t[1][2], t[2][2]),
-                    Vector3::new(t[0][3], t[1][3], t[2][3]),
-                    kind,
-                );
+                axes[k] = (z, o, kind);
             }
             k += 1;
         });
-        (matrix_of(&t), axes)
+        (t, axes)
     }
 
     /// The pose and the geometric Jacobian (`6 x N`: tool-point velocity over angular
@@ -84,30 +81,53 @@ impl PreparedChain {
     /// deviations, up to rounding). `q` must hold one value per joint.
     #[inline]
     pub fn pose(&self, q: &[f64]) -> Matrix4<f64> {
-        matrix_of(&self.walk(q, |_, _| {}))
+        self.walk(q, |_, _, _| {})
     }
 
-    /// Runs through the chain, calling `at_joint` with the frame of each joint (before
-    /// its motion) and its kind.
+    /// Runs through the chain, calling `at_joint` with the axis and origin of each
+    /// joint's frame (before its motion) and its kind; returns the pose. With AVX2
+    /// registers where the CPU has them (`walk.rs`: the same bits).
     #[inline(always)]
-    pub(super) fn walk<F: FnMut(&Affine, JointKind)>(&self, q: &[f64], mut at_joint: F) -> Affine {
-        let mut v = [0.0; MAX_VECTOR_JOINTS];
-        for ((vk, (_, dq, _)), qk) in v.iter_mut().zip(&self.steps).zip(q) {
-            *vk = qk + dq;
-        }
-        let (sn, cs) = joint_sin_cos(&v, self.steps.len());
-        let mut t = self.head;
-        for (k, ((kind, dq, link), qk)) in self.steps.iter().zip(q).enumerate() {
-            at_joint(&t, *kind);
+    pub(super) fn walk<F: FnMut(Vector3<f64>, Vector3<f64>, JointKind)>(
+        &self,
+        q: &[f64],
+        at_joint: F,
+    ) -> Matrix4<f64> {
+        fast(PreparedWalk {
+            chain: self,
+            q,
+            at_joint,
+        })
+    }
+}
+
+/// [`PreparedChain::walk`] over any column arithmetic.
+struct PreparedWalk<'a, F> {
+    chain: &'a PreparedChain,
+    q: &'a [f64],
+    at_joint: F,
+}
+
+impl<F: FnMut(Vector3<f64>, Vector3<f64>, JointKind)> Walk for PreparedWalk<'_, F> {
+    type Out = Matrix4<f64>;
+
+    #[inline(always)]
+    fn run<C: Column>(mut self) -> Matrix4<f64> {
+        let (steps, q) = (&self.chain.steps, self.q);
+        let n = steps.len().min(q.len());
+        let (sn, cs) = joint_sines(n, |k| q[k] + steps[k].1);
+        let mut t = Frame::<C>::of(&self.chain.head);
+        for (k, ((kind, dq, link), qk)) in steps.iter().zip(q).enumerate() {
+            (self.at_joint)(t.axis(), t.origin(), *kind);
             let v = qk + dq;
             let sc = match kind {
-                JointKind::Revolute if k < MAX_VECTOR_JOINTS => (sn[k], cs[k]),
+                JointKind::Revolute if k < VECTOR_JOINTS => (sn[k], cs[k]),
                 JointKind::Revolute => v.sin_cos(),
                 JointKind::Prismatic => (0.0, 1.0),
             };
-            apply_joint(&mut t, *kind, v, sc);
-            t = affine_mul(&t, link);
+            t.joint(*kind, v, sc);
+            t.times(link);
         }
-        t
+        t.matrix()
     }
 }

@@ -33,7 +33,7 @@
 //! towards the spindle), in the part frame; [`TcpMachine::rotary_for_axis`] gives the
 //! rotary angles for one (both branches; [`super::tcp_axis`]).
 
-use nalgebra::{Matrix3, SVector, Vector3};
+use nalgebra::{Matrix3, Matrix4, SVector, Vector3};
 
 use super::machine::SerialMachine;
 use super::{JointKind, PreparedChain};
@@ -259,29 +259,29 @@ impl<const N: usize> TcpMachine<N> {
         let nt = self.tool_joints;
         let s = q.as_slice();
         let mut k = 0;
-        let t = self.tool.walk(&s[..nt], |a, _| {
-            axis[k] = Vector3::new(a[0][2], a[1][2], a[2][2]);
-            point[k] = Vector3::new(a[0][3], a[1][3], a[2][3]);
+        let t = self.tool.walk(&s[..nt], |z, o, _| {
+            axis[k] = z;
+            point[k] = o;
             k += 1;
         });
         let w = match &self.work {
-            Some(wc) => wc.walk(&s[nt..], |a, _| {
-                axis[k] = -Vector3::new(a[0][2], a[1][2], a[2][2]);
-                point[k] = Vector3::new(a[0][3], a[1][3], a[2][3]);
+            Some(wc) => wc.walk(&s[nt..], |z, o, _| {
+                axis[k] = -z;
+                point[k] = o;
                 k += 1;
             }),
-            None => super::AFFINE_IDENTITY,
+            None => Matrix4::identity(),
         };
-        let rw = Matrix3::from_fn(|r, c| w[r][c]);
-        let ow = Vector3::new(w[0][3], w[1][3], w[2][3]);
+        let rw = w.fixed_view::<3, 3>(0, 0).into_owned();
+        let ow = Vector3::new(w[(0, 3)], w[(1, 3)], w[(2, 3)]);
         let rwt = rw.transpose();
         for j in 0..N {
             axis[j] = rwt * axis[j];
             point[j] = rwt * (point[j] - ow);
         }
         Relative {
-            tip: rwt * (Vector3::new(t[0][3], t[1][3], t[2][3]) - ow),
-            frame: rwt * Matrix3::from_fn(|r, c| t[r][c]),
+            tip: rwt * (Vector3::new(t[(0, 3)], t[(1, 3)], t[(2, 3)]) - ow),
+            frame: rwt * t.fixed_view::<3, 3>(0, 0).into_owned(),
             axis,
             point,
         }
