@@ -110,7 +110,7 @@ pub fn coords_text(m: &dyn DynMechanism, x: &[f64]) -> String {
             format!(
                 "{}={:.4} {}",
                 c.name,
-                clean(c.quantity.to_user(*v)),
+                Shown(c.quantity.to_user(*v)),
                 c.quantity.unit()
             )
         })
@@ -118,7 +118,112 @@ pub fn coords_text(m: &dyn DynMechanism, x: &[f64]) -> String {
         .join("  ")
 }
 
-/// Turns `-0.0` into `0.0` for display.
+/// Turns `-0.0` into `0.0` (JSON values).
 pub fn clean(v: f64) -> f64 {
     v + 0.0
+}
+
+/// A number for text: formatted with the precision, width, fill and alignment asked
+/// for (right-aligned unless told otherwise, as a number), without the minus sign of
+/// a value that shows as zero. `-3e-15` at four decimals is `0.0000`, not `-0.0000`: a
+/// robot's joint at home or a coordinate on an axis is zero to the digits shown, and
+/// a sign there reads as a result.
+#[derive(Debug, Clone, Copy)]
+pub struct Shown(pub f64);
+
+impl std::fmt::Display for Shown {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        use std::fmt::Write;
+        let s = match f.precision() {
+            Some(p) => format!("{:.*}", p, self.0),
+            None => format!("{}", self.0),
+        };
+        let s = match s.strip_prefix('-') {
+            Some(rest) if rest.bytes().all(|b| b == b'0' || b == b'.') => rest,
+            _ => &s,
+        };
+        let pad = f.width().unwrap_or(0).saturating_sub(s.chars().count());
+        let (before, after) = match f.align() {
+            Some(std::fmt::Alignment::Left) => (0, pad),
+            Some(std::fmt::Alignment::Center) => (pad / 2, pad - pad / 2),
+            _ => (pad, 0),
+        };
+        for _ in 0..before {
+            f.write_char(f.fill())?;
+        }
+        f.write_str(s)?;
+        for _ in 0..after {
+            f.write_char(f.fill())?;
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Shown;
+
+    /// A value that shows as zero loses its sign; every other value, width, fill and
+    /// alignment is formatted exactly as std formats the number.
+    #[test]
+    fn shown_drops_only_the_sign_of_a_shown_zero() {
+        assert_eq!(format!("{:.4}", Shown(-3e-15)), "0.0000");
+        assert_eq!(format!("{:>10.4}", Shown(-3e-15)), "    0.0000");
+        assert_eq!(format!("{:<8.2}|", Shown(-0.004)), "0.00    |");
+        assert_eq!(format!("{:*^9.1}", Shown(-0.04)), "***0.0***");
+        assert_eq!(format!("{:.3}", Shown(-0.0)), "0.000");
+        assert_eq!(format!("{:.4}", Shown(-0.00006)), "-0.0001");
+        assert_eq!(format!("{:.0}", Shown(-0.4)), "0");
+        assert_eq!(format!("{}", Shown(-1e-300)), format!("{}", -1e-300));
+        let mut x = 0.123_456_789_f64;
+        for k in 0..2_000 {
+            // Values over many magnitudes, both signs, ties and non-finite ones.
+            x = (x * 7.31 + 0.17).fract();
+            let v = match k % 7 {
+                0 => -x * 1e-6,
+                1 => x * 1e3,
+                2 => -x * 1e6,
+                3 => -(k as f64) * 5e-5,
+                4 => f64::NAN,
+                5 => f64::NEG_INFINITY,
+                _ => -x,
+            };
+            // (ours, std's, std's of the text without its sign, aligned as a number).
+            let unsigned = |t: String| t.strip_prefix('-').map(str::to_string).unwrap_or(t);
+            let cases = [
+                (
+                    format!("{:.4}", Shown(v)),
+                    format!("{v:.4}"),
+                    unsigned(format!("{v:.4}")),
+                ),
+                (
+                    format!("{:>12.4}", Shown(v)),
+                    format!("{v:>12.4}"),
+                    format!("{:>12}", unsigned(format!("{v:.4}"))),
+                ),
+                (
+                    format!("{:<12.2}", Shown(v)),
+                    format!("{v:<12.2}"),
+                    format!("{:<12}", unsigned(format!("{v:.2}"))),
+                ),
+                (
+                    format!("{:^11.1}", Shown(v)),
+                    format!("{v:^11.1}"),
+                    format!("{:^11}", unsigned(format!("{v:.1}"))),
+                ),
+                (
+                    format!("{:9}", Shown(v)),
+                    format!("{v:9}"),
+                    format!("{:>9}", unsigned(format!("{v}"))),
+                ),
+            ];
+            for (ours, std, zero) in cases {
+                let shows_zero = std
+                    .trim()
+                    .strip_prefix('-')
+                    .is_some_and(|r| r.bytes().all(|b| b == b'0' || b == b'.'));
+                assert_eq!(ours, if shows_zero { zero } else { std }, "{v}");
+            }
+        }
+    }
 }

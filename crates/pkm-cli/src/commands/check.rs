@@ -8,7 +8,7 @@ use serde_json::json;
 use std::path::PathBuf;
 
 use super::load;
-use crate::poses::{actuators_json, coords_text, tool_json};
+use crate::poses::{actuators_json, coords_text, tool_json, Shown};
 
 #[derive(Args, Debug)]
 pub struct CheckArgs {
@@ -111,7 +111,7 @@ pub fn run(a: &CheckArgs) -> Result<u8> {
                 x.name,
                 u(x.range.min),
                 u(x.range.max),
-                u(*v)
+                Shown(u(*v))
             );
             if let Some(vm) = x.max_velocity {
                 line.push_str(&format!(", max velocity {:.1} {unit}/s", u(vm)));

@@ -14,8 +14,8 @@ use super::csvio::{read_table, BatchTable};
 use super::load;
 use crate::columnar::{machine_metadata, Kind};
 use crate::poses::{
-    actuators_from_user, actuators_json, clean, coords_json, coords_text, parse_list,
-    pose_from_user, tool_json,
+    actuators_from_user, actuators_json, coords_json, coords_text, parse_list, pose_from_user,
+    tool_json, Shown,
 };
 use crate::EXIT_UNREACHABLE;
 use std::fmt::Write as _;
@@ -115,16 +115,16 @@ pub fn run(a: &FkArgs) -> Result<u8> {
     } else {
         let pose = m.tool_pose(&f.pose)?;
         let r = rotation_matrix(&pose);
-        let ang = conv.from_matrix(&r).map(|v| clean(v.to_degrees()));
+        let ang = conv.from_matrix(&r).map(|v| Shown(v.to_degrees()));
         let names = conv.angle_names();
         println!("{} ({})", m.name(), m.kind());
         println!("pose       {}", coords_text(m, &f.pose));
         let p = pose.translation.vector;
         println!(
             "tool       X={:.4} Y={:.4} Z={:.4} mm",
-            clean(p.x),
-            clean(p.y),
-            clean(p.z)
+            Shown(p.x),
+            Shown(p.y),
+            Shown(p.z)
         );
         println!(
             "angles     {}={:.4} {}={:.4} {}={:.4} deg ({conv})",

@@ -17,6 +17,7 @@ use super::load;
 use crate::columnar::{machine_metadata, Kind};
 use crate::poses::{
     actuators_json, coords_json, coords_text, parse_list, pose_from_user, pose_names, tool_json,
+    Shown,
 };
 use crate::EXIT_UNREACHABLE;
 use std::fmt::Write as _;
@@ -182,7 +183,7 @@ pub fn run(a: &IkArgs) -> Result<u8> {
             println!(
                 "actuator   {:<aw$} {:>12.4} {}   range [{:.3}, {:.3}]",
                 act.name,
-                act.quantity.to_user(*v),
+                Shown(act.quantity.to_user(*v)),
                 act.quantity.unit(),
                 act.quantity.to_user(act.range.min),
                 act.quantity.to_user(act.range.max)
@@ -199,7 +200,10 @@ pub fn run(a: &IkArgs) -> Result<u8> {
         for p in points {
             println!(
                 "joint      {:<w$} {:>10.4} {:>10.4} {:>10.4} mm",
-                p.name, p.position[0], p.position[1], p.position[2]
+                p.name,
+                Shown(p.position[0]),
+                Shown(p.position[1]),
+                Shown(p.position[2])
             );
         }
         match transmission(&machine, &r.pose) {
@@ -386,7 +390,7 @@ fn all_solutions(machine: &Machine, x: &[f64], json_out: bool) -> Result<u8> {
                 .actuators()
                 .iter()
                 .zip(q.iter())
-                .map(|(a, val)| format!("{}={:.4}", a.name, a.quantity.to_user(*val)))
+                .map(|(a, val)| format!("{}={:.4}", a.name, Shown(a.quantity.to_user(*val))))
                 .collect();
             let status = match v.first() {
                 None => "within limits".to_string(),

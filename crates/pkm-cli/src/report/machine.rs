@@ -7,7 +7,7 @@ use pkm::Machine;
 
 use super::html::{esc, Html};
 use super::{drawing, mark, Context};
-use crate::poses::clean;
+use crate::poses::Shown;
 
 /// Tolerances the check table is judged by.
 const ROUND_TRIP_TOL_MM: f64 = 1e-9;
@@ -30,7 +30,7 @@ pub fn summary(h: &mut Html, machine: &Machine, _ctx: &Context) -> Result<()> {
             } else {
                 "held by the mechanism".into()
             },
-            format!("{:.4}", clean(c.quantity.to_user(home[i]))),
+            format!("{:.4}", Shown(c.quantity.to_user(home[i]))),
         ]);
     }
     h.table(&["pose coordinate", "unit", "role", "home"], &rows);
@@ -55,7 +55,7 @@ pub fn summary(h: &mut Html, machine: &Machine, _ctx: &Context) -> Result<()> {
                     .unwrap_or_else(|| "-".into()),
                 q_home
                     .as_ref()
-                    .map(|q| format!("{:.4}", u(q[i])))
+                    .map(|q| format!("{:.4}", Shown(u(q[i]))))
                     .unwrap_or_else(|| "no solution".into()),
             ]
         })
@@ -101,9 +101,9 @@ pub fn drawing_section(h: &mut Html, machine: &Machine, ctx: &Context) -> Result
             vec![
                 esc(&p.name),
                 format!("{:?}", p.role),
-                format!("{:.4}", p.position[0]),
-                format!("{:.4}", p.position[1]),
-                format!("{:.4}", p.position[2]),
+                format!("{:.4}", Shown(p.position[0])),
+                format!("{:.4}", Shown(p.position[1])),
+                format!("{:.4}", Shown(p.position[2])),
             ]
         })
         .collect();
@@ -160,7 +160,7 @@ fn check_table_html(machine: &Machine, rows: &[CheckRow]) -> String {
     for r in rows {
         let mut cells = vec![esc(&r.label)];
         match &r.actuators {
-            Some(q) => cells.extend(q.iter().map(|v| format!("{v:.4}"))),
+            Some(q) => cells.extend(q.iter().map(|v| format!("{:.4}", Shown(*v)))),
             None => cells.extend(m.actuators().iter().map(|_| "-".to_string())),
         }
         cells.push(match &r.round_trip {

@@ -11,7 +11,7 @@ use pkm::Machine;
 use super::html::{esc, Html};
 use super::{sig, Context};
 use crate::commands::motion::plots;
-use crate::poses::clean;
+use crate::poses::Shown;
 
 /// Feed of the circle when no feeds are given (mm/min).
 const CIRCLE_FEED: f64 = 1000.0;
@@ -27,7 +27,7 @@ pub fn section(h: &mut Html, machine: &Machine, ctx: &Context) -> Result<()> {
     let user = |v: &[f64]| -> String {
         v.iter()
             .zip(m.coordinates())
-            .map(|(x, c)| format!("{}{:.3}", c.name, clean(c.quantity.to_user(*x))))
+            .map(|(x, c)| format!("{}{:.3}", c.name, Shown(c.quantity.to_user(*x))))
             .collect::<Vec<_>>()
             .join(" ")
     };

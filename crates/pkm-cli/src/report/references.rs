@@ -7,7 +7,7 @@ use pkm::Machine;
 
 use super::html::{esc, Html};
 use super::{drawing, mark, Context};
-use crate::poses::clean;
+use crate::poses::Shown;
 
 /// Every `[[reference]]` of the machine file, checked.
 pub fn section(h: &mut Html, machine: &Machine, _ctx: &Context) -> Result<()> {
@@ -49,7 +49,7 @@ fn one(h: &mut Html, machine: &Machine, r: &ReferenceCheck) -> Result<()> {
     }
     let fmt = |v: &[f64]| {
         v.iter()
-            .map(|x| format!("{:.3}", clean(*x)))
+            .map(|x| format!("{:.3}", Shown(*x)))
             .collect::<Vec<_>>()
             .join(", ")
     };

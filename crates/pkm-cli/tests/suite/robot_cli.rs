@@ -150,3 +150,37 @@ fn check_names_the_inverse_kinematics_method() {
         assert_eq!(v["inverse_method"], method, "{file}");
     }
 }
+
+/// The KR 30 at its home pose: joints and coordinates that are zero up to rounding
+/// (A2, A4, C, the arm's Y) print as `0.0000`, never `-0.0000`, in `pkm check`,
+/// `pkm ik` (one solution and all of them) and `pkm fk`; signed values keep their sign.
+#[test]
+fn text_outputs_show_no_negative_zero() {
+    let machine = path("examples/machines/kr30-dh.toml");
+    let pose = "--pose=1170,0,1540,-180,0,0";
+    for args in [
+        vec!["check", &machine],
+        vec!["ik", &machine, pose],
+        vec![
+            "ik",
+            &machine,
+            "--pose=1200,100,1400,180,0,0",
+            "--all-solutions",
+        ],
+        vec!["fk", &machine, "--actuators=0,0,0,0,90,0"],
+    ] {
+        let out = pkm().args(&args).output().unwrap();
+        ok(&out);
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            !text
+                .split(|c: char| c.is_whitespace() || c == '=')
+                .any(|w| w.strip_prefix('-').is_some_and(|r| {
+                    !r.is_empty() && r.bytes().all(|b| b == b'0' || b == b'.')
+                })),
+            "{args:?}:\n{text}"
+        );
+        // Negative values keep their sign (A = -180 deg; A3 of the second posture).
+        assert!(text.contains("=-1"), "{args:?}:\n{text}");
+    }
+}
