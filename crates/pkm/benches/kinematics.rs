@@ -603,6 +603,19 @@ fn serial(c: &mut Criterion) {
         "serial 6R FK with deviations (general, deviations applied per call)",
         |b| b.iter(|| chain.pose(black_box(&q), &dq, &dev).unwrap()),
     );
+    // The same arm with its links' translation deviations only: the walk and each
+    // link's bookkeeping without the angular deviations' sines and cosines.
+    let dev_delta: Vec<LinkDeviation> = dev
+        .iter()
+        .map(|d| LinkDeviation {
+            delta: d.delta,
+            ..Default::default()
+        })
+        .collect();
+    c.bench_function(
+        "serial 6R FK with translation deviations only (general, applied per call)",
+        |b| b.iter(|| chain.pose(black_box(&q), &dq, &dev_delta).unwrap()),
+    );
     c.bench_function(
         "serial 6R pose + geometric Jacobian (prepared chain)",
         |b| b.iter(|| prepared.jacobian(black_box(&q))),
