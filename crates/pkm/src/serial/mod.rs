@@ -454,4 +454,88 @@ mod tests {
             }
         }
     }
+
+    /// `Chain::pose` and the prepared chain's pose and axes are the same bits with
+    /// plain lanes as with the AVX2 registers `walk::fast` picks here: random 6R and
+    /// 5-axis chains (turns and slides), deviated links, joint values near zero, far
+    /// beyond a turn and beyond the vectorised sines' eight joints.
+    #[test]
+    fn walks_are_the_same_in_every_build() {
+        use walk::{Lanes, Walk};
+        let mut rng = rand::rngs::StdRng::seed_from_u64(5);
+        for case in 0..2_000 {
+            let n = [5, 6, 9][case % 3];
+            let links: Vec<Link> = (0..=n)
+                .map(|i| Link {
+                    name: format!("{i}"),
+                    joint: (i > 0).then(|| Joint {
+                        name: format!("j{i}"),
+                        kind: if rng.random_bool(0.6) {
+                            JointKind::Revolute
+                        } else {
+                            JointKind::Prismatic
+                        },
+                        range: Range {
+                            min: -1e9,
+                            max: 1e9,
+                        },
+                        max_velocity: None,
+                        max_acceleration: None,
+                    }),
+                    translation: Vector3::from_fn(|_, _| rng.random_range(-500.0..500.0)),
+                    rotation: *nalgebra::Rotation3::from_euler_angles(
+                        rng.random_range(-3.0..3.0),
+                        rng.random_range(-3.0..3.0),
+                        rng.random_range(-3.0..3.0),
+                    )
+                    .matrix(),
+                })
+                .collect();
+            let chain = Chain {
+                name: "c".into(),
+                links,
+            };
+            let dev: Vec<LinkDeviation> = (0..=n)
+                .map(|_| LinkDeviation {
+                    delta: Vector3::from_fn(|_, _| rng.random_range(-0.1..0.1)),
+                    alpha: Matrix3::from_fn(|_, _| rng.random_range(-1e-3..1e-3)),
+                    block: None,
+                })
+                .collect();
+            let scale = [1e-9, 1.0, 30.0][case % 3];
+            let q: Vec<f64> = (0..n)
+                .map(|_| scale * rng.random_range(-3.0..3.0))
+                .collect();
+            let dq: Vec<f64> = (0..n).map(|_| rng.random_range(-1e-3..1e-3)).collect();
+            let bits = |m: &Matrix4<f64>| m.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            let lanes = DeviatedWalk {
+                chain: &chain,
+                q: &q,
+                dq: &dq,
+                dev: &dev,
+            }
+            .run::<Lanes>();
+            assert_eq!(
+                bits(&lanes),
+                bits(&chain.pose(&q, &dq, &dev).unwrap()),
+                "case {case}"
+            );
+            let prepared = PreparedChain::new(&chain, &dq, &dev);
+            let (mut axes_plain, mut axes_fast) = (Vec::new(), Vec::new());
+            let plain = prepared::PreparedWalk {
+                chain: &prepared,
+                q: &q,
+                at_joint: |z: Vector3<f64>, o: Vector3<f64>, _| {
+                    axes_plain.extend(z.iter().chain(o.iter()).map(|x| x.to_bits()))
+                },
+            }
+            .run::<Lanes>();
+            let fast = prepared.walk(&q, |z, o, _| {
+                axes_fast.extend(z.iter().chain(o.iter()).map(|x| x.to_bits()))
+            });
+            assert_eq!(bits(&plain), bits(&fast), "case {case}");
+            assert_eq!(axes_plain, axes_fast, "case {case}");
+            assert_eq!(axes_plain.len(), 6 * n);
+        }
+    }
 }

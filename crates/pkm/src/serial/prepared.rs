@@ -102,10 +102,10 @@ impl PreparedChain {
 }
 
 /// [`PreparedChain::walk`] over any column arithmetic.
-struct PreparedWalk<'a, F> {
-    chain: &'a PreparedChain,
-    q: &'a [f64],
-    at_joint: F,
+pub(super) struct PreparedWalk<'a, F> {
+    pub(super) chain: &'a PreparedChain,
+    pub(super) q: &'a [f64],
+    pub(super) at_joint: F,
 }
 
 impl<F: FnMut(Vector3<f64>, Vector3<f64>, JointKind)> Walk for PreparedWalk<'_, F> {
