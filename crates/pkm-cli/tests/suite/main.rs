@@ -10,6 +10,7 @@ mod errors_cli;
 mod linuxcnc_cli;
 mod motion_cli;
 mod pipes_cli;
+mod readme_cli;
 mod report_cli;
 mod robot_cli;
 mod seed002_cli;
