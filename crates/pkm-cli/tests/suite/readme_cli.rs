@@ -1,7 +1,8 @@
-//! The README's tour is real: every `$ pkm ...` command it shows runs, in order, in one
-//! directory (later commands read what earlier ones wrote), and every output line it
-//! prints under a command is a line of that command's output. A line ending in `...`
-//! stands for any line it begins; a run time (`in 0.055 s`) may differ.
+//! The README's tour and the docs' examples are real: every `$ pkm ...` command a page
+//! shows runs, in order, in one directory per page (later commands read what earlier
+//! ones wrote), and every output line it prints under a command is a line of that
+//! command's output. A line ending in `...` stands for any line it begins; a run time
+//! (`in 0.055 s`) may differ.
 
 use super::common::path;
 
@@ -37,12 +38,12 @@ fn without_time(line: &str) -> String {
     line.to_string()
 }
 
+/// The commands of `page` (a path from the repository's root) that do not print what
+/// the page shows, each with the line and the output.
 #[cfg(unix)]
-#[test]
-fn readme_commands_print_what_the_readme_shows() {
-    let readme = std::fs::read_to_string(path("README.md")).unwrap();
-    let blocks = tour(&readme);
-    assert!(blocks.len() >= 25, "{} commands found", blocks.len());
+fn mismatches(page: &str) -> Vec<String> {
+    let text = std::fs::read_to_string(path(page)).unwrap();
+    let blocks = tour(&text);
     let dir = tempfile::tempdir().unwrap();
     // The commands name files by their paths from the repository's root.
     for d in ["examples", "tests"] {
@@ -51,7 +52,7 @@ fn readme_commands_print_what_the_readme_shows() {
     let bin = assert_cmd::cargo::cargo_bin("pkm");
     let mut wrong = Vec::new();
     for (cmd, shown) in &blocks {
-        // A trailing comment is the README's, not the shell's.
+        // A trailing comment is the page's, not the shell's.
         let cmd = cmd.split("  #").next().unwrap_or(cmd).trim();
         let out = std::process::Command::new("sh")
             .arg("-c")
@@ -71,10 +72,34 @@ fn readme_commands_print_what_the_readme_shows() {
                 None => lines.contains(&without_time(s)),
             };
             if !found {
-                wrong.push(format!("pkm {cmd}\n  README: {s}\n  output:\n{text}"));
+                wrong.push(format!(
+                    "{page}: pkm {cmd}\n  shown: {s}\n  output:\n{text}"
+                ));
             }
         }
     }
+    wrong
+}
+
+#[cfg(unix)]
+#[test]
+fn readme_commands_print_what_the_readme_shows() {
+    assert!(tour(&std::fs::read_to_string(path("README.md")).unwrap()).len() >= 25);
+    let wrong = mismatches("README.md");
+    assert!(wrong.is_empty(), "{}", wrong.join("\n"));
+}
+
+#[cfg(unix)]
+#[test]
+fn docs_commands_print_what_the_docs_show() {
+    let mut pages: Vec<String> = std::fs::read_dir(path("docs"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".md"))
+        .map(|n| format!("docs/{n}"))
+        .collect();
+    pages.sort();
+    let wrong: Vec<String> = pages.iter().flat_map(|p| mismatches(p)).collect();
     assert!(wrong.is_empty(), "{}", wrong.join("\n"));
 }
 
