@@ -101,6 +101,16 @@ pub fn tool_json(m: &dyn DynMechanism, x: &[f64], conv: Convention) -> Result<Va
     }))
 }
 
+/// The width of a text column holding `names`: the longest name in characters (what
+/// `{:<w$}` pads by), at least `at_least`. A user's names (`wrist 1`, `north-west`,
+/// `Säule`) then keep the columns after them in line.
+pub fn name_width<'a>(names: impl IntoIterator<Item = &'a str>, at_least: usize) -> usize {
+    names
+        .into_iter()
+        .map(|n| n.chars().count())
+        .fold(at_least, usize::max)
+}
+
 /// `name value unit` triples of a pose for text output.
 pub fn coords_text(m: &dyn DynMechanism, x: &[f64]) -> String {
     m.coordinates()

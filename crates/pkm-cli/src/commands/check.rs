@@ -8,7 +8,7 @@ use serde_json::json;
 use std::path::PathBuf;
 
 use super::load;
-use crate::poses::{actuators_json, coords_text, tool_json, Shown};
+use crate::poses::{actuators_json, coords_text, name_width, tool_json, Shown};
 
 #[derive(Args, Debug)]
 pub struct CheckArgs {
@@ -95,14 +95,7 @@ pub fn run(a: &CheckArgs) -> Result<u8> {
             })
             .collect();
         println!("coordinates {}", c.join(", "));
-        // The names in a column as wide as the longest (`wrist 1`, `north-west`).
-        let width = m
-            .actuators()
-            .iter()
-            .map(|x| x.name.chars().count())
-            .max()
-            .unwrap_or(0)
-            .max(6);
+        let width = name_width(m.actuators().iter().map(|x| x.name.as_str()), 6);
         for (x, v) in m.actuators().iter().zip(&q) {
             let u = |v: f64| x.quantity.to_user(v);
             let unit = x.quantity.unit();

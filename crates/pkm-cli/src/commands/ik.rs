@@ -16,8 +16,8 @@ use super::csvio::{read_table, BatchTable};
 use super::load;
 use crate::columnar::{machine_metadata, Kind};
 use crate::poses::{
-    actuators_json, coords_json, coords_text, parse_list, pose_from_user, pose_names, tool_json,
-    Shown,
+    actuators_json, coords_json, coords_text, name_width, parse_list, pose_from_user, pose_names,
+    tool_json, Shown,
 };
 use crate::EXIT_UNREACHABLE;
 use std::fmt::Write as _;
@@ -174,11 +174,7 @@ pub fn run(a: &IkArgs) -> Result<u8> {
             );
         }
         // Actuator names as long as a user's file makes them stay in one column too.
-        let aw = m
-            .actuators()
-            .iter()
-            .map(|a| a.name.len())
-            .fold(8, usize::max);
+        let aw = name_width(m.actuators().iter().map(|a| a.name.as_str()), 8);
         for (act, v) in m.actuators().iter().zip(&r.actuators) {
             println!(
                 "actuator   {:<aw$} {:>12.4} {}   range [{:.3}, {:.3}]",
@@ -191,12 +187,7 @@ pub fn run(a: &IkArgs) -> Result<u8> {
         }
         let points = m.skeleton(&r.pose)?.points;
         // Names as long as a user's file makes them stay in one column.
-        let w = points
-            .iter()
-            .map(|p| p.name.len())
-            .max()
-            .unwrap_or(0)
-            .max(8);
+        let w = name_width(points.iter().map(|p| p.name.as_str()), 8);
         for p in points {
             println!(
                 "joint      {:<w$} {:>10.4} {:>10.4} {:>10.4} mm",

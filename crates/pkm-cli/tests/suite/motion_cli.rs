@@ -641,15 +641,26 @@ fn the_printed_table_is_aligned_for_long_actuator_names() {
     for l in &table {
         assert_eq!(l.chars().count(), width, "{stdout}");
     }
-    // `pkm check` lists the same names with their ranges in one column.
-    let o = pkm().arg("check").arg(&machine).output().unwrap();
-    ok(&o);
-    let stdout = String::from_utf8(o.stdout).unwrap();
-    let at: Vec<usize> = stdout
-        .lines()
-        .filter(|l| l.starts_with("actuator "))
-        .map(|l| l.chars().count() - l.split_once(" range [").unwrap().1.chars().count())
-        .collect();
-    assert_eq!(at.len(), 6, "{stdout}");
-    assert!(at.iter().all(|&c| c == at[0]), "{stdout}");
+    // `pkm check` lists the same names with their ranges in one column, and `pkm ik`
+    // its values in one column after them: `marker` starts at the same character on
+    // every actuator line.
+    let aligned = |args: &[&str], marker: &str| {
+        let o = pkm()
+            .arg(args[0])
+            .arg(&machine)
+            .args(&args[1..])
+            .output()
+            .unwrap();
+        ok(&o);
+        let stdout = String::from_utf8(o.stdout).unwrap();
+        let at: Vec<usize> = stdout
+            .lines()
+            .filter(|l| l.starts_with("actuator "))
+            .map(|l| l.chars().count() - l.split_once(marker).unwrap().1.chars().count())
+            .collect();
+        assert_eq!(at.len(), 6, "{stdout}");
+        assert!(at.iter().all(|&c| c == at[0]), "{stdout}");
+    };
+    aligned(&["check"], " range [");
+    aligned(&["ik", "--pose=0,0,508,0,0,0"], " mm   range [");
 }

@@ -99,6 +99,11 @@ fn docs_commands_print_what_the_docs_show() {
         .map(|n| format!("docs/{n}"))
         .collect();
     pages.sort();
+    let commands: usize = pages
+        .iter()
+        .map(|p| tour(&std::fs::read_to_string(path(p)).unwrap()).len())
+        .sum();
+    assert!(commands >= 4, "{commands} commands in {pages:?}");
     let wrong: Vec<String> = pages.iter().flat_map(|p| mismatches(p)).collect();
     assert!(wrong.is_empty(), "{}", wrong.join("\n"));
 }

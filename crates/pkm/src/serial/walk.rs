@@ -64,10 +64,11 @@ impl Column for Lanes {
 
 /// A column in one AVX register. Its operations are the intrinsics themselves (plain
 /// lane loops would be split into scalars by the compiler), so it is only used inside
-/// [`fast`]'s AVX2 function, into which they inline.
+/// [`fast`]'s AVX2 function, into which they inline. Private to this file: no other
+/// code can name it, so no `Ymm` runs outside `avx2`, on a CPU without AVX.
 #[cfg(target_arch = "x86_64")]
 #[derive(Clone, Copy)]
-pub(super) struct Ymm(std::arch::x86_64::__m256d);
+struct Ymm(std::arch::x86_64::__m256d);
 
 #[cfg(target_arch = "x86_64")]
 impl Column for Ymm {
