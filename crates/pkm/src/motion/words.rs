@@ -17,6 +17,8 @@ use gcode::core::{
 use super::gcode::err;
 use crate::error::Result;
 
+mod plain;
+
 /// A word as the parser reported it: the letter as written and its source span, or
 /// the variable (`X#1`) it names.
 #[derive(Debug, Clone)]
@@ -62,7 +64,16 @@ impl LineWords {
     /// Reads `text`, one source line (1-based number `line`), into [`Self::codes`] and
     /// [`Self::words`]. Errors, naming the line: the parser's first diagnostic
     /// (`malformed: ...`), a variable, a word whose number is not a finite f64.
+    ///
+    /// A plain line (`plain.rs`: codes, words and a trailing `;` comment, nearly every
+    /// line of a program) is read in one pass over its bytes to the same codes and
+    /// words; any other goes through the crate.
     pub fn read(&mut self, text: &str, line: u64) -> Result<()> {
+        self.codes.clear();
+        self.words.clear();
+        if plain::read(text.as_bytes(), &mut self.codes, &mut self.words) {
+            return Ok(());
+        }
         self.codes.clear();
         self.words.clear();
         self.raw.clear();
@@ -337,6 +348,71 @@ mod tests {
         let mut buf = LineWords::default();
         for text in &lines {
             check(&mut buf, text);
+        }
+    }
+
+    /// The lines of the example programs nearly all take the one-pass reading (so the
+    /// comparison above is one of the two readers against the crate, not the crate
+    /// against itself).
+    #[test]
+    fn example_programs_are_plain_lines() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/paths");
+        let (mut plain_lines, mut all) = (0, 0);
+        for f in std::fs::read_dir(dir).unwrap() {
+            let text = std::fs::read_to_string(f.unwrap().path()).unwrap();
+            for l in text.lines().filter(|l| !l.trim().is_empty()) {
+                all += 1;
+                let (mut c, mut w) = (Vec::new(), Vec::new());
+                plain_lines += usize::from(plain::read(l.as_bytes(), &mut c, &mut w));
+            }
+        }
+        assert!(
+            all > 100 && plain_lines * 10 > all * 8,
+            "{plain_lines} of {all}"
+        );
+    }
+
+    /// A word of a plain line: a code (`G1`, `g91.1`, `M6`), or a letter other than
+    /// G, M, T, N, O with a signed number of 1 to 25 digits (beyond the exact
+    /// quotient's 2^53 units and 10^22: the standard library's reading).
+    fn plain_word() -> impl Strategy<Value = String> {
+        let code =
+            ("[GgMmTt]", "[0-9]{1,6}", proptest::option::of("[0-9]")).prop_map(|(l, n, m)| {
+                format!("{l}{n}{}", m.map(|m| format!(".{m}")).unwrap_or_default())
+            });
+        let word = (
+            "[A-FH-LPQR-SU-Za-fh-lpqr-su-z]",
+            "[+-]?",
+            "[0-9]{0,12}",
+            proptest::option::of("[0-9]{0,13}"),
+        )
+            .prop_filter_map("a number has a digit", |(l, s, w, f)| {
+                let f = f.map(|f| format!(".{f}")).unwrap_or_default();
+                (w.len() + f.len() > 1 || (!w.is_empty() && f.is_empty()))
+                    .then(|| format!("{l}{s}{w}{f}"))
+            });
+        prop_oneof![code, word]
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(4000))]
+        /// Random plain lines (a line number, codes and words glued or apart, a
+        /// comment): read in one pass, to what the crate reads.
+        #[test]
+        fn reads_plain_lines_as_the_syntax_tree_does(
+            number in proptest::option::of("N[0-9]{1,9}[ ]?"),
+            words in proptest::collection::vec((plain_word(), "[ \t\r]{0,2}"), 0..8),
+            comment in proptest::option::of(";[ -~]{0,12}"),
+        ) {
+            let mut text = number.unwrap_or_default();
+            for (w, gap) in words {
+                text += &w;
+                text += &gap;
+            }
+            text += &comment.unwrap_or_default();
+            let (mut c, mut w) = (Vec::new(), Vec::new());
+            prop_assert!(plain::read(text.as_bytes(), &mut c, &mut w), "{text:?}");
+            check(&mut LineWords::default(), &text);
         }
     }
 
