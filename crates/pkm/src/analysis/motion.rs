@@ -108,7 +108,7 @@ impl SampleSink for NoSink {
     }
 }
 
-pub use crate::motion::decimated::Decimated;
+pub use crate::motion::decimated::{Decimated, DecimatedRows};
 
 /// Decimated time series kept for plots (at most 4000 rows, flat memory): per row
 /// `t`, then per actuator `q, q', q''`, then per serial axis `x, x', x''`, in user
@@ -116,7 +116,7 @@ pub use crate::motion::decimated::Decimated;
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct Traces {
     /// The rows.
-    pub rows: Decimated<Vec<f64>>,
+    pub rows: DecimatedRows,
     /// Where each program line's motion starts: `(t, line)` at every change of the
     /// line (G-code segment boundaries), at most [`MAX_SEGMENTS`] (beyond, the
     /// boundaries are too dense to draw and the list is emptied).
@@ -127,23 +127,22 @@ pub struct Traces {
     too_many: bool,
 }
 
-impl Default for Traces {
-    fn default() -> Self {
-        Traces {
-            rows: Decimated::new(CAP),
-            segments: Vec::new(),
-            last_line: None,
-            too_many: false,
-        }
-    }
-}
-
 const CAP: usize = 4000;
 
 /// The most segment boundaries [`Traces::segments`] keeps.
 pub const MAX_SEGMENTS: usize = 200;
 
 impl Traces {
+    /// No rows yet; each will hold `width` numbers.
+    fn new(width: usize) -> Self {
+        Traces {
+            rows: DecimatedRows::new(CAP, width),
+            segments: Vec::new(),
+            last_line: None,
+            too_many: false,
+        }
+    }
+
     fn line(&mut self, t: f64, line: Option<u64>) {
         let Some(l) = line else { return };
         if self.too_many || self.last_line == Some(l) {

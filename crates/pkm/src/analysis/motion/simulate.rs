@@ -46,7 +46,7 @@ impl Visitor for Simulate<'_, '_> {
             PoseSpace::Own => (0..P).collect(),
             _ => (0..3).collect(),
         };
-        let mut traces = Traces::default();
+        let mut traces = Traces::new(1 + 3 * A + 3 * serial_idx.len());
         // The accuracy along the path: on the machine prepared for the tolerances.
         let prepared;
         let mut tracker = match self.accuracy {
@@ -82,26 +82,25 @@ impl Visitor for Simulate<'_, '_> {
             let act = m.actuators();
             let coords = m.coordinates();
             traces.line(s.t, s.line);
-            traces.rows.push(|| {
-                let mut r = Vec::with_capacity(1 + 3 * A + 3 * serial_idx.len());
-                r.push(s.t);
+            traces.rows.push(|r| {
+                r[0] = s.t;
                 for i in 0..A {
                     let qn = act[i].quantity;
-                    r.extend([
+                    r[1 + 3 * i..4 + 3 * i].copy_from_slice(&[
                         qn.to_user(s.act.q[i]),
                         qn.to_user(s.act.qd[i]),
                         qn.to_user(s.act.qdd[i]),
                     ]);
                 }
-                for &k in &serial_idx {
+                for (j, &k) in serial_idx.iter().enumerate() {
                     let qn = coords[k].quantity;
-                    r.extend([
+                    let at = 1 + 3 * A + 3 * j;
+                    r[at..at + 3].copy_from_slice(&[
                         qn.to_user(s.x[k]),
                         qn.to_user(s.xd[k]),
                         qn.to_user(s.xdd[k]),
                     ]);
                 }
-                r
             });
             out.borrow_mut().sample(&SampleRow {
                 t: s.t,
