@@ -214,12 +214,6 @@ impl Interpreter {
         if text.trim().is_empty() {
             return Ok(None);
         }
-        if let Some(word) = oversized_code(text) {
-            return Err(err(
-                line,
-                format!("`{word}`: a G, M or T code number has at most 6 digits"),
-            ));
-        }
         let mut read = std::mem::take(&mut self.words);
         let r = read.read(text, line).and_then(|()| {
             let glued_exponent =

@@ -62,12 +62,15 @@ impl std::fmt::Debug for LineWords {
 
 impl LineWords {
     /// Reads `text`, one source line (1-based number `line`), into [`Self::codes`] and
-    /// [`Self::words`]. Errors, naming the line: the parser's first diagnostic
-    /// (`malformed: ...`), a variable, a word whose number is not a finite f64.
+    /// [`Self::words`]. Errors, naming the line: a G, M or T code number of more than
+    /// six digits (`screen.rs`: the crate's `u32` would wrap it to another code), the
+    /// parser's first diagnostic (`malformed: ...`), a variable, a word whose number is
+    /// not a finite f64.
     ///
     /// A plain line (`plain.rs`: codes, words and a trailing `;` comment, nearly every
     /// line of a program) is read in one pass over its bytes to the same codes and
-    /// words; any other goes through the crate.
+    /// words (its codes have at most six digits, so it needs no screen); any other is
+    /// screened and goes through the crate.
     pub fn read(&mut self, text: &str, line: u64) -> Result<()> {
         self.codes.clear();
         self.words.clear();
@@ -76,6 +79,12 @@ impl LineWords {
         }
         self.codes.clear();
         self.words.clear();
+        if let Some(word) = super::gcode::oversized_code(text) {
+            return Err(err(
+                line,
+                format!("`{word}`: a G, M or T code number has at most 6 digits"),
+            ));
+        }
         self.raw.clear();
         self.bare.clear();
         self.first_error = None;
@@ -274,9 +283,12 @@ mod tests {
     }
 
     fn check(buf: &mut LineWords, text: &str) {
-        // The interpreter refuses these before the parser sees them (the crate's code
-        // numbers overflow).
+        // Refused before the parser sees them (the crate's code numbers overflow); a
+        // plain line never has one.
         if crate::motion::gcode::oversized_code(text).is_some() {
+            let (mut c, mut w) = (Vec::new(), Vec::new());
+            assert!(!plain::read(text.as_bytes(), &mut c, &mut w), "{text:?}");
+            assert!(buf.read(text, 7).is_err(), "{text:?}");
             return;
         }
         let want = from_tree(text, 7).map_err(|e| e.to_string());
@@ -325,6 +337,9 @@ mod tests {
             "G0 N3 X1",
             "G1 X1 X2 X3",
             "M428",
+            "G1234567 X1",
+            "G0000012 X1",
+            "X1 M00000030",
             "G59.3 X0",
             "G1\tX1\tY2",
             "  ",
