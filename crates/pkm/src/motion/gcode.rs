@@ -27,7 +27,7 @@ mod arc;
 mod screen;
 pub use arc::plane_axes;
 use screen::exponent_hint;
-pub(super) use screen::oversized_code;
+pub(super) use screen::{oversized_code, variable_hint};
 
 /// Active plane for arcs: in-plane axes `(e1, e2)` and normal `e1 x e2`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -90,7 +90,8 @@ impl LineWords {
         self.first_error = None;
         gcode::core::parse(text, &mut Reader(self));
         if let Some(first) = self.first_error.take() {
-            return Err(err(line, format!("malformed: {first}")));
+            let hint = super::gcode::variable_hint(text);
+            return Err(err(line, format!("malformed: {first}{hint}")));
         }
         for raw in &self.raw {
             match raw {
@@ -242,7 +243,11 @@ mod tests {
     fn from_tree(text: &str, line: u64) -> Result<Read> {
         let program = gcode::parse(text).map_err(|d| {
             let first = d.iter().next().map(|x| x.kind.to_string());
-            err(line, format!("malformed: {}", first.unwrap_or_default()))
+            let hint = crate::motion::gcode::variable_hint(text);
+            err(
+                line,
+                format!("malformed: {}{hint}", first.unwrap_or_default()),
+            )
         })?;
         let (mut codes, mut words) = (Vec::new(), Vec::new());
         let value = |span: Span, letter: char| -> Result<f64> {

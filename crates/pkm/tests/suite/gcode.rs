@@ -109,7 +109,16 @@ fn malformed_programs_name_the_line() {
         ("G2 X100 Y0 R10 F100", 1, "more than the diameter"),
         ("G2 X0 Y0 R10 F100", 1, "full circle"),
         ("G1 X10 F100\nM6", 2, "without a tool selected"),
-        ("G1 X10 F100\nG1 X#1", 2, "malformed"),
+        (
+            "G1 X10 F100\nG1 X#1",
+            2,
+            "variables such as `X#1` are not supported",
+        ),
+        (
+            "G1 X10 F100\nG1 Y2 Z#<depth>",
+            2,
+            "variables such as `X#1` are not supported",
+        ),
         ("G1 X10 F100\n\nG1 X1 Y[2]", 3, "malformed"),
         ("G4", 1, "P"),
         ("G1 X1 F-3", 1, "feed must be > 0"),
@@ -118,6 +127,18 @@ fn malformed_programs_name_the_line() {
         let e = run(text).unwrap_err().to_string();
         assert!(e.contains(&format!("G-code line {line}")), "{text:?}: {e}");
         assert!(e.contains(want), "{text:?}: {e}");
+    }
+    // A `#` in a comment, or not after a letter, is not a variable.
+    for text in [
+        "G1 X10 F100 $ (see #1)",
+        "G1 X10 F100 $ ; X#1",
+        "G1 X10 # F100",
+    ] {
+        let e = run(text).unwrap_err().to_string();
+        assert!(
+            e.contains("malformed") && !e.contains("variables"),
+            "{text:?}: {e}"
+        );
     }
 }
 

@@ -20,6 +20,21 @@ pub(super) fn exponent_hint(text: &str) -> &'static str {
     }
 }
 
+/// When a word's letter is followed by `#` (`X#1`, `X#<depth>`), outside comments,
+/// the writer used a variable, which the parser reports only as a letter without a
+/// number: the hint to add to that error.
+pub(crate) fn variable_hint(text: &str) -> &'static str {
+    let code = text.split([';', '(']).next().unwrap_or("").as_bytes();
+    let used = code
+        .windows(2)
+        .any(|w| w[0].is_ascii_alphabetic() && w[1] == b'#');
+    if used {
+        " (G-code variables such as `X#1` are not supported: write the value)"
+    } else {
+        ""
+    }
+}
+
 /// The first G, M or T code whose number has more than six digits before its point
 /// (leading zeros aside), outside comments. The `gcode` crate multiplies the number by
 /// ten in a `u32`: `G2147483649` wraps to `G1` in a release build (a silent move) and
