@@ -1,6 +1,7 @@
-//! The codes and words of one G-code line, read through the `gcode` crate's
-//! zero-allocation parser (`gcode::core`'s visitors) into buffers kept from line to
-//! line.
+//! The codes and words of one G-code line, into buffers kept from line to line: a
+//! plain line (codes, words, a trailing `;` comment: nearly every line) by the
+//! one-pass reader of `words/plain.rs`, any other through the `gcode` crate's
+//! zero-allocation parser (`gcode::core`'s visitors), both to the same codes and words.
 //!
 //! `gcode::parse` builds a syntax tree per call: a `Program`, its blocks, their codes
 //! and arguments, each a vector of its own, allocated and dropped per line. The crate's
@@ -407,9 +408,9 @@ mod tests {
             proptest::option::of("[0-9]{0,13}"),
         )
             .prop_filter_map("a number has a digit", |(l, s, w, f)| {
+                let has_digit = !w.is_empty() || f.as_ref().is_some_and(|f| !f.is_empty());
                 let f = f.map(|f| format!(".{f}")).unwrap_or_default();
-                (w.len() + f.len() > 1 || (!w.is_empty() && f.is_empty()))
-                    .then(|| format!("{l}{s}{w}{f}"))
+                has_digit.then(|| format!("{l}{s}{w}{f}"))
             });
         prop_oneof![code, word]
     }

@@ -112,13 +112,14 @@ fn malformed_programs_name_the_line() {
         (
             "G1 X10 F100\nG1 X#1",
             2,
-            "variables such as `X#1` are not supported",
+            "`X#1` is a variable: G-code variables are not supported",
         ),
         (
             "G1 X10 F100\nG1 Y2 Z#<depth>",
             2,
-            "variables such as `X#1` are not supported",
+            "`Z#<depth>` is a variable",
         ),
+        ("G1 X10 F100\nG1 (depth) Z#2(z)", 2, "`Z#2` is a variable"),
         ("G1 X10 F100\n\nG1 X1 Y[2]", 3, "malformed"),
         ("G4", 1, "P"),
         ("G1 X1 F-3", 1, "feed must be > 0"),
@@ -131,6 +132,7 @@ fn malformed_programs_name_the_line() {
     // A `#` in a comment, or not after a letter, is not a variable.
     for text in [
         "G1 X10 F100 $ (see #1)",
+        "G1 X10 F100 $ (X#1)",
         "G1 X10 F100 $ ; X#1",
         "G1 X10 # F100",
     ] {

@@ -1,6 +1,6 @@
-//! What the program's text is checked for before the `gcode` crate reads it: code
+//! What the program's text is checked for around the `gcode` crate's reading: code
 //! numbers too long for the crate's `u32` (which would wrap to another code), and the
-//! hint for a number written with an exponent.
+//! hints for a number written with an exponent and for a variable.
 
 /// When a word `E` follows a digit directly (`F1e300`), the writer meant an exponent,
 /// which G-code numbers do not have: the hint to add to the "unsupported word" error.
@@ -20,19 +20,33 @@ pub(super) fn exponent_hint(text: &str) -> &'static str {
     }
 }
 
-/// When a word's letter is followed by `#` (`X#1`, `X#<depth>`), outside comments,
+/// When a word's letter is followed by `#` (`X#1`, `Z#<depth>`), outside comments,
 /// the writer used a variable, which the parser reports only as a letter without a
-/// number: the hint to add to that error.
-pub(crate) fn variable_hint(text: &str) -> &'static str {
-    let code = text.split([';', '(']).next().unwrap_or("").as_bytes();
-    let used = code
-        .windows(2)
-        .any(|w| w[0].is_ascii_alphabetic() && w[1] == b'#');
-    if used {
-        " (G-code variables such as `X#1` are not supported: write the value)"
-    } else {
-        ""
+/// number: the hint to add to that error, naming the first such word as written.
+pub(crate) fn variable_hint(text: &str) -> String {
+    let b = text.as_bytes();
+    let mut depth = 0usize;
+    for (i, &c) in b.iter().enumerate() {
+        match c {
+            b';' if depth == 0 => break,
+            b'(' => depth += 1,
+            b')' => depth = depth.saturating_sub(1),
+            b'#' if depth == 0 && i > 0 && b[i - 1].is_ascii_alphabetic() => {
+                // The word: its letter, `#` and what follows up to a blank or comment.
+                let end = b[i..]
+                    .iter()
+                    .position(|c| matches!(c, b' ' | b'\t' | b'\r' | b';' | b'('))
+                    .map_or(b.len(), |k| i + k);
+                let word = String::from_utf8_lossy(&b[i - 1..end]);
+                return format!(
+                    " (`{word}` is a variable: G-code variables are not supported; write the \
+                     value)"
+                );
+            }
+            _ => {}
+        }
     }
+    String::new()
 }
 
 /// The first G, M or T code whose number has more than six digits before its point
