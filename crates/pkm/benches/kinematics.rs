@@ -504,6 +504,77 @@ fn random_hexapod_ik(c: &mut Criterion, h: &pkm::hexapod::Hexapod) {
             })
         },
     );
+    // The same four on the global pool: a batch of a user's (Python's `m.ik`, `pkm ik`)
+    // runs on every core; chunks of 8192 poses (the library's batch chunk).
+    use rayon::prelude::*;
+    let threads = rayon::current_num_threads();
+    const CH: usize = 8192;
+    g.bench_function(
+        format!("batch of 200k from X..C (block kernel), rayon {threads} threads"),
+        |b| {
+            b.iter(|| {
+                black_box(&many)
+                    .par_chunks(6 * CH)
+                    .zip(qs.par_chunks_mut(6 * CH))
+                    .zip(clear.par_chunks_mut(CH))
+                    .for_each(|((x, q), c)| {
+                        h.inverse_screened(x, q, c, false);
+                    });
+                qs[6 * n - 1]
+            })
+        },
+    );
+    g.bench_function(
+        format!("batch of 200k from rotation matrices, rayon {threads} threads"),
+        |b| {
+            b.iter(|| {
+                black_box(&ps)
+                    .par_chunks(CH)
+                    .zip(black_box(&rs).par_chunks(CH))
+                    .zip(out.par_chunks_mut(CH))
+                    .for_each(|((p, r), o)| h.lengths_batch(p, r, o));
+                out[n - 1][0]
+            })
+        },
+    );
+    g.bench_function(
+        format!("memory floor: 200k X..C read, 6 values written, rayon {threads} threads"),
+        |b| {
+            b.iter(|| {
+                qs.par_chunks_mut(6 * CH)
+                    .zip(black_box(&many).par_chunks(6 * CH))
+                    .for_each(|(q, x)| {
+                        for (o, x) in q.chunks_exact_mut(6).zip(x.chunks_exact(6)) {
+                            for k in 0..6 {
+                                o[k] = x[k] + 1.0;
+                            }
+                        }
+                    });
+                qs[6 * n - 1]
+            })
+        },
+    );
+    g.bench_function(
+        format!(
+            "memory floor: 200k positions, matrices read, 6 values written, rayon {threads} threads"
+        ),
+        |b| {
+            b.iter(|| {
+                out.par_chunks_mut(CH)
+                    .zip(black_box(&ps).par_chunks(CH))
+                    .zip(black_box(&rs).par_chunks(CH))
+                    .for_each(|((o, p), r)| {
+                        for ((o, p), r) in o.iter_mut().zip(p).zip(r) {
+                            for k in 0..3 {
+                                o[k] = p[k] + r[k];
+                                o[k + 3] = r[k + 3] + r[k + 6];
+                            }
+                        }
+                    });
+                out[n - 1][0]
+            })
+        },
+    );
     g.finish();
 }
 

@@ -403,13 +403,14 @@ pub fn condition_batch(machine: &Machine, poses: &[f64]) -> Result<Vec<f64>> {
         fn visit<M: Analysable<P, A>, const P: usize, const A: usize>(self, m: &M) -> Self::Output {
             let n = rows(self.0, P, "poses")?;
             let mut out = filled(n, f64::NAN);
+            // A chunk's poses in one call (the hexapod's eigenvalues run eight poses
+            // across SIMD lanes); a failure is NaN.
             let work = |(xs, c): (&[f64], &mut [f64])| {
-                for (x, c) in xs.chunks_exact(P).zip(c.iter_mut()) {
-                    let x = nalgebra::SVector::<f64, P>::from_column_slice(x);
-                    if let Ok(k) = m.condition(&x) {
-                        *c = k;
-                    }
-                }
+                let xs: Vec<nalgebra::SVector<f64, P>> = xs
+                    .chunks_exact(P)
+                    .map(nalgebra::SVector::<f64, P>::from_column_slice)
+                    .collect();
+                m.conditions(&xs, &[], c);
             };
             if n <= BATCH_CHUNK {
                 work((self.0, &mut out));

@@ -191,6 +191,13 @@ impl Hexapod {
             .lengths_and_jacobian(p, r, self.characteristic_length)
             .1
     }
+
+    /// `J^T J` of [`Self::scaled_twist_jacobian`] at pose coordinates `x`.
+    fn gram(&self, x: &Vector6<f64>) -> SMatrix<f64, 6, 6> {
+        let (p, r) = split_pose(x);
+        let j = self.scaled_twist_jacobian(&p, &r);
+        j.transpose() * j
+    }
 }
 
 impl Mechanism<6, 6> for Hexapod {
@@ -405,21 +412,26 @@ impl Mechanism<6, 6> for Hexapod {
     /// Condition number of the twist Jacobian with rotations scaled by the
     /// characteristic length (mean platform joint distance from the tool tip): the ratio
     /// of the largest to the smallest strut rate per unit tool twist.
+    ///
+    /// From the eigenvalues of `J^T J` ([`crate::linalg::gram_conditions`]: eight
+    /// poses per call of its lane kernel in [`Mechanism::conditions`], the same value
+    /// for one pose alone).
     fn condition(&self, x: &Vector6<f64>) -> Result<f64> {
-        let (p, r) = split_pose(x);
-        let j = self.scaled_twist_jacobian(&p, &r);
-        // Eigenvalues of J^T J by the root-free QL (much faster than an SVD or
-        // nalgebra's symmetric solver with eigenvectors; half the time of the QL with
-        // square roots), with the Jacobi method as the fallback.
-        let jtj = j.transpose() * j;
-        let ev = crate::linalg::symmetric_eigenvalues_rational(&jtj)
-            .unwrap_or_else(|| crate::linalg::symmetric_eigenvalues(&jtj));
-        let (lo, hi) = (ev.min(), ev.max());
-        Ok(if lo > 0.0 {
-            (hi / lo).sqrt()
-        } else {
-            f64::INFINITY
-        })
+        let mut out = [0.0];
+        crate::linalg::gram_conditions(&[self.gram(x)], &mut out);
+        Ok(out[0])
+    }
+
+    /// Eight poses per call of the lanes' eigenvalue kernel.
+    fn conditions(&self, xs: &[Vector6<f64>], _qs: &[Vector6<f64>], out: &mut [f64]) {
+        assert_eq!(out.len(), xs.len(), "one condition number per pose");
+        for (xs, out) in xs.chunks(8).zip(out.chunks_mut(8)) {
+            let grams: [SMatrix<f64, 6, 6>; 8] = std::array::from_fn(|k| match xs.get(k) {
+                Some(x) => self.gram(x),
+                None => SMatrix::zeros(),
+            });
+            crate::linalg::gram_conditions(&grams[..xs.len()], out);
+        }
     }
 
     fn characteristic_length(&self) -> f64 {

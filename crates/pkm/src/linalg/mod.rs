@@ -9,11 +9,13 @@
 
 mod eigen;
 mod inverse;
+mod jacobi_lanes;
 pub use eigen::{
     condition_number, singular_values, symmetric_eigenvalues, symmetric_eigenvalues_ql,
     symmetric_eigenvalues_rational,
 };
 pub use inverse::inverse_lu;
+pub use jacobi_lanes::gram_conditions;
 
 use nalgebra::{SMatrix, SVector};
 

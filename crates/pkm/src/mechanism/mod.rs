@@ -343,6 +343,27 @@ pub trait Mechanism<const P: usize, const A: usize>: Send + Sync {
         self.condition(x)
     }
 
+    /// [`Mechanism::condition_at`] of many poses: `out[i]` at `xs[i]` with actuator
+    /// positions `qs[i]` (or [`Mechanism::condition`] when `qs` is empty), NaN where it
+    /// fails. Types with a kernel for several poses at once (the hexapod's eigenvalues
+    /// across SIMD lanes) override it with the same values as one pose at a time.
+    ///
+    /// # Panics
+    /// When `out` differs from `xs` in length, or `qs` is neither empty nor as long.
+    fn conditions(&self, xs: &[SVector<f64, P>], qs: &[SVector<f64, A>], out: &mut [f64]) {
+        assert!(
+            out.len() == xs.len() && (qs.is_empty() || qs.len() == xs.len()),
+            "one condition number per pose"
+        );
+        for (i, (x, o)) in xs.iter().zip(out.iter_mut()).enumerate() {
+            let c = match qs.get(i) {
+                Some(q) => self.condition_at(x, q),
+                None => self.condition(x),
+            };
+            *o = c.unwrap_or(f64::NAN);
+        }
+    }
+
     /// Pose coordinates putting the tool tip at `tip` with the tool axis along `axis`
     /// (the frame of the pose coordinates; from the tip towards the spindle, any length):
     /// every branch of the rotary axes, the continuity rule's choice (the branch within

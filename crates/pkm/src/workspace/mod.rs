@@ -9,6 +9,7 @@ mod connected;
 pub mod forward;
 mod reach;
 mod summary;
+mod verdict;
 
 pub use reach::{
     default_grid, default_span, map_reach, reach_grid, reachable_tilt, tilt_orientations, ReachGrid,
@@ -16,6 +17,8 @@ pub use reach::{
 pub use summary::WorkspaceSummary;
 
 use connected::{keep_connected, nearest_index, neighbours};
+use verdict::{admit, conditioned, fold_conditions, judge, Tally};
+pub(crate) use verdict::{evaluate, reach};
 
 use nalgebra::SVector;
 use rayon::prelude::*;
@@ -193,81 +196,6 @@ pub fn flat_index(axes: &[GridAxis], idx: &[usize]) -> usize {
     k
 }
 
-/// The category and the text ([`Error::category`]: one key per kind, not one per
-/// residual) of an inverse-kinematics failure.
-pub(crate) fn classify(e: &Error) -> (PointStatus, String) {
-    let status = match e {
-        Error::NotConverged { .. } => PointStatus::SolverFailed,
-        Error::Singular { .. } => PointStatus::Singular,
-        _ => PointStatus::NoSolution,
-    };
-    (status, e.category())
-}
-
-/// Inverse kinematics and every limit at `x`: the actuator values when the pose is
-/// within every limit, else the name of what binds (`no solution`, the first violated
-/// limit) beside the actuator values when they exist. `v` holds every violation.
-pub(crate) fn reach<M: Mechanism<P, A>, const P: usize, const A: usize>(
-    m: &M,
-    x: &SVector<f64, P>,
-    v: &mut Vec<Violation>,
-) -> (Option<SVector<f64, A>>, Option<String>) {
-    v.clear();
-    match m.inverse(x) {
-        Ok(q) => limits_at(m, x, q, v),
-        Err(e) => (None, Some(classify(&e).1)),
-    }
-}
-
-fn limits_at<M: Mechanism<P, A>, const P: usize, const A: usize>(
-    m: &M,
-    x: &SVector<f64, P>,
-    q: SVector<f64, A>,
-    v: &mut Vec<Violation>,
-) -> (Option<SVector<f64, A>>, Option<String>) {
-    v.clear();
-    m.check_limits(x, &q, v);
-    (Some(q), v.first().map(|f| f.limit.to_string()))
-}
-
-/// The point result at `x` once inverse kinematics has answered `q`; `v` is left with
-/// every violated limit.
-fn judge<M: Mechanism<P, A>, const P: usize, const A: usize>(
-    m: &M,
-    x: &SVector<f64, P>,
-    q: Result<SVector<f64, A>>,
-    v: &mut Vec<Violation>,
-) -> PointResult {
-    v.clear();
-    let q = match q {
-        Ok(q) => q,
-        Err(e) => {
-            let (status, why) = classify(&e);
-            return PointResult::unreachable(status, why);
-        }
-    };
-    if let (_, Some(b)) = limits_at(m, x, q, v) {
-        return PointResult::unreachable(PointStatus::Limits, b);
-    }
-    match m.condition_at(x, &q) {
-        Ok(c) if c.is_finite() => PointResult {
-            reachable: true,
-            status: PointStatus::Reachable,
-            condition: c,
-            binding: None,
-        },
-        _ => PointResult::unreachable(PointStatus::Singular, "singular".into()),
-    }
-}
-
-pub(crate) fn evaluate<M: Mechanism<P, A>, const P: usize, const A: usize>(
-    m: &M,
-    x: &SVector<f64, P>,
-    v: &mut Vec<Violation>,
-) -> PointResult {
-    judge(m, x, m.inverse(x), v)
-}
-
 /// The grid point with flat index `k` (row-major over `axes`, `counts` their sizes):
 /// `base` with the axis coordinates set.
 #[inline]
@@ -381,23 +309,76 @@ where
             }
             worst
         };
+    // `evaluate_all` (from home) up to the condition numbers: the poses of `x` within
+    // every limit, in orientation order, go to `pend`; the result of the first one
+    // that is not, if any.
+    let admit_all = |x: &SVector<f64, P>,
+                     v: &mut Vec<Violation>,
+                     pend: &mut dyn FnMut(SVector<f64, P>, SVector<f64, A>)|
+     -> Option<PointResult> {
+        if rots.is_empty() {
+            return match admit(m, x, m.inverse(x), v) {
+                Ok(q) => {
+                    pend(*x, q);
+                    None
+                }
+                Err(r) => Some(r),
+            };
+        }
+        let mut x = *x;
+        for o in &rots {
+            for (i, val) in o.iter().enumerate() {
+                x[3 + i] = *val;
+            }
+            match admit(m, &x, m.inverse(&x), v) {
+                Ok(q) => pend(x, q),
+                Err(r) => return Some(r),
+            }
+        }
+        None
+    };
     // Chunks in parallel, each with its own tally of every violated limit (merged in
-    // order afterwards: no locks, and the points keep their grid order).
+    // order afterwards: no locks, and the points keep their grid order). In a chunk,
+    // inverse kinematics and limits point by point, then the condition numbers of
+    // every pose within the limits in one call (`Mechanism::conditions`: the
+    // hexapod's runs eight poses across SIMD lanes), folded as `evaluate_all` does:
+    // the worst over the orientations; singular at the first that is not finite, also
+    // before an orientation beyond a limit.
     let chunks: Vec<(Vec<PointResult>, Tally)> = (0..total.div_ceil(chunk))
         .into_par_iter()
         .map_init(Vec::new, |v, c| {
             let range = c * chunk..((c + 1) * chunk).min(total);
             let mut tally = Tally::default();
-            let points: Vec<PointResult> = range
-                .clone()
-                .map(|k| {
-                    let r = evaluate_all(&grid_point(base, axes, &counts, k), v, None);
-                    if r.status == PointStatus::Limits {
-                        tally.add(v);
+            let mut points: Vec<PointResult> = Vec::with_capacity(range.len());
+            let (mut xs, mut qs, mut owner) = (Vec::new(), Vec::new(), Vec::new());
+            // Points beyond a limit after orientations whose conditions are pending:
+            // their violations, tallied unless one of those is singular.
+            let mut deferred: Vec<(usize, Vec<Violation>)> = Vec::new();
+            for k in range.clone() {
+                let i = points.len();
+                let before = xs.len();
+                let mut pend = |x, q| {
+                    xs.push(x);
+                    qs.push(q);
+                    owner.push(i);
+                };
+                match admit_all(&grid_point(base, axes, &counts, k), v, &mut pend) {
+                    Some(r) => {
+                        if r.status == PointStatus::Limits {
+                            if xs.len() > before {
+                                deferred.push((i, v.clone()));
+                            } else {
+                                tally.add(v);
+                            }
+                        }
+                        points.push(r);
                     }
-                    r
-                })
-                .collect();
+                    None => points.push(conditioned(0.0)),
+                }
+            }
+            let mut cs = vec![0.0; xs.len()];
+            m.conditions(&xs, &qs, &mut cs);
+            fold_conditions(&mut points, &owner, &cs, deferred, &mut tally);
             progress(range.len() as u64);
             (points, tally)
         })
@@ -461,37 +442,4 @@ where
         violated: tally.sorted(),
         closed: vec![[false; 2]; axes.len()],
     })
-}
-
-/// Points per violated limit, each point counted once per limit it violates.
-#[derive(Default)]
-struct Tally(std::collections::HashMap<String, usize>);
-
-impl Tally {
-    fn add(&mut self, v: &[Violation]) {
-        for (i, x) in v.iter().enumerate() {
-            // A limit listed twice at one point (two orientations) counts once.
-            if v[..i].iter().any(|y| y.limit == x.limit) {
-                continue;
-            }
-            match self.0.get_mut(x.limit.as_str()) {
-                Some(n) => *n += 1,
-                None => {
-                    self.0.insert(x.limit.to_string(), 1);
-                }
-            }
-        }
-    }
-
-    fn merge(&mut self, other: Tally) {
-        for (k, n) in other.0 {
-            *self.0.entry(k).or_default() += n;
-        }
-    }
-
-    fn sorted(self) -> Vec<(String, usize)> {
-        let mut v: Vec<(String, usize)> = self.0.into_iter().collect();
-        v.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
-        v
-    }
 }

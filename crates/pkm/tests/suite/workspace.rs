@@ -198,6 +198,82 @@ fn hexapod_condition_numbers_agree_with_the_plain_ql_and_an_svd() {
     assert!(seen > 20_000, "{seen}");
 }
 
+/// A hexapod's map, whose condition numbers run eight poses across SIMD lanes a chunk
+/// at a time, gives every point what it gives one pose at a time: with an orientation
+/// set (the total orientation workspace of `--tilt 12`), a point is reachable when
+/// every orientation is, and its condition is the largest of theirs, bit for bit; a
+/// point beyond a limit names the first orientation's first violated limit.
+/// `Mechanism::conditions` equals `condition` pose by pose, bit for bit.
+#[test]
+fn hexapod_map_conditions_equal_those_of_single_poses() {
+    let Model::Hexapod(h) = machine("hexapod-linuxcnc.toml").model else {
+        panic!()
+    };
+    let axes = [
+        GridAxis {
+            coordinate: 0,
+            min: -300.0,
+            max: 300.0,
+            step: 50.0,
+        },
+        GridAxis {
+            coordinate: 1,
+            min: -300.0,
+            max: 300.0,
+            step: 60.0,
+        },
+        GridAxis {
+            coordinate: 2,
+            min: 300.0,
+            max: 800.0,
+            step: 50.0,
+        },
+    ];
+    let tilts = pkm::workspace::tilt_orientations(12f64.to_radians());
+    let wm = map(h.as_ref(), &h.home, &axes, &tilts, &|_| {}).unwrap();
+    let base = pkm::Convention::Rpy.to_matrix([h.home[3], h.home[4], h.home[5]]);
+    let (mut reachable, mut beyond) = (0, 0);
+    let mut xs = Vec::new();
+    for (k, p) in wm.points.iter().enumerate() {
+        let c = wm.coords(k);
+        let mut worst: f64 = 0.0;
+        let mut first = None;
+        for o in &tilts {
+            let a = pkm::Convention::Rpy.from_matrix(&(pkm::Convention::Rpy.to_matrix(*o) * base));
+            let x = Vector6::new(c[0], c[1], c[2], a[0], a[1], a[2]);
+            xs.push(x);
+            match inverse_checked(h.as_ref(), &x) {
+                Ok(_) => worst = worst.max(h.condition(&x).unwrap()),
+                Err(e) => {
+                    first = Some(e);
+                    break;
+                }
+            }
+        }
+        match first {
+            None => {
+                reachable += 1;
+                assert!(p.reachable, "{c:?}");
+                assert_eq!(p.condition.to_bits(), worst.to_bits(), "{c:?}");
+            }
+            Some(pkm::Error::Unreachable { violations }) => {
+                beyond += 1;
+                assert!(!p.reachable);
+                assert_eq!(p.binding.as_deref(), Some(violations[0].limit.as_str()));
+            }
+            Some(e) => panic!("{c:?}: {e}"),
+        }
+    }
+    assert!(reachable > 30 && beyond > 300, "{reachable} {beyond}");
+    // Any count, not a multiple of eight.
+    xs.truncate(8 * 40 + 5);
+    let mut out = vec![0.0; xs.len()];
+    h.conditions(&xs, &[], &mut out);
+    for (x, c) in xs.iter().zip(&out) {
+        assert_eq!(c.to_bits(), h.condition(x).unwrap().to_bits(), "{x}");
+    }
+}
+
 #[test]
 fn total_orientation_workspace_is_smaller() {
     let Model::Hexapod(h) = machine("hexapod-linuxcnc.toml").model else {
