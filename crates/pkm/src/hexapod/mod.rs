@@ -425,13 +425,7 @@ impl Mechanism<6, 6> for Hexapod {
     /// Eight poses per call of the lanes' eigenvalue kernel.
     fn conditions(&self, xs: &[Vector6<f64>], _qs: &[Vector6<f64>], out: &mut [f64]) {
         assert_eq!(out.len(), xs.len(), "one condition number per pose");
-        for (xs, out) in xs.chunks(8).zip(out.chunks_mut(8)) {
-            let grams: [SMatrix<f64, 6, 6>; 8] = std::array::from_fn(|k| match xs.get(k) {
-                Some(x) => self.gram(x),
-                None => SMatrix::zeros(),
-            });
-            crate::linalg::gram_conditions(&grams[..xs.len()], out);
-        }
+        crate::linalg::gram_conditions_by(|k| self.gram(&xs[k]), out);
     }
 
     fn characteristic_length(&self) -> f64 {

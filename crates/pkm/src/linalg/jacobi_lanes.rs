@@ -30,9 +30,9 @@ use nalgebra::SMatrix;
 /// The condition numbers `sqrt(lambda_max / lambda_min)` of the symmetric positive
 /// semi-definite Gram matrices `g` (`J^T J` of a Jacobian `J`: the 2-norm condition
 /// number of `J`) into `out` (one per matrix; infinity where `lambda_min <= 0` or is
-/// NaN, as for a matrix with an entry that is not finite). Eight at a time by the lanes' Jacobi method where
-/// the CPU has AVX-512F; otherwise, and for a matrix the lanes give up on, by the
-/// root-free QL ([`super::symmetric_eigenvalues_rational`], the Jacobi method of
+/// NaN, as for a matrix with an entry that is not finite). Eight at a time by the
+/// lanes' Jacobi method where the CPU has AVX-512F; otherwise, and for a matrix the
+/// lanes give up on, by the root-free QL ([`super::symmetric_eigenvalues_rational`], the Jacobi method of
 /// [`super::symmetric_eigenvalues`] if that fails). A matrix gets the same value
 /// whichever matrices share its call.
 ///
@@ -40,6 +40,15 @@ use nalgebra::SMatrix;
 /// When `out` and `g` differ in length.
 pub fn gram_conditions<const N: usize>(g: &[SMatrix<f64, N, N>], out: &mut [f64]) {
     assert_eq!(g.len(), out.len(), "one condition number per matrix");
+    gram_conditions_by(|k| g[k], out);
+}
+
+/// [`gram_conditions`] of the matrices `gram(0)`, ..., `gram(out.len() - 1)`, each
+/// built where the lanes take it (no array of them is copied).
+pub fn gram_conditions_by<const N: usize>(
+    gram: impl Fn(usize) -> SMatrix<f64, N, N>,
+    out: &mut [f64],
+) {
     let ratio = |lo: f64, hi: f64| {
         if lo > 0.0 {
             (hi / lo).sqrt()
@@ -52,12 +61,15 @@ pub fn gram_conditions<const N: usize>(g: &[SMatrix<f64, N, N>], out: &mut [f64]
             .unwrap_or_else(|| super::symmetric_eigenvalues(g));
         ratio(ev.min(), ev.max())
     };
-    for (g, out) in g.chunks(8).zip(out.chunks_mut(8)) {
+    for (c, out) in out.chunks_mut(8).enumerate() {
+        // The chunk's matrices, the last repeated in the spare lanes (lanes do not
+        // interact).
+        let g: [SMatrix<f64, N, N>; 8] =
+            std::array::from_fn(|k| gram(8 * c + k.min(out.len() - 1)));
         #[cfg(target_arch = "x86_64")]
         {
-            // The last matrix repeated in the spare lanes (lanes do not interact).
-            let lanes: [SMatrix<f64, N, N>; 8] = std::array::from_fn(|k| g[k.min(g.len() - 1)]);
-            if let Some((ev, converged)) = symmetric_eigenvalues_x8(&lanes) {
+            let lanes = &g;
+            if let Some((ev, converged)) = symmetric_eigenvalues_x8(lanes) {
                 for (k, o) in out.iter_mut().enumerate() {
                     *o = if converged & (1 << k) != 0 {
                         let (lo, hi) = ev
@@ -92,12 +104,13 @@ const MAX_SWEEPS: usize = 30;
 /// eigenvalue of matrix `k` (in no particular order) and bit `k` of `converged` set
 /// when it converged (unset for a matrix with an entry that is not finite, or, in
 /// principle, one that did not converge in 30 sweeps; an all-zero matrix too: the
-/// caller uses another method). `None` when the CPU lacks AVX-512F.
+/// caller uses another method). `None` when the CPU lacks AVX-512F, or for `N > 16`.
 #[cfg(target_arch = "x86_64")]
 pub(crate) fn symmetric_eigenvalues_x8<const N: usize>(
     m: &[SMatrix<f64, N, N>; 8],
 ) -> Option<([[f64; 8]; N], u8)> {
-    if !std::arch::is_x86_feature_detected!("avx512f") {
+    // The round-robin order is laid out for at most 16 rows.
+    if N > 16 || !std::arch::is_x86_feature_detected!("avx512f") {
         return None;
     }
     // SAFETY: the CPU reported AVX-512F, the one feature the kernel is compiled with.
@@ -161,10 +174,29 @@ mod avx512 {
             if done == 0xff {
                 break;
             }
-            for p in 0..N {
-                for q in p + 1..N {
-                    rotate(&mut a, p, q, done);
+            // The round-robin order (Brent & Luk 1985): N - 1 rounds (N even) of
+            // disjoint pairs, whose rotation angles depend only on their own 2 x 2
+            // blocks: a round's angles are computed side by side, then applied (a
+            // sweep row by row is one chain of dependent angles).
+            let players = N + N % 2;
+            let mut order: [usize; 16] = std::array::from_fn(|k| k);
+            for _ in 0..players - 1 {
+                let mut angles = [(zero, zero, zero, 0u8); 8];
+                let mut pairs = [(0usize, 0usize); 8];
+                let mut count = 0;
+                for i in 0..players / 2 {
+                    let (u, v) = (order[i], order[players - 1 - i]);
+                    if u < N && v < N {
+                        pairs[count] = (u.min(v), u.max(v));
+                        angles[count] = angle(&a, pairs[count].0, pairs[count].1, done);
+                        count += 1;
+                    }
                 }
+                for k in 0..count {
+                    apply(&mut a, pairs[k], angles[k]);
+                }
+                // Every player but the first moves one place round.
+                order[1..players].rotate_right(1);
             }
         }
         let mut out = [[0.0; 8]; N];
@@ -197,25 +229,61 @@ mod avx512 {
         }
     }
 
-    /// The rotation `(p, q)` (`p < q`) in every lane not in `frozen`.
+    /// The rotation `(p, q)` (`p < q`) in every lane not in `frozen`: `(t, c, s,
+    /// clear)`, `clear` the lanes whose `a_pq` it zeroes (all but `frozen`; where
+    /// `a_pq` is negligible, without rotating: `t = 0, c = 1, s = 0`). The
+    /// square roots and the quotient come from the 14-bit estimates refined by Newton
+    /// steps (two each: within an ulp or two, as a rounded division and square root
+    /// chained are) on the multiply-add units, not the divider.
     #[target_feature(enable = "avx512f")]
     #[inline]
-    fn rotate<const N: usize>(a: &mut [[__m512d; N]; N], p: usize, q: usize, frozen: u8) {
-        let zero = _mm512_setzero_pd();
-        let one = _mm512_set1_pd(1.0);
+    fn angle<const N: usize>(
+        a: &[[__m512d; N]; N],
+        p: usize,
+        q: usize,
+        frozen: u8,
+    ) -> (__m512d, __m512d, __m512d, u8) {
+        let b = |v: f64| _mm512_set1_pd(v);
         let (app, aqq, apq) = (a[p][p], a[q][q], a[p][q]);
+        // Rotated: not converged, and a_pq above 2^-500 (the lane is scaled to a largest
+        // entry of 1 or more: a smaller one is negligible, set to zero; d^2 + 4 a_pq^2
+        // cannot underflow).
+        let tiny = b(f64::from_bits(0x20b0_0000_0000_0000));
+        let still = !frozen & _mm512_cmp_pd_mask::<_CMP_GT_OQ>(_mm512_abs_pd(apq), tiny);
         let d = _mm512_sub_pd(aqq, app);
         let two = _mm512_add_pd(apq, apq);
-        let h = _mm512_sqrt_pd(_mm512_fmadd_pd(d, d, _mm512_mul_pd(two, two)));
+        let x = _mm512_fmadd_pd(d, d, _mm512_mul_pd(two, two));
+        // h = sqrt(x): y ~ 1/sqrt(x), h = x y and one Heron step.
+        let y = rsqrt(x);
+        let h0 = _mm512_mul_pd(x, y);
+        let h = _mm512_fmadd_pd(_mm512_fnmadd_pd(h0, h0, x), _mm512_mul_pd(y, b(0.5)), h0);
         // sign(d) 2 a_pq: the sign bit of d applied to 2 a_pq.
         let sign = _mm512_and_si512(_mm512_castpd_si512(d), _mm512_set1_epi64(i64::MIN));
         let num = _mm512_castsi512_pd(_mm512_xor_si512(_mm512_castpd_si512(two), sign));
-        let t = _mm512_div_pd(num, _mm512_add_pd(_mm512_abs_pd(d), h));
-        // a_pq = 0 (0 / 0 when d = 0 too) and converged lanes: no rotation.
-        let still = !frozen & _mm512_cmp_pd_mask::<_CMP_NEQ_UQ>(apq, zero);
+        // t = num / den: r ~ 1/den by two Newton steps, then one correction of t.
+        let den = _mm512_add_pd(_mm512_abs_pd(d), h);
+        let mut r = _mm512_rcp14_pd(den);
+        for _ in 0..2 {
+            r = _mm512_mul_pd(r, _mm512_fnmadd_pd(den, r, b(2.0)));
+        }
+        let t0 = _mm512_mul_pd(num, r);
+        let t = _mm512_fmadd_pd(_mm512_fnmadd_pd(den, t0, num), r, t0);
         let t = _mm512_maskz_mov_pd(still, t);
-        let c = _mm512_div_pd(one, _mm512_sqrt_pd(_mm512_fmadd_pd(t, t, one)));
-        let s = _mm512_mul_pd(t, c);
+        let c = _mm512_mask_blend_pd(still, b(1.0), rsqrt(_mm512_fmadd_pd(t, t, b(1.0))));
+        (t, c, _mm512_mul_pd(t, c), !frozen)
+    }
+
+    /// Applies the rotation `(t, c, s, clear)` of pair `(p, q)` ([`angle`]): in the
+    /// lanes it does not rotate every entry is kept (`c = 1`, `s = 0`, `t = 0`) but
+    /// `a_pq` in the `clear` ones.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn apply<const N: usize>(
+        a: &mut [[__m512d; N]; N],
+        (p, q): (usize, usize),
+        (t, c, s, clear): (__m512d, __m512d, __m512d, u8),
+    ) {
+        let (app, aqq, apq) = (a[p][p], a[q][q], a[p][q]);
         for r in 0..N {
             if r == p || r == q {
                 continue;
@@ -226,7 +294,23 @@ mod avx512 {
         }
         a[p][p] = _mm512_fnmadd_pd(t, apq, app);
         a[q][q] = _mm512_fmadd_pd(t, apq, aqq);
-        a[p][q] = _mm512_mask_mov_pd(apq, still, zero);
+        a[p][q] = _mm512_mask_mov_pd(apq, clear, _mm512_setzero_pd());
+    }
+
+    /// `1 / sqrt(x)` for `x > 0`: the 14-bit estimate and two Newton steps
+    /// `y (1.5 - 0.5 x y^2)` (56 bits).
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn rsqrt(x: __m512d) -> __m512d {
+        let half = _mm512_mul_pd(x, _mm512_set1_pd(0.5));
+        let mut y = _mm512_rsqrt14_pd(x);
+        for _ in 0..2 {
+            y = _mm512_mul_pd(
+                y,
+                _mm512_fnmadd_pd(half, _mm512_mul_pd(y, y), _mm512_set1_pd(1.5)),
+            );
+        }
+        y
     }
 }
 
