@@ -6,14 +6,22 @@
 //! dependent divisions whose length depends on the matrix (deflation, iterations): it
 //! cannot share vector lanes between matrices, and a 6 x 6 takes about a microsecond.
 //! Jacobi's sweeps make the same operations for every matrix, so eight run side by
-//! side. Rotation `(p, q)` of a sweep (`p < q`, row by row) zeroes `a_pq` (Golub & Van
-//! Loan, algorithm 8.5.1, written without `tau`'s division by `a_pq`):
+//! side. A sweep takes the pairs in round-robin order (Brent & Luk 1985, "The solution
+//! of singular-value and symmetric eigenvalue problems on multiprocessor arrays", SIAM
+//! J. Sci. Stat. Comput. 6): rounds of disjoint pairs, whose angles depend only on
+//! their own 2 x 2 blocks, so a round's angles are computed side by side (row by row,
+//! a sweep is one chain of dependent angles). Rotation `(p, q)` (`p < q`) zeroes
+//! `a_pq` (Golub & Van Loan, algorithm 8.5.1, written without `tau`'s division by
+//! `a_pq`):
 //!
 //! `d = a_qq - a_pp`, `h = sqrt(d^2 + (2 a_pq)^2)`, `t = sign(d) 2 a_pq / (|d| + h)`
 //! (the smaller root of `t^2 + 2 tau t - 1 = 0`, `tau = d / (2 a_pq)`: a rotation of
 //! at most 45 degrees), `c = 1 / sqrt(1 + t^2)`, `s = t c`; then `a_pp -= t a_pq`,
 //! `a_qq += t a_pq`, `a_pq = 0` and, for every other row `r`,
-//! `a_rp = c a_rp - s a_rq`, `a_rq = s a_rp + c a_rq`.
+//! `a_rp = c a_rp - s a_rq`, `a_rq = s a_rp + c a_rq`. The square roots and the
+//! quotient come from the 14-bit hardware estimates refined by Newton steps (within
+//! an ulp or two, as a rounded division and square root chained are), on the
+//! multiply-add units rather than the divider (16-20 cycles per 512-bit operation).
 //!
 //! Each lane is scaled first by a power of two (exact) to a largest entry in [1, 2),
 //! so the squares neither overflow nor underflow, and stops on its own: before each
@@ -180,7 +188,7 @@ mod avx512 {
             // sweep row by row is one chain of dependent angles).
             let players = N + N % 2;
             let mut order: [usize; 16] = std::array::from_fn(|k| k);
-            for _ in 0..players - 1 {
+            for _ in 0..players.saturating_sub(1) {
                 let mut angles = [(zero, zero, zero, 0u8); 8];
                 let mut pairs = [(0usize, 0usize); 8];
                 let mut count = 0;
