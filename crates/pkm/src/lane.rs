@@ -111,3 +111,22 @@ impl Lane for Zmm {
         Zmm(self.0.map(|a| -a))
     }
 }
+
+/// `sqrt(x)` by lane (`x > 0`) without the square-root unit: `y ~ 1/sqrt(x)` by the
+/// 14-bit estimate and one Newton step `y (1.5 - 0.5 x y^2)` (28 bits), then
+/// `l = x y` and one Heron step `l + (x - l^2) y / 2` (56 bits). The hexapod's strut
+/// lengths and the lanes' Jacobi rotations take their square roots from it.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+#[inline]
+pub(crate) fn sqrt_refined(x: std::arch::x86_64::__m512d) -> std::arch::x86_64::__m512d {
+    use std::arch::x86_64::*;
+    let b = |v: f64| _mm512_set1_pd(v);
+    let half = _mm512_mul_pd(x, b(0.5));
+    let y0 = _mm512_rsqrt14_pd(x);
+    let yy = _mm512_mul_pd(y0, y0);
+    let y = _mm512_mul_pd(y0, _mm512_fnmadd_pd(half, yy, b(1.5)));
+    let l = _mm512_mul_pd(x, y);
+    let e = _mm512_fnmadd_pd(l, l, x);
+    _mm512_fmadd_pd(e, _mm512_mul_pd(y, b(0.5)), l)
+}

@@ -244,24 +244,16 @@ pub(crate) fn strut_component(
     _mm512_fmadd_pd(r[0], arm[0], t)
 }
 
-/// `|d|` by lane without the square-root unit: `d2 = |d|^2`, `y ~ 1/sqrt(d2)` by the
-/// 14-bit estimate and one Newton step `y (1.5 - 0.5 d2 y^2)` (28 bits), then
-/// `l = d2 y` and one Heron step `l + (d2 - l^2) y / 2` (56 bits).
+/// `|d|` by lane without the square-root unit: `d2 = |d|^2`, then
+/// [`crate::lane::sqrt_refined`] (56 bits).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
 #[inline]
 pub(crate) fn strut_length(d: [std::arch::x86_64::__m512d; 3]) -> std::arch::x86_64::__m512d {
     use std::arch::x86_64::*;
-    let b = |v: f64| _mm512_set1_pd(v);
     let [dx, dy, dz] = d;
     let d2 = _mm512_fmadd_pd(dz, dz, _mm512_fmadd_pd(dy, dy, _mm512_mul_pd(dx, dx)));
-    let half = _mm512_mul_pd(d2, b(0.5));
-    let y0 = _mm512_rsqrt14_pd(d2);
-    let yy = _mm512_mul_pd(y0, y0);
-    let y = _mm512_mul_pd(y0, _mm512_fnmadd_pd(half, yy, b(1.5)));
-    let l = _mm512_mul_pd(d2, y);
-    let e = _mm512_fnmadd_pd(l, l, d2);
-    _mm512_fmadd_pd(e, _mm512_mul_pd(y, b(0.5)), l)
+    crate::lane::sqrt_refined(d2)
 }
 
 /// [`crate::legs::StrutSoa::motion`] compiled with AVX-512 enabled (the same operations,

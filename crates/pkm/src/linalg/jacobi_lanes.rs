@@ -40,9 +40,9 @@ use nalgebra::SMatrix;
 /// number of `J`) into `out` (one per matrix; infinity where `lambda_min <= 0` or is
 /// NaN, as for a matrix with an entry that is not finite). Eight at a time by the
 /// lanes' Jacobi method where the CPU has AVX-512F; otherwise, and for a matrix the
-/// lanes give up on, by the root-free QL ([`super::symmetric_eigenvalues_rational`], the Jacobi method of
-/// [`super::symmetric_eigenvalues`] if that fails). A matrix gets the same value
-/// whichever matrices share its call.
+/// lanes give up on, by the root-free QL ([`super::symmetric_eigenvalues_rational`],
+/// the Jacobi method of [`super::symmetric_eigenvalues`] if that fails). A matrix gets
+/// the same value whichever matrices share its call.
 ///
 /// # Panics
 /// When `out` and `g` differ in length.
@@ -70,10 +70,13 @@ pub fn gram_conditions_by<const N: usize>(
         ratio(ev.min(), ev.max())
     };
     for (c, out) in out.chunks_mut(8).enumerate() {
-        // The chunk's matrices, the last repeated in the spare lanes (lanes do not
+        // The chunk's matrices, the last copied into the spare lanes (lanes do not
         // interact).
-        let g: [SMatrix<f64, N, N>; 8] =
-            std::array::from_fn(|k| gram(8 * c + k.min(out.len() - 1)));
+        let n = out.len();
+        let mut g = [SMatrix::<f64, N, N>::zeros(); 8];
+        for k in 0..8 {
+            g[k] = if k < n { gram(8 * c + k) } else { g[n - 1] };
+        }
         #[cfg(target_arch = "x86_64")]
         {
             let lanes = &g;
@@ -256,15 +259,12 @@ mod avx512 {
         // Rotated: not converged, and a_pq above 2^-500 (the lane is scaled to a largest
         // entry of 1 or more: a smaller one is negligible, set to zero; d^2 + 4 a_pq^2
         // cannot underflow).
-        let tiny = b(f64::from_bits(0x20b0_0000_0000_0000));
+        let tiny = b(f64::from_bits((1023 - 500) << 52));
         let still = !frozen & _mm512_cmp_pd_mask::<_CMP_GT_OQ>(_mm512_abs_pd(apq), tiny);
         let d = _mm512_sub_pd(aqq, app);
         let two = _mm512_add_pd(apq, apq);
         let x = _mm512_fmadd_pd(d, d, _mm512_mul_pd(two, two));
-        // h = sqrt(x): y ~ 1/sqrt(x), h = x y and one Heron step.
-        let y = rsqrt(x);
-        let h0 = _mm512_mul_pd(x, y);
-        let h = _mm512_fmadd_pd(_mm512_fnmadd_pd(h0, h0, x), _mm512_mul_pd(y, b(0.5)), h0);
+        let h = crate::lane::sqrt_refined(x);
         // sign(d) 2 a_pq: the sign bit of d applied to 2 a_pq.
         let sign = _mm512_and_si512(_mm512_castpd_si512(d), _mm512_set1_epi64(i64::MIN));
         let num = _mm512_castsi512_pd(_mm512_xor_si512(_mm512_castpd_si512(two), sign));

@@ -17,7 +17,7 @@ pub use reach::{
 pub use summary::WorkspaceSummary;
 
 use connected::{keep_connected, nearest_index, neighbours};
-use verdict::{admit, conditioned, fold_conditions, judge, Tally};
+use verdict::{admit, conditioned, fold_conditions, Tally};
 pub(crate) use verdict::{evaluate, reach};
 
 use nalgebra::SVector;
@@ -281,43 +281,20 @@ where
         .map(|o| Convention::Rpy.from_matrix(&(Convention::Rpy.to_matrix(*o) * base_r)))
         .collect();
     let chunk = 4096;
-    let evaluate_all =
-        |x: &SVector<f64, P>, v: &mut Vec<Violation>, seed: Option<&SVector<f64, A>>| {
-            let solve = |x: &SVector<f64, P>| match seed {
-                Some(q) => m.inverse_near(x, q),
-                None => m.inverse(x),
-            };
-            if rots.is_empty() {
-                return judge(m, x, solve(x), v);
-            }
-            let mut worst = PointResult {
-                reachable: true,
-                status: PointStatus::Reachable,
-                condition: 0.0,
-                binding: None,
-            };
-            let mut x = *x;
-            for o in &rots {
-                for (i, val) in o.iter().enumerate() {
-                    x[3 + i] = *val;
-                }
-                let r = judge(m, &x, solve(&x), v);
-                if !r.reachable {
-                    return r;
-                }
-                worst.condition = worst.condition.max(r.condition);
-            }
-            worst
-        };
-    // `evaluate_all` (from home) up to the condition numbers: the poses of `x` within
-    // every limit, in orientation order, go to `pend`; the result of the first one
-    // that is not, if any.
+    // Inverse kinematics (from `seed`, else home) and limits at `x` in each orientation
+    // of the set: the poses within every limit, in orientation order, go to `pend`; the
+    // result of the first one that is not, if any.
     let admit_all = |x: &SVector<f64, P>,
                      v: &mut Vec<Violation>,
+                     seed: Option<&SVector<f64, A>>,
                      pend: &mut dyn FnMut(SVector<f64, P>, SVector<f64, A>)|
      -> Option<PointResult> {
+        let solve = |x: &SVector<f64, P>| match seed {
+            Some(q) => m.inverse_near(x, q),
+            None => m.inverse(x),
+        };
         if rots.is_empty() {
-            return match admit(m, x, m.inverse(x), v) {
+            return match admit(m, x, solve(x), v) {
                 Ok(q) => {
                     pend(*x, q);
                     None
@@ -330,13 +307,35 @@ where
             for (i, val) in o.iter().enumerate() {
                 x[3 + i] = *val;
             }
-            match admit(m, &x, m.inverse(&x), v) {
+            match admit(m, &x, solve(&x), v) {
                 Ok(q) => pend(x, q),
                 Err(r) => return Some(r),
             }
         }
         None
     };
+    // One point alone (the retries from a neighbour's solution): `v` is left with the
+    // violations of a point beyond a limit.
+    let evaluate_all =
+        |x: &SVector<f64, P>, v: &mut Vec<Violation>, seed: Option<&SVector<f64, A>>| {
+            let (mut xs, mut qs) = (Vec::new(), Vec::new());
+            let r = admit_all(x, v, seed, &mut |x, q| {
+                xs.push(x);
+                qs.push(q);
+            });
+            let mut cs = vec![0.0; xs.len()];
+            m.conditions(&xs, &qs, &mut cs);
+            let mut point = [r.unwrap_or_else(|| conditioned(0.0))];
+            fold_conditions(
+                &mut point,
+                &vec![0; cs.len()],
+                &cs,
+                Vec::new(),
+                &mut Tally::default(),
+            );
+            let [point] = point;
+            point
+        };
     // Chunks in parallel, each with its own tally of every violated limit (merged in
     // order afterwards: no locks, and the points keep their grid order). In a chunk,
     // inverse kinematics and limits point by point, then the condition numbers of
@@ -362,7 +361,7 @@ where
                     qs.push(q);
                     owner.push(i);
                 };
-                match admit_all(&grid_point(base, axes, &counts, k), v, &mut pend) {
+                match admit_all(&grid_point(base, axes, &counts, k), v, None, &mut pend) {
                     Some(r) => {
                         if r.status == PointStatus::Limits {
                             if xs.len() > before {

@@ -48,7 +48,7 @@ fn limits_at<M: Mechanism<P, A>, const P: usize, const A: usize>(
 
 /// The point result at `x` once inverse kinematics has answered `q`; `v` is left with
 /// every violated limit.
-pub(super) fn judge<M: Mechanism<P, A>, const P: usize, const A: usize>(
+fn judge<M: Mechanism<P, A>, const P: usize, const A: usize>(
     m: &M,
     x: &SVector<f64, P>,
     q: Result<SVector<f64, A>>,
