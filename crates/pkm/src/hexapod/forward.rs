@@ -17,7 +17,7 @@ use nalgebra::{Matrix3, Vector3, Vector6};
 
 use super::Hexapod;
 use crate::error::{Error, Result};
-use crate::linalg::{norm1, rcond1, SmallLu};
+use crate::linalg::{max_abs, norm1, rcond1, SmallLu};
 
 /// Settings of the hexapod FK solver.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -200,7 +200,7 @@ fn solve_from(
     let soa = h.soa();
     let (l0, mut j) = soa.lengths_and_jacobian(&p, &r, lc);
     let mut res_v = l0 - q;
-    let mut res = res_v.amax();
+    let mut res = max_abs(&res_v);
     // j is the Jacobian at the current pose.
     let mut fresh = true;
     // Smallest LU pivot of the factorisation in use: the pose uncertainty is about
@@ -266,7 +266,7 @@ fn solve_from(
             let pn = p - dv * t;
             let rn = exp_so3(&(-dw * t)) * r;
             let vn = h.lengths(&pn, &rn) - q;
-            let resn = vn.amax();
+            let resn = max_abs(&vn);
             if resn < res || resn <= o.tolerance {
                 // A kept Jacobian must still pay: otherwise refresh it and retry.
                 if chord && t == 1.0 && resn > 0.1 * res && resn > o.tolerance {

@@ -7,7 +7,7 @@ use nalgebra::{SMatrix, SVector};
 
 use super::{Forward, Mechanism, PoseSpace};
 use crate::error::{Error, Result};
-use crate::linalg::{rcond1, SmallLu};
+use crate::linalg::{max_abs, rcond1, SmallLu};
 use crate::pose::Pose;
 
 /// Settings of [`newton_forward`].
@@ -114,7 +114,7 @@ where
     let driven = m.driven();
     let mut x = *start;
     let mut r = m.inverse(&x)? - q;
-    let mut res = r.amax();
+    let mut res = max_abs(&r);
     for it in 0..opt.max_iterations {
         if res <= opt.tolerance {
             return Ok(Forward {
@@ -143,7 +143,7 @@ where
             }
             if let Ok(qn) = m.inverse(&xn) {
                 let rn = qn - q;
-                let resn = rn.amax();
+                let resn = max_abs(&rn);
                 if resn < res || resn <= opt.tolerance {
                     x = xn;
                     r = rn;

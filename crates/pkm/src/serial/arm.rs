@@ -220,6 +220,22 @@ impl SerialArm {
         Ok(inv * m)
     }
 
+    /// `K^T K` of `K = dq/dx` at joints `q` with its angle columns divided by the
+    /// characteristic length ([`crate::mechanism::scale_driven_columns`]): the 2-norm
+    /// condition number of `K` is `sqrt(lambda_max / lambda_min)` of it. `None` at a
+    /// singular configuration (`dq/dx` does not exist).
+    fn condition_gram(&self, x: &Vector6<f64>, q: &Vector6<f64>) -> Result<Option<Matrix6<f64>>> {
+        let (_, j) = self.pose_and_jacobian(q);
+        match self.coords_jacobian(x, &j) {
+            Ok(jx) => {
+                let k = crate::mechanism::scale_driven_columns(self, &jx);
+                Ok(Some(k.transpose() * k))
+            }
+            Err(Error::Singular { .. }) => Ok(None),
+            Err(e) => Err(e),
+        }
+    }
+
     fn inverse_geometric(&self, j: &Matrix6<f64>) -> Result<Matrix6<f64>> {
         let lc = self.characteristic_length;
         let mut js = *j;
@@ -326,14 +342,49 @@ impl Mechanism<6, 6> for SerialArm {
 
     /// The scaled condition number from the joints already solved (no second inverse);
     /// infinite at a singular configuration (a robot's stretched zero pose often is).
+    /// The eigenvalues of [`SerialArm::condition_gram`] by the kernel a map uses for
+    /// eight poses at once ([`crate::linalg::gram_conditions`]), so a pose gets the same
+    /// value here as in [`Mechanism::conditions`].
     fn condition_at(&self, x: &Vector6<f64>, q: &Vector6<f64>) -> Result<f64> {
-        let (_, j) = self.pose_and_jacobian(q);
-        match self.coords_jacobian(x, &j) {
-            Ok(jx) => Ok(crate::linalg::condition_number(
-                &crate::mechanism::scale_driven_columns(self, &jx),
-            )),
-            Err(Error::Singular { .. }) => Ok(f64::INFINITY),
-            Err(e) => Err(e),
+        Ok(match self.condition_gram(x, q)? {
+            Some(g) => {
+                let mut c = [0.0];
+                crate::linalg::gram_conditions(&[g], &mut c);
+                c[0]
+            }
+            None => f64::INFINITY,
+        })
+    }
+
+    /// Eight poses per call of the lanes' eigenvalue kernel, each equal to
+    /// [`Mechanism::condition_at`] (or [`Mechanism::condition`] without `qs`).
+    fn conditions(&self, xs: &[Vector6<f64>], qs: &[Vector6<f64>], out: &mut [f64]) {
+        assert!(
+            out.len() == xs.len() && (qs.is_empty() || qs.len() == xs.len()),
+            "one condition number per pose"
+        );
+        let grams: Vec<Result<Option<Matrix6<f64>>>> = xs
+            .iter()
+            .enumerate()
+            .map(|(i, x)| match qs.get(i) {
+                Some(q) => self.condition_gram(x, q),
+                None => self.inverse(x).and_then(|q| self.condition_gram(x, &q)),
+            })
+            .collect();
+        crate::linalg::gram_conditions_by(
+            |k| match &grams[k] {
+                Ok(Some(g)) => *g,
+                // A stand-in (lanes do not interact); its value is replaced below.
+                _ => Matrix6::identity(),
+            },
+            out,
+        );
+        for (o, g) in out.iter_mut().zip(&grams) {
+            match g {
+                Ok(Some(_)) => {}
+                Ok(None) => *o = f64::INFINITY,
+                Err(_) => *o = f64::NAN,
+            }
         }
     }
 

@@ -662,3 +662,104 @@ fn point_status_names_are_their_serialised_names() {
         assert_eq!(serde_json::to_value(s).unwrap(), s.name());
     }
 }
+
+/// A 6R robot's condition numbers run eight poses across SIMD lanes in a map, as the
+/// hexapod's: the map's values equal `condition` pose by pose, bit for bit;
+/// `conditions` with and without the solved joints equals `condition_at` and
+/// `condition`; each agrees with nalgebra's SVD of the scaled `dq/dx` (1e-12 relative
+/// where `kappa < 1e2`, the eigen-solver's backward error `1e-14 kappa^2` beyond); a
+/// pose out of reach is NaN, a singular one infinite.
+#[test]
+fn serial_arm_conditions_equal_single_poses_and_an_svd() {
+    let m = machine("kr30-dh.toml");
+    let Model::Serial(s) = &m.model else { panic!() };
+    let pkm::serial::mechanism::SerialAny::Arm(arm) = &s.mechanism else {
+        panic!()
+    };
+    let home = arm.home();
+    let axes = [
+        GridAxis {
+            coordinate: 0,
+            min: 200.0,
+            max: 2200.0,
+            step: 250.0,
+        },
+        GridAxis {
+            coordinate: 1,
+            min: -1500.0,
+            max: 1500.0,
+            step: 300.0,
+        },
+        GridAxis {
+            coordinate: 2,
+            min: -500.0,
+            max: 2000.0,
+            step: 250.0,
+        },
+    ];
+    let wm = map(arm, &home, &axes, &[], &|_| {}).unwrap();
+    let mut xs = Vec::new();
+    let mut reachable = 0;
+    for (k, p) in wm.points.iter().enumerate() {
+        let c = wm.coords(k);
+        let x = Vector6::new(c[0], c[1], c[2], home[3], home[4], home[5]);
+        xs.push(x);
+        if p.reachable {
+            reachable += 1;
+            assert_eq!(
+                p.condition.to_bits(),
+                arm.condition(&x).unwrap().to_bits(),
+                "{x}"
+            );
+        }
+    }
+    assert!(reachable > 100, "{reachable}");
+    // A singular pose (the wrist straight: axis 5 at zero) and poses beyond reach.
+    let mut q = Vector6::new(0.3, -1.2, 1.0, 0.0, 0.0, 0.4);
+    xs.push(arm.coords_of_joints(&q));
+    q[4] = 0.5;
+    xs.push(arm.coords_of_joints(&q));
+    xs.push(Vector6::new(9000.0, 0.0, 0.0, 0.0, 0.0, 0.0));
+    let mut out = vec![0.0; xs.len()];
+    arm.conditions(&xs, &[], &mut out);
+    let (mut compared, mut beyond, mut singular) = (0, 0, 0);
+    let mut solved = Vec::new();
+    let mut with_q = Vec::new();
+    for (x, c) in xs.iter().zip(&out) {
+        match arm.condition(x) {
+            Ok(single) => {
+                assert_eq!(c.to_bits(), single.to_bits(), "{x}");
+                if single.is_infinite() {
+                    singular += 1;
+                    continue;
+                }
+                let q = arm.inverse(x).unwrap();
+                solved.push(*x);
+                with_q.push(q);
+                let k = pkm::mechanism::scale_driven_columns(arm, &arm.jacobian(x).unwrap());
+                let sv = k.singular_values();
+                let svd = sv.max() / sv.min();
+                let tol = 1e-12f64.max(1e-14 * svd * svd);
+                assert!((c - svd).abs() <= tol * svd, "{x}: {c} vs SVD {svd}");
+                compared += 1;
+            }
+            Err(_) => {
+                assert!(c.is_nan(), "{x}: {c}");
+                beyond += 1;
+            }
+        }
+    }
+    assert!(
+        compared > 100 && beyond > 0 && singular > 0,
+        "{compared} {beyond} {singular}"
+    );
+    let mut by_q = vec![0.0; solved.len()];
+    arm.conditions(&solved, &with_q, &mut by_q);
+    for ((x, q), c) in solved.iter().zip(&with_q).zip(&by_q) {
+        assert_eq!(
+            c.to_bits(),
+            arm.condition_at(x, q).unwrap().to_bits(),
+            "{x}"
+        );
+    }
+}
