@@ -116,7 +116,7 @@ fn serde_details<'py>(py: Python<'py>, e: &pkm::Error) -> PyResult<Bound<'py, Py
             let v = serde_json::to_value(violations).unwrap_or_default();
             d.set_item("violations", crate::convert::json_to_py(py, &v)?)?;
         }
-        pkm::Error::NotAttainable { reason } => d.set_item("reason", reason)?,
+        pkm::Error::NotAttainable { reason } => d.set_item("reason", reason.to_string())?,
         pkm::Error::NotConverged {
             solver,
             iterations,

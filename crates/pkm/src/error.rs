@@ -42,8 +42,8 @@ pub enum Error {
     /// forbids it), independent of any stroke limit.
     #[error("pose not attainable by the mechanism: {reason}")]
     NotAttainable {
-        /// Why, in words, with the numbers involved.
-        reason: String,
+        /// Why, with the numbers involved (words when displayed).
+        reason: Unattainable,
     },
     /// An iterative solver did not converge.
     #[error("{solver} did not converge after {iterations} iterations (residual {residual:.3e})")]
@@ -138,3 +138,87 @@ fn join_violations(v: &[Violation]) -> String {
 
 /// Result type of the library.
 pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// Why a pose is not attainable, with the numbers involved. The common reasons of a
+/// robot's inverse are kept as numbers and put in words only when displayed: a
+/// workspace map meets millions of poses out of reach and shows none of the messages
+/// (formatting them was an eighth of a 6R robot's map).
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum Unattainable {
+    /// In words.
+    Text(std::borrow::Cow<'static, str>),
+    /// The tool point is beyond the links' reach from the robot's base (mm).
+    BeyondReach {
+        /// Distance of the tool point from the base (mm).
+        distance: f64,
+        /// The longest reach of the links (mm).
+        reach: f64,
+    },
+    /// A point of the wrist (`what`: "the wrist centre would be", "axes 5 and 6 would
+    /// meet") would be nearer axis 1 than the arm's plane is offset from it (mm).
+    ShoulderOffset {
+        /// The point, as a sentence's start.
+        what: &'static str,
+        /// Its distance from axis 1 (mm).
+        distance: f64,
+        /// The offset of the arm's plane from axis 1 (mm).
+        offset: f64,
+    },
+    /// A point (`what`: "the wrist centre", "axis 4") would be outside the ring the
+    /// elbow's two links span around axis 2 (mm).
+    ElbowSpan {
+        /// The point.
+        what: &'static str,
+        /// Its distance from axis 2 (mm).
+        distance: f64,
+        /// The nearest the elbow reaches (mm).
+        min: f64,
+        /// The farthest (mm).
+        max: f64,
+    },
+}
+
+impl std::fmt::Display for Unattainable {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Unattainable::Text(t) => f.write_str(t),
+            Unattainable::BeyondReach { distance, reach } => write!(
+                f,
+                "the tool point is {distance:.3} mm from the robot's base, beyond the \
+                 {reach:.3} mm the links can reach"
+            ),
+            Unattainable::ShoulderOffset {
+                what,
+                distance,
+                offset,
+            } => write!(
+                f,
+                "{what} {distance:.3} mm from axis 1, closer than the {offset:.3} mm the \
+                 arm's plane is offset from it"
+            ),
+            Unattainable::ElbowSpan {
+                what,
+                distance,
+                min,
+                max,
+            } => write!(
+                f,
+                "{what} would be {distance:.3} mm from axis 2, outside the {min:.3} to \
+                 {max:.3} mm the elbow spans"
+            ),
+        }
+    }
+}
+
+impl From<String> for Unattainable {
+    fn from(s: String) -> Self {
+        Unattainable::Text(s.into())
+    }
+}
+
+impl From<&'static str> for Unattainable {
+    fn from(s: &'static str) -> Self {
+        Unattainable::Text(s.into())
+    }
+}

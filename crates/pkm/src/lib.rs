@@ -52,7 +52,7 @@ pub mod verify;
 pub mod workspace;
 
 pub use dynamic::DynMechanism;
-pub use error::{Error, Result};
+pub use error::{Error, Result, Unattainable};
 pub use limits::{LimitKind, LimitName, Range, Side, Violation};
 pub use machine::{Machine, Visitor};
 pub use mechanism::{

@@ -43,7 +43,8 @@ impl HybridAm {
                     leg.length,
                     leg.platform_name,
                     reach - leg.length
-                ),
+                )
+                .into(),
             });
         }
         Ok(d.z + h2.sqrt())

@@ -292,7 +292,8 @@ impl Mechanism<6, 5> for HybridAm {
                         angle_between(&(rz(c) * ry(b)), &r).to_degrees(),
                         b.to_degrees(),
                         c.to_degrees()
-                    ),
+                    )
+                    .into(),
                 }
             })?
         } else {

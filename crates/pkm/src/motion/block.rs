@@ -248,7 +248,8 @@ fn at_sample(e: Error, line: Option<u64>, t: f64) -> Error {
             reason: format!(
                 "{}t = {t:.4} s: {reason}",
                 line.map(|l| format!("line {l}, ")).unwrap_or_default()
-            ),
+            )
+            .into(),
         },
         e => e,
     }

@@ -155,7 +155,7 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Planner<'m, M, P, A
                         c.quantity.to_user(mv.segment.start[k]),
                         c.quantity.to_user(mv.segment.end[k]),
                         c.quantity.unit()
-                    ),
+                    ).into(),
                 });
             }
         }

@@ -115,7 +115,8 @@ impl HeadGeometry {
                     theta.to_degrees(),
                     self.l2,
                     s.abs()
-                ),
+                )
+                .into(),
             });
         }
         Ok((sp, cp, s, h2.sqrt()))
@@ -215,7 +216,8 @@ impl HeadGeometry {
                      outside [{:.4}, {:.4}] mm that crank l1 and rod l2 can span",
                     (self.l2 - self.l1).abs(),
                     self.l1 + self.l2
-                ),
+                )
+                .into(),
             });
         }
         // c is the sine of the transmission angle; theta's sensitivity to the slider
@@ -236,7 +238,8 @@ impl HeadGeometry {
                 reason: format!(
                     "on the {branch:?} branch the rod would hang below hinge B (C below B \
                      is not an assembly of this head)"
-                ),
+                )
+                .into(),
             });
         }
         Ok(Vector2::new(z1, wrap(psi - self.delta)))

@@ -178,7 +178,8 @@ impl Mechanism<6, 4> for HybridMachine {
                         "the machine turns the spindle about X only: the orientation is \
                          {:.4} deg from any rotation about X",
                         off.to_degrees()
-                    ),
+                    )
+                    .into(),
                 });
             }
             a

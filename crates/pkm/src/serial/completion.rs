@@ -191,7 +191,8 @@ pub fn complete(
                     .iter()
                     .map(|(p, a)| (*p, a.to_degrees()))
                     .collect::<Vec<_>>()
-            ),
+            )
+            .into(),
         });
     };
     let ambiguous = roots
@@ -382,7 +383,8 @@ impl TripleCompletion {
                     measured.map(f64::to_degrees),
                     self.positions,
                     f.amax()
-                ),
+                )
+                .into(),
             });
         }
         let (a, b) = rodrigues_coefficients(&w);

@@ -43,6 +43,7 @@ use super::spherical_wrist::{
     Search, ZeroPose, GEOMETRY_TOLERANCE,
 };
 use super::PreparedChain;
+use crate::error::Unattainable;
 
 /// The zero-configuration geometry of an arm the closed form applies to (part frame).
 #[derive(Debug, Clone, PartialEq)]
@@ -126,7 +127,7 @@ impl ParallelAxes {
         start: &Vector6<f64>,
         nearest: Option<&Nearest>,
         out: &mut [Vector6<f64>; 8],
-    ) -> Result<usize, String> {
+    ) -> Result<usize, Unattainable> {
         let (w, p, n) = (&self.w, &self.p, self.w[1]);
         let tol = GEOMETRY_TOLERANCE * self.scale;
         // T* T_0^-1: the turn and the point c where it takes axes 5 and 6.
@@ -135,10 +136,11 @@ impl ParallelAxes {
         let w6_star = turn * w[5];
         // 1. Shoulder: n . E_1(q_1)^-1 c* = n . c.
         let q1s = shoulder(w, p, &self.c, &c_star, tol, start[0]).map_err(|(r, off)| {
-            format!(
-                "axes 5 and 6 would meet {r:.3} mm from axis 1, closer than the {off:.3} mm \
-                 the arm's plane is offset from it"
-            )
+            Unattainable::ShoulderOffset {
+                what: "axes 5 and 6 would meet",
+                distance: r,
+                offset: off,
+            }
         })?;
         let (w5, w6) = (&w[4], &w[5]);
         let c56 = w5.dot(w6);

@@ -31,6 +31,7 @@
 use nalgebra::{Matrix3, Matrix4, Rotation3, Unit, Vector3, Vector6};
 
 use super::{JointKind, PreparedChain};
+use crate::error::Unattainable;
 
 /// How far (relative) two axes may be off parallel, or three axes off meeting, for the
 /// closed form to apply: the rounding of a Denavit-Hartenberg table or a URDF's angles.
@@ -220,14 +221,14 @@ impl Elbow {
     }
 
     /// Why the elbow cannot place `what` at `r` mm from axis 2.
-    pub(super) fn miss(&self, what: &str, r: f64) -> String {
+    pub(super) fn miss(&self, what: &'static str, r: f64) -> Unattainable {
         let (e, f) = (self.e.norm(), self.f.norm());
-        format!(
-            "{what} would be {r:.3} mm from axis 2, outside the {:.3} to {:.3} mm the \
-             elbow spans",
-            (e - f).abs(),
-            e + f
-        )
+        Unattainable::ElbowSpan {
+            what,
+            distance: r,
+            min: (e - f).abs(),
+            max: e + f,
+        }
     }
 }
 
@@ -305,16 +306,17 @@ impl SphericalWrist {
         start: &Vector6<f64>,
         nearest: Option<&Nearest>,
         out: &mut [Vector6<f64>; 8],
-    ) -> Result<usize, String> {
+    ) -> Result<usize, Unattainable> {
         let (w, p, n) = (&self.w, &self.p, self.w[1]);
         let tol = GEOMETRY_TOLERANCE * self.scale;
         let centre = target_p + target_r * self.centre_tool;
         // 1. Shoulder: n . E_1(q_1)^-1 centre = n . c.
         let q1s = shoulder(w, p, &self.centre, &centre, tol, start[0]).map_err(|(r, off)| {
-            format!(
-                "the wrist centre would be {r:.3} mm from axis 1, closer than the {off:.3} mm \
-                 the arm's plane is offset from it"
-            )
+            Unattainable::ShoulderOffset {
+                what: "the wrist centre would be",
+                distance: r,
+                offset: off,
+            }
         })?;
         // Slot `4 i + 2 j + k` holds the solution of shoulder `i`, elbow `j`, wrist `k`.
         let mut slots = [None::<Vector6<f64>>; 8];

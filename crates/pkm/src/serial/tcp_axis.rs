@@ -165,7 +165,8 @@ impl<const N: usize> TcpMachine<N> {
                     gap.to_degrees(),
                     self.coordinates()[3 + k1].name,
                     self.coordinates()[3 + k2].name
-                ),
+                )
+                .into(),
             });
         }
         let cos_a = if den > 0.0 {

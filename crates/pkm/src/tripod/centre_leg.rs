@@ -83,7 +83,8 @@ impl CentreLegTripod {
                     "the tool tip is {:.3} mm from the centre-leg joint, closer than the \
                      tool's lateral offset allows",
                     d.norm()
-                ),
+                )
+                .into(),
             });
         }
         let h = h2.sqrt();
@@ -96,7 +97,8 @@ impl CentreLegTripod {
                     "the universal joint of the centre leg cannot reach X offset {:.3} mm \
                      (largest {:.3} mm)",
                     d.x, rho
-                ),
+                )
+                .into(),
             });
         }
         let phi0 = v.z.atan2(v.x);
@@ -230,7 +232,8 @@ impl Mechanism<3, 3> for CentreLegTripod {
                         g[1],
                         g[2],
                         diff.to_degrees()
-                    ),
+                    )
+                    .into(),
                 });
             }
         }

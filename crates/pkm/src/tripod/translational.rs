@@ -76,7 +76,8 @@ impl TranslationalTripod {
                     "no platform position has strut lengths {:.4}, {:.4}, {:.4} mm at this \
                      orientation: the three spheres miss each other ({:.3e} mm^2 short)",
                     q[0], q[1], q[2], -z2
-                ),
+                )
+                .into(),
             });
         }
         let z = z2.sqrt();

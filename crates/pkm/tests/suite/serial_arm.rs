@@ -136,6 +136,7 @@ fn unreachable_pose_reports_the_residual() {
         .sum();
     match a.inverse(&x) {
         Err(pkm::Error::NotAttainable { reason }) => {
+            let reason = reason.to_string();
             assert!(
                 reason.contains(&format!("beyond the {reach:.3} mm")),
                 "{reason}"
@@ -148,6 +149,7 @@ fn unreachable_pose_reports_the_residual() {
     x[0] = 2500.0;
     match a.inverse(&x) {
         Err(pkm::Error::NotAttainable { reason }) => {
+            let reason = reason.to_string();
             assert!(reason.contains("the elbow spans"), "{reason}")
         }
         other => panic!("{other:?}"),

@@ -213,6 +213,7 @@ fn out_of_reach_names_the_distances() {
     let x = Vector6::new(2500.0, 0.0, 815.0, PI, 0.0, 0.0);
     match a.inverse(&x) {
         Err(pkm::Error::NotAttainable { reason }) => {
+            let reason = reason.to_string();
             assert!(reason.contains("from axis 2, outside the"), "{reason}");
             assert!(reason.contains("the elbow spans"), "{reason}");
         }
@@ -224,6 +225,7 @@ fn out_of_reach_names_the_distances() {
     let x = Vector6::new(1000.0, 0.0, 89.159, PI, 0.0, 0.0);
     match a.inverse(&x) {
         Err(pkm::Error::NotAttainable { reason }) => {
+            let reason = reason.to_string();
             assert!(reason.contains("axis 4 would be"), "{reason}");
             assert!(reason.contains("to 817.250 mm the elbow spans"), "{reason}");
         }
@@ -235,8 +237,22 @@ fn out_of_reach_names_the_distances() {
     let x = Vector6::new(0.0, 0.0, 900.0, 0.0, 0.0, 0.0);
     match a.inverse(&x) {
         Err(pkm::Error::NotAttainable { reason }) => {
+            let reason = reason.to_string();
             assert!(reason.contains("0.000 mm from axis 1"), "{reason}");
             assert!(reason.contains("the 150.050 mm"), "{reason}");
+        }
+        other => panic!("{other:?}"),
+    }
+    // The numbers are kept as numbers (words only when shown).
+    match a.inverse(&x) {
+        Err(pkm::Error::NotAttainable {
+            reason:
+                pkm::Unattainable::ShoulderOffset {
+                    distance, offset, ..
+                },
+        }) => {
+            assert!(distance.abs() < 1e-9, "{distance}");
+            assert!((offset - 150.05).abs() < 1e-9, "{offset}");
         }
         other => panic!("{other:?}"),
     }

@@ -189,7 +189,8 @@ impl Mechanism<2, 2> for P3rpHead {
                      from a rotation about X and {:.4} mm off the head's plane",
                     off.to_degrees(),
                     p.x.hypot(dy)
-                ),
+                )
+                .into(),
             });
         }
         Ok(Vector2::new(p.z + l * theta.cos(), theta))

@@ -7,6 +7,7 @@
 use nalgebra::{Matrix3, Matrix4, Vector3, Vector6};
 
 use super::{Postures, SerialArm};
+use crate::error::Unattainable;
 use crate::serial::parallel_axes::ParallelAxes;
 use crate::serial::spherical_wrist::{Nearest, SphericalWrist};
 use crate::serial::PreparedChain;
@@ -44,7 +45,7 @@ impl ClosedForm {
         start: &Vector6<f64>,
         nearest: Option<&Nearest>,
         out: &mut [Vector6<f64>; 8],
-    ) -> Result<usize, String> {
+    ) -> Result<usize, Unattainable> {
         match self {
             ClosedForm::Spherical(w) => w.solve(target_p, target_r, start, nearest, out),
             ClosedForm::ParallelAxes(w) => w.solve(target_p, target_r, start, nearest, out),
@@ -74,7 +75,7 @@ impl SerialArm {
         near: &Vector6<f64>,
         all: bool,
         sols: &mut Postures,
-    ) -> std::result::Result<Option<usize>, String> {
+    ) -> std::result::Result<Option<usize>, Unattainable> {
         if self.wrist.is_none() {
             return Ok(None);
         }
@@ -101,7 +102,7 @@ impl SerialArm {
         all: bool,
         nearest: Option<&Nearest>,
         sols: &mut Postures,
-    ) -> std::result::Result<usize, String> {
+    ) -> std::result::Result<usize, Unattainable> {
         let Some(wrist) = &self.wrist else {
             return Ok(0);
         };

@@ -7,7 +7,7 @@
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 
 use super::SerialArm;
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, Unattainable};
 use crate::rotation::rotation_vector;
 use crate::units::Quantity;
 use std::f64::consts::PI;
@@ -60,11 +60,10 @@ impl SerialArm {
         let distance = (target_p - self.base_origin).norm();
         if distance > self.reach * (1.0 + 1e-12) {
             return Err(Error::NotAttainable {
-                reason: format!(
-                    "the tool point is {distance:.3} mm from the robot's base, beyond the \
-                     {:.3} mm the links can reach",
-                    self.reach
-                ),
+                reason: Unattainable::BeyondReach {
+                    distance,
+                    reach: self.reach,
+                },
             });
         }
         let target_r = crate::rotation::rpy_matrix(x[3], x[4], x[5]);
