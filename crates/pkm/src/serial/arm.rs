@@ -342,7 +342,7 @@ impl Mechanism<6, 6> for SerialArm {
 
     /// The scaled condition number from the joints already solved (no second inverse);
     /// infinite at a singular configuration (a robot's stretched zero pose often is).
-    /// The eigenvalues of [`SerialArm::condition_gram`] by the kernel a map uses for
+    /// The eigenvalues of `K^T K` (`K` the scaled `dq/dx`) by the kernel a map uses for
     /// eight poses at once ([`crate::linalg::gram_conditions`]), so a pose gets the same
     /// value here as in [`Mechanism::conditions`].
     fn condition_at(&self, x: &Vector6<f64>, q: &Vector6<f64>) -> Result<f64> {
