@@ -60,7 +60,7 @@ impl MapColumns {
             c.status.push(s as i32);
             c.binding.push(match &p.binding {
                 Some(b) => *bindings.entry(b.as_str()).or_insert_with(|| {
-                    c.binding_names.push(b.clone());
+                    c.binding_names.push(b.to_string());
                     c.binding_names.len() as i32 - 1
                 }),
                 None => -1,

@@ -88,6 +88,9 @@ pub enum Error {
     },
 }
 
+/// [`Error::category`] of [`Error::NotAttainable`].
+pub(crate) const NO_SOLUTION: &str = "no solution";
+
 impl Error {
     /// The failure without its numbers: one key per kind of failure, for tables that
     /// count failures over many poses (a workspace map's binding limits, a batch's
@@ -96,7 +99,7 @@ impl Error {
     /// their message.
     pub fn category(&self) -> String {
         match self {
-            Error::NotAttainable { .. } => "no solution".into(),
+            Error::NotAttainable { .. } => NO_SOLUTION.into(),
             Error::NotConverged { solver, .. } => {
                 format!("no solution found ({solver} did not converge)")
             }

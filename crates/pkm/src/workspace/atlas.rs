@@ -3,6 +3,8 @@
 //! (seed 004 fig. 6: slider rates for `z'' = 1 g`, `theta'' = 30 rad/s^2`).
 
 use nalgebra::SVector;
+
+use crate::limits::LimitName;
 use rayon::prelude::*;
 
 use super::{check_axes, grid_point, reach, GridAxis};
@@ -25,7 +27,7 @@ pub struct AtlasPoint<const A: usize> {
     /// Within every limit.
     pub reachable: bool,
     /// The first violated limit, when not reachable.
-    pub binding: Option<String>,
+    pub binding: Option<LimitName>,
     /// Actuator positions (NaN where the inverse solution does not exist).
     pub q: SVector<f64, A>,
     /// Per actuator, the largest `|q'|` over all pose rates within the capacity.

@@ -25,7 +25,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::error::{Error, Result};
-use crate::limits::Violation;
+use crate::limits::{LimitName, Violation};
 use crate::mechanism::Mechanism;
 use crate::rotation::Convention;
 
@@ -136,12 +136,13 @@ pub struct PointResult {
     /// Condition number (worst over the orientation set), when reachable.
     pub condition: f64,
     /// The first violated limit in the machine's check order, or why there is no
-    /// solution, when not reachable.
-    pub binding: Option<String>,
+    /// solution, when not reachable (shared text: a map of millions of points beyond
+    /// a limit clones a pointer per point, not a string).
+    pub binding: Option<LimitName>,
 }
 
 impl PointResult {
-    fn unreachable(status: PointStatus, binding: String) -> Self {
+    fn unreachable(status: PointStatus, binding: LimitName) -> Self {
         PointResult {
             reachable: false,
             status,

@@ -175,7 +175,8 @@ impl WorkspaceMap {
     ) -> WorkspaceSummary {
         let mut conds: Vec<f64> = Vec::new();
         let mut bbox = vec![[f64::INFINITY, f64::NEG_INFINITY]; self.axes.len()];
-        let mut binding: std::collections::HashMap<String, usize> = Default::default();
+        // Counted by the names as they are (no string per point).
+        let mut binding: std::collections::HashMap<&str, usize> = Default::default();
         for (k, p) in self.points.iter().enumerate() {
             if p.reachable {
                 conds.push(p.condition);
@@ -186,7 +187,7 @@ impl WorkspaceMap {
                     bbox[i][1] = bbox[i][1].max(v);
                 }
             } else if let Some(b) = &p.binding {
-                *binding.entry(b.clone()).or_default() += 1;
+                *binding.entry(b.as_str()).or_default() += 1;
             }
         }
         conds.sort_by(|a, b| a.total_cmp(b));
@@ -202,7 +203,10 @@ impl WorkspaceMap {
                 max: conds[conds.len() - 1],
             }
         };
-        let mut binding: Vec<(String, usize)> = binding.into_iter().collect();
+        let mut binding: Vec<(String, usize)> = binding
+            .into_iter()
+            .map(|(b, n)| (b.to_string(), n))
+            .collect();
         binding.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
         let outcomes = PointStatus::ALL
             .map(|st| (st, self.points.iter().filter(|p| p.status == st).count()))

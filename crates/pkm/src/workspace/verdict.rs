@@ -6,18 +6,25 @@ use nalgebra::SVector;
 
 use super::{PointResult, PointStatus};
 use crate::error::{Error, Result};
-use crate::limits::Violation;
+use crate::limits::{LimitName, Violation};
 use crate::mechanism::Mechanism;
 
 /// The category and the text ([`Error::category`]: one key per kind, not one per
-/// residual) of an inverse-kinematics failure.
-fn classify(e: &Error) -> (PointStatus, String) {
+/// residual) of an inverse-kinematics failure; the commonest, a pose out of reach,
+/// shares one text (a robot's map has millions).
+fn classify(e: &Error) -> (PointStatus, LimitName) {
+    static NO_SOLUTION: std::sync::LazyLock<LimitName> =
+        std::sync::LazyLock::new(|| crate::error::NO_SOLUTION.into());
     let status = match e {
         Error::NotConverged { .. } => PointStatus::SolverFailed,
         Error::Singular { .. } => PointStatus::Singular,
         _ => PointStatus::NoSolution,
     };
-    (status, e.category())
+    let name = match e {
+        Error::NotAttainable { .. } => NO_SOLUTION.clone(),
+        _ => e.category().into(),
+    };
+    (status, name)
 }
 
 /// Inverse kinematics and every limit at `x`: the actuator values when the pose is
@@ -27,7 +34,7 @@ pub(crate) fn reach<M: Mechanism<P, A>, const P: usize, const A: usize>(
     m: &M,
     x: &SVector<f64, P>,
     v: &mut Vec<Violation>,
-) -> (Option<SVector<f64, A>>, Option<String>) {
+) -> (Option<SVector<f64, A>>, Option<LimitName>) {
     v.clear();
     match m.inverse(x) {
         Ok(q) => limits_at(m, x, q, v),
@@ -40,10 +47,10 @@ fn limits_at<M: Mechanism<P, A>, const P: usize, const A: usize>(
     x: &SVector<f64, P>,
     q: SVector<f64, A>,
     v: &mut Vec<Violation>,
-) -> (Option<SVector<f64, A>>, Option<String>) {
+) -> (Option<SVector<f64, A>>, Option<LimitName>) {
     v.clear();
     m.check_limits(x, &q, v);
-    (Some(q), v.first().map(|f| f.limit.to_string()))
+    (Some(q), v.first().map(|f| f.limit.clone()))
 }
 
 /// The point result at `x` once inverse kinematics has answered `q`; `v` is left with
