@@ -3,12 +3,11 @@
 //! (seed 004 fig. 6: slider rates for `z'' = 1 g`, `theta'' = 30 rad/s^2`).
 
 use nalgebra::SVector;
-
-use crate::limits::LimitName;
 use rayon::prelude::*;
 
 use super::{check_axes, grid_point, reach, GridAxis};
 use crate::error::{Error, Result};
+use crate::limits::LimitName;
 use crate::mechanism::Mechanism;
 
 /// Largest pose-coordinate rates and accelerations (internal units: mm, rad per s,
