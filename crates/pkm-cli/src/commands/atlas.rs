@@ -72,7 +72,7 @@ pub fn run_atlas(
 /// units) when found.
 pub struct DynForwardMap {
     /// Points in row-major order of the actuator axes.
-    pub points: Vec<(bool, Option<String>, Option<Vec<f64>>)>,
+    pub points: Vec<(bool, Option<pkm::LimitName>, Option<Vec<f64>>)>,
 }
 
 /// The forward map (`pkm::analysis::workspace::forward_map`), poses in user units.

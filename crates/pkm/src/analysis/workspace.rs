@@ -217,7 +217,7 @@ pub struct ForwardPoint {
     /// A pose was found within every limit.
     pub reachable: bool,
     /// The limit that binds, or why no pose was found.
-    pub binding: Option<String>,
+    pub binding: Option<crate::limits::LimitName>,
     /// The pose, when found.
     pub pose: Option<Vec<f64>>,
 }

@@ -7,6 +7,7 @@ use rayon::prelude::*;
 
 use super::{check_axes, grid_point, GridAxis};
 use crate::error::{Error, Result};
+use crate::limits::LimitName;
 use crate::mechanism::Mechanism;
 
 /// One grid node of actuator positions.
@@ -17,8 +18,8 @@ pub struct ForwardPoint<const P: usize> {
     /// The pose is within every limit.
     pub reachable: bool,
     /// Why not: the first violated limit, or the solver's failure (no assembly,
-    /// singular, not converged).
-    pub binding: Option<String>,
+    /// singular, not converged), as shared text ([`LimitName`]).
+    pub binding: Option<LimitName>,
 }
 
 /// A forward map over actuator axes (`GridAxis::coordinate` is an actuator index).
@@ -63,7 +64,7 @@ where
                     ForwardPoint {
                         pose: Some(f.pose),
                         reachable: v.is_empty(),
-                        binding: v.first().map(|x| x.limit.to_string()),
+                        binding: v.first().map(|x| x.limit.clone()),
                     }
                 }
                 Err(e) => ForwardPoint {
@@ -73,7 +74,7 @@ where
                         Error::NotAttainable { .. } => "no assembly".into(),
                         Error::Singular { .. } => "singular".into(),
                         Error::NotConverged { .. } => "not converged".into(),
-                        other => other.to_string(),
+                        other => other.to_string().into(),
                     }),
                 },
             }
