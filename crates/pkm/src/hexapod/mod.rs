@@ -417,9 +417,7 @@ impl Mechanism<6, 6> for Hexapod {
     /// poses per call of its lane kernel in [`Mechanism::conditions`], the same value
     /// for one pose alone).
     fn condition(&self, x: &Vector6<f64>) -> Result<f64> {
-        let mut out = [0.0];
-        crate::linalg::gram_conditions(&[self.gram(x)], &mut out);
-        Ok(out[0])
+        Ok(crate::linalg::gram_condition(&self.gram(x)))
     }
 
     /// Eight poses per call of the lanes' eigenvalue kernel.

@@ -51,6 +51,14 @@ pub fn gram_conditions<const N: usize>(g: &[SMatrix<f64, N, N>], out: &mut [f64]
     gram_conditions_by(|k| g[k], out);
 }
 
+/// [`gram_conditions`] of one matrix: what a single pose gets, equal to its value in
+/// any batch.
+pub fn gram_condition<const N: usize>(g: &SMatrix<f64, N, N>) -> f64 {
+    let mut c = [0.0];
+    gram_conditions_by(|_| *g, &mut c);
+    c[0]
+}
+
 /// [`gram_conditions`] of the matrices `gram(0)`, ..., `gram(out.len() - 1)`, each
 /// built where the lanes take it (no array of them is copied).
 pub fn gram_conditions_by<const N: usize>(

@@ -15,7 +15,7 @@ pub use eigen::{
     symmetric_eigenvalues_rational,
 };
 pub use inverse::inverse_lu;
-pub use jacobi_lanes::{gram_conditions, gram_conditions_by};
+pub use jacobi_lanes::{gram_condition, gram_conditions, gram_conditions_by};
 
 use nalgebra::{SMatrix, SVector};
 

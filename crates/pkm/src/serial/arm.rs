@@ -343,15 +343,11 @@ impl Mechanism<6, 6> for SerialArm {
     /// The scaled condition number from the joints already solved (no second inverse);
     /// infinite at a singular configuration (a robot's stretched zero pose often is).
     /// The eigenvalues of `K^T K` (`K` the scaled `dq/dx`) by the kernel a map uses for
-    /// eight poses at once ([`crate::linalg::gram_conditions`]), so a pose gets the same
+    /// eight poses at once ([`crate::linalg::gram_condition`]), so a pose gets the same
     /// value here as in [`Mechanism::conditions`].
     fn condition_at(&self, x: &Vector6<f64>, q: &Vector6<f64>) -> Result<f64> {
         Ok(match self.condition_gram(x, q)? {
-            Some(g) => {
-                let mut c = [0.0];
-                crate::linalg::gram_conditions(&[g], &mut c);
-                c[0]
-            }
+            Some(g) => crate::linalg::gram_condition(&g),
             None => f64::INFINITY,
         })
     }
