@@ -5,6 +5,8 @@
 use anyhow::{anyhow, Result};
 use plotters::prelude::*;
 
+use super::ticks::{linear_ticks, log_ticks, tick};
+
 /// One cell: centre (h, v) in user units, and the condition number (None: unreachable).
 pub struct Cell {
     /// Horizontal coordinate.
@@ -57,7 +59,7 @@ pub fn slice_svg(
     size: (u32, u32),
 ) -> Result<String> {
     let (tf, bar_label): (fn(f64) -> f64, String) = match scale {
-        Scale::Log10(l) => (f64::log10, format!("log10 {l}")),
+        Scale::Log10(l) => (f64::log10, format!("{l} (log scale)")),
         Scale::Linear(l) => (|x| x, l.to_string()),
     };
     let (mut h0, mut h1, mut v0, mut v1) = (
@@ -108,6 +110,8 @@ pub fn slice_svg(
             .disable_mesh()
             .x_desc(hlabel)
             .y_desc(vlabel)
+            .x_label_formatter(&|v| tick(*v, h1 - h0))
+            .y_label_formatter(&|v| tick(*v, v1 - v0))
             .draw()
             .map_err(|e| anyhow!("{e}"))?;
         chart
@@ -125,20 +129,37 @@ pub fn slice_svg(
                 )
             }))
             .map_err(|e| anyhow!("{e}"))?;
-        // Colour bar.
+        // Colour bar, in the coloured quantity (log10 of the value on a log scale), its
+        // ticks at round values of the value itself.
+        let log = matches!(scale, Scale::Log10(_));
+        let ticks = if log {
+            log_ticks(c0, c1)
+        } else {
+            linear_ticks(c0, c1, 6)
+        };
+        let label_of = |v: f64| match log {
+            true => tick(10f64.powf(v), 10f64.powf(v)),
+            false => tick(v, c1 - c0),
+        };
         let mut cb = ChartBuilder::on(&bar)
             .margin_top(40)
             .margin_bottom(42)
             .margin_right(8)
             .y_label_area_size(58)
-            .build_cartesian_2d(0.0..1.0, c0..c1)
+            .build_cartesian_2d(
+                0.0..1.0,
+                TickedAxis {
+                    range: c0..c1,
+                    ticks,
+                },
+            )
             .map_err(|e| anyhow!("{e}"))?;
         cb.configure_mesh()
             .disable_mesh()
             .disable_x_axis()
             .y_label_style(("sans-serif", 11))
             .axis_desc_style(("sans-serif", 12))
-            .y_labels(6)
+            .y_label_formatter(&|v| label_of(*v))
             .y_desc(bar_label.as_str())
             .draw()
             .map_err(|e| anyhow!("{e}"))?;
@@ -155,4 +176,29 @@ pub fn slice_svg(
         root.present().map_err(|e| anyhow!("{e}"))?;
     }
     Ok(out)
+}
+
+/// A linear axis with its ticks where given (plotters' `WithKeyPoints` has no label
+/// formatter, which a mesh needs).
+struct TickedAxis {
+    range: std::ops::Range<f64>,
+    ticks: Vec<f64>,
+}
+
+impl Ranged for TickedAxis {
+    type FormatOption = plotters::coord::ranged1d::DefaultFormatting;
+    type ValueType = f64;
+
+    fn map(&self, value: &f64, limit: (i32, i32)) -> i32 {
+        let t = (value - self.range.start) / (self.range.end - self.range.start);
+        limit.0 + (t * (limit.1 - limit.0) as f64).round() as i32
+    }
+
+    fn key_points<Hint: plotters::coord::ranged1d::KeyPointHint>(&self, _: Hint) -> Vec<f64> {
+        self.ticks.clone()
+    }
+
+    fn range(&self) -> std::ops::Range<f64> {
+        self.range.clone()
+    }
 }

@@ -13,6 +13,7 @@ mod motion;
 mod p3rp;
 pub mod plot;
 mod references;
+pub mod ticks;
 mod view3d;
 mod workspace;
 

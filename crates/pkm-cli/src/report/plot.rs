@@ -3,6 +3,8 @@
 use anyhow::{anyhow, Result};
 use plotters::prelude::*;
 
+use super::ticks::tick;
+
 /// One curve: name and (t, value) points.
 pub struct Series {
     /// Legend name.
@@ -137,6 +139,8 @@ pub fn panels_marked(
                 .configure_mesh()
                 .x_desc(xlabel)
                 .y_desc(p.ylabel)
+                .x_label_formatter(&|v| tick(*v, t1 - t0))
+                .y_label_formatter(&|v| tick(*v, y1 - y0))
                 .light_line_style(RGBColor(235, 235, 235))
                 .draw()
                 .map_err(|e| anyhow!("{e}"))?;
@@ -229,6 +233,7 @@ pub fn bars_svg(title: &str, xlabel: &str, items: &[(String, f64)], width: u32) 
             .disable_y_mesh()
             .disable_y_axis()
             .x_desc(xlabel)
+            .x_label_formatter(&|v| tick(*v, vmax))
             .draw()
             .map_err(|e| anyhow!("{e}"))?;
         // Labels beside their bars, right-aligned in the label area.
@@ -286,6 +291,8 @@ pub fn histogram_svg(
             .configure_mesh()
             .x_desc(xlabel)
             .y_desc("samples")
+            .x_label_formatter(&|v| tick(*v, x1 - x0))
+            .y_label_formatter(&|v| tick(*v, cmax))
             .draw()
             .map_err(|e| anyhow!("{e}"))?;
         chart
