@@ -344,12 +344,12 @@ pub fn plot_svgs(id: &Identification) -> Result<(String, String)> {
         &[
             (
                 "nominal parameters".into(),
-                "RMS [um]".into(),
+                "RMS [µm]".into(),
                 vec![per_state(&id.state_rms_before)],
             ),
             (
                 "identified parameters".into(),
-                "RMS [um]".into(),
+                "RMS [µm]".into(),
                 vec![per_state(&id.state_rms_after)],
             ),
         ],

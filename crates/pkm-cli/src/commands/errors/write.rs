@@ -139,11 +139,11 @@ pub(super) fn write_budget(
         .collect();
     let svg = bars_svg(
         &format!(
-            "error budget: tool-point error at each tolerance (worst case {:.2} um, RSS {:.2} um)",
+            "error budget: tool-point error at each tolerance (worst case {:.2} µm, RSS {:.2} µm)",
             1000.0 * b.worst_case,
             1000.0 * b.rss
         ),
-        "contribution [um]",
+        "contribution [µm]",
         &top,
         760,
     )?;
@@ -160,12 +160,12 @@ pub(super) fn write_monte_carlo(
     let bins: Vec<(f64, usize)> = mc.histogram.iter().map(|(x, c)| (1000.0 * x, *c)).collect();
     let svg = histogram_svg(
         &format!(
-            "Monte Carlo, {} machines: tool-point error (mean {:.2} um, p95 {:.2} um)",
+            "Monte Carlo, {} machines: tool-point error (mean {:.2} µm, p95 {:.2} µm)",
             mc.samples,
             1000.0 * mc.mean,
             1000.0 * mc.p95
         ),
-        "|error| [um]",
+        "|error| [µm]",
         &bins,
         (640, 400),
     )?;
