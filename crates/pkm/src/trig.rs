@@ -87,6 +87,35 @@ pub fn sin_cos_small<const N: usize>(x: &[f64; N]) -> ([f64; N], [f64; N]) {
 /// The bound of [`sin_cos_small`]'s series, `2^-7`.
 const SMALL: f64 = 0.0078125;
 
+/// The bound of [`cos_sum_aligned_tiny`]'s series, `2^-10` (0.98 mrad): a link's
+/// angular deviations in practice.
+pub const TINY: f64 = 0.0009765625;
+
+/// `cos(phi_k + x_k)` for nominal cosines `c_k = cos(phi_k)` that are exactly 0 or
+/// +-1 and every `|x_k| <= TINY` (the caller checks both): `c cos x` where `|c| = 1`,
+/// `-sin x` where `c = 0`, each from its Taylor series to `x^4` and `x^5`, whose
+/// first omitted terms are below `2^-60 / 720` and `2^-60 / 5040` relative, far below
+/// rounding. Both are one expression, `w = u + u z (k_0 + z k_1)` with `z = x^2` and
+/// `u = c`, `k = (-1/2, 1/24)` or `u = x`, `k = (-1/6, 1/120)`, then `c - w` where
+/// `c = 0`: a dozen operations an entry where the sine and the cosine both would take
+/// twice that. `c + c w` is `c (1 + w)` exactly for `c = +-1`, and `c - sin x` keeps
+/// the general path's `c cos x - sin x` signed zeros.
+#[inline(always)]
+pub fn cos_sum_aligned_tiny<const N: usize>(c: &[f64; N], x: &[f64; N]) -> [f64; N] {
+    let mut out = [0.0; N];
+    // Selections by bit masks: `if`s here became a branch per entry.
+    let pick = |m: u64, a: f64, b: f64| f64::from_bits((a.to_bits() & m) | (b.to_bits() & !m));
+    for k in 0..N {
+        let zero = ((c[k] == 0.0) as u64).wrapping_neg();
+        let u = pick(zero, x[k], c[k]);
+        let (k0, k1) = (pick(zero, S[0], C[0]), pick(zero, S[1], C[1]));
+        let z = x[k] * x[k];
+        let w = u + u * z * (k0 + z * k1);
+        out[k] = pick(zero, c[k] - w, w);
+    }
+    out
+}
+
 /// Angles with `|x| <= 0.78` (just inside `pi/4`) reduce to themselves: `x (2/pi)` is
 /// at most 0.4966 after rounding, so `k = 0`, `r = (x - 0) - 0 = x` (signed zeros
 /// kept) and the quadrant is 0. The AVX-512 lanes skip the reduction when every lane
@@ -246,27 +275,68 @@ mod tests {
     #[test]
     fn small_angles_match_std_within_one_ulp() {
         let mut worst: f64 = 0.0;
-        let n = 200_000;
-        for i in 0..=n {
-            let t = i as f64 / n as f64;
-            for x in [
-                super::SMALL * (2.0 * t - 1.0),
-                1e-12 * (2.0 * t - 1.0),
-                super::SMALL * t * t,
-            ] {
-                let (s, c) = super::sin_cos_small(&[x, -x, 0.0]);
-                let (s0, c0) = x.sin_cos();
-                let ulp = |v: f64| v.abs().max(f64::MIN_POSITIVE) * f64::EPSILON;
-                worst = worst
-                    .max((s[0] - s0).abs() / ulp(s0))
-                    .max((s[1] + s0).abs() / ulp(s0))
-                    .max((c[0] - c0).abs() / ulp(c0));
-                assert_eq!((s[2], c[2]), (0.0, 1.0));
-            }
+        for x in angles_up_to(super::SMALL) {
+            let (s, c) = super::sin_cos_small(&[x, -x, 0.0]);
+            let (s0, c0) = x.sin_cos();
+            let ulp = |v: f64| v.abs().max(f64::MIN_POSITIVE) * f64::EPSILON;
+            worst = worst
+                .max((s[0] - s0).abs() / ulp(s0))
+                .max((s[1] + s0).abs() / ulp(s0))
+                .max((c[0] - c0).abs() / ulp(c0));
+            assert_eq!((s[2], c[2]), (0.0, 1.0));
         }
         assert!(worst <= 1.0, "{worst} ulp");
         let big = [0.1, 1e-3];
         assert_eq!(super::sin_cos_small(&big), super::sin_cos_array(&big));
+    }
+
+    /// Aligned links' tiny deviations: `c cos x` and `-sin x` within one unit in the
+    /// last place of libm's, both signs of `c` and `x`, zero exactly kept; and equal
+    /// to the longer series' `c cos x - (1 - |c|) sin x` (the general path) to one
+    /// unit in the last place.
+    #[test]
+    fn aligned_tiny_deviations_match_std_within_one_ulp() {
+        let mut worst: f64 = 0.0;
+        let mut worst_series: f64 = 0.0;
+        let ulp = |v: f64| v.abs().max(f64::MIN_POSITIVE) * f64::EPSILON;
+        for x in angles_up_to(super::TINY) {
+            let c = [1.0, -1.0, 0.0, -0.0, 1.0, 0.0, -0.0, 0.0];
+            let a = [x, x, x, x, 0.0, 0.0, 0.0, -0.0];
+            let got = super::cos_sum_aligned_tiny(&c, &a);
+            let (s0, c0) = x.sin_cos();
+            let want = [c0, -c0, -s0, -s0];
+            for k in 0..4 {
+                worst = worst.max((got[k] - want[k]).abs() / ulp(want[k]));
+            }
+            let (ss, cs) = super::sin_cos_small(&a);
+            for k in 0..8 {
+                let general = c[k] * cs[k] - (1.0 - c[k].abs()) * ss[k];
+                worst_series = worst_series.max((got[k] - general).abs() / ulp(general));
+                if general == 0.0 {
+                    // Zeros with the general path's sign.
+                    assert_eq!(got[k].to_bits(), general.to_bits(), "{k} at {x}");
+                }
+            }
+            assert_eq!(got[4], 1.0);
+        }
+        assert!(worst <= 1.0, "{worst} ulp from libm");
+        assert!(
+            worst_series <= 1.0,
+            "{worst_series} ulp from the longer series"
+        );
+    }
+
+    /// Angles within `bound`: evenly over it, near zero, and denser near zero.
+    fn angles_up_to(bound: f64) -> impl Iterator<Item = f64> {
+        let n = 200_000;
+        (0..=n).flat_map(move |i| {
+            let t = i as f64 / n as f64;
+            [
+                bound * (2.0 * t - 1.0),
+                1e-12 * (2.0 * t - 1.0),
+                bound * t * t,
+            ]
+        })
     }
 
     /// The AVX-512 kernel on eight lanes, stored: `(sin, cos, in range)`.

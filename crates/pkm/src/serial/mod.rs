@@ -149,7 +149,11 @@ pub fn link_transform(link: &Link, dev: &LinkDeviation) -> Matrix4<f64> {
 ///
 /// (`phi = acos c` lies in `[0, pi]`, so `sin(phi) = sqrt(1 - c^2) >= 0`). The nine
 /// sines and cosines come from one vectorised pass ([`crate::trig::sin_cos_small`]:
-/// short series for deviations below 7.8 mrad, the usual case).
+/// short series for deviations below 7.8 mrad, the usual case). An axis-aligned link
+/// whose deviations are all below 0.98 mrad (a machine's, in practice) needs only
+/// `c cos(alpha)` or `-sin(alpha)` per entry, by shorter series still
+/// ([`crate::trig::cos_sum_aligned_tiny`]; within one unit in the last place of the
+/// longer ones, tested).
 /// An entry without angular deviation is `c` itself (`c * 1 - s * 0`, exactly). An
 /// axis-aligned link (every `c` exactly 0 or +-1) takes `sqrt(1 - c^2) = 1 - |c|`,
 /// exact, without the nine square roots. The
@@ -194,12 +198,21 @@ fn deviated_block_body(link: &Link, dev: &LinkDeviation) -> Matrix3<f64> {
     // Read in place: a copy (stored as two 32-byte halves, read back at other offsets)
     // would wait for the stores to retire.
     let alpha: &[f64; 9] = dev.alpha.as_slice().try_into().expect("3 x 3");
-    let (sa, ca) = crate::trig::sin_cos_small(alpha);
     // Axis-aligned links (every nominal cosine 0 or +-1, exactly: `c^2 = |c|` holds
     // for nothing else) have `sqrt(1 - c^2) = 1 - |c|` exactly: no square root.
     // A fold, not `all`: nine comparisons in a few vector instructions instead of nine
     // compare-and-branch pairs (the same answer).
     let aligned = b.iter().fold(true, |ok, c| ok & (*c * *c == c.abs()));
+    if aligned
+        && alpha
+            .iter()
+            .fold(true, |ok, a| ok & (a.abs() <= crate::trig::TINY))
+    {
+        // Each entry is `c cos(alpha)` or `-sin(alpha)`: only the one series it needs.
+        let c: &[f64; 9] = b.as_slice().try_into().expect("3 x 3");
+        return Matrix3::from_column_slice(&crate::trig::cos_sum_aligned_tiny(c, alpha));
+    }
+    let (sa, ca) = crate::trig::sin_cos_small(alpha);
     let sine: [f64; 9] = if aligned {
         std::array::from_fn(|k| 1.0 - b[k].abs())
     } else {
