@@ -137,9 +137,12 @@ pub fn slice_svg(
         } else {
             linear_ticks(c0, c1, 6)
         };
-        let label_of = |v: f64| match log {
-            true => tick(10f64.powf(v), 10f64.powf(v)),
-            false => tick(v, c1 - c0),
+        let label_of = |v: f64| {
+            if log {
+                tick(10f64.powf(v), 10f64.powf(v))
+            } else {
+                tick(v, c1 - c0)
+            }
         };
         let mut cb = ChartBuilder::on(&bar)
             .margin_top(40)
