@@ -149,7 +149,9 @@ pub fn slice_cells(
         .zip(&fix_idx)
         .map(|(&f, &fi)| {
             let (name, q) = coord(f);
-            format!("{name} = {:.2} {}", q.to_user(axes[f].value(fi)), q.unit())
+            // Rounded first: a grid value a rounding below zero would read "-0.00".
+            let v = (q.to_user(axes[f].value(fi)) * 100.0).round() / 100.0 + 0.0;
+            format!("{name} = {v:.2} {}", q.unit())
         })
         .collect::<Vec<_>>()
         .join(", ");

@@ -4,6 +4,8 @@ use anyhow::{anyhow, Result};
 use pkm::mechanism::{LinkKind, PointRole, Skeleton};
 use plotters::prelude::*;
 
+use super::ticks::tick;
+
 /// One orthographic view: which coordinates go right and up.
 #[derive(Clone, Copy)]
 pub struct View {
@@ -129,7 +131,7 @@ pub fn view_svg(skeletons: &[&Skeleton], view: View, size: (u32, u32)) -> Result
             .caption(view.title, ("sans-serif", 16))
             .x_label_area_size(xl)
             .y_label_area_size(yl)
-            .build_cartesian_2d(xr, yr)
+            .build_cartesian_2d(xr.clone(), yr.clone())
             .map_err(|e| anyhow!("{e}"))?;
         chart
             .configure_mesh()
@@ -138,8 +140,8 @@ pub fn view_svg(skeletons: &[&Skeleton], view: View, size: (u32, u32)) -> Result
             .light_line_style(RGBColor(235, 235, 235))
             .x_labels(5)
             .y_labels(6)
-            .x_label_formatter(&|v| format!("{v:.0}"))
-            .y_label_formatter(&|v| format!("{v:.0}"))
+            .x_label_formatter(&|v| tick(*v, xr.end - xr.start))
+            .y_label_formatter(&|v| tick(*v, yr.end - yr.start))
             .draw()
             .map_err(|e| anyhow!("{e}"))?;
         for (n, s) in skeletons.iter().enumerate().rev() {
