@@ -32,7 +32,10 @@ fn csv_text(v: &Bound<'_, PyAny>, what: &str) -> PyResult<(String, String)> {
 /// and `rotation` rad of home, within every limit) or `one-strut` (seed 001: one more
 /// strut changed by `step` mm per state); `fixture_radius` (mm): the fixture's size
 /// (a strut machine's triangle's circumradius, a pentapod's two points on its axis
-/// apart); `holdout`: further states for validation.
+/// apart); `holdout`: further states for validation. Left out, they are
+/// `pkm simulate-measurements`' defaults fitted to the machine (1 mm, 100 mm, 10 deg,
+/// 40 mm, 200 mm, shrunk by halves on a machine where fewer than a fifth of such
+/// random poses are within its limits).
 ///
 /// Returns a dict: `measurements` and `validation` (CSV text for `calibrate`),
 /// `names` and `true_parameters` (array), `true_poses` ((states, 6) array, mm and
@@ -41,7 +44,7 @@ fn csv_text(v: &Bound<'_, PyAny>, what: &str) -> PyResult<(String, String)> {
 #[pyfunction]
 #[pyo3(signature = (machine, *, states = None, holdout = 0, deviation = None,
     point_noise = None, length_noise = None, design = "random", translation = None,
-    rotation = None, step = None, fixture_radius = 200.0, seed = 1))]
+    rotation = None, step = None, fixture_radius = None, seed = 1))]
 #[allow(clippy::too_many_arguments)]
 pub fn simulate_measurements<'py>(
     py: Python<'py>,
@@ -55,11 +58,14 @@ pub fn simulate_measurements<'py>(
     translation: Option<f64>,
     rotation: Option<f64>,
     step: Option<f64>,
-    fixture_radius: f64,
+    fixture_radius: Option<f64>,
     seed: u64,
 ) -> PyResult<Bound<'py, PyDict>> {
     use pkm::analysis::identification::{parse_design, SimulateOptions};
-    let mut e = pkm::identify::simulate::Experiment::default();
+    // The defaults fitted to the machine, as `pkm simulate-measurements`'.
+    let mut e = pkm::analysis::identification::sized_experiment(&machine.inner)
+        .map_err(to_py)?
+        .experiment;
     let set = |dst: &mut f64, v: Option<f64>, what: &str| -> PyResult<()> {
         if let Some(x) = v {
             if !(x >= 0.0 && x.is_finite()) {
@@ -75,12 +81,14 @@ pub fn simulate_measurements<'py>(
     set(&mut e.translation, translation, "translation")?;
     set(&mut e.rotation, rotation, "rotation")?;
     set(&mut e.step, step, "step")?;
-    if !(fixture_radius > 0.0 && fixture_radius.is_finite()) {
-        return Err(invalid("fixture_radius", "expected a positive number"));
+    if let Some(r) = fixture_radius {
+        if !(r > 0.0 && r.is_finite()) {
+            return Err(invalid("fixture_radius", "expected a positive number"));
+        }
+        e.fixture = pkm::analysis::identification::fixture(&machine.inner, r)
+            .map_err(to_py)?
+            .points;
     }
-    e.fixture = pkm::analysis::identification::fixture(&machine.inner, fixture_radius)
-        .map_err(to_py)?
-        .points;
     e.states = states.unwrap_or(e.states);
     e.design = parse_design(design).map_err(to_py)?;
     e.seed = seed;

@@ -229,6 +229,22 @@ def test_a_pentapod_is_identified_from_points_on_its_tool_axis():
     assert pkm.Machine.from_toml(c["identified_toml"]).kind == "pentapod"
 
 
+def test_the_default_campaign_fits_a_micro_hexapod():
+    # 15 mm: the machine-tool defaults (+-100 mm) find no poses; the defaults are
+    # fitted to the machine (1/16, as pkm simulate-measurements').
+    m = pkm.load(ROOT / "tests/fixtures/micro-hexapod.toml")
+    s = pkm.simulate_measurements(m, states=30, holdout=10, seed=3)
+    assert "# fixture P1 = 0, 12.5, 0" in s["measurements"]
+    nominal = pkm.simulate_measurements(m, states=1, deviation=0.0)["true_parameters"]
+    assert 0 < np.max(np.abs(s["true_parameters"] - nominal)) <= 0.0625
+    assert np.max(np.abs(s["true_poses"][:, :3] - [0, 0, 30])) <= 6.25
+    c = pkm.calibrate(m, s["measurements"], validation=s["validation"])
+    v = c["validation"]
+    assert v["identified"]["rms"] < v["nominal"]["rms"] / 5
+    with pytest.raises(pkm.InvalidInputError, match="poses within the limits"):
+        pkm.simulate_measurements(m, translation=100.0)
+
+
 def test_errors_are_raised_with_pkm_messages(tmp_path):
     bad = tmp_path / "bad.toml"
     bad.write_text(open(HEX).read().replace("type = \"hexapod\"", "type = \"hexapod\"\nbogus = [1,"))

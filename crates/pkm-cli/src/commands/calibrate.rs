@@ -26,9 +26,9 @@ pub struct SimulateArgs {
     /// Machine file (TOML, type = "hexapod"): the nominal machine.
     pub machine: PathBuf,
     /// Half-width of the uniform deviations of every joint coordinate and zero length of
-    /// the true machine (mm).
-    #[arg(long, default_value_t = 1.0)]
-    pub deviation: f64,
+    /// the true machine (mm) [default: 1, times the campaign's scale].
+    #[arg(long)]
+    pub deviation: Option<f64>,
     /// Standard deviation of the measured point coordinates (mm).
     #[arg(long, default_value_t = 0.005)]
     pub point_noise: f64,
@@ -45,19 +45,28 @@ pub struct SimulateArgs {
     /// zero state, then one more strut changed per state).
     #[arg(long, default_value = "random")]
     pub design: String,
-    /// Half-width of the random poses' translations (mm).
-    #[arg(long, default_value_t = 100.0)]
-    pub translation: f64,
-    /// Half-width of the random poses' angles (deg).
-    #[arg(long, default_value_t = 10.0)]
-    pub rotation: f64,
-    /// Strut change per state of the one-strut design (mm).
-    #[arg(long, default_value_t = 40.0)]
-    pub step: f64,
+    /// Half-width of the random poses' translations (mm) [default: 100, times the
+    /// campaign's scale].
+    #[arg(long)]
+    pub translation: Option<f64>,
+    /// Half-width of the random poses' angles (deg) [default: 10, halved while fewer
+    /// than a fifth of the random poses are within the limits].
+    #[arg(long)]
+    pub rotation: Option<f64>,
+    /// Strut change per state of the one-strut design (mm) [default: 40, times the
+    /// campaign's scale].
+    #[arg(long)]
+    pub step: Option<f64>,
     /// Size of the fixture (mm): the circumradius of a strut machine's triangle, the
-    /// spacing of a pentapod's two points on its tool axis.
-    #[arg(long, default_value_t = 200.0)]
-    pub fixture_radius: f64,
+    /// spacing of a pentapod's two points on its tool axis [default: 200, times the
+    /// campaign's scale].
+    ///
+    /// The campaign's scale is 1 unless fewer than a fifth of the random poses within
+    /// +-100 mm and +-10 deg of home are within the machine's limits (a machine much
+    /// smaller than 100 mm); then it halves until they are, so the defaults fit a
+    /// micro-positioner as well as a machine tool.
+    #[arg(long)]
+    pub fixture_radius: Option<f64>,
     /// Random seed.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -105,13 +114,22 @@ fn read(path: &Path) -> Result<String> {
 
 pub fn simulate_run(a: &SimulateArgs) -> Result<u8> {
     let machine = load(&a.machine)?;
-    let fixture = identification::fixture(&machine, a.fixture_radius)?;
+    let sized = identification::sized_experiment(&machine)?;
+    let fixture = match a.fixture_radius {
+        Some(r) => identification::fixture(&machine, r)?,
+        None => pkm::identify::Fixture {
+            points: sized.experiment.fixture.clone(),
+            description: sized.fixture.clone(),
+        },
+    };
+    let d = &sized.experiment;
+    let deviation = a.deviation.unwrap_or(d.deviation);
     let comment = format!(
         "simulated by pkm simulate-measurements on {} (seed {}): deviations +-{} mm, point \
          noise {} mm, reading noise {} mm, {} design\nthe fixture is {}",
         a.machine.display(),
         a.seed,
-        a.deviation,
+        deviation,
         a.point_noise,
         a.length_noise,
         a.design,
@@ -119,14 +137,14 @@ pub fn simulate_run(a: &SimulateArgs) -> Result<u8> {
     );
     let opt = SimulateOptions {
         experiment: Experiment {
-            deviation: a.deviation,
+            deviation,
             point_noise: a.point_noise,
             length_noise: a.length_noise,
             states: a.states,
             design: parse_design(&a.design)?,
-            translation: a.translation,
-            rotation: a.rotation.to_radians(),
-            step: a.step,
+            translation: a.translation.unwrap_or(d.translation),
+            rotation: a.rotation.map_or(d.rotation, f64::to_radians),
+            step: a.step.unwrap_or(d.step),
             fixture: fixture.points,
             seed: a.seed,
         },
@@ -162,6 +180,18 @@ pub fn simulate_run(a: &SimulateArgs) -> Result<u8> {
         "machine": a.machine.display().to_string(),
         "states": a.states,
         "holdout": a.holdout,
+        "experiment": {
+            "deviation": opt.experiment.deviation,
+            "point_noise": a.point_noise,
+            "length_noise": a.length_noise,
+            "design": a.design,
+            "translation": opt.experiment.translation,
+            "rotation_deg": opt.experiment.rotation.to_degrees(),
+            "step": opt.experiment.step,
+            "fixture": fixture.description,
+            "default_scale": sized.sizing.scale,
+            "default_rotation_scale": sized.sizing.rotation_scale,
+        },
         "true_parameters": s.names.iter().zip(&s.true_parameters).map(|(n, v)| (n.clone(), json!(v))).collect::<serde_json::Map<_, _>>(),
         "true_poses": s.true_poses,
     });
@@ -180,7 +210,7 @@ pub fn simulate_run(a: &SimulateArgs) -> Result<u8> {
             machine.mechanism().name(),
             a.states,
             a.holdout,
-            a.deviation,
+            deviation,
             a.out.display()
         );
     }

@@ -4,21 +4,19 @@
 //! design beside it (`pkm::analysis::identification::calibration_study`).
 
 use anyhow::Result;
-use pkm::analysis::identification::{self, calibration_study};
-use pkm::identify::simulate::Experiment;
+use pkm::analysis::identification::{self, calibration_study, sized_experiment};
 use pkm::Machine;
 
 use super::html::{esc, Html};
+use super::ticks::tick;
 use crate::commands::calibrate::plot_svgs;
 
 pub fn section(h: &mut Html, machine: &Machine, _ctx: &super::Context) -> Result<()> {
-    // The campaign `pkm simulate-measurements` simulates by default.
-    let fixture = identification::fixture(machine, 200.0)?;
-    let e = Experiment {
-        fixture: fixture.points,
-        ..Experiment::default()
-    };
-    let st = calibration_study(machine, &e, 20)?;
+    // The campaign `pkm simulate-measurements` simulates by default, fitted to the
+    // machine.
+    let sized = sized_experiment(machine)?;
+    let e = &sized.experiment;
+    let st = calibration_study(machine, e, 20)?;
     let id = &st.identification;
     let n = id.names.len();
     h.h2_id(
@@ -48,17 +46,38 @@ pub fn section(h: &mut Html, machine: &Machine, _ctx: &super::Context) -> Result
         (None, Some(why)) => format!("not applicable: {why}"),
         (None, None) => "singular (the design cannot determine the parameters)".into(),
     };
+    let num = |v: f64| tick(v, v);
+    let default = pkm::identify::simulate::Experiment::default();
+    let fitted = if sized.sizing.scale < 1.0 || sized.sizing.rotation_scale < 1.0 {
+        format!(
+            " The default campaign (±{} mm deviations, ±{} mm, ±{}°, a {} mm fixture) is \
+             shrunk to fit this machine: fewer than a fifth of its random poses are within \
+             the limits, against {:.0}% of these.",
+            num(default.deviation),
+            num(default.translation),
+            num(default.rotation.to_degrees()),
+            num(identification::DEFAULT_FIXTURE_SIZE),
+            100.0 * sized.sizing.share
+        )
+    } else {
+        String::new()
+    };
     h.p(&format!(
         "A simulated campaign (<code>pkm simulate-measurements</code> + <code>pkm \
              calibrate</code> do the same from files): a true machine whose joint coordinates \
-             and zero lengths ({n} parameters) deviate uniformly by up to ±1 mm, {} \
-             measured with 5 µm noise per coordinate, strut \
-             readings with 1 µm noise, {} random states (±100 mm, ±10°). Levenberg-Marquardt \
-             on the actuator equations with the measured poses; the pose error is the tool \
-             tip's, at {} held-out states, when the control's readings are put through each \
-             model's forward kinematics.{held} docs/identification.md explains the method.",
-        esc(&fixture.description),
+             and zero lengths ({n} parameters) deviate uniformly by up to ±{} mm, {} \
+             measured with {} µm noise per coordinate, strut readings with {} µm noise, {} \
+             random states (±{} mm, ±{}°).{fitted} Levenberg-Marquardt on the actuator \
+             equations with the measured poses; the pose error is the tool tip's, at {} \
+             held-out states, when the control's readings are put through each model's \
+             forward kinematics.{held} docs/identification.md explains the method.",
+        num(e.deviation),
+        esc(&sized.fixture),
+        num(1e3 * e.point_noise),
+        num(1e3 * e.length_noise),
         st.experiment_states,
+        num(e.translation),
+        num(e.rotation.to_degrees()),
         st.holdout
     ));
     h.table(

@@ -336,3 +336,64 @@ fn a_pentapod_calibrates_and_goes_back_to_linuxcnc() {
         String::from_utf8_lossy(&o.stderr)
     );
 }
+
+/// A 15 mm micro-hexapod with the defaults: the campaign is fitted to the machine
+/// (1/16 of the machine-tool defaults, recorded in truth.json), options given on the
+/// command line are used as given, and the campaign identifies the machine.
+#[test]
+fn the_default_campaign_fits_a_micro_hexapod() {
+    let dir = tempfile::tempdir().unwrap();
+    let sim = dir.path().join("sim");
+    let micro = path("tests/fixtures/micro-hexapod.toml");
+    let o = pkm()
+        .args(["simulate-measurements", &micro, "--holdout", "20", "--out"])
+        .arg(&sim)
+        .output()
+        .unwrap();
+    ok(&o);
+    let truth: Value =
+        serde_json::from_str(&std::fs::read_to_string(sim.join("truth.json")).unwrap()).unwrap();
+    let e = &truth["experiment"];
+    assert_eq!(e["default_scale"], 0.0625, "{e}");
+    assert_eq!(e["translation"], 6.25);
+    assert_eq!(e["deviation"], 0.0625);
+    assert_eq!(e["step"], 2.5);
+    assert!(e["fixture"].as_str().unwrap().contains("12.5 mm"), "{e}");
+    let csv = std::fs::read_to_string(sim.join("measurements.csv")).unwrap();
+    assert!(csv.contains("# fixture P1 = 0, 12.5, 0"), "{csv}");
+    // The true machine is within 0.0625 mm of the nominal joints.
+    let d = truth["true_parameters"]["B1.x"].as_f64().unwrap() - 29.3444;
+    assert!(d.abs() <= 0.0625, "{d}");
+    let o = pkm()
+        .args(["calibrate", &micro, "--measurements"])
+        .arg(sim.join("measurements.csv"))
+        .arg("--validation")
+        .arg(sim.join("validation.csv"))
+        .arg("--json")
+        .arg("--out")
+        .arg(dir.path().join("cal"))
+        .output()
+        .unwrap();
+    ok(&o);
+    let r: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let v = &r["validation"];
+    assert!(
+        v["identified"]["rms"].as_f64().unwrap() < v["nominal"]["rms"].as_f64().unwrap() / 5.0,
+        "{v}"
+    );
+    // Given spans are used as given: the default span does not fit this machine.
+    let o = pkm()
+        .args([
+            "simulate-measurements",
+            &micro,
+            "--translation",
+            "100",
+            "--out",
+        ])
+        .arg(dir.path().join("sim2"))
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("poses within the limits"), "{err}");
+}

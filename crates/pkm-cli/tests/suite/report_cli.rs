@@ -57,6 +57,9 @@ fn the_report_of_an_own_hexapod_has_every_section() {
     let html = std::fs::read_to_string(out.join("index.html")).unwrap();
     assert!(!html.contains("could not be computed"));
     assert!(html.contains("A full circle of radius"));
+    // The machine-tool-sized calibration campaign fits it as it is.
+    assert!(html.contains("random states (±100 mm, ±10°)"));
+    assert!(!html.contains("is shrunk"));
     assert!(!html.to_lowercase().contains("seed 000 reports"));
     assert!(!html.contains("Published ("));
     // The workspace map holds the whole reach: no warning that it was cut.
@@ -205,4 +208,31 @@ fn a_planar_head_is_drawn_in_its_plane() {
     let html = std::fs::read_to_string(out.join("index.html")).unwrap();
     assert!(html.contains("In its plane"));
     assert!(!html.contains("Top view"));
+}
+
+/// A 15 mm micro-hexapod (`tests/fixtures/micro-hexapod.toml`): every section,
+/// the calibration campaign fitted to its size and saying so with the values used
+/// (the machine-tool defaults found no poses within its limits).
+#[test]
+fn the_report_of_a_micro_hexapod_fits_its_size() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("rep");
+    let micro = path("tests/fixtures/micro-hexapod.toml");
+    let (code, v, err) = report(&[&micro, "--out", out.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(v["failed"].as_array().unwrap().len(), 0, "{v}");
+    assert!(v["sections"]
+        .as_array()
+        .unwrap()
+        .contains(&Value::from("calibration")));
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    assert!(!html.contains("could not be computed"));
+    for s in [
+        "deviate uniformly by up to ±0.0625 mm",
+        "circumradius 12.5 mm",
+        "random states (±6.25 mm, ±10°)",
+        "is shrunk to fit this machine",
+    ] {
+        assert!(html.contains(s), "{s}");
+    }
 }

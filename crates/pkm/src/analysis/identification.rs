@@ -8,7 +8,7 @@ use serde::Serialize;
 
 use crate::error::{Error, Result};
 use crate::identify::hexapod::SeedProcedure;
-use crate::identify::simulate::{simulate, Design, Experiment};
+use crate::identify::simulate::{simulate, sized, Design, Experiment, Sizing};
 use crate::identify::{self, Calibratable, Fixture, Identification, Measurements, PointErrors};
 use crate::machine::{Analysable, CalibratableVisitor, Machine};
 
@@ -124,6 +124,61 @@ pub fn fixture(machine: &Machine, size: f64) -> Result<Fixture> {
     }
     machine.visit_calibratable(Job(size))
 }
+
+/// [`Experiment::default`] fitted to `machine` ([`sized_experiment`]), with its fixture.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SizedExperiment {
+    /// The experiment (fixture points included).
+    #[serde(skip)]
+    pub experiment: Experiment,
+    /// The fixture's size (mm; see [`fixture`]).
+    pub fixture_size: f64,
+    /// What the fixture is.
+    pub fixture: String,
+    /// How the default was shrunk.
+    pub sizing: Sizing,
+}
+
+/// The campaign `pkm simulate-measurements` and the report simulate on `machine` by
+/// default: [`Experiment::default`] (deviations +-1 mm, +-100 mm and +-10 deg around
+/// home, 40 mm steps, a 200 mm fixture) where at least a fifth of its random poses
+/// are within the machine's limits; on a smaller or tighter machine the spans shrink
+/// by halves ([`crate::identify::simulate::sized`]) and the fixture, step and
+/// deviations with the translation span, so that a 15 mm micro-hexapod gets a
+/// campaign of its own size instead of a failed search.
+pub fn sized_experiment(machine: &Machine) -> Result<SizedExperiment> {
+    struct Job;
+    impl CalibratableVisitor for Job {
+        type Output = Result<SizedExperiment>;
+        fn visit<M: Calibratable<A> + Analysable<6, A>, const A: usize>(
+            self,
+            h: &M,
+        ) -> Self::Output {
+            let base = Experiment::default();
+            let sizing = sized(h, &base);
+            let s = sizing.scale;
+            let size = DEFAULT_FIXTURE_SIZE * s;
+            let f = h.fixture(size);
+            Ok(SizedExperiment {
+                experiment: Experiment {
+                    deviation: base.deviation * s,
+                    translation: base.translation * s,
+                    rotation: base.rotation * sizing.rotation_scale,
+                    step: base.step * s,
+                    fixture: f.points,
+                    ..base
+                },
+                fixture_size: size,
+                fixture: f.description,
+                sizing,
+            })
+        }
+    }
+    machine.visit_calibratable(Job)?
+}
+
+/// The fixture size of [`Experiment::default`] (mm).
+pub const DEFAULT_FIXTURE_SIZE: f64 = 200.0;
 
 /// Reads a measurement CSV for `machine` (its actuators name the reading columns).
 pub fn parse_measurements(machine: &Machine, text: &str, file: &str) -> Result<Measurements> {

@@ -129,12 +129,9 @@ pub fn simulate_on<M: Identifiable<P, A>, const P: usize, const A: usize>(
     let mut rng = rand::rngs::StdRng::seed_from_u64(e.seed ^ 0x5EED_0001);
     let unit = Normal::new(0.0, 1.0).expect("unit normal");
     let mut poses = Vec::with_capacity(e.states);
-    let mut violations = Vec::new();
     match e.design {
         Design::Random => {
-            let home = truth.home();
-            // Coordinates the mechanism holds (a translational tripod's angles) stay.
-            let driven = truth.driven();
+            let mut draw = RandomPoses::new(&truth, e.translation, e.rotation);
             let mut tries = 0;
             while poses.len() < e.states {
                 tries += 1;
@@ -149,18 +146,7 @@ pub fn simulate_on<M: Identifiable<P, A>, const P: usize, const A: usize>(
                         ),
                     });
                 }
-                let x = SVector::<f64, P>::from_fn(|k, _| {
-                    let span = match truth.coordinates()[k].quantity {
-                        _ if !driven.contains(&k) => 0.0,
-                        Quantity::Length => e.translation,
-                        Quantity::Angle => e.rotation,
-                    };
-                    home[k] + rng.random_range(-1.0..=1.0) * span
-                });
-                let Ok(q) = truth.inverse(&x) else { continue };
-                violations.clear();
-                truth.check_limits(&x, &q, &mut violations);
-                if violations.is_empty() {
+                if let Some(x) = draw.next(&truth, &mut rng) {
                     poses.push(x);
                 }
             }
@@ -209,6 +195,113 @@ pub fn simulate_on<M: Identifiable<P, A>, const P: usize, const A: usize>(
         },
         poses,
     })
+}
+
+/// Uniform random poses around home: every driven coordinate within `translation`
+/// (lengths, mm) or `rotation` (angles, rad) of its home value; coordinates the
+/// mechanism holds (a translational tripod's angles) stay at home.
+struct RandomPoses<const P: usize> {
+    home: SVector<f64, P>,
+    span: SVector<f64, P>,
+    violations: Vec<crate::limits::Violation>,
+}
+
+impl<const P: usize> RandomPoses<P> {
+    fn new<M: Identifiable<P, A>, const A: usize>(m: &M, translation: f64, rotation: f64) -> Self {
+        let driven = m.driven();
+        let span = SVector::<f64, P>::from_fn(|k, _| match m.coordinates()[k].quantity {
+            _ if !driven.contains(&k) => 0.0,
+            Quantity::Length => translation,
+            Quantity::Angle => rotation,
+        });
+        RandomPoses {
+            home: m.home(),
+            span,
+            violations: Vec::new(),
+        }
+    }
+
+    /// The next draw, if `m` reaches it within every limit.
+    fn next<M: Identifiable<P, A>, const A: usize>(
+        &mut self,
+        m: &M,
+        rng: &mut impl Rng,
+    ) -> Option<SVector<f64, P>> {
+        let x = SVector::<f64, P>::from_fn(|k, _| {
+            self.home[k] + rng.random_range(-1.0..=1.0) * self.span[k]
+        });
+        let q = m.inverse(&x).ok()?;
+        self.violations.clear();
+        m.check_limits(&x, &q, &mut self.violations);
+        self.violations.is_empty().then_some(x)
+    }
+}
+
+/// Share of [`SIZING_DRAWS`] random poses within `translation` (mm) and `rotation`
+/// (rad) of home that `m` reaches within every limit (a fixed seed: the same answer
+/// for the same machine).
+pub fn reachable_share<M: Identifiable<P, A>, const P: usize, const A: usize>(
+    m: &M,
+    translation: f64,
+    rotation: f64,
+) -> f64 {
+    let mut rng = rand::rngs::StdRng::seed_from_u64(0x512E);
+    let mut draw = RandomPoses::new(m, translation, rotation);
+    let hits = (0..SIZING_DRAWS)
+        .filter(|_| draw.next(m, &mut rng).is_some())
+        .count();
+    hits as f64 / SIZING_DRAWS as f64
+}
+
+/// Draws per [`reachable_share`].
+pub const SIZING_DRAWS: usize = 256;
+
+/// Smallest share of random poses within the limits [`sized`] accepts.
+pub const SIZING_SHARE: f64 = 0.2;
+
+/// How [`sized`] shrank an experiment.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Sizing {
+    /// Factor on the translation span, the fixture, the one-actuator step and the
+    /// deviations (a power of 1/2; 1 where the experiment fits as it is).
+    pub scale: f64,
+    /// Factor on the rotation span (a power of 1/2).
+    pub rotation_scale: f64,
+    /// Share of random poses within the limits at the chosen spans.
+    pub share: f64,
+}
+
+/// The spans of `e` fitted to `nominal`: where fewer than [`SIZING_SHARE`] of the
+/// random poses within them are reachable (a machine much smaller than
+/// [`Experiment::default`]'s +-100 mm, or with tight joint limits), halves the
+/// translation or the rotation span, whichever raises the share more, until the share
+/// is reached or both have been halved ten times. The caller scales the fixture, step
+/// and deviations by [`Sizing::scale`] (see
+/// [`crate::analysis::identification::sized_experiment`]).
+pub fn sized<M: Identifiable<P, A>, const P: usize, const A: usize>(
+    nominal: &M,
+    e: &Experiment,
+) -> Sizing {
+    const FLOOR: f64 = 1.0 / 1024.0;
+    let share = |s: f64, r: f64| reachable_share(nominal, s * e.translation, r * e.rotation);
+    let (mut s, mut r) = (1.0, 1.0);
+    let mut now = share(s, r);
+    while now < SIZING_SHARE && (s > FLOOR || r > FLOOR) {
+        let by_t = if s > FLOOR { share(s / 2.0, r) } else { -1.0 };
+        let by_r = if r > FLOOR { share(s, r / 2.0) } else { -1.0 };
+        if by_t >= by_r {
+            s /= 2.0;
+            now = by_t;
+        } else {
+            r /= 2.0;
+            now = by_r;
+        }
+    }
+    Sizing {
+        scale: s,
+        rotation_scale: r,
+        share: now,
+    }
 }
 
 /// Pose errors of a model against the truth.

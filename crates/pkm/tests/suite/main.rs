@@ -15,6 +15,7 @@ mod hexapod;
 mod hybrid_am;
 mod identify;
 mod identify_pentapod;
+mod identify_sizing;
 mod linuxcnc;
 mod linuxcnc_tripod;
 mod machine_file;

@@ -12,6 +12,15 @@ pub fn example(name: &str) -> Machine {
     .unwrap()
 }
 
+/// The machine file `name` in `tests/fixtures/` (users' own machines), loaded.
+pub fn fixture(name: &str) -> Machine {
+    Machine::from_path(format!(
+        "{}/../../tests/fixtures/{name}",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap()
+}
+
 /// The tool point's change after moving the named joints' centres by `d` (mm) in the
 /// machine file `file` itself (lines `NAME = [x, y, z]`) and solving forward
 /// kinematics at the nominal readings of `pose`: an independent path (the file's

@@ -1,0 +1,99 @@
+//! The default simulated campaign fitted to the machine
+//! (`pkm::analysis::identification::sized_experiment`): the examples keep
+//! `Experiment::default()`, a micro-hexapod fifteen times smaller gets a campaign of
+//! its own size that identifies it.
+
+use pkm::analysis::identification::{calibration_study, fixture, sized_experiment};
+use pkm::identify::simulate::{Experiment, SIZING_SHARE};
+use pkm::Error;
+
+/// Every identifiable example (and the own-hexapod fixture) fits the default
+/// campaign: nothing is shrunk, so the README's and report's figures stay those of
+/// `Experiment::default()`.
+#[test]
+fn the_examples_keep_the_default_campaign() {
+    let mut n = 0;
+    let machines = [
+        "hexapod-linuxcnc.toml",
+        "hexapod-seed001.toml",
+        "pentapod-linuxcnc.toml",
+        "tripod-seed000.toml",
+        "tripod-centre-leg.toml",
+        "kr30-dh.toml",
+    ]
+    .map(crate::common::example);
+    for m in machines
+        .iter()
+        .chain([&crate::common::fixture("own-hexapod.toml")])
+    {
+        let s = match sized_experiment(m) {
+            Err(Error::Unsupported { .. }) => continue,
+            r => r.unwrap(),
+        };
+        n += 1;
+        assert_eq!(s.sizing.scale, 1.0, "{}", m.source);
+        assert_eq!(s.sizing.rotation_scale, 1.0, "{}", m.source);
+        assert!(s.sizing.share >= SIZING_SHARE, "{}", m.source);
+        let f = fixture(m, 200.0).unwrap();
+        assert_eq!(
+            s.experiment,
+            Experiment {
+                fixture: f.points,
+                ..Experiment::default()
+            }
+        );
+        assert_eq!(s.fixture, f.description);
+        assert_eq!(s.fixture_size, 200.0);
+    }
+    assert_eq!(n, 5, "hexapods x3, pentapod, translational tripod");
+}
+
+/// A 15 mm micro-hexapod: the default +-100 mm campaign cannot find its poses; the
+/// sized one is 1/16 of it (a 12.5 mm fixture, +-6.25 mm, +-62.5 um deviations) and
+/// identifies the machine down to the measurement noise.
+#[test]
+fn a_micro_hexapod_gets_a_campaign_of_its_size() {
+    let m = crate::common::fixture("micro-hexapod.toml");
+    let f = fixture(&m, 200.0).unwrap();
+    let plain = Experiment {
+        fixture: f.points,
+        ..Experiment::default()
+    };
+    match calibration_study(&m, &plain, 20) {
+        Err(Error::InvalidInput { message, .. }) => {
+            assert!(message.contains("poses within the limits"), "{message}")
+        }
+        r => panic!("the default campaign should not fit: {r:?}"),
+    }
+    let s = sized_experiment(&m).unwrap();
+    let k = s.sizing.scale;
+    assert_eq!(k, 1.0 / 16.0, "{:?}", s.sizing);
+    assert!(s.sizing.share >= SIZING_SHARE);
+    let e = &s.experiment;
+    assert_eq!(e.translation, 100.0 * k);
+    assert_eq!(e.deviation, k);
+    assert_eq!(e.step, 40.0 * k);
+    assert_eq!(e.rotation, 10f64.to_radians() * s.sizing.rotation_scale);
+    assert_eq!(s.fixture_size, 200.0 * k);
+    assert_eq!(e.fixture, fixture(&m, 12.5).unwrap().points);
+    // The noise is the instrument's, not the machine's: unchanged.
+    assert_eq!(e.point_noise, Experiment::default().point_noise);
+    assert_eq!(e.length_noise, Experiment::default().length_noise);
+    let st = calibration_study(&m, e, 20).unwrap();
+    let id = &st.identification;
+    // Residual at the noise level (5 um per coordinate), 10x below the nominal's.
+    assert!(id.rms_after < 0.006, "{}", id.rms_after);
+    assert!(
+        id.rms_before > 10.0 * id.rms_after,
+        "{} {}",
+        id.rms_before,
+        id.rms_after
+    );
+    // Held-out tool position: the identified model 5x better than the nominal one.
+    assert!(
+        st.identified.position_max < st.nominal.position_max / 5.0,
+        "{:?} vs {:?}",
+        st.identified,
+        st.nominal
+    );
+}
