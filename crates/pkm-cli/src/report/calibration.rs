@@ -62,6 +62,22 @@ pub fn section(h: &mut Html, machine: &Machine, _ctx: &super::Context) -> Result
     } else {
         String::new()
     };
+    // Held-out states at the edge of the true machine's workspace can lie beyond a
+    // model's: say how many were left out.
+    let unreached = |k: usize, model: &str| {
+        if k == 0 {
+            String::new()
+        } else {
+            format!(
+                " {k} of the {} held-out states' readings are beyond the {model} model's \
+                 reach (its forward kinematics finds no pose) and are left out of its \
+                 errors.",
+                st.holdout
+            )
+        }
+    };
+    let unreached =
+        unreached(st.nominal_failed, "nominal") + &unreached(st.identified_failed, "identified");
     h.p(&format!(
         "A simulated campaign (<code>pkm simulate-measurements</code> + <code>pkm \
              calibrate</code> do the same from files): a true machine whose joint coordinates \
@@ -70,7 +86,7 @@ pub fn section(h: &mut Html, machine: &Machine, _ctx: &super::Context) -> Result
              random states (±{} mm, ±{}°).{fitted} Levenberg-Marquardt on the actuator \
              equations with the measured poses; the pose error is the tool tip's, at {} \
              held-out states, when the control's readings are put through each model's \
-             forward kinematics.{held} docs/identification.md explains the method.",
+             forward kinematics.{unreached}{held} docs/identification.md explains the method.",
         num(e.deviation),
         esc(&sized.fixture),
         num(1e3 * e.point_noise),

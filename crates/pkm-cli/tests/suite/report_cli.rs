@@ -236,3 +236,24 @@ fn the_report_of_a_micro_hexapod_fits_its_size() {
         assert!(html.contains(s), "{s}");
     }
 }
+
+/// A micro tripod (`tests/fixtures/micro-tripod.toml`): held-out states beyond the
+/// nominal model's reach are counted in the calibration section, not a failed section.
+#[test]
+fn the_calibration_of_a_micro_tripod_counts_unreached_states() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("rep");
+    let file = path("tests/fixtures/micro-tripod.toml");
+    let (code, v, err) = report(&[
+        &file,
+        "--sections",
+        "calibration",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(v["failed"].as_array().unwrap().len(), 0, "{v}");
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    assert!(html.contains("beyond the nominal model's reach"));
+    assert!(html.contains("is shrunk to fit this machine"));
+}

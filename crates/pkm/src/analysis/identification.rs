@@ -410,8 +410,13 @@ pub struct CalibrationStudy {
     pub identification: Identification,
     /// Tool-pose errors of the nominal model at the held-out states.
     pub nominal: identify::simulate::PoseErrors,
+    /// Held-out states whose readings the nominal model cannot reach (left out of
+    /// `nominal`).
+    pub nominal_failed: usize,
     /// Tool-pose errors of the identified model at the held-out states.
     pub identified: identify::simulate::PoseErrors,
+    /// Held-out states whose readings the identified model cannot reach.
+    pub identified_failed: usize,
     /// Worst per-actuator condition number of seed 001's one-strut design with
     /// `A + 1` noise-free states (`None` when it does not solve).
     pub one_strut_condition: Option<f64>,
@@ -458,11 +463,13 @@ pub fn calibration_study(
                 },
             )?;
             let readings = test.measurements.readings();
-            let nominal = identify::simulate::pose_errors(h, &zero, &readings, &test.poses)?;
+            let (nominal, nominal_failed) =
+                identify::simulate::pose_errors(h, &zero, &readings, &test.poses)?;
             let ng = id.values.len() - A;
             let model = h.with_geometry(&id.values[..ng])?;
             let z = SVector::<f64, A>::from_column_slice(&id.values[ng..]);
-            let identified = identify::simulate::pose_errors(&model, &z, &readings, &test.poses)?;
+            let (identified, identified_failed) =
+                identify::simulate::pose_errors(&model, &z, &readings, &test.poses)?;
             // Whether seed 001's procedure applies at all (a machine without it says why
             // whatever the states), then its design's conditioning.
             let (one_strut_condition, one_strut_note) =
@@ -494,7 +501,9 @@ pub fn calibration_study(
                 held: held.iter().map(|&k| names[k].clone()).collect(),
                 identification: id,
                 nominal,
+                nominal_failed,
                 identified,
+                identified_failed,
                 one_strut_condition,
                 one_strut_note,
             })

@@ -361,18 +361,31 @@ impl PoseStats {
 
 /// How far a model (`m`, zero readings `zero`) puts the tool from the true poses
 /// `poses` when given the readings `readings` the control would have: forward
-/// kinematics of the model at `zero + dL`, against the truth.
+/// kinematics of the model at `zero + dL`, against the truth; and how many states'
+/// readings the model cannot reach (its forward kinematics finds no pose: a state at
+/// the edge of the true machine's workspace can lie beyond the model's), which are
+/// left out of the statistics. Fails only when no state is reached.
 pub fn pose_errors<M: Identifiable<P, A>, const P: usize, const A: usize>(
     m: &M,
     zero: &SVector<f64, A>,
     readings: &[Vec<f64>],
     poses: &[SVector<f64, P>],
-) -> Result<PoseErrors> {
+) -> Result<(PoseErrors, usize)> {
     let mut stats = PoseStats::default();
+    let mut failed = 0;
+    let mut first = None;
     for (r, x) in readings.iter().zip(poses) {
         let q = SVector::<f64, A>::from_fn(|j, _| zero[j] + r[j]);
-        let f = m.forward(&q, x)?;
-        stats.add(&m.tool_pose(x)?, &m.tool_pose(&f.pose)?, m.free_spin());
+        match m.forward(&q, x) {
+            Ok(f) => stats.add(&m.tool_pose(x)?, &m.tool_pose(&f.pose)?, m.free_spin()),
+            Err(e) => {
+                failed += 1;
+                first.get_or_insert(e);
+            }
+        }
     }
-    Ok(stats.finish())
+    match first {
+        Some(e) if stats.n == 0 => Err(e),
+        _ => Ok((stats.finish(), failed)),
+    }
 }

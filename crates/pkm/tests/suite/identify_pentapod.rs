@@ -120,8 +120,8 @@ fn noise_free_axis_measurements_recover_the_pentapod() {
         let model_m = p.with_geometry(&id.values[..25]).unwrap();
         let z = SVector::<f64, 5>::from_column_slice(&id.values[25..]);
         let readings = v.measurements.readings();
-        let before = pose_errors(&p, &zero, &readings, &v.poses).unwrap();
-        let after = pose_errors(&model_m, &z, &readings, &v.poses).unwrap();
+        let before = crate::common::all_reached(pose_errors(&p, &zero, &readings, &v.poses));
+        let after = crate::common::all_reached(pose_errors(&model_m, &z, &readings, &v.poses));
         assert!(before.position_max > 0.5, "{before:?}");
         assert!(
             after.position_max < 1e-6 && after.orientation_max < 1e-9,

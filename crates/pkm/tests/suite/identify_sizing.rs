@@ -97,3 +97,53 @@ fn a_micro_hexapod_gets_a_campaign_of_its_size() {
         st.nominal
     );
 }
+
+/// A micro tripod (seed 000's / 20): the fitted campaign's held-out states at the edge
+/// of the true machine's workspace lie beyond the nominal model's reach; they are
+/// counted and left out instead of failing the study, and the model that reaches
+/// none of them fails naming its forward kinematics.
+#[test]
+fn held_out_states_beyond_a_models_reach_are_counted() {
+    use pkm::identify::simulate::{pose_errors, simulate};
+    use pkm::identify::Identifiable;
+    use pkm::machine::Model;
+    use pkm::Mechanism;
+    let m = crate::common::fixture("micro-tripod.toml");
+    let s = sized_experiment(&m).unwrap();
+    assert!(s.sizing.scale < 1.0, "{:?}", s.sizing);
+    let st = calibration_study(&m, &s.experiment, 20).unwrap();
+    assert!(
+        st.nominal_failed > 0 && st.nominal_failed < 20,
+        "{}",
+        st.nominal_failed
+    );
+    assert!(st.identified_failed < 20);
+    assert!(st.identified.position_rms < st.nominal.position_rms);
+    // The same count by hand: forward kinematics of the nominal model per state.
+    let Model::TranslationalTripod(t) = &m.model else {
+        panic!("a translational tripod")
+    };
+    let sim = simulate(t, &t.zero_readings().unwrap(), &s.experiment).unwrap();
+    let readings = sim.measurements.readings();
+    let z = t.zero_readings().unwrap();
+    let (_, failed) = pose_errors(t, &z, &readings, &sim.poses).unwrap();
+    let by_hand = readings
+        .iter()
+        .zip(&sim.poses)
+        .filter(|(r, x)| {
+            let q = nalgebra::Vector3::from_fn(|j, _| z[j] + r[j]);
+            t.forward(&q, x).is_err()
+        })
+        .count();
+    assert_eq!(failed, by_hand);
+    // No state reached (one strut 100 mm longer: its sphere misses the others'): the
+    // forward kinematics' error.
+    let far: Vec<Vec<f64>> = readings
+        .iter()
+        .map(|r| vec![r[0] + 100.0, r[1], r[2]])
+        .collect();
+    match pose_errors(t, &z, &far, &sim.poses) {
+        Err(e) => assert!(e.to_string().contains("spheres"), "{e}"),
+        r => panic!("{r:?}"),
+    }
+}

@@ -21,6 +21,16 @@ pub fn fixture(name: &str) -> Machine {
     .unwrap()
 }
 
+/// Pose errors of a model at states it all reaches
+/// ([`pkm::identify::simulate::pose_errors`] with no state left out).
+pub fn all_reached(
+    r: pkm::Result<(pkm::identify::simulate::PoseErrors, usize)>,
+) -> pkm::identify::simulate::PoseErrors {
+    let (e, failed) = r.unwrap();
+    assert_eq!(failed, 0, "states the model does not reach");
+    e
+}
+
 /// The tool point's change after moving the named joints' centres by `d` (mm) in the
 /// machine file `file` itself (lines `NAME = [x, y, z]`) and solving forward
 /// kinematics at the nominal readings of `pose`: an independent path (the file's
