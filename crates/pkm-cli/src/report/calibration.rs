@@ -78,12 +78,24 @@ pub fn section(h: &mut Html, machine: &Machine, _ctx: &super::Context) -> Result
     };
     let unreached =
         unreached(st.nominal_failed, "nominal") + &unreached(st.identified_failed, "identified");
+    // The rotation span where the machine turns its platform (not a translational
+    // tripod's).
+    let m = machine.mechanism();
+    let turns = if m
+        .driven()
+        .iter()
+        .any(|&k| m.coordinates()[k].quantity == pkm::Quantity::Angle)
+    {
+        format!(", ±{}°", num(e.rotation.to_degrees()))
+    } else {
+        String::new()
+    };
     h.p(&format!(
         "A simulated campaign (<code>pkm simulate-measurements</code> + <code>pkm \
              calibrate</code> do the same from files): a true machine whose joint coordinates \
              and zero lengths ({n} parameters) deviate uniformly by up to ±{} mm, {} \
              measured with {} µm noise per coordinate, strut readings with {} µm noise, {} \
-             random states (±{} mm, ±{}°).{fitted} Levenberg-Marquardt on the actuator \
+             random states (±{} mm{turns}).{fitted} Levenberg-Marquardt on the actuator \
              equations with the measured poses; the pose error is the tool tip's, at {} \
              held-out states, when the control's readings are put through each model's \
              forward kinematics.{unreached}{held} docs/identification.md explains the method.",
@@ -93,7 +105,6 @@ pub fn section(h: &mut Html, machine: &Machine, _ctx: &super::Context) -> Result
         num(1e3 * e.length_noise),
         st.experiment_states,
         num(e.translation),
-        num(e.rotation.to_degrees()),
         st.holdout
     ));
     h.table(

@@ -255,5 +255,7 @@ fn the_calibration_of_a_micro_tripod_counts_unreached_states() {
     assert_eq!(v["failed"].as_array().unwrap().len(), 0, "{v}");
     let html = std::fs::read_to_string(out.join("index.html")).unwrap();
     assert!(html.contains("beyond the nominal model's reach"));
+    // Its platform does not turn: no rotation span is claimed for its campaign.
+    assert!(html.contains("random states (±12.5 mm)."));
     assert!(html.contains("is shrunk to fit this machine"));
 }
