@@ -34,8 +34,8 @@ fn csv_text(v: &Bound<'_, PyAny>, what: &str) -> PyResult<(String, String)> {
 /// (a strut machine's triangle's circumradius, a pentapod's two points on its axis
 /// apart); `holdout`: further states for validation. Left out, they are
 /// `pkm simulate-measurements`' defaults fitted to the machine (1 mm, 100 mm, 10 deg,
-/// 40 mm, 200 mm, shrunk by halves on a machine where fewer than a fifth of such
-/// random poses are within its limits).
+/// 40 mm, 200 mm, halved on a machine where fewer than a fifth of such random poses
+/// are within its limits, doubled on one whose struts average more than 1 m).
 ///
 /// Returns a dict: `measurements` and `validation` (CSV text for `calibrate`),
 /// `names` and `true_parameters` (array), `true_poses` ((states, 6) array, mm and

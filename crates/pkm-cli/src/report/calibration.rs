@@ -48,16 +48,29 @@ pub fn section(h: &mut Html, machine: &Machine, _ctx: &super::Context) -> Result
     };
     let num = |v: f64| tick(v, v);
     let default = pkm::identify::simulate::Experiment::default();
-    let fitted = if sized.sizing.scale < 1.0 || sized.sizing.rotation_scale < 1.0 {
+    let z = &sized.sizing;
+    let base = format!(
+        "The default campaign (±{} mm deviations, ±{} mm, ±{}°, a {} mm fixture)",
+        num(default.deviation),
+        num(default.translation),
+        num(default.rotation.to_degrees()),
+        num(identification::DEFAULT_FIXTURE_SIZE),
+    );
+    let fitted = if z.scale < 1.0 || z.rotation_scale < 1.0 {
         format!(
-            " The default campaign (±{} mm deviations, ±{} mm, ±{}°, a {} mm fixture) is \
-             shrunk to fit this machine: fewer than a fifth of its random poses are within \
-             the limits, against {:.0}% of these.",
-            num(default.deviation),
+            " {base} is shrunk to fit this machine: fewer than a fifth of its random \
+             poses are within the limits, against {:.0}% of these.",
+            100.0 * z.share
+        )
+    } else if z.scale > 1.0 {
+        format!(
+            " {base} is scaled ×{} to this machine's size: its struts average {:.0} mm at \
+             home, over which ±{} mm would hardly turn them ({:.0}% of these random poses \
+             are within the limits).",
+            num(z.scale),
+            z.home_length,
             num(default.translation),
-            num(default.rotation.to_degrees()),
-            num(identification::DEFAULT_FIXTURE_SIZE),
-            100.0 * sized.sizing.share
+            100.0 * z.share
         )
     } else {
         String::new()

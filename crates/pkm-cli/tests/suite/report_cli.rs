@@ -237,13 +237,12 @@ fn the_report_of_a_micro_hexapod_fits_its_size() {
     }
 }
 
-/// A micro tripod (`tests/fixtures/micro-tripod.toml`): held-out states beyond the
-/// nominal model's reach are counted in the calibration section, not a failed section.
-#[test]
-fn the_calibration_of_a_micro_tripod_counts_unreached_states() {
+/// The report's calibration section alone for the machine file `fixture` (in
+/// `tests/fixtures/`): computed without a failure, its HTML.
+fn calibration_section(fixture: &str) -> String {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("rep");
-    let file = path("tests/fixtures/micro-tripod.toml");
+    let file = path(&format!("tests/fixtures/{fixture}"));
     let (code, v, err) = report(&[
         &file,
         "--sections",
@@ -253,9 +252,30 @@ fn the_calibration_of_a_micro_tripod_counts_unreached_states() {
     ]);
     assert_eq!(code, 0, "{err}");
     assert_eq!(v["failed"].as_array().unwrap().len(), 0, "{v}");
-    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    std::fs::read_to_string(out.join("index.html")).unwrap()
+}
+
+/// A micro tripod (`tests/fixtures/micro-tripod.toml`): held-out states beyond the
+/// nominal model's reach are counted in the calibration section, not a failed section.
+#[test]
+fn the_calibration_of_a_micro_tripod_counts_unreached_states() {
+    let html = calibration_section("micro-tripod.toml");
     assert!(html.contains("beyond the nominal model's reach"));
     // Its platform does not turn: no rotation span is claimed for its campaign.
     assert!(html.contains("random states (±12.5 mm)."));
     assert!(html.contains("is shrunk to fit this machine"));
+}
+
+/// A giant hexapod (`tests/fixtures/giant-hexapod.toml`, struts of metres): the
+/// calibration campaign is enlarged to its size and says so.
+#[test]
+fn the_calibration_of_a_giant_hexapod_is_enlarged() {
+    let html = calibration_section("giant-hexapod.toml");
+    for s in [
+        "random states (±800 mm, ±10°)",
+        "is scaled ×8 to this machine's size",
+        "circumradius 1600 mm",
+    ] {
+        assert!(html.contains(s), "{s}");
+    }
 }

@@ -135,17 +135,19 @@ pub struct SizedExperiment {
     pub fixture_size: f64,
     /// What the fixture is.
     pub fixture: String,
-    /// How the default was shrunk.
+    /// How the default was fitted.
     pub sizing: Sizing,
 }
 
 /// The campaign `pkm simulate-measurements` and the report simulate on `machine` by
 /// default: [`Experiment::default`] (deviations +-1 mm, +-100 mm and +-10 deg around
 /// home, 40 mm steps, a 200 mm fixture) where at least a fifth of its random poses
-/// are within the machine's limits; on a smaller or tighter machine the spans shrink
-/// by halves ([`crate::identify::simulate::sized`]) and the fixture, step and
-/// deviations with the translation span, so that a 15 mm micro-hexapod gets a
-/// campaign of its own size instead of a failed search.
+/// are within the machine's limits and its struts average at most 1 m at home; on a
+/// smaller or tighter machine the spans shrink by halves, on one with struts of metres
+/// they grow by doubling ([`crate::identify::simulate::sized`]), the fixture, step and
+/// deviations with the translation span, so that a 15 mm micro-hexapod and a 6 m one
+/// get campaigns of their own size instead of a failed search or an unidentifiable
+/// one.
 pub fn sized_experiment(machine: &Machine) -> Result<SizedExperiment> {
     struct Job;
     impl CalibratableVisitor for Job {

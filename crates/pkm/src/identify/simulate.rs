@@ -259,24 +259,52 @@ pub const SIZING_DRAWS: usize = 256;
 /// Smallest share of random poses within the limits [`sized`] accepts.
 pub const SIZING_SHARE: f64 = 0.2;
 
-/// How [`sized`] shrank an experiment.
+/// Largest translation span [`sized`] grows to, as a fraction of the mean length of
+/// the linear actuators at home: [`Experiment::default`]'s +-100 mm is an eighth of
+/// the examples' struts (0.75 m at home), a micro-hexapod's fitted campaign a fifth of
+/// its struts; spans of more than a fifth of the struts are not sought.
+pub const SIZING_FRACTION: f64 = 0.2;
+
+/// Mean length (mm) of the linear actuators at home (0 where there are none or home
+/// has no solution).
+fn home_stroke_length<M: Identifiable<P, A>, const P: usize, const A: usize>(m: &M) -> f64 {
+    let Ok(q) = m.inverse(&m.home()) else {
+        return 0.0;
+    };
+    let linear: Vec<f64> = (0..A)
+        .filter(|&j| m.actuators()[j].quantity == Quantity::Length)
+        .map(|j| q[j].abs())
+        .collect();
+    if linear.is_empty() {
+        0.0
+    } else {
+        linear.iter().sum::<f64>() / linear.len() as f64
+    }
+}
+
+/// How [`sized`] fitted an experiment.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Sizing {
     /// Factor on the translation span, the fixture, the one-actuator step and the
-    /// deviations (a power of 1/2; 1 where the experiment fits as it is).
+    /// deviations (a power of 2; 1 where the experiment fits as it is).
     pub scale: f64,
     /// Factor on the rotation span (a power of 1/2).
     pub rotation_scale: f64,
     /// Share of random poses within the limits at the chosen spans.
     pub share: f64,
+    /// Mean length of the linear actuators at home (mm; 0 where there are none).
+    pub home_length: f64,
 }
 
-/// The spans of `e` fitted to `nominal`: where fewer than [`SIZING_SHARE`] of the
-/// random poses within them are reachable (a machine much smaller than
+/// The spans of `e` fitted to `nominal`. Smaller: where fewer than [`SIZING_SHARE`]
+/// of the random poses within them are reachable (a machine much smaller than
 /// [`Experiment::default`]'s +-100 mm, or with tight joint limits), halves the
 /// translation or the rotation span, whichever raises the share more, until the share
-/// is reached or both have been halved ten times. The caller scales the fixture, step
-/// and deviations by [`Sizing::scale`] (see
+/// is reached or both have been halved ten times. Larger: where the translation span
+/// is below [`SIZING_FRACTION`] of the mean length of the linear actuators at home (a
+/// machine with struts of metres, whose struts would hardly turn over +-100 mm), doubles
+/// it while twice the span stays within that fraction and the share stays reached.
+/// The caller scales the fixture, step and deviations by [`Sizing::scale`] (see
 /// [`crate::analysis::identification::sized_experiment`]).
 pub fn sized<M: Identifiable<P, A>, const P: usize, const A: usize>(
     nominal: &M,
@@ -286,6 +314,23 @@ pub fn sized<M: Identifiable<P, A>, const P: usize, const A: usize>(
     let share = |s: f64, r: f64| reachable_share(nominal, s * e.translation, r * e.rotation);
     let (mut s, mut r) = (1.0, 1.0);
     let mut now = share(s, r);
+    let home_length = home_stroke_length(nominal);
+    if now >= SIZING_SHARE {
+        while 2.0 * s * e.translation <= SIZING_FRACTION * home_length && s < 1024.0 {
+            let wider = share(2.0 * s, r);
+            if wider < SIZING_SHARE {
+                break;
+            }
+            s *= 2.0;
+            now = wider;
+        }
+        return Sizing {
+            scale: s,
+            rotation_scale: r,
+            share: now,
+            home_length,
+        };
+    }
     while now < SIZING_SHARE && (s > FLOOR || r > FLOOR) {
         let by_t = if s > FLOOR { share(s / 2.0, r) } else { -1.0 };
         let by_r = if r > FLOOR { share(s, r / 2.0) } else { -1.0 };
@@ -301,6 +346,7 @@ pub fn sized<M: Identifiable<P, A>, const P: usize, const A: usize>(
         scale: s,
         rotation_scale: r,
         share: now,
+        home_length,
     }
 }
 

@@ -147,3 +147,36 @@ fn held_out_states_beyond_a_models_reach_are_counted() {
         r => panic!("{r:?}"),
     }
 }
+
+/// A giant hexapod (the micro one x200: struts 4.4-8.4 m): the default campaign
+/// (+-100 mm) hardly turns its struts and leaves it not identifiable; the fitted one is
+/// 8 times larger (within a fifth of the 6.55 m struts) and identifies it.
+#[test]
+fn a_giant_hexapod_gets_a_campaign_of_its_size() {
+    use pkm::identify::simulate::SIZING_FRACTION;
+    let m = crate::common::fixture("giant-hexapod.toml");
+    let plain = Experiment {
+        fixture: fixture(&m, 200.0).unwrap().points,
+        ..Experiment::default()
+    };
+    match calibration_study(&m, &plain, 20) {
+        Err(Error::NotIdentifiable { combination, .. }) => {
+            assert!(combination.contains("standard error"), "{combination}")
+        }
+        r => panic!("the default campaign should not identify it: {r:?}"),
+    }
+    let s = sized_experiment(&m).unwrap();
+    let z = s.sizing;
+    assert_eq!(z.scale, 8.0, "{z:?}");
+    assert!((z.home_length - 6551.0).abs() < 1.0, "{z:?}");
+    // The largest power of two within the fraction, and the share kept.
+    assert!(100.0 * z.scale <= SIZING_FRACTION * z.home_length);
+    assert!(200.0 * z.scale > SIZING_FRACTION * z.home_length);
+    assert!(z.share >= SIZING_SHARE);
+    assert_eq!(s.experiment.translation, 800.0);
+    assert_eq!(s.experiment.deviation, 8.0);
+    assert_eq!(s.fixture_size, 1600.0);
+    let st = calibration_study(&m, &s.experiment, 20).unwrap();
+    assert!(st.identification.rms_after < 0.01);
+    assert!(st.identified.position_max < st.nominal.position_max / 100.0);
+}
