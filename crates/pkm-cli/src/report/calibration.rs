@@ -4,7 +4,7 @@
 //! design beside it (`pkm::analysis::identification::calibration_study`).
 
 use anyhow::Result;
-use pkm::analysis::identification::{self, calibration_study, sized_experiment};
+use pkm::analysis::identification::{calibration_study, sized_experiment};
 use pkm::Machine;
 
 use super::html::{esc, Html};
@@ -54,7 +54,7 @@ pub fn section(h: &mut Html, machine: &Machine, _ctx: &super::Context) -> Result
         num(default.deviation),
         num(default.translation),
         num(default.rotation.to_degrees()),
-        num(identification::DEFAULT_FIXTURE_SIZE),
+        num(pkm::identify::simulate::DEFAULT_FIXTURE_SIZE),
     );
     let fitted = if z.scale < 1.0 || z.rotation_scale < 1.0 {
         format!(

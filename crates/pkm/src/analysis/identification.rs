@@ -8,7 +8,9 @@ use serde::Serialize;
 
 use crate::error::{Error, Result};
 use crate::identify::hexapod::SeedProcedure;
-use crate::identify::simulate::{simulate, sized, Design, Experiment, Sizing};
+use crate::identify::simulate::{
+    simulate, sized, Design, Experiment, Sizing, DEFAULT_FIXTURE_SIZE,
+};
 use crate::identify::{self, Calibratable, Fixture, Identification, Measurements, PointErrors};
 use crate::machine::{Analysable, CalibratableVisitor, Machine};
 
@@ -178,9 +180,6 @@ pub fn sized_experiment(machine: &Machine) -> Result<SizedExperiment> {
     }
     machine.visit_calibratable(Job)?
 }
-
-/// The fixture size of [`Experiment::default`] (mm).
-pub const DEFAULT_FIXTURE_SIZE: f64 = 200.0;
 
 /// Reads a measurement CSV for `machine` (its actuators name the reading columns).
 pub fn parse_measurements(machine: &Machine, text: &str, file: &str) -> Result<Measurements> {

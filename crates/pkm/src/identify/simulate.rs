@@ -64,11 +64,14 @@ impl Default for Experiment {
             translation: 100.0,
             rotation: 10f64.to_radians(),
             step: 40.0,
-            fixture: triangle(200.0, 0.0),
+            fixture: triangle(DEFAULT_FIXTURE_SIZE, 0.0),
             seed: 1,
         }
     }
 }
+
+/// The fixture size of [`Experiment::default`] (mm): its triangle's circumradius.
+pub const DEFAULT_FIXTURE_SIZE: f64 = 200.0;
 
 /// A simulated campaign and the truth behind it.
 #[derive(Debug, Clone)]
