@@ -268,20 +268,20 @@ pub const SIZING_SHARE: f64 = 0.2;
 /// its struts; spans of more than a fifth of the struts are not sought.
 pub const SIZING_FRACTION: f64 = 0.2;
 
-/// Mean length (mm) of the linear actuators at home (0 where there are none or home
-/// has no solution).
+/// Mean length (mm) of the linear actuators at their zero readings
+/// ([`Identifiable::zero_readings`]: at home unless the file gives calibrated ones; 0
+/// where there are none).
 fn home_stroke_length<M: Identifiable<P, A>, const P: usize, const A: usize>(m: &M) -> f64 {
-    let Ok(q) = m.inverse(&m.home()) else {
+    let Ok(q) = m.zero_readings() else {
         return 0.0;
     };
-    let linear: Vec<f64> = (0..A)
+    let (sum, n) = (0..A)
         .filter(|&j| m.actuators()[j].quantity == Quantity::Length)
-        .map(|j| q[j].abs())
-        .collect();
-    if linear.is_empty() {
+        .fold((0.0, 0), |(s, n), j| (s + q[j].abs(), n + 1));
+    if n == 0 {
         0.0
     } else {
-        linear.iter().sum::<f64>() / linear.len() as f64
+        sum / n as f64
     }
 }
 
