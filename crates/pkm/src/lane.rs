@@ -2,8 +2,9 @@
 //! `f64` and (on x86-64) on an AVX-512 register of eight values, so a kernel that runs
 //! eight poses per register computes, lane by lane, exactly what the scalar code does.
 //!
-//! Every operation is one IEEE operation with one rounding (no fused multiply-add:
-//! Rust never contracts `a * b + c`), so a formula written once over [`Lane`] gives the
+//! Every operation is one IEEE operation with one rounding (Rust never contracts
+//! `a * b + c`; a fused multiply-add is asked for by name, [`Lane::mul_add`], and is
+//! one rounding on either type), so a formula written once over [`Lane`] gives the
 //! same bits on either type; the tests of the kernels that use it check that.
 
 /// The arithmetic of a formula shared by scalar and SIMD code.
@@ -15,6 +16,8 @@ pub(crate) trait Lane: Copy {
     fn sqrt(self) -> Self;
     /// `-self` (the sign bit flipped, as `-x` on `f64`: `-0.0` from `0.0`).
     fn neg(self) -> Self;
+    /// `self * a + b` with one rounding.
+    fn mul_add(self, a: Self, b: Self) -> Self;
 }
 
 impl Lane for f64 {
@@ -41,6 +44,10 @@ impl Lane for f64 {
     #[inline(always)]
     fn neg(self) -> f64 {
         -self
+    }
+    #[inline(always)]
+    fn mul_add(self, a: f64, b: f64) -> f64 {
+        f64::mul_add(self, a, b)
     }
 }
 
@@ -109,6 +116,12 @@ impl Lane for Zmm {
     #[inline(always)]
     fn neg(self) -> Zmm {
         Zmm(self.0.map(|a| -a))
+    }
+    #[inline(always)]
+    fn mul_add(self, a: Zmm, b: Zmm) -> Zmm {
+        Zmm(std::array::from_fn(|k| {
+            f64::mul_add(self.0[k], a.0[k], b.0[k])
+        }))
     }
 }
 

@@ -7,6 +7,14 @@
 //! latency), and a branch-free quadrant fix-up. Within 2 units in the last place of
 //! `f64::sin_cos` for `|x| <= 1e4` (tested over 10^6 points); beyond that it defers to
 //! `f64::sin_cos`.
+//!
+//! Every multiply-add of the kernel is fused (`f64::mul_add`, one rounding): half the
+//! dependent steps of a separate product and sum, and the AVX-512 lanes
+//! (`avx512`) make the same fused operations, so both give the same bits. The
+//! library is built for the baseline x86-64 target, which has no FMA instruction: the
+//! scalar kernel runs compiled with FMA enabled where the CPU has it ([`fused`],
+//! checked at run time), else with libm's `fma` (correctly rounded too, so the same
+//! bits, but a call per operation: only CPUs from before 2013 take it).
 
 /// `pi/2` split so that `k * PIO2_HI` is exact for `|k| < 2^20`: its first 33 bits
 /// (1.5707963267341256) and the rest (6.077100506506192e-11).
@@ -36,24 +44,117 @@ const C: [f64; 8] = [
     1.0 / 20_922_789_888_000.0,
 ];
 
-/// `(sin x, cos x)`.
+/// Whether this CPU has fused multiply-adds (x86-64: FMA3, detected once and cached
+/// by the standard library; other targets: whether the build enables them). The
+/// kernel's multiply-adds are fused on every CPU, so its bits do not depend on this:
+/// where it is `false` each one is libm's `fma`, correctly rounded too but a call.
+#[inline(always)]
+pub fn fused() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        cfg!(target_feature = "fma") || std::arch::is_x86_feature_detected!("fma")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        cfg!(target_feature = "fma") || cfg!(target_arch = "aarch64")
+    }
+}
+
+/// Runs `$body` (an expression) compiled with FMA enabled when [`fused`] (so each
+/// `mul_add` in it is one instruction), else as it is (each `mul_add` a libm call):
+/// the same bits either way.
+macro_rules! with_fma {
+    ($(<$(const $g:ident: usize),*>)? ($($arg:ident: $ty:ty),*) -> $ret:ty $body:block) => {{
+        #[cfg(target_arch = "x86_64")]
+        {
+            #[target_feature(enable = "fma")]
+            fn fast$(<$(const $g: usize),*>)?($($arg: $ty),*) -> $ret $body
+            if $crate::trig::fused() {
+                // SAFETY: the CPU has FMA (and so AVX, which FMA implies), the features
+                // the function enables.
+                return unsafe { fast$(::<$($g),*>)?($($arg),*) };
+            }
+        }
+        #[inline(always)]
+        fn plain$(<$(const $g: usize),*>)?($($arg: $ty),*) -> $ret $body
+        plain$(::<$($g),*>)?($($arg),*)
+    }};
+}
+pub(crate) use with_fma;
+
+/// How the kernel evaluates its multiply-adds `a b + c`.
+pub(crate) trait MulAdd {
+    /// `a b + c`.
+    fn mul_add(a: f64, b: f64, c: f64) -> f64;
+    /// `c - a b`.
+    fn sub_mul(a: f64, b: f64, c: f64) -> f64;
+}
+
+/// Fused, one rounding ([`f64::mul_add`]): the AVX-512 lanes' operations.
+pub(crate) enum Fused {}
+
+/// A product, then a sum (two roundings): inlined into its caller and vectorised with
+/// its loop on any target, no dispatch.
+pub(crate) enum Separate {}
+
+impl MulAdd for Fused {
+    #[inline(always)]
+    fn mul_add(a: f64, b: f64, c: f64) -> f64 {
+        a.mul_add(b, c)
+    }
+    #[inline(always)]
+    fn sub_mul(a: f64, b: f64, c: f64) -> f64 {
+        (-a).mul_add(b, c)
+    }
+}
+
+impl MulAdd for Separate {
+    #[inline(always)]
+    fn mul_add(a: f64, b: f64, c: f64) -> f64 {
+        c + a * b
+    }
+    #[inline(always)]
+    fn sub_mul(a: f64, b: f64, c: f64) -> f64 {
+        c - a * b
+    }
+}
+
+/// `(sin x, cos x)`, by the fused kernel: the same bits as the AVX-512 lanes.
 #[inline(always)]
 pub fn sin_cos(x: f64) -> (f64, f64) {
     if !(x.abs() <= 1e4) {
         return x.sin_cos();
     }
-    kernel(x)
+    with_fma!((x: f64) -> (f64, f64) { kernel::<Fused>(x) })
 }
 
 /// `(sin x, cos x)` of every element of `x`, in one vectorised pass when all of them
-/// are within `|x| <= 1e4` (else element by element).
+/// are within `|x| <= 1e4` (else element by element), by the fused kernel: the same
+/// bits as [`sin_cos`] and the AVX-512 lanes.
 #[inline(always)]
 pub fn sin_cos_array<const N: usize>(x: &[f64; N]) -> ([f64; N], [f64; N]) {
+    with_fma!(<const N: usize>(x: &[f64; N]) -> ([f64; N], [f64; N]) {
+        sin_cos_array_by::<Fused, N>(x)
+    })
+}
+
+/// [`sin_cos_array`] with separate products and sums, inlined into the caller (whose
+/// loop over the angles it vectorises with, on any target, with no call): for a
+/// serial chain's joints, which no AVX-512 kernel has to agree with. Within the same
+/// 2 units in the last place of libm's (tested).
+#[inline(always)]
+pub fn sin_cos_array_inline<const N: usize>(x: &[f64; N]) -> ([f64; N], [f64; N]) {
+    sin_cos_array_by::<Separate, N>(x)
+}
+
+/// [`sin_cos_array`]'s pass with the multiply-adds `M`, compiled in its caller.
+#[inline(always)]
+pub(crate) fn sin_cos_array_by<M: MulAdd, const N: usize>(x: &[f64; N]) -> ([f64; N], [f64; N]) {
     let mut s = [0.0; N];
     let mut c = [0.0; N];
     if x.iter().fold(true, |ok, v| ok & (v.abs() <= 1e4)) {
         for k in 0..N {
-            (s[k], c[k]) = kernel(x[k]);
+            (s[k], c[k]) = kernel::<M>(x[k]);
         }
     } else {
         for k in 0..N {
@@ -67,12 +168,12 @@ pub fn sin_cos_array<const N: usize>(x: &[f64; N]) -> ([f64; N], [f64; N]) {
 /// every `|x| <= 2^-7` (7.8 mrad: the angular deviations of links and joints), the
 /// Taylor series to `x^7` and `x^8`, whose first omitted terms are below `4e-23`
 /// relative (within one unit in the last place of `f64::sin_cos`, tested); else
-/// [`sin_cos_array`].
+/// [`sin_cos_array_inline`].
 #[inline(always)]
 pub fn sin_cos_small<const N: usize>(x: &[f64; N]) -> ([f64; N], [f64; N]) {
     // A fold, not `all`: the comparisons vectorise instead of branching one by one.
     if !x.iter().fold(true, |ok, v| ok & (v.abs() <= SMALL)) {
-        return sin_cos_array(x);
+        return sin_cos_array_inline(x);
     }
     let mut s = [0.0; N];
     let mut c = [0.0; N];
@@ -125,27 +226,33 @@ const FIRST_OCTANT: f64 = 0.78;
 
 /// `c_0 + c_1 z + ... + c_6 z^6` by Estrin's scheme (`z2 = z^2`, `z4 = z^4`): pairs,
 /// then pairs of pairs, three multiply-add levels deep where Horner's rule is six; the
-/// AVX-512 kernel makes the same operations in the same order.
+/// AVX-512 kernel makes the same (fused) operations in the same order.
 #[inline(always)]
-fn estrin7(z: f64, z2: f64, z4: f64, c: &[f64; 7]) -> f64 {
-    let (p0, p1, p2) = (c[0] + z * c[1], c[2] + z * c[3], c[4] + z * c[5]);
-    (p0 + z2 * p1) + z4 * (p2 + z2 * c[6])
+fn estrin7<M: MulAdd>(z: f64, z2: f64, z4: f64, c: &[f64; 7]) -> f64 {
+    let (p0, p1, p2) = (
+        M::mul_add(z, c[1], c[0]),
+        M::mul_add(z, c[3], c[2]),
+        M::mul_add(z, c[5], c[4]),
+    );
+    M::mul_add(z4, M::mul_add(z2, c[6], p2), M::mul_add(z2, p1, p0))
 }
 
-/// The branch-free kernel for `|x| <= 1e4`.
+/// The branch-free kernel for `|x| <= 1e4`, its multiply-adds by `M`: `y = x 2/pi +
+/// 1.5 2^52`, `r = x - k pio2_hi - k pio2_lo`, `s = r + (r z) P_s(z)`, `c = 1 + z (C_0 +
+/// z P_c(z))`.
 #[inline(always)]
-fn kernel(x: f64) -> (f64, f64) {
-    let y = x * TWO_OVER_PI + MAGIC;
+fn kernel<M: MulAdd>(x: f64) -> (f64, f64) {
+    let y = M::mul_add(x, TWO_OVER_PI, MAGIC);
     let q = y.to_bits();
     let k = y - MAGIC;
-    let r = (x - k * PIO2_HI) - k * PIO2_LO;
+    let r = M::sub_mul(k, PIO2_LO, M::sub_mul(k, PIO2_HI, x));
     let z = r * r;
     let z2 = z * z;
     let z4 = z2 * z2;
-    let ps = estrin7(z, z2, z4, &S);
-    let s = r + r * z * ps;
-    let pc = estrin7(z, z2, z4, &[C[1], C[2], C[3], C[4], C[5], C[6], C[7]]);
-    let c = 1.0 + z * (C[0] + z * pc);
+    let ps = estrin7::<M>(z, z2, z4, &S);
+    let s = M::mul_add(r * z, ps, r);
+    let pc = estrin7::<M>(z, z2, z4, &[C[1], C[2], C[3], C[4], C[5], C[6], C[7]]);
+    let c = M::mul_add(z, M::mul_add(z, pc, C[0]), 1.0);
     // Quadrant q mod 4: (s, c), (c, -s), (-s, -c), (-c, s), without branches: swap by
     // a select, signs by flipping the sign bit.
     let swap = q & 1 == 1;
@@ -158,8 +265,8 @@ fn kernel(x: f64) -> (f64, f64) {
     )
 }
 
-/// The kernel on eight lanes of AVX-512 (the hexapod's block kernel calls it from its
-/// own AVX-512 code).
+/// The fused kernel on eight lanes of AVX-512 (the hexapod's block kernel calls it from
+/// its own AVX-512 code).
 #[cfg(target_arch = "x86_64")]
 pub(crate) mod avx512 {
     use std::arch::x86_64::*;
@@ -175,9 +282,6 @@ pub(crate) mod avx512 {
     #[inline]
     pub(crate) fn sin_cos(x: __m512d) -> ((__m512d, __m512d), u8) {
         let c = |v: f64| _mm512_set1_pd(v);
-        let add = |a: __m512d, b: __m512d| _mm512_add_pd(a, b);
-        let mul = |a: __m512d, b: __m512d| _mm512_mul_pd(a, b);
-        let sub = |a: __m512d, b: __m512d| _mm512_sub_pd(a, b);
         let ax = _mm512_abs_pd(x);
         if _mm512_cmp_pd_mask::<_CMP_LE_OQ>(ax, c(super::FIRST_OCTANT)) == 0xff {
             // Every lane in the first octant: the reduction is the identity (k = 0,
@@ -185,10 +289,10 @@ pub(crate) mod avx512 {
             return (series(x), 0xff);
         }
         let in_range = _mm512_cmp_pd_mask::<_CMP_LE_OQ>(ax, c(1e4));
-        let y = add(mul(x, c(TWO_OVER_PI)), c(MAGIC));
+        let y = _mm512_fmadd_pd(x, c(TWO_OVER_PI), c(MAGIC));
         let q = _mm512_castpd_si512(y);
-        let k = sub(y, c(MAGIC));
-        let r = sub(sub(x, mul(k, c(PIO2_HI))), mul(k, c(PIO2_LO)));
+        let k = _mm512_sub_pd(y, c(MAGIC));
+        let r = _mm512_fnmadd_pd(k, c(PIO2_LO), _mm512_fnmadd_pd(k, c(PIO2_HI), x));
         let (sn, cs) = series(r);
         let swap = _mm512_test_epi64_mask(q, _mm512_set1_epi64(1));
         let (a, b) = (
@@ -213,21 +317,21 @@ pub(crate) mod avx512 {
     #[inline]
     fn series(r: __m512d) -> (__m512d, __m512d) {
         let c = |v: f64| _mm512_set1_pd(v);
-        let add = |a: __m512d, b: __m512d| _mm512_add_pd(a, b);
         let mul = |a: __m512d, b: __m512d| _mm512_mul_pd(a, b);
         let z = mul(r, r);
         let z2 = mul(z, z);
         let z4 = mul(z2, z2);
         // `super::estrin7`, the same operations in the same order.
+        let fma = |a: __m512d, b: __m512d, d: __m512d| _mm512_fmadd_pd(a, b, d);
         let estrin = |k: &[f64]| {
-            let pair = |j: usize| add(c(k[j]), mul(z, c(k[j + 1])));
+            let pair = |j: usize| fma(z, c(k[j + 1]), c(k[j]));
             let (p0, p1, p2) = (pair(0), pair(2), pair(4));
-            add(add(p0, mul(z2, p1)), mul(z4, add(p2, mul(z2, c(k[6])))))
+            fma(z4, fma(z2, c(k[6]), p2), fma(z2, p1, p0))
         };
         let ps = estrin(&S);
-        let sn = add(r, mul(mul(r, z), ps));
+        let sn = fma(mul(r, z), ps, r);
         let pc = estrin(&C[1..]);
-        let cs = add(c(1.0), mul(z, add(c(C[0]), mul(z, pc))));
+        let cs = fma(z, fma(z, pc, c(C[0])), c(1.0));
         (sn, cs)
     }
 }
@@ -249,24 +353,61 @@ mod tests {
 
     #[test]
     fn matches_std_within_two_ulp() {
-        let mut worst: f64 = 0.0;
+        let (mut worst, mut worst_inline): (f64, f64) = (0.0, 0.0);
         let n = 1_000_000;
         for i in 0..=n {
             let x = -20.0 + 40.0 * i as f64 / n as f64;
             let (s, c) = super::sin_cos(x);
+            let (si, ci) = super::sin_cos_array_inline(&[x]);
             let (s0, c0) = x.sin_cos();
             // Relative to the value, or absolute near zero crossings.
             let ulp = |v: f64| (v.abs().max(1e-3)) * f64::EPSILON;
             worst = worst
                 .max((s - s0).abs() / ulp(s0))
                 .max((c - c0).abs() / ulp(c0));
+            worst_inline = worst_inline
+                .max((si[0] - s0).abs() / ulp(s0))
+                .max((ci[0] - c0).abs() / ulp(c0));
         }
-        assert!(worst <= 2.0, "{worst} ulp");
+        assert!(worst <= 2.0, "fused: {worst} ulp");
+        assert!(worst_inline <= 2.0, "separate: {worst_inline} ulp");
         for x in [3e4, -1e5, 1e300] {
             assert_eq!(super::sin_cos(x), x.sin_cos());
         }
         let (s, c) = super::sin_cos(f64::NAN);
         assert!(s.is_nan() && c.is_nan());
+    }
+
+    /// The fused kernel gives the same bits whichever way its multiply-adds are made:
+    /// compiled with FMA enabled (what [`super::sin_cos_array`] runs on a CPU with it)
+    /// and through libm's `fma` (this test function is compiled for the baseline
+    /// target, so `f64::mul_add` here is the call a CPU without FMA makes); and the
+    /// separate kernel stays within an ulp or two of it.
+    #[test]
+    fn fused_kernel_has_the_same_bits_with_and_without_the_instruction() {
+        let xs: Vec<f64> = angles_up_to(40.0).collect();
+        let mut differ = 0;
+        for x in xs.chunks_exact(4) {
+            let x: &[f64; 4] = x.try_into().unwrap();
+            let (s, c) = super::sin_cos_array(x);
+            let (sl, cl) = super::sin_cos_array_by::<super::Fused, 4>(x);
+            let (si, ci) = super::sin_cos_array_inline(x);
+            for k in 0..4 {
+                assert_eq!(
+                    (s[k].to_bits(), c[k].to_bits()),
+                    (sl[k].to_bits(), cl[k].to_bits()),
+                    "{:e}",
+                    x[k]
+                );
+                assert_eq!(super::sin_cos(x[k]), (s[k], c[k]));
+                let ulp = |v: f64| v.abs().max(1e-3) * f64::EPSILON;
+                assert!((si[k] - s[k]).abs() <= 2.0 * ulp(s[k]), "{:e}", x[k]);
+                assert!((ci[k] - c[k]).abs() <= 2.0 * ulp(c[k]), "{:e}", x[k]);
+                differ += usize::from(si[k] != s[k] || ci[k] != c[k]);
+            }
+        }
+        // The two really are different evaluations (else this test proves nothing).
+        assert!(differ > 1000, "{differ}");
     }
 
     /// The short series of small angles: within one unit in the last place of libm's
@@ -287,7 +428,10 @@ mod tests {
         }
         assert!(worst <= 1.0, "{worst} ulp");
         let big = [0.1, 1e-3];
-        assert_eq!(super::sin_cos_small(&big), super::sin_cos_array(&big));
+        assert_eq!(
+            super::sin_cos_small(&big),
+            super::sin_cos_array_inline(&big)
+        );
     }
 
     /// Aligned links' tiny deviations: `c cos x` and `-sin x` within one unit in the
@@ -363,7 +507,7 @@ mod tests {
             let (s, c, m) = lanes(x.try_into().unwrap());
             assert_eq!(m, 0xff);
             for l in 0..8 {
-                let (s0, c0) = super::kernel(x[l]);
+                let (s0, c0) = super::kernel::<super::Fused>(x[l]);
                 assert_eq!(
                     (s[l].to_bits(), c[l].to_bits()),
                     (s0.to_bits(), c0.to_bits()),

@@ -177,7 +177,7 @@ pub(super) const VECTOR_JOINTS: usize = 8;
 
 /// `(sin v_k, cos v_k)` of the first `n` joint values `v_k = value(k)` (at most
 /// [`VECTOR_JOINTS`]; the other lanes `(0, 1)`), in one branch-free pass over eight
-/// lanes ([`crate::trig::sin_cos_array`]): independent of each other and of the
+/// lanes ([`crate::trig::sin_cos_array_inline`]): independent of each other and of the
 /// products, they overlap instead of sitting on the walk's chain. The values are made
 /// in registers, lane by lane, and the pass fills whole registers: a vector load of
 /// values stored one by one, or of a part-filled register's masked store, would wait
@@ -190,7 +190,7 @@ pub(super) fn joint_sines(
     // Written out: `array::from_fn` is not inlined and fills the array in memory.
     let at = |k: usize| if k < n { value(k) } else { 0.0 };
     let v = [at(0), at(1), at(2), at(3), at(4), at(5), at(6), at(7)];
-    crate::trig::sin_cos_array(&v)
+    crate::trig::sin_cos_array_inline(&v)
 }
 
 /// A walk written once over its column arithmetic.
