@@ -123,24 +123,60 @@ pub(crate) fn screen_rows(
     {
         if s.avx512 {
             let n = clear.len();
-            for b in 0..n / LANES {
-                let (r0, r1) = (b * LANES, (b + 1) * LANES);
-                let x: &[f64; 6 * LANES] = xs[6 * r0..6 * r1].try_into().expect("whole block");
-                let q: &mut [f64; 6 * LANES] =
-                    (&mut qs[6 * r0..6 * r1]).try_into().expect("whole block");
-                // SAFETY: `avx512` is the hexapod's detection of AVX-512F, the one
-                // feature the kernel enables.
-                let mask = unsafe { avx512::block(s, x, q, check) };
-                for (l, c) in clear[r0..r1].iter_mut().enumerate() {
-                    *c = mask & (1 << l) != 0;
+            let blocks = n / LANES;
+            let whole = "whole blocks";
+            if check {
+                // One block per call: the limit screen's registers leave no room for a
+                // second block's.
+                let rows = xs
+                    .chunks_exact(6 * LANES)
+                    .zip(qs.chunks_exact_mut(6 * LANES));
+                for ((x, q), c) in rows.zip(clear.chunks_exact_mut(LANES)) {
+                    let (x, q) = (x.try_into().expect(whole), q.try_into().expect(whole));
+                    // SAFETY: `avx512` is the hexapod's detection of AVX-512F, the one
+                    // feature the kernel enables.
+                    set_clear(c, &unsafe { avx512::blocks::<1, true>(s, [x], [q]) });
+                }
+            } else {
+                // Two blocks per call, interleaved step by step (`avx512::blocks`), then
+                // the odd one.
+                let pairs = xs[..6 * LANES * (blocks - blocks % 2)]
+                    .chunks_exact(12 * LANES)
+                    .zip(qs.chunks_exact_mut(12 * LANES))
+                    .zip(clear.chunks_exact_mut(2 * LANES));
+                for ((x, q), c) in pairs {
+                    let (x0, x1) = x.split_at(6 * LANES);
+                    let (q0, q1) = q.split_at_mut(6 * LANES);
+                    let xs = [x0.try_into().expect(whole), x1.try_into().expect(whole)];
+                    let qs = [q0.try_into().expect(whole), q1.try_into().expect(whole)];
+                    // SAFETY: as above.
+                    set_clear(c, &unsafe { avx512::blocks::<2, false>(s, xs, qs) });
+                }
+                if blocks % 2 == 1 {
+                    let r0 = (blocks - 1) * LANES;
+                    let x = xs[6 * r0..6 * (r0 + LANES)].try_into().expect(whole);
+                    let q = (&mut qs[6 * r0..6 * (r0 + LANES)]).try_into().expect(whole);
+                    // SAFETY: as above.
+                    let masks = unsafe { avx512::blocks::<1, false>(s, [x], [q]) };
+                    set_clear(&mut clear[r0..r0 + LANES], &masks);
                 }
             }
-            clear[n / LANES * LANES..].fill(false);
+            clear[blocks * LANES..].fill(false);
             return true;
         }
     }
     let _ = (s, xs, qs, clear, check);
     false
+}
+
+/// `clear` (rows of consecutive blocks) from the blocks' lane masks.
+fn set_clear(clear: &mut [bool], masks: &[u8]) {
+    for (c, (b, l)) in clear
+        .iter_mut()
+        .zip((0..masks.len()).flat_map(|b| (0..LANES).map(move |l| (b, l))))
+    {
+        *c = masks[b] & (1 << l) != 0;
+    }
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -275,54 +311,67 @@ pub(super) mod avx512 {
         }
     }
 
-    /// One block: lengths into `qs`, the mask of cleared lanes returned.
+    /// `K` blocks: lengths into `qs`, the masks of cleared lanes returned (with
+    /// `CHECK`, the lanes within every limit of the screen; else the lanes within the
+    /// fast sine's range). Each step (transposes, sines and cosines, rotation, each
+    /// strut) is made for every block before the next: one block's steps are a chain
+    /// of dependent operations too long for the processor to overlap with the next
+    /// block's on its own (its scheduler fills with one block's waiting operations),
+    /// so two blocks interleaved in program order keep both chains going (5-6 % less
+    /// time than one block per call without the screen, measured in
+    /// `docs/performance.md`; none with it, whose registers then spill).
     #[target_feature(enable = "avx512f")]
-    pub(super) unsafe fn block(
+    pub(super) unsafe fn blocks<const K: usize, const CHECK: bool>(
         s: &Screen,
-        xs: &[f64; 6 * LANES],
-        qs: &mut [f64; 6 * LANES],
-        check: bool,
-    ) -> u8 {
+        xs: [&[f64; 6 * LANES]; K],
+        qs: [&mut [f64; 6 * LANES]; K],
+    ) -> [u8; K] {
         let c = |v: f64| _mm512_set1_pd(v);
         let sub = |a: __m512d, b: __m512d| _mm512_sub_pd(a, b);
-        let x = columns(xs);
-        let [px, py, pz, a, b, cc_] = x;
+        let x: [[__m512d; 6]; K] = std::array::from_fn(|j| columns(xs[j]));
         use crate::trig::avx512::sin_cos;
-        let ((sa, ca), in_a) = sin_cos(a);
-        let ((sb, cb), in_b) = sin_cos(b);
-        let ((sc, cc), in_c) = sin_cos(cc_);
-        let ok: u8 = in_a & in_b & in_c;
+        let angle = |k: usize| -> [((__m512d, __m512d), u8); K] {
+            std::array::from_fn(|j| sin_cos(x[j][k]))
+        };
+        let (ta, tb, tc) = (angle(3), angle(4), angle(5));
         // R = Rz(C) Ry(B) Rx(A), as rotation::rpy_matrix (same operations, same order).
         use crate::lane::Zmm;
-        let r = crate::rotation::rpy_entries([sa, sb, sc].map(Zmm::of), [ca, cb, cc].map(Zmm::of))
-            .map(Zmm::reg);
+        let r: [[__m512d; 9]; K] = std::array::from_fn(|j| {
+            let (((sa, ca), _), ((sb, cb), _), ((sc, cc), _)) = (ta[j], tb[j], tc[j]);
+            crate::rotation::rpy_entries([sa, sb, sc].map(Zmm::of), [ca, cb, cc].map(Zmm::of))
+                .map(Zmm::reg)
+        });
         // Strut vectors and lengths by the single pose's AVX-512 steps (`simd.rs`), so
         // a batch's lengths equal `Hexapod::lengths` bit for bit, whichever path
         // settles a row.
-        let mut d = [[c(0.0); 3]; 6];
-        let mut len = [c(0.0); 6];
+        let mut d = [[[c(0.0); 3]; 6]; K];
+        let mut len = [[c(0.0); 6]; K];
         for i in 0..6 {
-            let (x, y, z) = (c(s.arm[0][i]), c(s.arm[1][i]), c(s.arm[2][i]));
-            let row = |k: usize, p: __m512d, base: f64| {
-                strut_component(
-                    [r[3 * k], r[3 * k + 1], r[3 * k + 2]],
-                    [x, y, z],
-                    sub(p, c(base)),
-                )
+            let arm = [c(s.arm[0][i]), c(s.arm[1][i]), c(s.arm[2][i])];
+            for j in 0..K {
+                let row = |k: usize| {
+                    strut_component(
+                        [r[j][3 * k], r[j][3 * k + 1], r[j][3 * k + 2]],
+                        arm,
+                        sub(x[j][k], c(s.base[k][i])),
+                    )
+                };
+                let v = [row(0), row(1), row(2)];
+                len[j][i] = strut_length(v);
+                d[j][i] = v;
+            }
+        }
+        let mut masks = [0; K];
+        for (j, q) in qs.into_iter().enumerate() {
+            rows(&len[j], q);
+            let ok: u8 = ta[j].1 & tb[j].1 & tc[j].1;
+            masks[j] = if !CHECK || ok == 0 {
+                ok
+            } else {
+                limits(s, &x[j], &r[j], &d[j], &len[j], ok)
             };
-            let v = [
-                row(0, px, s.base[0][i]),
-                row(1, py, s.base[1][i]),
-                row(2, pz, s.base[2][i]),
-            ];
-            len[i] = strut_length(v);
-            d[i] = v;
         }
-        rows(&len, qs);
-        if !check || ok == 0 {
-            return ok;
-        }
-        limits(s, &x, &r, &d, &len, ok)
+        masks
     }
 
     /// Narrows `ok` to the lanes whose pose (coordinates `x` by column, rotation `r`

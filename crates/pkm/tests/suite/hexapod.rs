@@ -798,6 +798,24 @@ fn screened_batch_equals_the_exact_path_on_and_near_every_limit() {
                 let fast = x.iter().all(|v| v.abs() <= 1e4);
                 assert_eq!(clear[r], fast, "{name} row {r}");
             }
+            // Blocks go two per call and the odd one alone: an even and an odd number
+            // of blocks, and rows past the last whole block, give the single call's
+            // lengths bit for bit.
+            for rows in [n, n - 8, n - 3] {
+                let (mut q, mut c) = (vec![f64::NAN; 6 * rows], vec![true; rows]);
+                assert!(h.inverse_screened(&flat[..6 * rows], &mut q, &mut c, false));
+                for (r, x) in poses[..rows].iter().enumerate() {
+                    let whole = r < rows / 8 * 8;
+                    let fast = x.iter().all(|v| v.abs() <= 1e4);
+                    assert_eq!(c[r], whole && fast, "{name} {rows} rows, row {r}");
+                    if c[r] {
+                        let single = h.pose_lengths(x);
+                        for i in 0..6 {
+                            assert_eq!(q[6 * r + i].to_bits(), single[i].to_bits());
+                        }
+                    }
+                }
+            }
             let b = pkm::analysis::batch::inverse_batch_with(&machine, &flat, false).unwrap();
             assert!(b.reachable.iter().all(|r| *r));
             // The same lengths with and without the check.
