@@ -60,7 +60,7 @@ pub fn fused() -> bool {
     }
 }
 
-/// Runs `$body` (an expression) compiled with FMA enabled when [`fused`] (so each
+/// Runs `$body` (a block over the named arguments) compiled with FMA enabled when [`fused`] (so each
 /// `mul_add` in it is one instruction), else as it is (each `mul_add` a libm call):
 /// the same bits either way.
 macro_rules! with_fma {

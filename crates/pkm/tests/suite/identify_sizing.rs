@@ -4,8 +4,17 @@
 //! its own size that identifies it.
 
 use pkm::analysis::identification::{calibration_study, fixture, sized_experiment};
-use pkm::identify::simulate::{Experiment, SIZING_SHARE};
+use pkm::identify::simulate::{Experiment, DEFAULT_FIXTURE_SIZE, SIZING_SHARE};
 use pkm::Error;
+
+/// The default campaign on machine `m`: `Experiment::default()` with the default
+/// fixture placed on it.
+fn default_campaign(m: &pkm::machine::Machine) -> Experiment {
+    Experiment {
+        fixture: fixture(m, DEFAULT_FIXTURE_SIZE).unwrap().points,
+        ..Experiment::default()
+    }
+}
 
 /// Every identifiable example (and the own-hexapod fixture) fits the default
 /// campaign: nothing is shrunk, so the README's and report's figures stay those of
@@ -34,16 +43,12 @@ fn the_examples_keep_the_default_campaign() {
         assert_eq!(s.sizing.scale, 1.0, "{}", m.source);
         assert_eq!(s.sizing.rotation_scale, 1.0, "{}", m.source);
         assert!(s.sizing.share >= SIZING_SHARE, "{}", m.source);
-        let f = fixture(m, 200.0).unwrap();
+        assert_eq!(s.experiment, default_campaign(m));
         assert_eq!(
-            s.experiment,
-            Experiment {
-                fixture: f.points,
-                ..Experiment::default()
-            }
+            s.fixture,
+            fixture(m, DEFAULT_FIXTURE_SIZE).unwrap().description
         );
-        assert_eq!(s.fixture, f.description);
-        assert_eq!(s.fixture_size, 200.0);
+        assert_eq!(s.fixture_size, DEFAULT_FIXTURE_SIZE);
     }
     assert_eq!(n, 5, "hexapods x3, pentapod, translational tripod");
 }
@@ -54,11 +59,7 @@ fn the_examples_keep_the_default_campaign() {
 #[test]
 fn a_micro_hexapod_gets_a_campaign_of_its_size() {
     let m = crate::common::fixture("micro-hexapod.toml");
-    let f = fixture(&m, 200.0).unwrap();
-    let plain = Experiment {
-        fixture: f.points,
-        ..Experiment::default()
-    };
+    let plain = default_campaign(&m);
     match calibration_study(&m, &plain, 20) {
         Err(Error::InvalidInput { message, .. }) => {
             assert!(message.contains("poses within the limits"), "{message}")
@@ -74,7 +75,7 @@ fn a_micro_hexapod_gets_a_campaign_of_its_size() {
     assert_eq!(e.deviation, k);
     assert_eq!(e.step, 40.0 * k);
     assert_eq!(e.rotation, 10f64.to_radians() * s.sizing.rotation_scale);
-    assert_eq!(s.fixture_size, 200.0 * k);
+    assert_eq!(s.fixture_size, DEFAULT_FIXTURE_SIZE * k);
     assert_eq!(e.fixture, fixture(&m, 12.5).unwrap().points);
     // The noise is the instrument's, not the machine's: unchanged.
     assert_eq!(e.point_noise, Experiment::default().point_noise);
@@ -155,10 +156,7 @@ fn held_out_states_beyond_a_models_reach_are_counted() {
 fn a_giant_hexapod_gets_a_campaign_of_its_size() {
     use pkm::identify::simulate::SIZING_FRACTION;
     let m = crate::common::fixture("giant-hexapod.toml");
-    let plain = Experiment {
-        fixture: fixture(&m, 200.0).unwrap().points,
-        ..Experiment::default()
-    };
+    let plain = default_campaign(&m);
     match calibration_study(&m, &plain, 20) {
         Err(Error::NotIdentifiable { combination, .. }) => {
             assert!(combination.contains("standard error"), "{combination}")
@@ -169,9 +167,11 @@ fn a_giant_hexapod_gets_a_campaign_of_its_size() {
     let z = s.sizing;
     assert_eq!(z.scale, 8.0, "{z:?}");
     assert!((z.home_length - 6551.0).abs() < 1.0, "{z:?}");
-    // The largest power of two within the fraction, and the share kept.
-    assert!(100.0 * z.scale <= SIZING_FRACTION * z.home_length);
-    assert!(200.0 * z.scale > SIZING_FRACTION * z.home_length);
+    // The largest power of two within the fraction (the next doubling would pass it),
+    // and the share kept.
+    let t = Experiment::default().translation;
+    assert!(t * z.scale <= SIZING_FRACTION * z.home_length);
+    assert!(2.0 * t * z.scale > SIZING_FRACTION * z.home_length);
     assert!(z.share >= SIZING_SHARE);
     assert_eq!(s.experiment.translation, 800.0);
     assert_eq!(s.experiment.deviation, 8.0);
