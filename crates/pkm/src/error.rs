@@ -180,6 +180,20 @@ pub enum Unattainable {
         /// The farthest (mm).
         max: f64,
     },
+    /// A strut of fixed length whose carriage runs on a vertical guide cannot reach its
+    /// platform joint: the joint is farther from the guide's axis than the strut is
+    /// long (mm). A hybrid machine's map meets it at every point beyond its struts'
+    /// reach (formatting its three numbers was a third of such a map, session 38).
+    StrutReach {
+        /// The strut's actuator.
+        strut: String,
+        /// The platform joint.
+        joint: String,
+        /// The strut's length `L` (mm).
+        length: f64,
+        /// The joint's distance from the guide's axis (mm).
+        distance: f64,
+    },
 }
 
 impl std::fmt::Display for Unattainable {
@@ -209,6 +223,17 @@ impl std::fmt::Display for Unattainable {
                 f,
                 "{what} would be {distance:.3} mm from axis 2, outside the {min:.3} to \
                  {max:.3} mm the elbow spans"
+            ),
+            Unattainable::StrutReach {
+                strut,
+                joint,
+                length,
+                distance,
+            } => write!(
+                f,
+                "strut {strut} (L = {length:.3} mm) cannot reach platform joint {joint}: the \
+                 joint is {distance:.3} mm from its guide, {:.3} mm beyond the strut's length",
+                distance - length
             ),
         }
     }

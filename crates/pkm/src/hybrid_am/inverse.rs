@@ -34,17 +34,13 @@ impl HybridAm {
         let d = p - leg.guide;
         let h2 = leg.length * leg.length - d.x * d.x - d.y * d.y;
         if !(h2 >= 0.0) {
-            let reach = d.x.hypot(d.y);
             return Err(Error::NotAttainable {
-                reason: format!(
-                    "strut {} (L = {:.3} mm) cannot reach platform joint {}: the joint is \
-                     {reach:.3} mm from its guide, {:.3} mm beyond the strut's length",
-                    leg.actuator.name,
-                    leg.length,
-                    leg.platform_name,
-                    reach - leg.length
-                )
-                .into(),
+                reason: crate::error::Unattainable::StrutReach {
+                    strut: leg.actuator.name.clone(),
+                    joint: leg.platform_name.clone(),
+                    length: leg.length,
+                    distance: d.x.hypot(d.y),
+                },
             });
         }
         Ok(d.z + h2.sqrt())

@@ -279,9 +279,42 @@ fn geometry_jacobian_and_sensitivities_match_finite_differences() {
 fn unreachable_poses_name_the_strut_and_limits_their_excess() {
     let m = machine();
     // Far outside: a strut cannot reach, and says by how much.
-    let e = m.inverse(&pose(600.0, 0.0, 0.0, 45.0, 0.0)).unwrap_err();
-    assert!(matches!(e, Error::NotAttainable { .. }));
+    let x = pose(600.0, 0.0, 0.0, 45.0, 0.0);
+    let e = m.inverse(&x).unwrap_err();
     assert!(e.to_string().contains("beyond the strut's length"), "{e}");
+    // The numbers are kept as numbers (words only when shown), and they are the
+    // geometry's: the platform joint's distance from the strut's guide, by hand.
+    let Error::NotAttainable {
+        reason:
+            pkm::Unattainable::StrutReach {
+                strut,
+                joint,
+                length,
+                distance,
+            },
+    } = &e
+    else {
+        panic!("{e:?}")
+    };
+    let i = m
+        .legs
+        .iter()
+        .position(|l| &l.actuator.name == strut)
+        .expect("a strut of the machine");
+    assert_eq!(joint, &m.legs[i].platform_name);
+    assert_eq!(*length, m.legs[i].length);
+    let d = m.placement(&x).joints[i] - m.legs[i].guide;
+    assert!((distance - d.x.hypot(d.y)).abs() < 1e-9, "{distance}");
+    assert!(distance > length, "{distance} {length}");
+    let shown = e.to_string();
+    assert!(
+        shown.contains(&format!(
+            "strut {strut} (L = {length:.3} mm) cannot reach platform joint {joint}: the \
+             joint is {distance:.3} mm from its guide, {:.3} mm beyond",
+            distance - length
+        )),
+        "{shown}"
+    );
     // A held A, a tilt beyond its range, a carriage beyond its stroke.
     let violated = |x: Vector6<f64>| {
         let q = m.inverse(&x).unwrap();
