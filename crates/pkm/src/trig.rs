@@ -60,9 +60,9 @@ pub fn fused() -> bool {
     }
 }
 
-/// Runs `$body` (a block over the named arguments) compiled with FMA enabled when [`fused`] (so each
-/// `mul_add` in it is one instruction), else as it is (each `mul_add` a libm call):
-/// the same bits either way.
+/// Runs `$body` (a block over the named arguments) compiled with FMA enabled when
+/// [`fused`] (so each `mul_add` in it is one instruction), else as it is (each
+/// `mul_add` a libm call): the same bits either way.
 macro_rules! with_fma {
     ($(<$(const $g:ident: usize),*>)? ($($arg:ident: $ty:ty),*) -> $ret:ty $body:block) => {{
         #[cfg(target_arch = "x86_64")]

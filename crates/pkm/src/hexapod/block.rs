@@ -169,13 +169,11 @@ pub(crate) fn screen_rows(
     false
 }
 
-/// `clear` (rows of consecutive blocks) from the blocks' lane masks.
+/// `clear` (the rows of consecutive blocks) from the blocks' lane masks: row `r` is
+/// lane `r % LANES` of block `r / LANES`.
 fn set_clear(clear: &mut [bool], masks: &[u8]) {
-    for (c, (b, l)) in clear
-        .iter_mut()
-        .zip((0..masks.len()).flat_map(|b| (0..LANES).map(move |l| (b, l))))
-    {
-        *c = masks[b] & (1 << l) != 0;
+    for (r, c) in clear.iter_mut().enumerate() {
+        *c = masks[r / LANES] & (1 << (r % LANES)) != 0;
     }
 }
 
