@@ -29,13 +29,15 @@ fn csv_text(v: &Bound<'_, PyAny>, what: &str) -> PyResult<(String, String)> {
 /// `deviation` (mm): half-width of the uniform deviations of every joint coordinate
 /// and zero reading; `point_noise`, `length_noise` (mm): standard deviations of the
 /// measured points and readings; `design`: `random` (poses within `translation` mm
-/// and `rotation` rad of home, within every limit) or `one-strut` (seed 001: one more
-/// strut changed by `step` mm per state); `fixture_radius` (mm): the fixture's size
+/// and `rotation` rad of home, within every limit and `condition_ratio` times the home
+/// pose's condition number, default 4) or `one-strut` (seed 001: one more strut changed
+/// by `step` mm per state); `fixture_radius` (mm): the fixture's size
 /// (a strut machine's triangle's circumradius, a pentapod's two points on its axis
 /// apart); `holdout`: further states for validation. Left out, they are
 /// `pkm simulate-measurements`' defaults fitted to the machine (1 mm, 100 mm, 10 deg,
 /// 40 mm, 200 mm, halved on a machine where fewer than a fifth of such random poses
-/// are within its limits, doubled on one whose struts average more than 1 m).
+/// are within its limits and the condition bound, doubled on one whose struts average
+/// more than 1 m).
 ///
 /// Returns a dict: `measurements` and `validation` (CSV text for `calibrate`),
 /// `names` and `true_parameters` (array), `true_poses` ((states, 6) array, mm and
@@ -44,7 +46,7 @@ fn csv_text(v: &Bound<'_, PyAny>, what: &str) -> PyResult<(String, String)> {
 #[pyfunction]
 #[pyo3(signature = (machine, *, states = None, holdout = 0, deviation = None,
     point_noise = None, length_noise = None, design = "random", translation = None,
-    rotation = None, step = None, fixture_radius = None, seed = 1))]
+    rotation = None, condition_ratio = None, step = None, fixture_radius = None, seed = 1))]
 #[allow(clippy::too_many_arguments)]
 pub fn simulate_measurements<'py>(
     py: Python<'py>,
@@ -57,6 +59,7 @@ pub fn simulate_measurements<'py>(
     design: &str,
     translation: Option<f64>,
     rotation: Option<f64>,
+    condition_ratio: Option<f64>,
     step: Option<f64>,
     fixture_radius: Option<f64>,
     seed: u64,
@@ -81,6 +84,10 @@ pub fn simulate_measurements<'py>(
     set(&mut e.translation, translation, "translation")?;
     set(&mut e.rotation, rotation, "rotation")?;
     set(&mut e.step, step, "step")?;
+    // Checked (>= 1, inf allowed) by the library.
+    if let Some(r) = condition_ratio {
+        e.condition_ratio = r;
+    }
     if let Some(r) = fixture_radius {
         if !(r > 0.0 && r.is_finite()) {
             return Err(invalid("fixture_radius", "expected a positive number"));

@@ -245,6 +245,26 @@ def test_the_default_campaign_fits_a_micro_hexapod():
         pkm.simulate_measurements(m, translation=100.0)
 
 
+
+def test_random_states_keep_away_from_singularities():
+    # A micro tripod at 1/8 of the default spans reaches the plane of its base joints:
+    # unbounded, states far beyond its home's condition number are drawn; with the
+    # bound (4 by default) none is, and a bound below 1 is refused.
+    m = pkm.load(ROOT / "tests/fixtures/micro-tripod.toml")
+    # No deviations: the true machine is the nominal one, whose conditions are asked.
+    kw = dict(states=50, translation=12.5, deviation=0.0, fixture_radius=25.0, seed=1)
+    home = m.condition(m.home)
+
+    def worst(**more):
+        poses = pkm.simulate_measurements(m, **kw, **more)["true_poses"]
+        return max(m.condition(x) for x in poses) / home
+
+    assert worst() <= 4
+    assert worst(condition_ratio=float("inf")) > 20
+    with pytest.raises(pkm.InvalidInputError, match="condition ratio"):
+        pkm.simulate_measurements(m, condition_ratio=0.5)
+
+
 def test_errors_are_raised_with_pkm_messages(tmp_path):
     bad = tmp_path / "bad.toml"
     bad.write_text(open(HEX).read().replace("type = \"hexapod\"", "type = \"hexapod\"\nbogus = [1,"))

@@ -53,6 +53,10 @@ pub struct SimulateArgs {
     /// than a fifth of the random poses are within the limits].
     #[arg(long)]
     pub rotation: Option<f64>,
+    /// Largest condition number of a random state, as a multiple of the home pose's:
+    /// states nearer a singularity are drawn again (`inf`: none refused).
+    #[arg(long, default_value_t = pkm::identify::simulate::CONDITION_RATIO)]
+    pub condition_ratio: f64,
     /// Strut change per state of the one-strut design (mm) [default: 40, times the
     /// campaign's scale].
     #[arg(long)]
@@ -62,9 +66,9 @@ pub struct SimulateArgs {
     /// campaign's scale].
     ///
     /// The campaign's scale is 1 unless fewer than a fifth of the random poses within
-    /// +-100 mm and +-10 deg of home are within the machine's limits (a machine much
-    /// smaller than 100 mm: then it halves until they are) or the struts average more
-    /// than 1 m at home (then it doubles while the span stays within a fifth of them
+    /// +-100 mm and +-10 deg of home are within the machine's limits and the condition
+    /// ratio (a machine much smaller than 100 mm: then it halves until they are) or the
+    /// struts average more than 1 m at home (then it doubles while the span stays within a fifth of them
     /// and a fifth of the poses within the limits), so the defaults fit a
     /// micro-positioner and a hexapod of metres as well as a machine tool.
     #[arg(long)]
@@ -146,6 +150,7 @@ pub fn simulate_run(a: &SimulateArgs) -> Result<u8> {
             design: parse_design(&a.design)?,
             translation: a.translation.unwrap_or(d.translation),
             rotation: a.rotation.map_or(d.rotation, f64::to_radians),
+            condition_ratio: a.condition_ratio,
             step: a.step.unwrap_or(d.step),
             fixture: fixture.points,
             seed: a.seed,
@@ -189,6 +194,12 @@ pub fn simulate_run(a: &SimulateArgs) -> Result<u8> {
             "design": a.design,
             "translation": opt.experiment.translation,
             "rotation_deg": opt.experiment.rotation.to_degrees(),
+            // `inf` as JSON has it not: the string.
+            "condition_ratio": if opt.experiment.condition_ratio.is_finite() {
+                json!(opt.experiment.condition_ratio)
+            } else {
+                json!("inf")
+            },
             "step": opt.experiment.step,
             "fixture": fixture.description,
             "default_scale": sized.sizing.scale,

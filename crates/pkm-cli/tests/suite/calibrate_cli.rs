@@ -397,3 +397,38 @@ fn the_default_campaign_fits_a_micro_hexapod() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("poses within the limits"), "{err}");
 }
+
+/// `--condition-ratio`: recorded in truth.json (`inf` as a string), a bound below 1
+/// refused naming it, and nothing written.
+#[test]
+fn the_condition_bound_of_random_states_is_an_option() {
+    let dir = tempfile::tempdir().unwrap();
+    let tri = path("tests/fixtures/micro-tripod.toml");
+    for (ratio, recorded) in [("4", serde_json::json!(4.0)), ("inf", "inf".into())] {
+        let sim = dir.path().join(format!("sim-{ratio}"));
+        ok(&pkm()
+            .args(["simulate-measurements", &tri, "--condition-ratio", ratio])
+            .arg("--out")
+            .arg(&sim)
+            .output()
+            .unwrap());
+        let t: Value =
+            serde_json::from_str(&std::fs::read_to_string(sim.join("truth.json")).unwrap())
+                .unwrap();
+        assert_eq!(t["experiment"]["condition_ratio"], recorded, "{t}");
+    }
+    let sim = dir.path().join("sim-bad");
+    let o = pkm()
+        .args(["simulate-measurements", &tri, "--condition-ratio", "0.5"])
+        .arg("--out")
+        .arg(&sim)
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("condition ratio: expected a number >= 1"),
+        "{err}"
+    );
+    assert!(!sim.exists());
+}

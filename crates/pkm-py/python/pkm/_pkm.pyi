@@ -192,8 +192,9 @@ def simulate_measurements(
     design: str = "random",
     translation: Optional[float] = None,
     rotation: Optional[float] = None,
+    condition_ratio: Optional[float] = None,
     step: Optional[float] = None,
-    fixture_radius: float = 200.0,
+    fixture_radius: Optional[float] = None,
     seed: int = 1,
 ) -> dict[str, Any]: ...
 def calibrate(

@@ -57,6 +57,14 @@ pub fn simulate_measurements(
             message: "expected at least one state".into(),
         });
     }
+    let r = opt.experiment.condition_ratio;
+    // NaN refused too; a bound below home's own would refuse the poses around it.
+    if !(r >= 1.0) {
+        return Err(Error::InvalidInput {
+            what: "condition ratio".into(),
+            message: format!("expected a number >= 1 (inf: no bound), found {r}"),
+        });
+    }
     machine.visit_calibratable(SimulateJob {
         machine,
         source,
@@ -144,12 +152,12 @@ pub struct SizedExperiment {
 /// The campaign `pkm simulate-measurements` and the report simulate on `machine` by
 /// default: [`Experiment::default`] (deviations +-1 mm, +-100 mm and +-10 deg around
 /// home, 40 mm steps, a 200 mm fixture) where at least a fifth of its random poses
-/// are within the machine's limits and its struts average at most 1 m at home; on a
-/// smaller or tighter machine the spans shrink by halves, on one with struts of metres
-/// they grow by doubling ([`crate::identify::simulate::sized`]), the fixture, step and
-/// deviations with the translation span, so that a 15 mm micro-hexapod and a 6 m one
-/// get campaigns of their own size instead of a failed search or an unidentifiable
-/// one.
+/// are within the machine's limits and 4 times its home pose's condition number and
+/// its struts average at most 1 m at home; on a smaller or tighter machine the spans
+/// shrink by halves, on one with struts of metres they grow by doubling
+/// ([`crate::identify::simulate::sized`]), the fixture, step and deviations with the
+/// translation span, so that a 15 mm micro-hexapod and a 6 m one get campaigns of their
+/// own size instead of a failed search or an unidentifiable one.
 pub fn sized_experiment(machine: &Machine) -> Result<SizedExperiment> {
     struct Job;
     impl CalibratableVisitor for Job {

@@ -41,6 +41,12 @@ pub struct Experiment {
     pub translation: f64,
     /// Half-width of the random poses' angles around home (rad).
     pub rotation: f64,
+    /// Largest condition number of a random state ([`crate::Mechanism::condition`]), as
+    /// a multiple of the home pose's: states nearer a singularity, where the readings'
+    /// noise is amplified in the pose and a model's small error can put the state
+    /// beyond its reach, are drawn again ([`CONDITION_RATIO`] by default; infinite:
+    /// none refused).
+    pub condition_ratio: f64,
     /// Actuator change per state of the one-actuator design (mm or rad).
     pub step: f64,
     /// Fixture points (platform frame, mm).
@@ -51,8 +57,8 @@ pub struct Experiment {
 
 impl Default for Experiment {
     /// `pkm simulate-measurements`' defaults: deviations of +-1 mm, point noise 5 um,
-    /// reading noise 1 um, 50 random states within +-100 mm and +-10 deg of home,
-    /// 40 mm per state of the one-actuator design, a triangular fixture of
+    /// reading noise 1 um, 50 random states within +-100 mm and +-10 deg of home and
+    /// within 4 times its condition number, 40 mm per state of the one-actuator design, a triangular fixture of
     /// circumradius 200 mm, seed 1.
     fn default() -> Self {
         Experiment {
@@ -63,6 +69,7 @@ impl Default for Experiment {
             design: Design::Random,
             translation: 100.0,
             rotation: 10f64.to_radians(),
+            condition_ratio: CONDITION_RATIO,
             step: 40.0,
             fixture: triangle(DEFAULT_FIXTURE_SIZE, 0.0),
             seed: 1,
@@ -72,6 +79,16 @@ impl Default for Experiment {
 
 /// The fixture size of [`Experiment::default`] (mm): its triangle's circumradius.
 pub const DEFAULT_FIXTURE_SIZE: f64 = 200.0;
+
+/// [`Experiment::condition_ratio`] by default. The random states of every example stay
+/// within 3 times their home's condition number (the pentapod's largest of 4000 draws:
+/// 2.9, the hexapods' 1.3); a translational tripod whose campaign reaches the plane of
+/// its base joints, where the three spheres of its forward kinematics meet at a
+/// grazing angle, draws states of up to 1000 times (a tenth beyond 13 times): the
+/// held-out errors after identification were 7.6-86 um RMS over 20 seeds with them,
+/// 5.4-11 um without (`tests/fixtures/micro-tripod.toml` at 1/8 of the default spans;
+/// docs/identification.md).
+pub const CONDITION_RATIO: f64 = 4.0;
 
 /// A simulated campaign and the truth behind it.
 #[derive(Debug, Clone)]
@@ -134,7 +151,7 @@ pub fn simulate_on<M: Identifiable<P, A>, const P: usize, const A: usize>(
     let mut poses = Vec::with_capacity(e.states);
     match e.design {
         Design::Random => {
-            let mut draw = RandomPoses::new(&truth, e.translation, e.rotation);
+            let mut draw = RandomPoses::new(&truth, e.translation, e.rotation, e.condition_ratio);
             let mut tries = 0;
             while poses.len() < e.states {
                 tries += 1;
@@ -142,10 +159,19 @@ pub fn simulate_on<M: Identifiable<P, A>, const P: usize, const A: usize>(
                     return Err(Error::InvalidInput {
                         what: "simulated experiment".into(),
                         message: format!(
-                            "found only {} poses within the limits in {} tries: reduce the \
+                            "found only {} poses within the limits in {} tries{}: reduce the \
                              translation/rotation spans",
                             poses.len(),
-                            tries - 1
+                            tries - 1,
+                            if draw.ill_conditioned > 0 {
+                                format!(
+                                    " ({} more within them refused beyond {} times the \
+                                     home pose's condition number)",
+                                    draw.ill_conditioned, e.condition_ratio
+                                )
+                            } else {
+                                String::new()
+                            }
                         ),
                     });
                 }
@@ -202,24 +228,46 @@ pub fn simulate_on<M: Identifiable<P, A>, const P: usize, const A: usize>(
 
 /// Uniform random poses around home: every driven coordinate within `translation`
 /// (lengths, mm) or `rotation` (angles, rad) of its home value; coordinates the
-/// mechanism holds (a translational tripod's angles) stay at home.
+/// mechanism holds (a translational tripod's angles) stay at home. A pose within the
+/// limits is kept when its condition number is at most `condition_ratio` times the
+/// home pose's (every pose where home's is not finite or cannot be computed).
 struct RandomPoses<const P: usize> {
     home: SVector<f64, P>,
     span: SVector<f64, P>,
+    /// Largest condition number kept (infinite: none computed).
+    max_condition: f64,
+    /// Poses within the limits refused for their condition number so far.
+    ill_conditioned: usize,
     violations: Vec<crate::limits::Violation>,
 }
 
 impl<const P: usize> RandomPoses<P> {
-    fn new<M: Identifiable<P, A>, const A: usize>(m: &M, translation: f64, rotation: f64) -> Self {
+    fn new<M: Identifiable<P, A>, const A: usize>(
+        m: &M,
+        translation: f64,
+        rotation: f64,
+        condition_ratio: f64,
+    ) -> Self {
         let driven = m.driven();
         let span = SVector::<f64, P>::from_fn(|k, _| match m.coordinates()[k].quantity {
             _ if !driven.contains(&k) => 0.0,
             Quantity::Length => translation,
             Quantity::Angle => rotation,
         });
+        let home = m.home();
+        let max_condition = if condition_ratio.is_finite() {
+            m.condition(&home)
+                .ok()
+                .filter(|c| c.is_finite())
+                .map_or(f64::INFINITY, |c| condition_ratio * c)
+        } else {
+            f64::INFINITY
+        };
         RandomPoses {
-            home: m.home(),
+            home,
             span,
+            max_condition,
+            ill_conditioned: 0,
             violations: Vec::new(),
         }
     }
@@ -236,28 +284,43 @@ impl<const P: usize> RandomPoses<P> {
         let q = m.inverse(&x).ok()?;
         self.violations.clear();
         m.check_limits(&x, &q, &mut self.violations);
-        self.violations.is_empty().then_some(x)
+        if !self.violations.is_empty() {
+            return None;
+        }
+        // NaN (a condition that cannot be computed) is refused too.
+        if self.max_condition.is_finite()
+            && !(m.condition_at(&x, &q).unwrap_or(f64::NAN) <= self.max_condition)
+        {
+            self.ill_conditioned += 1;
+            return None;
+        }
+        Some(x)
     }
 }
 
 /// Share of [`SIZING_DRAWS`] random poses within `translation` (mm) and `rotation`
-/// (rad) of home that `m` reaches within every limit (a fixed seed: the same answer
-/// for the same machine).
+/// (rad) of home that `m` reaches within every limit and within `condition_ratio`
+/// times the home pose's condition number (a fixed seed: the same answer for the same
+/// machine).
 pub fn reachable_share<M: Identifiable<P, A>, const P: usize, const A: usize>(
     m: &M,
     translation: f64,
     rotation: f64,
+    condition_ratio: f64,
 ) -> f64 {
     let mut rng = rand::rngs::StdRng::seed_from_u64(0x512E);
-    let mut draw = RandomPoses::new(m, translation, rotation);
+    let mut draw = RandomPoses::new(m, translation, rotation, condition_ratio);
     let hits = (0..SIZING_DRAWS)
         .filter(|_| draw.next(m, &mut rng).is_some())
         .count();
     hits as f64 / SIZING_DRAWS as f64
 }
 
-/// Draws per [`reachable_share`].
-pub const SIZING_DRAWS: usize = 256;
+/// Draws per [`reachable_share`]: the share's standard error is about 0.013 at
+/// [`SIZING_SHARE`] (0.025 with the 256 draws before 2026-11-29, when a micro tripod
+/// whose share at 1/8 of the default spans is 0.155 of 20 000 draws was found 0.21 in
+/// the first 256 and given that campaign).
+pub const SIZING_DRAWS: usize = 1024;
 
 /// Smallest share of random poses within the limits [`sized`] accepts.
 pub const SIZING_SHARE: f64 = 0.2;
@@ -300,7 +363,8 @@ pub struct Sizing {
 }
 
 /// The spans of `e` fitted to `nominal`. Smaller: where fewer than [`SIZING_SHARE`]
-/// of the random poses within them are reachable (a machine much smaller than
+/// of the random poses within them are reachable within
+/// [`Experiment::condition_ratio`] (a machine much smaller than
 /// [`Experiment::default`]'s +-100 mm, or with tight joint limits), halves the
 /// translation or the rotation span, whichever raises the share more, until the share
 /// is reached or both have been halved ten times. Larger: where the translation span
@@ -314,7 +378,14 @@ pub fn sized<M: Identifiable<P, A>, const P: usize, const A: usize>(
     e: &Experiment,
 ) -> Sizing {
     const FLOOR: f64 = 1.0 / 1024.0;
-    let share = |s: f64, r: f64| reachable_share(nominal, s * e.translation, r * e.rotation);
+    let share = |s: f64, r: f64| {
+        reachable_share(
+            nominal,
+            s * e.translation,
+            r * e.rotation,
+            e.condition_ratio,
+        )
+    };
     let (mut s, mut r) = (1.0, 1.0);
     let mut now = share(s, r);
     let home_length = home_stroke_length(nominal);

@@ -311,6 +311,7 @@ fn identification(name: &str, machine: &Machine) {
         design: Design::Random,
         translation: 30.0,
         rotation: 5f64.to_radians(),
+        condition_ratio: pkm::identify::simulate::CONDITION_RATIO,
         step: 20.0,
         // The machine's own fixture: a triangle on a platform, points on a pentapod's
         // tool axis.

@@ -35,6 +35,7 @@ fn experiment(states: usize, design: Design, seed: u64) -> Experiment {
         design,
         translation: 100.0,
         rotation: 10f64.to_radians(),
+        condition_ratio: pkm::identify::simulate::CONDITION_RATIO,
         step: 40.0,
         fixture: triangle(200.0, 0.0),
         seed,
