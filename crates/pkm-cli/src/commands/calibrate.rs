@@ -68,9 +68,10 @@ pub struct SimulateArgs {
     /// The campaign's scale is 1 unless fewer than a fifth of the random poses within
     /// +-100 mm and +-10 deg of home are within the machine's limits and the condition
     /// ratio (a machine much smaller than 100 mm: then it halves until they are) or the
-    /// struts average more than 1 m at home (then it doubles while the span stays within a fifth of them
-    /// and a fifth of the poses within the limits), so the defaults fit a
-    /// micro-positioner and a hexapod of metres as well as a machine tool.
+    /// struts average more than 1 m at home (then it doubles while the span stays
+    /// within a fifth of them and a fifth of the poses within the limits), so the
+    /// defaults fit a micro-positioner and a hexapod of metres as well as a machine
+    /// tool.
     #[arg(long)]
     pub fixture_radius: Option<f64>,
     /// Random seed.

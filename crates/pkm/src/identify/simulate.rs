@@ -57,9 +57,9 @@ pub struct Experiment {
 
 impl Default for Experiment {
     /// `pkm simulate-measurements`' defaults: deviations of +-1 mm, point noise 5 um,
-    /// reading noise 1 um, 50 random states within +-100 mm and +-10 deg of home and
-    /// within 4 times its condition number, 40 mm per state of the one-actuator design, a triangular fixture of
-    /// circumradius 200 mm, seed 1.
+    /// reading noise 1 um, 50 random states within +-100 mm and +-10 deg of home and 4
+    /// times the home pose's condition number, 40 mm per state of the one-actuator
+    /// design, a triangular fixture of circumradius 200 mm, seed 1.
     fn default() -> Self {
         Experiment {
             deviation: 1.0,
@@ -160,7 +160,7 @@ pub fn simulate_on<M: Identifiable<P, A>, const P: usize, const A: usize>(
                         what: "simulated experiment".into(),
                         message: format!(
                             "found only {} poses within the limits in {} tries{}: reduce the \
-                             translation/rotation spans",
+                             translation/rotation spans{}",
                             poses.len(),
                             tries - 1,
                             if draw.ill_conditioned > 0 {
@@ -171,6 +171,11 @@ pub fn simulate_on<M: Identifiable<P, A>, const P: usize, const A: usize>(
                                 )
                             } else {
                                 String::new()
+                            },
+                            if draw.ill_conditioned > 0 {
+                                " or raise the condition ratio"
+                            } else {
+                                ""
                             }
                         ),
                     });

@@ -169,6 +169,22 @@ fn random_states_keep_away_from_singularities() {
     assert!(a.identified.position_rms > 0.015, "{:?}", a.identified);
     assert!(b.identified.position_rms < 0.012, "{:?}", b.identified);
     assert_eq!(b.identified_failed, 0);
+    // A bound no pose meets (below 1: none is better conditioned than 1/1000 of home)
+    // refuses every pose within the limits, and the error says so.
+    let none = Experiment {
+        states: 5,
+        condition_ratio: 1e-3,
+        ..bound
+    };
+    match simulate(t, &z, &none) {
+        Err(Error::InvalidInput { message, .. }) => assert!(
+            message.contains("found only 0 poses within the limits in 5000 tries (")
+                && message.contains("more within them refused beyond 0.001 times the home pose's")
+                && message.ends_with("or raise the condition ratio"),
+            "{message}"
+        ),
+        r => panic!("{:?}", r.map(|s| s.poses)),
+    }
 }
 
 /// The micro tripod's campaign at 1/8 of the default spans without the condition bound:
