@@ -1008,8 +1008,9 @@ fn accuracy(c: &mut Criterion) {
     );
     let mut g = c.benchmark_group("accuracy monte carlo");
     g.sample_size(10);
+    let threads = rayon::current_num_threads();
     g.bench_function(
-        "hexapod 1e6 machines, 42 tolerances (rayon, 2 threads)",
+        format!("hexapod 1e6 machines, 42 tolerances (rayon, {threads} threads)"),
         |b| {
             b.iter(|| {
                 pkm::accuracy::monte_carlo(h.as_ref(), &x, &tol, 1_000_000, 1)
@@ -1017,6 +1018,35 @@ fn accuracy(c: &mut Criterion) {
                     .mean
             })
         },
+    );
+    // What `pkm errors kr30-dh.toml --pose 1200,100,1400,180,0,0 --length-tolerance
+    // 0.01 --joint-tolerance 0.01 --monte-carlo 100000` runs: the budget and 1e5
+    // deviated robots (57 tolerances, one per kind; eight links completed per sample,
+    // seed 003 eq. 3), on the global pool and on one thread.
+    let kr = machine("kr30-dh.toml");
+    let opt = pkm::analysis::accuracy::AccuracyOptions {
+        pose: Some(vec![1200.0, 100.0, 1400.0, 180f64.to_radians(), 0.0, 0.0]),
+        tolerances: pkm::analysis::accuracy::Tolerances::ByKind(Default::default()),
+        monte_carlo: Some(100_000),
+        ..Default::default()
+    };
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let run = || {
+        pkm::analysis::accuracy::accuracy(&kr, black_box(&opt))
+            .unwrap()
+            .monte_carlo
+            .map(|m| m.mean)
+    };
+    g.bench_function(
+        format!("KR 30 1e5 robots, 57 tolerances, with the budget (rayon, {threads} threads)"),
+        |b| b.iter(run),
+    );
+    g.bench_function(
+        "KR 30 1e5 robots, 57 tolerances, with the budget (one thread)",
+        |b| b.iter(|| one.install(run)),
     );
     g.finish();
 }
