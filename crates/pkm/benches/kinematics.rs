@@ -1040,12 +1040,21 @@ fn accuracy(c: &mut Criterion) {
             .monte_carlo
             .map(|m| m.mean)
     };
+    // The tolerances the options give (57: one per kind on every toleranced parameter).
+    let budget_only = pkm::analysis::accuracy::AccuracyOptions {
+        monte_carlo: None,
+        ..opt.clone()
+    };
+    let n = pkm::analysis::accuracy::accuracy(&kr, &budget_only)
+        .unwrap()
+        .tolerances
+        .len();
     g.bench_function(
-        format!("KR 30 1e5 robots, 57 tolerances, with the budget (rayon, {threads} threads)"),
+        format!("KR 30 1e5 robots, {n} tolerances, with the budget (rayon, {threads} threads)"),
         |b| b.iter(run),
     );
     g.bench_function(
-        "KR 30 1e5 robots, 57 tolerances, with the budget (one thread)",
+        format!("KR 30 1e5 robots, {n} tolerances, with the budget (one thread)"),
         |b| b.iter(|| one.install(run)),
     );
     g.finish();

@@ -59,8 +59,8 @@ pub fn section(h: &mut Html, machine: &Machine, _ctx: &super::Context) -> Result
     let fitted = if z.scale < 1.0 || z.rotation_scale < 1.0 {
         format!(
             " {base} is shrunk to fit this machine: fewer than a fifth of its random \
-             poses are within the limits and {} times the home pose's condition number, \
-             against {:.0}% of these.",
+             poses are within the limits and within {} times the home pose's condition \
+             number, against {:.0}% of these.",
             num(e.condition_ratio),
             100.0 * z.share
         )

@@ -172,14 +172,7 @@ pub fn sized_experiment(machine: &Machine) -> Result<SizedExperiment> {
             let size = DEFAULT_FIXTURE_SIZE * s;
             let f = h.fixture(size);
             Ok(SizedExperiment {
-                experiment: Experiment {
-                    deviation: base.deviation * s,
-                    translation: base.translation * s,
-                    rotation: base.rotation * sizing.rotation_scale,
-                    step: base.step * s,
-                    fixture: f.points,
-                    ..base
-                },
+                experiment: base.scaled(s, sizing.rotation_scale, f.points),
                 fixture_size: size,
                 fixture: f.description,
                 sizing,

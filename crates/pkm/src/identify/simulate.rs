@@ -77,6 +77,23 @@ impl Default for Experiment {
     }
 }
 
+impl Experiment {
+    /// The experiment at another size: the deviations, the translation span and the
+    /// one-actuator step times `scale`, the rotation span times `rotation_scale`, the
+    /// fixture `fixture` (the caller's, made `scale` times larger for its machine);
+    /// the noise (the instrument's) and the rest unchanged ([`sized`]'s factors).
+    pub fn scaled(&self, scale: f64, rotation_scale: f64, fixture: Vec<Vector3<f64>>) -> Self {
+        Experiment {
+            deviation: self.deviation * scale,
+            translation: self.translation * scale,
+            rotation: self.rotation * rotation_scale,
+            step: self.step * scale,
+            fixture,
+            ..self.clone()
+        }
+    }
+}
+
 /// The fixture size of [`Experiment::default`] (mm): its triangle's circumradius.
 pub const DEFAULT_FIXTURE_SIZE: f64 = 200.0;
 

@@ -104,14 +104,10 @@ fn a_micro_hexapod_gets_a_campaign_of_its_size() {
 /// where the three spheres of its forward kinematics meet at a grazing angle.
 fn micro_tripod_edge_campaign(m: &pkm::machine::Machine, condition_ratio: f64) -> Experiment {
     let k = 1.0 / 8.0;
-    let base = Experiment::default();
+    let points = fixture(m, DEFAULT_FIXTURE_SIZE * k).unwrap().points;
     Experiment {
-        deviation: base.deviation * k,
-        translation: base.translation * k,
-        step: base.step * k,
-        fixture: fixture(m, DEFAULT_FIXTURE_SIZE * k).unwrap().points,
         condition_ratio,
-        ..base
+        ..Experiment::default().scaled(k, 1.0, points)
     }
 }
 
