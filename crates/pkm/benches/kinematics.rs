@@ -870,6 +870,25 @@ fn serial(c: &mut Criterion) {
             })
         },
     );
+    // The same robot in joint coordinates (a file's `pose = "joints"`, as every serial
+    // machine without tool-pose or TCP coordinates): its tool pose is its forward
+    // kinematics, what `pkm fk`, the maps and the views ask of it per state.
+    let joints =
+        pkm::serial::mechanism::SerialMechanism::<6>::new(arm.machine.clone(), arm.home_joints)
+            .expect("six joints");
+    let states: Vec<Vector6<f64>> = poses.iter().filter_map(|x| arm.inverse(x).ok()).collect();
+    c.bench_function(
+        "KR 30 in joint coordinates: tool pose (forward kinematics), 1024 random states, one thread",
+        |b| {
+            b.iter(|| {
+                states
+                    .iter()
+                    .filter_map(|q| joints.tool_pose(black_box(q)).ok())
+                    .map(|t| t.translation.vector.x)
+                    .sum::<f64>()
+            })
+        },
+    );
     let mut g = c.benchmark_group("6x6 inverse of 1024 random matrices");
     g.bench_function("nalgebra try_inverse", |b| {
         b.iter(|| {

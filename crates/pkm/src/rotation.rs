@@ -301,6 +301,19 @@ pub fn quaternion_wxyz(m: &Matrix3<f64>) -> [f64; 4] {
     [q.w, q.i, q.j, q.k]
 }
 
+/// The unit quaternion of a rotation matrix that is orthonormal to rounding (a nominal
+/// chain's frame, a product of exact rotations): Shepperd's method (nalgebra's
+/// `UnitQuaternion::from_rotation_matrix`: the largest of `w, x, y, z` from the trace
+/// or a diagonal entry, the others from sums and differences of the off-diagonal
+/// ones), renormalised. A few dozen operations where `UnitQuaternion::from_matrix`'s
+/// iterative extraction of the rotational part (Mueller et al. 2016, for matrices
+/// that are not orthonormal, such as deviated blocks) takes about a microsecond; the
+/// two agree within 1e-15 on such matrices (tested).
+pub fn orthonormal_quaternion(m: &Matrix3<f64>) -> UnitQuaternion<f64> {
+    let q = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(*m));
+    UnitQuaternion::new_normalize(q.into_inner())
+}
+
 /// Rotation matrix of a quaternion `[w, x, y, z]` (normalised first).
 pub fn from_quaternion_wxyz(q: [f64; 4]) -> Result<Matrix3<f64>, Error> {
     let raw = nalgebra::Quaternion::new(q[0], q[1], q[2], q[3]);

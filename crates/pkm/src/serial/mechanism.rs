@@ -5,9 +5,10 @@
 //! The joint count is a const parameter (`N` = tool joints + workpiece joints), so the
 //! hot paths stay fixed-size; [`SerialAny`] holds the sizes pkm loads from files.
 
-use nalgebra::{Isometry3, Matrix3, SMatrix, SVector, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Matrix3, SMatrix, SVector, Translation3, Vector3};
 
 use super::machine::SerialMachine;
+use super::PreparedChain;
 use crate::error::{Error, Result};
 use crate::limits::{PositionLimits, Violation};
 use crate::mechanism::{
@@ -18,7 +19,8 @@ use crate::pose::Pose;
 /// A serial machine with `N` joints in all.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SerialMechanism<const N: usize> {
-    /// The chains and their geometry.
+    /// The chains and their geometry. Read it; a machine of other chains is built anew
+    /// with [`SerialMechanism::new`] (it prepares its chains from this one).
     pub machine: SerialMachine,
     /// Home joint values.
     pub home: SVector<f64, N>,
@@ -30,6 +32,9 @@ pub struct SerialMechanism<const N: usize> {
     tool_joints: usize,
     /// Links whose angular deviations are completed from a triple (accuracy engine).
     pub(crate) completions: Vec<crate::accuracy::LinkCompletion>,
+    /// The nominal chains prepared for repeated evaluation (the tool poses).
+    tool: PreparedChain,
+    work: Option<PreparedChain>,
 }
 
 impl<const N: usize> SerialMechanism<N> {
@@ -50,6 +55,11 @@ impl<const N: usize> SerialMechanism<N> {
         Ok(SerialMechanism {
             position_limits: PositionLimits::new("axis", &actuators),
             tool_joints: machine.tool.dof(),
+            tool: PreparedChain::new(&machine.tool, &[], &[]),
+            work: machine
+                .workpiece
+                .as_ref()
+                .map(|w| PreparedChain::new(w, &[], &[])),
             machine,
             home,
             coordinates,
@@ -126,15 +136,26 @@ impl<const N: usize> Mechanism<N, N> for SerialMechanism<N> {
         })
     }
 
-    /// The nominal tool pose relative to the workpiece.
+    /// The nominal tool pose relative to the workpiece, `T_w^-1 T_t` (the forward
+    /// kinematics of both chains), from the chains prepared once
+    /// ([`PreparedChain::pose`]: within rounding of [`SerialMachine::pose`], tested to
+    /// 1e-12 relative) and the workpiece frame inverted as the rigid transform it is
+    /// (`R_w^T`, `-R_w^T o_w`); the orientation by
+    /// [`crate::rotation::orthonormal_quaternion`]. Allocation-free.
     fn tool_pose(&self, x: &SVector<f64, N>) -> Result<Pose> {
-        let (qt, qw) = self.split(x);
-        let t = self.machine.pose(&qt, &qw, &[])?;
-        let r: Matrix3<f64> = t.fixed_view::<3, 3>(0, 0).into_owned();
-        let rot = UnitQuaternion::from_matrix(&r);
+        let (qt, qw) = x.as_slice().split_at(self.tool_joints);
+        let t = self.tool.pose(qt);
+        let mut r: Matrix3<f64> = t.fixed_view::<3, 3>(0, 0).into_owned();
+        let mut p = Vector3::new(t[(0, 3)], t[(1, 3)], t[(2, 3)]);
+        if let Some(work) = &self.work {
+            let w = work.pose(qw);
+            let rwt = w.fixed_view::<3, 3>(0, 0).transpose();
+            r = rwt * r;
+            p = rwt * (p - Vector3::new(w[(0, 3)], w[(1, 3)], w[(2, 3)]));
+        }
         Ok(Isometry3::from_parts(
-            Translation3::from(Vector3::new(t[(0, 3)], t[(1, 3)], t[(2, 3)])),
-            rot,
+            Translation3::from(p),
+            crate::rotation::orthonormal_quaternion(&r),
         ))
     }
 

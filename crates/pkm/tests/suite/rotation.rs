@@ -2,8 +2,8 @@
 
 use nalgebra::{Matrix3, Rotation3, Vector3};
 use pkm::rotation::{
-    axis_angle, from_axis_angle, from_quaternion_wxyz, krylov_matrix, quaternion_wxyz, rx, ry, rz,
-    Convention,
+    axis_angle, from_axis_angle, from_quaternion_wxyz, krylov_matrix, orthonormal_quaternion,
+    quaternion_wxyz, rx, ry, rz, Convention,
 };
 use proptest::prelude::*;
 
@@ -143,6 +143,55 @@ proptest! {
         prop_assert!((from_quaternion_wxyz(q).unwrap() - m).amax() < 1e-12);
         let (axis, angle) = axis_angle(&m);
         prop_assert!((from_axis_angle(&axis, angle).unwrap() - m).amax() < 1e-12);
+    }
+}
+
+/// The quaternion by Shepperd's method against nalgebra's iterative extraction (an
+/// independent algorithm) and against the matrix it came from; `q` and `-q` are one
+/// rotation, so the sign is matched first.
+fn check_orthonormal_quaternion(m: &Matrix3<f64>) -> Result<(), TestCaseError> {
+    let q = orthonormal_quaternion(m);
+    let r = nalgebra::UnitQuaternion::from_matrix(m);
+    let d = (q.coords - r.coords)
+        .amax()
+        .min((q.coords + r.coords).amax());
+    prop_assert!(d < 1e-15, "{d:e} for {m}");
+    prop_assert!((q.norm() - 1.0).abs() < 1e-15);
+    prop_assert!((q.to_rotation_matrix().matrix() - m).amax() < 2e-15);
+    Ok(())
+}
+
+proptest! {
+    #[test]
+    fn orthonormal_quaternion_is_the_iterative_one(a in angles()) {
+        check_orthonormal_quaternion(&Convention::Rpy.to_matrix(a))?;
+    }
+
+    /// Half turns and their neighbourhood (trace near -1), where the quaternion comes
+    /// from a diagonal entry instead of the trace.
+    #[test]
+    fn orthonormal_quaternion_near_half_turns(
+        axis in [-1.0f64..1.0, -1.0f64..1.0, -1.0f64..1.0],
+        off in -1e-6f64..1e-6,
+    ) {
+        let axis = Vector3::from(axis);
+        prop_assume!(axis.norm() > 0.1);
+        let angle = std::f64::consts::PI - off.abs();
+        check_orthonormal_quaternion(&from_axis_angle(&axis, angle).unwrap())?;
+    }
+}
+
+#[test]
+fn orthonormal_quaternion_of_exact_frames() {
+    let half = std::f64::consts::PI;
+    for m in [
+        Matrix3::identity(),
+        rx(half),
+        ry(half),
+        rz(half),
+        rz(half / 2.0) * rx(-half / 2.0),
+    ] {
+        check_orthonormal_quaternion(&m).unwrap();
     }
 }
 

@@ -869,3 +869,46 @@ fn jacobian_rate_equals_central_differences_of_the_jacobian() {
         assert!(e < 1e-9, "{errs:?}");
     }
 }
+
+/// Tool poses of `mech` (joint coordinates) against `SerialMachine::pose` (the walk
+/// per call, the workpiece frame inverted as a general 4 x 4 matrix) at random joint
+/// values: positions within 1e-12 of the machine's size, rotations within 1e-12.
+fn check_joint_space_tool_poses<const N: usize>(
+    mech: &pkm::serial::mechanism::SerialMechanism<N>,
+    size: f64,
+    seed: u64,
+) {
+    use pkm::Mechanism;
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
+    let nt = mech.machine.tool.dof();
+    for _ in 0..2000 {
+        let x = nalgebra::SVector::<f64, N>::from_fn(|_, _| rng.random_range(-3.0..3.0));
+        let (qt, qw) = x.as_slice().split_at(nt);
+        let by_walk = mech.machine.pose(qt, qw, &[]).unwrap();
+        let prepared = mech.tool_pose(&x).unwrap().to_homogeneous();
+        let dp = (prepared.fixed_view::<3, 1>(0, 3) - by_walk.fixed_view::<3, 1>(0, 3)).amax();
+        let dr = (prepared.fixed_view::<3, 3>(0, 0) - by_walk.fixed_view::<3, 3>(0, 0)).amax();
+        assert!(dp < 1e-12 * size, "{dp:e} mm at {x:?}");
+        assert!(dr < 1e-12, "{dr:e} at {x:?}");
+    }
+}
+
+/// A machine in joint coordinates asks its prepared chains for its tool pose (no walk
+/// of the link deviations, no allocation): the same pose as the general path, on a
+/// 5-axis machine with a workpiece chain and on the KR 30 robot.
+#[test]
+fn joint_space_tool_poses_equal_the_machines_pose() {
+    use pkm::serial::mechanism::SerialMechanism;
+    let five = SerialMechanism::<5>::new(five_axis(), nalgebra::SVector::zeros()).unwrap();
+    assert!(five.machine.workpiece.is_some());
+    check_joint_space_tool_poses(&five, 300.0, 1);
+    let kr30 = crate::common::example("kr30-dh.toml");
+    let pkm::machine::Model::Serial(s) = &kr30.model else {
+        panic!("the KR 30 is a serial machine")
+    };
+    let robot =
+        SerialMechanism::<6>::new(s.mechanism.machine().clone(), nalgebra::SVector::zeros())
+            .unwrap();
+    check_joint_space_tool_poses(&robot, 2000.0, 2);
+}

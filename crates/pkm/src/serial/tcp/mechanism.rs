@@ -1,7 +1,7 @@
 //! The [`Mechanism`] of a serial machine tool in tool-centre-point coordinates: the
 //! trait's answers from [`TcpMachine`]'s solver (module docs of [`super`]).
 
-use nalgebra::{Isometry3, SMatrix, SVector, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, SMatrix, SVector, Translation3, Vector3};
 
 use super::TcpMachine;
 use crate::error::{Error, Result};
@@ -86,13 +86,15 @@ impl<const N: usize> Mechanism<N, N> for TcpMachine<N> {
         })
     }
 
-    /// The nominal tool pose relative to the part.
+    /// The nominal tool pose relative to the part (the orientation by
+    /// [`crate::rotation::orthonormal_quaternion`]: the frame is a product of the
+    /// nominal chains' rotations).
     fn tool_pose(&self, x: &SVector<f64, N>) -> Result<Pose> {
         let (q, rel0, _) = self.solve(x)?;
         let rel = self.at_solution(&rel0, &q);
         Ok(Isometry3::from_parts(
             Translation3::from(rel.tip),
-            UnitQuaternion::from_matrix(&rel.frame),
+            crate::rotation::orthonormal_quaternion(&rel.frame),
         ))
     }
 
