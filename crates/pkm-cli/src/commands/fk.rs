@@ -197,19 +197,25 @@ fn batch(
         .iter()
         .map(|h| (h.clone(), Kind::F64))
         .collect();
+    // Spatial machines' poses are their tool poses; a machine in its own coordinates
+    // (a serial machine in joint coordinates, the P3RP head) gets its coordinates and
+    // then its tool pose (its forward kinematics).
     let spatial = m.pose_space() != PoseSpace::Own;
-    let pose_names: Vec<String> = if spatial {
-        ["X_mm", "Y_mm", "Z_mm"]
-            .map(String::from)
-            .into_iter()
-            .chain(conv.angle_names().map(|n| format!("{n}_deg")))
-            .collect()
+    let tool_names: Vec<String> = ["X_mm", "Y_mm", "Z_mm"]
+        .map(String::from)
+        .into_iter()
+        .chain(conv.angle_names().map(|n| format!("{n}_deg")))
+        .map(|c| if spatial { c } else { format!("tool_{c}") })
+        .collect();
+    let mut pose_names: Vec<String> = if spatial {
+        Vec::new()
     } else {
         m.coordinates()
             .iter()
             .map(|c| format!("{}_{}", c.name, c.quantity.unit()))
             .collect()
     };
+    pose_names.extend(tool_names);
     let n = pose_names.len();
     columns.extend(pose_names.into_iter().map(|c| (c, Kind::OptF64)));
     columns.push(("iterations".into(), Kind::OptI64));
@@ -218,7 +224,8 @@ fn batch(
     columns.push(("status".into(), Kind::OptText));
     let meta = machine_metadata(
         m,
-        "pkm fk batch: the input actuator values, the pose (null without a solution), \
+        "pkm fk batch: the input actuator values, the pose (null without a solution; a \
+         machine in its own coordinates: its coordinates, then its tool pose as tool_*), \
          the solver's iterations and residual, whether every limit holds, the violated \
          limits",
     );
@@ -235,20 +242,19 @@ fn batch(
         text.clear();
         match res {
             Ok((f, v)) => {
-                if spatial {
-                    let pose = m.tool_pose(&f.pose)?;
-                    let p = pose.translation.vector;
-                    let ang = conv.from_matrix(&rotation_matrix(&pose));
-                    for x in [p.x, p.y, p.z] {
-                        out.num(Some(x));
-                    }
-                    for x in ang {
-                        out.num(Some(x.to_degrees()));
-                    }
-                } else {
+                if !spatial {
                     for (c, x) in m.coordinates().iter().zip(&f.pose) {
                         out.num(Some(c.quantity.to_user(*x)));
                     }
+                }
+                let pose = m.tool_pose(&f.pose)?;
+                let p = pose.translation.vector;
+                let ang = conv.from_matrix(&rotation_matrix(&pose));
+                for x in [p.x, p.y, p.z] {
+                    out.num(Some(x));
+                }
+                for x in ang {
+                    out.num(Some(x.to_degrees()));
                 }
                 out.int(Some(f.iterations as u64));
                 out.num(Some(f.residual));

@@ -434,6 +434,60 @@ fn fk_names_its_solver() {
     assert!(v["iterations"].as_u64().unwrap() > 0, "{v}");
 }
 
+/// A batch FK of a machine in joint coordinates carries its tool pose after its
+/// coordinates (`tool_X_mm` ... `tool_C_deg`): the KR 30 in joint coordinates gives
+/// the same tool poses as the KR 30 in tool coordinates, whose pose columns are its
+/// own forward kinematics (the robot's closed-form class, another mechanism).
+#[test]
+fn fk_batch_of_a_joint_space_machine_has_its_tool_pose() {
+    let dir = tempfile::tempdir().unwrap();
+    let kr30 = root().join("examples/machines/kr30-dh.toml");
+    let joints = dir.path().join("kr30-joints.toml");
+    let text = std::fs::read_to_string(&kr30).unwrap();
+    std::fs::write(&joints, format!("pose = \"joints\"\n{text}")).unwrap();
+    let q = dir.path().join("q.csv");
+    std::fs::write(
+        &q,
+        "A1,A2,A3,A4,A5,A6\n10,20,-30,40,50,60\n-100,60,-150,170,-80,-20\n0,0,0,0,90,0\n",
+    )
+    .unwrap();
+    let run = |machine: &std::path::Path, out: &str| {
+        let out = dir.path().join(out);
+        pkm()
+            .args(["fk"])
+            .arg(machine)
+            .arg("--input")
+            .arg(&q)
+            .arg("--output")
+            .arg(&out)
+            .assert()
+            .success();
+        let text = std::fs::read_to_string(&out).unwrap();
+        let mut lines = text.lines();
+        let header: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
+        let rows: Vec<Vec<String>> = lines
+            .map(|l| l.split(',').map(String::from).collect())
+            .collect();
+        (header, rows)
+    };
+    let (h, rows) = run(&joints, "joints.csv");
+    let tool: Vec<usize> = ["X_mm", "Y_mm", "Z_mm", "A_deg", "B_deg", "C_deg"]
+        .iter()
+        .map(|c| h.iter().position(|x| *x == format!("tool_{c}")).expect(c))
+        .collect();
+    assert_eq!(h[6], "A1_deg", "{h:?}");
+    assert_eq!(tool[0], 12, "the tool pose follows the coordinates: {h:?}");
+    let (hs, spatial) = run(&kr30, "spatial.csv");
+    assert_eq!(hs[6], "X_mm", "{hs:?}");
+    assert_eq!(rows.len(), 3);
+    for (a, b) in rows.iter().zip(&spatial) {
+        for (k, &c) in tool.iter().enumerate() {
+            let (x, y): (f64, f64) = (a[c].parse().unwrap(), b[6 + k].parse().unwrap());
+            assert!((x - y).abs() < 1e-9, "{k}: {x} vs {y}");
+        }
+    }
+}
+
 /// Issue 17, item 10: a reference whose expected value is the project's correction of
 /// its source is printed as a discrepancy with the paper's and pkm's values, never as
 /// reproduced; references quoting the same source are told apart by their pose.
