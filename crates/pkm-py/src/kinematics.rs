@@ -2,7 +2,7 @@
 //! `tool_pose`, `check_limits`. Batches release the GIL and run on all cores
 //! (`pkm::analysis::batch`); one row is solved on the calling thread.
 
-use numpy::PyArray2;
+use numpy::{PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
@@ -345,25 +345,31 @@ impl Machine {
         Ok(vec1(py, c).into_any())
     }
 
-    /// The tool pose at pose coordinates `pose`, as a 4 x 4 homogeneous matrix (mm).
+    /// The tool pose (the tool relative to the part) at pose coordinates `pose`, as a
+    /// 4 x 4 homogeneous matrix (mm): one pose, shape (P,), gives shape (4, 4); many,
+    /// shape (N, P), give shape (N, 4, 4) (on all cores; NaN where the machine has no
+    /// tool pose for the row, e.g. a TCP pose without inverse solution). For a machine
+    /// in joint coordinates this is its forward kinematics.
     fn tool_pose<'py>(
         &self,
         py: Python<'py>,
         pose: &Bound<'py, PyAny>,
-    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    ) -> PyResult<Bound<'py, PyAny>> {
         let p = self.m().coordinates().len();
         let (x, single) = rows(pose, p, "pose")?;
-        if !single {
-            return Err(crate::errors::invalid(
-                "pose",
-                "expected one pose, shape (P,)",
-            ));
+        if single {
+            let t = self.m().tool_pose(&x).map_err(to_py)?.to_homogeneous();
+            let rows: Vec<Vec<f64>> = (0..4)
+                .map(|r| (0..4).map(|c| t[(r, c)]).collect())
+                .collect();
+            return Ok(PyArray2::from_vec2(py, &rows)?.into_any());
         }
-        let t = self.m().tool_pose(&x).map_err(to_py)?.to_homogeneous();
-        let rows: Vec<Vec<f64>> = (0..4)
-            .map(|r| (0..4).map(|c| t[(r, c)]).collect())
-            .collect();
-        Ok(PyArray2::from_vec2(py, &rows)?)
+        let inner = self.inner.clone();
+        let t = py
+            .detach(move || pkm::analysis::batch::tool_pose_batch(&inner, &x))
+            .map_err(to_py)?;
+        let n = t.len() / 16;
+        Ok(vec1(py, t).reshape([n, 4, 4])?.into_any())
     }
 
     /// Every limit the pose (and its actuators, default its inverse kinematics)

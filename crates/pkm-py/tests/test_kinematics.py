@@ -2,6 +2,7 @@
 forward and inverse round trips, the Jacobian against finite differences."""
 
 import math
+import pathlib
 
 import numpy as np
 import pytest
@@ -132,6 +133,32 @@ def test_condition_of_one_pose_and_of_many():
     t = m.tool_pose(m.home)
     assert t.shape == (4, 4) and np.allclose(t[3], [0, 0, 0, 1])
     assert np.allclose(t[:3, 3], m.home[:3])
+
+
+def test_tool_poses_of_many_poses():
+    """(N, P) poses give (N, 4, 4) tool poses, row by row the single call's; a robot
+    in joint coordinates gives the tool poses of the same robot in tool coordinates
+    (its own forward kinematics, another class); a TCP machine's tool tip is its X,
+    Y, Z."""
+    text = pathlib.Path(example("kr30-dh.toml")).read_text()
+    joints = pkm.Machine.from_toml('pose = "joints"\n' + text)
+    assert joints.pose_space != "spatial"
+    rng = np.random.default_rng(40)
+    q = rng.uniform(-2.0, 2.0, (50, 6))
+    t = joints.tool_pose(q)
+    assert t.shape == (50, 4, 4)
+    assert np.array_equal(t[7], joints.tool_pose(q[7]))
+    assert np.array_equal(t[:, 3], np.tile([0.0, 0.0, 0.0, 1.0], (50, 1)))
+    robot = pkm.load(example("kr30-dh.toml"))
+    for k in range(0, 50, 7):
+        pose, _ = robot.fk(q[k])
+        assert np.allclose(robot.tool_pose(pose), t[k], rtol=0, atol=1e-9), k
+    mc = pkm.load(example("mc300.toml"))
+    x = np.tile(mc.home, (3, 1))
+    x[1, :3] = [250.0, -120.0, 300.0]
+    t = mc.tool_pose(x)
+    assert np.allclose(t[1, :3, 3], [250.0, -120.0, 300.0], rtol=0, atol=1e-9)
+    assert np.array_equal(t[2], mc.tool_pose(mc.home))
 
 
 def test_metadata():

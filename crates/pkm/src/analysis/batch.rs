@@ -92,6 +92,23 @@ fn rows(values: &[f64], width: usize, what: &str) -> Result<usize> {
     Ok(values.len() / width)
 }
 
+/// Runs `work` on matching chunks of rows of `input` (`width` values a row) and of
+/// `out` (`out_width` a row): [`BATCH_CHUNK`] rows per rayon task, or the whole batch
+/// on the calling thread when it is at most one chunk ([`chunked`] without causes).
+fn per_chunk<F>(input: &[f64], width: usize, out: &mut [f64], out_width: usize, work: F)
+where
+    F: Fn((&[f64], &mut [f64])) + Send + Sync,
+{
+    if input.len() <= width * BATCH_CHUNK {
+        work((input, out));
+    } else {
+        input
+            .par_chunks(width * BATCH_CHUNK)
+            .zip(out.par_chunks_mut(out_width * BATCH_CHUNK))
+            .for_each(work);
+    }
+}
+
 /// One chunk's distinct causes and its solver messages by row within the chunk.
 type ChunkCauses = (Vec<BatchReason>, Vec<(usize, String)>);
 
@@ -412,14 +429,39 @@ pub fn condition_batch(machine: &Machine, poses: &[f64]) -> Result<Vec<f64>> {
                     .collect();
                 m.conditions(&xs, &[], c);
             };
-            if n <= BATCH_CHUNK {
-                work((self.0, &mut out));
-            } else {
-                self.0
-                    .par_chunks(P * BATCH_CHUNK)
-                    .zip(out.par_chunks_mut(BATCH_CHUNK))
-                    .for_each(work);
-            }
+            per_chunk(self.0, P, &mut out, 1, work);
+            Ok(out)
+        }
+    }
+    machine.visit(Job(poses))
+}
+
+/// The tool pose ([`crate::Mechanism::tool_pose`]: the tool relative to the part, mm)
+/// of every pose in `poses` (row-major, `n x P`, internal units) on all cores, as 4 x 4
+/// homogeneous matrices, each row-major: `n x 16` values; NaN where the machine has
+/// no tool pose for it (a TCP machine's pose without inverse solution). For a machine
+/// in its own coordinates (a serial machine in joint coordinates) this is its forward
+/// kinematics, from its prepared chains.
+pub fn tool_pose_batch(machine: &Machine, poses: &[f64]) -> Result<Vec<f64>> {
+    struct Job<'a>(&'a [f64]);
+    impl Visitor for Job<'_> {
+        type Output = Result<Vec<f64>>;
+        fn visit<M: Analysable<P, A>, const P: usize, const A: usize>(self, m: &M) -> Self::Output {
+            let n = rows(self.0, P, "poses")?;
+            let mut out = filled(16 * n, f64::NAN);
+            let work = |(xs, t): (&[f64], &mut [f64])| {
+                for (x, t) in xs.chunks_exact(P).zip(t.chunks_exact_mut(16)) {
+                    if let Ok(pose) =
+                        m.tool_pose(&nalgebra::SVector::<f64, P>::from_column_slice(x))
+                    {
+                        let h = pose.to_homogeneous();
+                        for (k, v) in t.iter_mut().enumerate() {
+                            *v = h[(k / 4, k % 4)];
+                        }
+                    }
+                }
+            };
+            per_chunk(self.0, P, &mut out, 16, work);
             Ok(out)
         }
     }

@@ -464,7 +464,7 @@ fn every_example_runs_every_analysis_it_supports() {
 /// array is refused.
 #[test]
 fn batch_kinematics_equal_single_calls_on_every_example() {
-    use pkm::analysis::batch::{condition_batch, forward_batch};
+    use pkm::analysis::batch::{condition_batch, forward_batch, tool_pose_batch};
     use pkm::analysis::kinematics::{forward, inverse, inverse_batch};
     use rand::{Rng, SeedableRng};
     for path in examples() {
@@ -574,6 +574,25 @@ fn batch_kinematics_equal_single_calls_on_every_example() {
                 Err(_) => assert!(c[r].is_nan(), "{path:?} row {r}"),
             }
         }
+        // Tool poses: the single call's 4 x 4 matrix bit for bit, NaN where it fails.
+        let t = tool_pose_batch(&machine, &poses).unwrap();
+        assert_eq!(t.len(), 16 * n);
+        let mut posed = 0;
+        for r in (0..n).step_by(13) {
+            let row = &t[16 * r..16 * (r + 1)];
+            match m.tool_pose(&poses[r * p..(r + 1) * p]) {
+                Ok(pose) => {
+                    let h = pose.to_homogeneous();
+                    for (k, v) in row.iter().enumerate() {
+                        assert_eq!(v.to_bits(), h[(k / 4, k % 4)].to_bits(), "{path:?} row {r}");
+                    }
+                    posed += 1;
+                }
+                Err(_) => assert!(row.iter().all(|v| v.is_nan()), "{path:?} row {r}"),
+            }
+        }
+        assert!(posed > 0, "{path:?}: no tool pose");
+        assert!(tool_pose_batch(&machine, &poses[..p + 1]).is_err());
     }
 }
 
@@ -583,7 +602,9 @@ fn batch_kinematics_equal_single_calls_on_every_example() {
 /// limits, and the rows around them are unaffected.
 #[test]
 fn batches_take_any_value_without_panicking() {
-    use pkm::analysis::batch::{condition_batch, forward_batch, inverse_batch_with};
+    use pkm::analysis::batch::{
+        condition_batch, forward_batch, inverse_batch_with, tool_pose_batch,
+    };
     for path in examples() {
         let machine = Machine::from_path(&path).unwrap();
         let m = machine.mechanism();
@@ -627,5 +648,7 @@ fn batches_take_any_value_without_panicking() {
         assert_eq!(f.solved.len(), bad.len());
         let c = condition_batch(&machine, &poses).unwrap();
         assert_eq!(c.len(), poses.len() / p);
+        let t = tool_pose_batch(&machine, &poses).unwrap();
+        assert_eq!(t.len(), 16 * (poses.len() / p));
     }
 }
