@@ -347,9 +347,9 @@ impl Machine {
 
     /// The tool pose (the tool relative to the part) at pose coordinates `pose`, as a
     /// 4 x 4 homogeneous matrix (mm): one pose, shape (P,), gives shape (4, 4); many,
-    /// shape (N, P), give shape (N, 4, 4) (on all cores; NaN where the machine has no
-    /// tool pose for the row, e.g. a TCP pose without inverse solution). For a machine
-    /// in joint coordinates this is its forward kinematics.
+    /// shape (N, P), give shape (N, 4, 4) (on all cores; NaN where the single call
+    /// would raise for the row). For a machine in joint coordinates this is its
+    /// forward kinematics.
     fn tool_pose<'py>(
         &self,
         py: Python<'py>,

@@ -438,8 +438,8 @@ pub fn condition_batch(machine: &Machine, poses: &[f64]) -> Result<Vec<f64>> {
 
 /// The tool pose ([`crate::Mechanism::tool_pose`]: the tool relative to the part, mm)
 /// of every pose in `poses` (row-major, `n x P`, internal units) on all cores, as 4 x 4
-/// homogeneous matrices, each row-major: `n x 16` values; NaN where the machine has
-/// no tool pose for it (a TCP machine's pose without inverse solution). For a machine
+/// homogeneous matrices, each row-major: `n x 16` values; NaN where the single call
+/// fails for the row. For a machine
 /// in its own coordinates (a serial machine in joint coordinates) this is its forward
 /// kinematics, from its prepared chains.
 pub fn tool_pose_batch(machine: &Machine, poses: &[f64]) -> Result<Vec<f64>> {
