@@ -911,4 +911,17 @@ fn joint_space_tool_poses_equal_the_machines_pose() {
         SerialMechanism::<6>::new(s.mechanism.machine().clone(), nalgebra::SVector::zeros())
             .unwrap();
     check_joint_space_tool_poses(&robot, 2000.0, 2);
+    // Any value without panicking (the batches read arrays a caller may fill with
+    // anything): a pose or an error, NaN where the input is.
+    use pkm::Mechanism;
+    for v in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY, 1e300, -1e300] {
+        for k in 0..6 {
+            let mut x = nalgebra::SVector::<f64, 6>::zeros();
+            x[k] = v;
+            if let Ok(p) = robot.tool_pose(&x) {
+                let h = p.to_homogeneous();
+                assert!(h.iter().all(|e| e.is_finite()) || h.iter().any(|e| e.is_nan()));
+            }
+        }
+    }
 }
