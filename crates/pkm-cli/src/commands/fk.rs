@@ -215,6 +215,7 @@ fn batch(
             .map(|c| format!("{}_{}", c.name, c.quantity.unit()))
             .collect()
     };
+    let tool_columns = tool_names.len();
     pose_names.extend(tool_names);
     let n = pose_names.len();
     columns.extend(pose_names.into_iter().map(|c| (c, Kind::OptF64)));
@@ -247,14 +248,22 @@ fn batch(
                         out.num(Some(c.quantity.to_user(*x)));
                     }
                 }
-                let pose = m.tool_pose(&f.pose)?;
-                let p = pose.translation.vector;
-                let ang = conv.from_matrix(&rotation_matrix(&pose));
-                for x in [p.x, p.y, p.z] {
-                    out.num(Some(x));
-                }
-                for x in ang {
-                    out.num(Some(x.to_degrees()));
+                // A row without a tool pose keeps its row: empty cells and the reason
+                // in its status (the batch goes on).
+                match m.tool_pose(&f.pose) {
+                    Ok(pose) => {
+                        let p = pose.translation.vector;
+                        let ang = conv.from_matrix(&rotation_matrix(&pose));
+                        for x in [p.x, p.y, p.z].into_iter().chain(ang.map(f64::to_degrees)) {
+                            out.num(Some(x));
+                        }
+                    }
+                    Err(e) => {
+                        for _ in 0..tool_columns {
+                            out.num(None);
+                        }
+                        let _ = write!(text, "tool pose: {e}");
+                    }
                 }
                 out.int(Some(f.iterations as u64));
                 out.num(Some(f.residual));
@@ -262,8 +271,8 @@ fn batch(
                 if !v.is_empty() {
                     failed += 1;
                 }
-                for (k, x) in v.iter().enumerate() {
-                    if k > 0 {
+                for x in &v {
+                    if !text.is_empty() {
                         text.push_str("; ");
                     }
                     let _ = write!(text, "{x}");

@@ -57,9 +57,9 @@ pub struct Experiment {
 
 impl Default for Experiment {
     /// `pkm simulate-measurements`' defaults: deviations of +-1 mm, point noise 5 um,
-    /// reading noise 1 um, 50 random states within +-100 mm and +-10 deg of home and 4
-    /// times the home pose's condition number, 40 mm per state of the one-actuator
-    /// design, a triangular fixture of circumradius 200 mm, seed 1.
+    /// reading noise 1 um, 50 random states within +-100 mm and +-10 deg of home and
+    /// within 4 times the home pose's condition number, 40 mm per state of the
+    /// one-actuator design, a triangular fixture of circumradius 200 mm, seed 1.
     fn default() -> Self {
         Experiment {
             deviation: 1.0,
@@ -173,27 +173,27 @@ pub fn simulate_on<M: Identifiable<P, A>, const P: usize, const A: usize>(
             while poses.len() < e.states {
                 tries += 1;
                 if tries > 1000 * e.states.max(1) {
+                    // Poses refused for their conditioning: how many, and the second
+                    // remedy.
+                    let (refused, remedy) = if draw.ill_conditioned > 0 {
+                        (
+                            format!(
+                                " ({} more within them refused beyond {} times the home \
+                                 pose's condition number)",
+                                draw.ill_conditioned, e.condition_ratio
+                            ),
+                            " or raise the condition ratio",
+                        )
+                    } else {
+                        (String::new(), "")
+                    };
                     return Err(Error::InvalidInput {
                         what: "simulated experiment".into(),
                         message: format!(
-                            "found only {} poses within the limits in {} tries{}: reduce the \
-                             translation/rotation spans{}",
+                            "found only {} poses within the limits in {} tries{refused}: \
+                             reduce the translation/rotation spans{remedy}",
                             poses.len(),
                             tries - 1,
-                            if draw.ill_conditioned > 0 {
-                                format!(
-                                    " ({} more within them refused beyond {} times the \
-                                     home pose's condition number)",
-                                    draw.ill_conditioned, e.condition_ratio
-                                )
-                            } else {
-                                String::new()
-                            },
-                            if draw.ill_conditioned > 0 {
-                                " or raise the condition ratio"
-                            } else {
-                                ""
-                            }
                         ),
                     });
                 }
