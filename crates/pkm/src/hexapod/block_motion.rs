@@ -77,7 +77,8 @@ pub(crate) fn motion_rows(
 mod avx512 {
     use std::arch::x86_64::*;
 
-    use super::super::block::avx512::{columns, limits, rows};
+    use super::super::block::avx512::limits;
+    use super::super::transpose::{columns, rows};
     use super::{Screen, LANES};
     use crate::lane::Zmm;
 

@@ -15,6 +15,8 @@ mod interference;
 mod lengths;
 mod limits;
 mod simd;
+#[cfg(target_arch = "x86_64")]
+mod transpose;
 
 use std::sync::Arc;
 

@@ -20,6 +20,10 @@ pub(crate) struct Lanes {
     bx: [f64; 8],
     by: [f64; 8],
     bz: [f64; 8],
+    /// Every arm's z is exactly 0 (the platform joints in the tool frame's XY plane,
+    /// as in LinuxCNC's genhexkins): the rotation's third column is not needed
+    /// ([`strut_component`]).
+    planar: bool,
     /// The CPU has AVX-512F (checked once, when the machine is built).
     pub(crate) available: bool,
 }
@@ -33,6 +37,7 @@ impl Lanes {
             bx: [0.0; 8],
             by: [0.0; 8],
             bz: [0.0; 8],
+            planar: false,
             available: detect(),
         };
         lanes.set_geometry(arms, base);
@@ -46,6 +51,7 @@ impl Lanes {
             (self.ax[i], self.ay[i], self.az[i]) = (arms[k].x, arms[k].y, arms[k].z);
             (self.bx[i], self.by[i], self.bz[i]) = (base[k].x, base[k].y, base[k].z);
         }
+        self.planar = arms.iter().all(|a| a.z == 0.0);
     }
 
     /// The six strut lengths `|p + R arm_i - base_i|`; `None` when AVX-512F is not
@@ -81,7 +87,13 @@ impl Lanes {
         {
             if self.available {
                 // SAFETY: as in `lengths`: the CPU reported AVX-512F.
-                return unsafe { pose_lengths_avx512(self, x, out) };
+                return unsafe {
+                    if self.planar {
+                        pose_lengths_avx512::<true>(self, x, out)
+                    } else {
+                        pose_lengths_avx512::<false>(self, x, out)
+                    }
+                };
             }
         }
         let _ = (x, out);
@@ -141,7 +153,11 @@ fn detect() -> bool {
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
-unsafe fn pose_lengths_avx512(s: &Lanes, x: &Vector6<f64>, out: &mut Vector6<f64>) -> bool {
+unsafe fn pose_lengths_avx512<const PLANAR: bool>(
+    s: &Lanes,
+    x: &Vector6<f64>,
+    out: &mut Vector6<f64>,
+) -> bool {
     use std::arch::x86_64::*;
     let r = if x[3] == 0.0 && x[4] == 0.0 && x[5] == 0.0 {
         // As `rotation::rpy_matrix`: exactly the identity.
@@ -165,7 +181,7 @@ unsafe fn pose_lengths_avx512(s: &Lanes, x: &Vector6<f64>, out: &mut Vector6<f64
         .map(Zmm::reg)
     };
     let p = x.as_slice().first_chunk::<3>().expect("six coordinates");
-    let l = lengths_of_entries(s, p, &r);
+    let l = lengths_of_entries::<PLANAR>(s, p, &r);
     // Lanes 0..4 and 4..6 by two plain stores, not one masked store: a caller's loads
     // of the result are then forwarded from the stores, where after a masked store they
     // wait for it to retire (which serialised successive calls).
@@ -198,16 +214,18 @@ unsafe fn lengths_avx512(s: &Lanes, p: &Vector3<f64>, r: &Matrix3<f64>) -> [f64;
 fn lengths_zmm(s: &Lanes, p: &Vector3<f64>, r: &Matrix3<f64>) -> std::arch::x86_64::__m512d {
     use std::arch::x86_64::_mm512_set1_pd;
     let e = std::array::from_fn(|k| _mm512_set1_pd(r[(k / 3, k % 3)]));
-    lengths_of_entries(s, p.as_ref(), &e)
+    // A matrix from a caller may hold NaN in its third column, which the full sum
+    // carries into the lengths: no shortcut here.
+    lengths_of_entries::<false>(s, p.as_ref(), &e)
 }
 
 /// The lengths of the struts in the lanes of one pose: tool tip `p` (by reference, so
 /// each coordinate is broadcast from memory, not from a copy on the stack), rotation
-/// entries `r` row by row, each in every lane.
+/// entries `r` row by row, each in every lane; `PLANAR` as in [`strut_component`].
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
 #[inline]
-fn lengths_of_entries(
+fn lengths_of_entries<const PLANAR: bool>(
     s: &Lanes,
     p: &[f64; 3],
     r: &[std::arch::x86_64::__m512d; 9],
@@ -220,7 +238,7 @@ fn lengths_of_entries(
         let (ax, ay, az) = (ld(&s.ax), ld(&s.ay), ld(&s.az));
         let row = |i: usize, base: &[f64; 8]| {
             let offset = _mm512_sub_pd(_mm512_set1_pd(p[i]), ld(base));
-            strut_component([r[3 * i], r[3 * i + 1], r[3 * i + 2]], [ax, ay, az], offset)
+            strut_component::<PLANAR>([r[3 * i], r[3 * i + 1], r[3 * i + 2]], [ax, ay, az], offset)
         };
         strut_length([row(0, &s.bx), row(1, &s.by), row(2, &s.bz)])
     }
@@ -230,16 +248,27 @@ fn lengths_of_entries(
 /// fused multiply-adds from the last term (`offset = p - base`): the one sequence of
 /// operations of the single pose's kernel (lanes: struts) and the block kernel's
 /// (lanes: poses), so both give the same bits.
+///
+/// With `PLANAR` (every arm's `a_z` exactly 0) the first term is left out:
+/// `r_2 * 0 + offset` is `offset` exactly for a finite `r_2` (the sign of a zero
+/// aside, which no length or limit test sees), so the same bits, and the rotation's
+/// third column is then not computed at all by a caller that needs it for nothing
+/// else. Callers pass `PLANAR` only with entries made from finite sines and cosines;
+/// a caller's matrix may hold NaN there.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
 #[inline]
-pub(crate) fn strut_component(
+pub(crate) fn strut_component<const PLANAR: bool>(
     r: [std::arch::x86_64::__m512d; 3],
     arm: [std::arch::x86_64::__m512d; 3],
     offset: std::arch::x86_64::__m512d,
 ) -> std::arch::x86_64::__m512d {
     use std::arch::x86_64::*;
-    let t = _mm512_fmadd_pd(r[2], arm[2], offset);
+    let t = if PLANAR {
+        offset
+    } else {
+        _mm512_fmadd_pd(r[2], arm[2], offset)
+    };
     let t = _mm512_fmadd_pd(r[1], arm[1], t);
     _mm512_fmadd_pd(r[0], arm[0], t)
 }
@@ -274,4 +303,104 @@ pub(crate) unsafe fn motion(
     al: &nalgebra::Vector3<f64>,
 ) -> crate::mechanism::ActuatorMotion<6> {
     soa.motion(p, r, v, w, a, al)
+}
+
+#[cfg(all(test, target_arch = "x86_64"))]
+mod tests {
+    use nalgebra::{Vector3, Vector6};
+    use rand::{Rng, SeedableRng};
+
+    use super::{pose_lengths_avx512, Lanes};
+
+    /// genhexkins' default joints (mm): arms in the platform's plane.
+    fn geometry(arm_z: f64) -> ([Vector3<f64>; 6], [Vector3<f64>; 6]) {
+        let b = [
+            [-582.93, 336.55],
+            [582.93, 336.55],
+            [582.93, 336.55],
+            [0.0, -673.1],
+            [0.0, -673.1],
+            [-582.93, 336.55],
+        ];
+        let a = [
+            [-25.4, 292.1],
+            [25.4, 292.1],
+            [265.6586, -124.0536],
+            [240.2586, -168.0464],
+            [-240.2586, -168.0464],
+            [-265.6586, -124.0536],
+        ];
+        (
+            a.map(|[x, y]| Vector3::new(x, y, arm_z)),
+            b.map(|[x, y]| Vector3::new(x, y, 0.0)),
+        )
+    }
+
+    #[test]
+    fn planar_arms_are_recognised_and_moved_joints_unset_it() {
+        let (arms, base) = geometry(0.0);
+        let mut lanes = Lanes::new(&arms, &base);
+        assert!(lanes.planar);
+        let mut lifted = arms;
+        lifted[3].z = 1e-300;
+        lanes.set_geometry(&lifted, &base);
+        assert!(!lanes.planar, "one arm off the plane by 1e-300 mm");
+        lanes.set_geometry(&arms, &base);
+        assert!(lanes.planar);
+        let (arms, base) = geometry(-150.0);
+        assert!(!Lanes::new(&arms, &base).planar);
+    }
+
+    /// The kernel without the `R_k2 a_z` terms gives the lengths of the full sum bit for
+    /// bit on planar arms, over random poses and poses with exact zeros (signed zeros
+    /// in the strut vectors: `p = base` in a coordinate); and the dispatch takes it.
+    #[test]
+    fn planar_kernel_equals_the_full_sum_bit_for_bit() {
+        let (arms, base) = geometry(0.0);
+        let lanes = Lanes::new(&arms, &base);
+        if !lanes.available {
+            eprintln!("no AVX-512F on this CPU: the kernels are not run");
+            return;
+        }
+        let mut rng = rand::rngs::StdRng::seed_from_u64(11);
+        let mut xs: Vec<Vector6<f64>> = (0..200_000)
+            .map(|_| {
+                Vector6::new(
+                    rng.random_range(-300.0..300.0),
+                    rng.random_range(-300.0..300.0),
+                    rng.random_range(300.0..800.0),
+                    rng.random_range(-0.6..0.6),
+                    rng.random_range(-0.6..0.6),
+                    rng.random_range(-3.2..3.2),
+                )
+            })
+            .collect();
+        xs.extend([
+            Vector6::new(-582.93, 336.55, 0.0, 0.0, 0.0, 0.0),
+            Vector6::new(0.0, -673.1, -0.0, 0.0, -0.0, 0.0),
+            Vector6::new(-0.0, 0.0, 508.0, 0.3, -0.0, 1.0),
+            Vector6::new(10.0, 20.0, 500.0, 1e3, -2.0, 7.0),
+        ]);
+        let (mut planar, mut full, mut dispatched) =
+            (Vector6::zeros(), Vector6::zeros(), Vector6::zeros());
+        for x in &xs {
+            // SAFETY: `available` says the CPU has AVX-512F.
+            let ok = unsafe {
+                (
+                    pose_lengths_avx512::<true>(&lanes, x, &mut planar),
+                    pose_lengths_avx512::<false>(&lanes, x, &mut full),
+                )
+            };
+            assert!(ok.0 && ok.1, "{x:?}");
+            assert!(lanes.pose_lengths(x, &mut dispatched));
+            for i in 0..6 {
+                assert_eq!(planar[i].to_bits(), full[i].to_bits(), "{x:?} strut {i}");
+                assert_eq!(
+                    dispatched[i].to_bits(),
+                    full[i].to_bits(),
+                    "{x:?} strut {i}"
+                );
+            }
+        }
+    }
 }
