@@ -41,10 +41,17 @@ pub fn section(h: &mut Html, machine: &Machine, _ctx: &super::Context) -> Result
             esc(&st.held.join(", "))
         )
     };
-    let worst_seven = match (&st.one_strut_condition, &st.one_strut_note) {
-        (Some(c), _) => format!("{c:.2e} (exactly determined)"),
-        (None, Some(why)) => format!("not applicable: {why}"),
-        (None, None) => "singular (the design cannot determine the parameters)".into(),
+    let worst_seven = match (
+        &st.one_strut_condition,
+        &st.one_strut_note,
+        &st.one_strut_failure,
+    ) {
+        (Some(c), _, _) => format!("{c:.2e} (exactly determined)"),
+        (None, Some(why), _) => format!("not applicable: {why}"),
+        (None, None, why) => format!(
+            "no solution: {}",
+            why.as_deref().unwrap_or("the procedure gave none")
+        ),
     };
     let num = |v: f64| tick(v, v);
     let default = pkm::identify::simulate::Experiment::default();

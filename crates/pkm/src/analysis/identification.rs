@@ -420,11 +420,16 @@ pub struct CalibrationStudy {
     /// Held-out states whose readings the identified model cannot reach.
     pub identified_failed: usize,
     /// Worst per-actuator condition number of seed 001's one-strut design with
-    /// `A + 1` noise-free states (`None` when it does not solve).
+    /// [`identify::hexapod::SEED_PROCEDURE_STATES`] noise-free states (`None` when it
+    /// does not apply or does not solve).
     pub one_strut_condition: Option<f64>,
     /// Why the machine has no such design (seed 001's procedure does not apply to it),
     /// `None` where it has one.
     pub one_strut_note: Option<String>,
+    /// Why the design, where the machine has one, gives no solution (the procedure's
+    /// error: a singular strut system, no convergence, or a state the simulated
+    /// machine could not reach); `None` where it solves or does not apply.
+    pub one_strut_failure: Option<String>,
 }
 
 /// Runs [`CalibrationStudy`] with experiment `e` and `holdout` held-out states (seed
@@ -474,27 +479,32 @@ pub fn calibration_study(
                 identify::simulate::pose_errors(&model, &z, &readings, &test.poses)?;
             // Whether seed 001's procedure applies at all (a machine without it says why
             // whatever the states), then its design's conditioning.
-            let (one_strut_condition, one_strut_note) =
+            let (one_strut_condition, one_strut_note, one_strut_failure) =
                 match h.seed_procedure(&zero, &Measurements::default()) {
-                    Err(Error::Unsupported { reason, .. }) => (None, Some(reason)),
+                    Err(Error::Unsupported { reason, .. }) => (None, Some(reason), None),
                     _ => {
                         let seven = simulate(
                             h,
                             &zero,
                             &Experiment {
-                                states: A + 1,
+                                // The procedure's own count: seven parameters per
+                                // strut (A + 1 states coincide with it only for six
+                                // struts, and a tripod's four cannot determine seven).
+                                states: identify::hexapod::SEED_PROCEDURE_STATES,
                                 design: Design::OneActuator,
                                 point_noise: 0.0,
                                 length_noise: 0.0,
                                 ..e.clone()
                             },
                         );
-                        let c = seven.and_then(|s| h.seed_procedure(&zero, &s.measurements));
-                        (
-                            c.ok()
-                                .map(|sp| sp.conditions.iter().copied().fold(0.0, f64::max)),
-                            None,
-                        )
+                        match seven.and_then(|s| h.seed_procedure(&zero, &s.measurements)) {
+                            Ok(sp) => (
+                                Some(sp.conditions.iter().copied().fold(0.0, f64::max)),
+                                None,
+                                None,
+                            ),
+                            Err(err) => (None, None, Some(err.to_string())),
+                        }
                     }
                 };
             Ok(CalibrationStudy {
@@ -508,6 +518,7 @@ pub fn calibration_study(
                 identified_failed,
                 one_strut_condition,
                 one_strut_note,
+                one_strut_failure,
             })
         }
     }

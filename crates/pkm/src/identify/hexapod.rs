@@ -68,6 +68,11 @@ pub struct SeedProcedure {
     pub iterations: Vec<usize>,
 }
 
+/// The measured states seed 001's procedure uses: as many as each strut has
+/// parameters (its base joint, its platform joint, its zero length), whatever the
+/// number of struts.
+pub const SEED_PROCEDURE_STATES: usize = 7;
+
 /// Seed 001's procedure: seven measured states (full poses from the fixture) give
 /// `7 x 6 = 42` equations that split into six independent systems of seven: strut
 /// `j`'s parameters `A_j`, `B'_j`, `L_j^(0)` appear only in its own seven equations
@@ -81,7 +86,7 @@ pub fn seed_procedure<M: StrutMachine<A>, const A: usize>(
     zero: &SVector<f64, A>,
     meas: &Measurements,
 ) -> Result<SeedProcedure> {
-    if meas.states.len() < 7 {
+    if meas.states.len() < SEED_PROCEDURE_STATES {
         return Err(Error::InvalidInput {
             what: "seed 001 procedure".into(),
             message: format!(
@@ -92,7 +97,7 @@ pub fn seed_procedure<M: StrutMachine<A>, const A: usize>(
     }
     let seven = Measurements {
         fixture: meas.fixture.clone(),
-        states: meas.states[..7].to_vec(),
+        states: meas.states[..SEED_PROCEDURE_STATES].to_vec(),
     };
     let poses = measured_poses(nominal, &seven)?;
     let g = nominal.geometry();
