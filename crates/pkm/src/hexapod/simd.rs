@@ -253,8 +253,10 @@ fn lengths_of_entries<const PLANAR: bool>(
 /// `r_2 * 0 + offset` is `offset` exactly for a finite `r_2` (the sign of a zero
 /// aside, which no length or limit test sees), so the same bits, and the rotation's
 /// third column is then not computed at all by a caller that needs it for nothing
-/// else. Callers pass `PLANAR` only with entries made from finite sines and cosines;
-/// a caller's matrix may hold NaN there.
+/// else. Callers pass `PLANAR` only where the entries come from the kernels' own
+/// sines and cosines: a lane whose angles are beyond their range or NaN (entries
+/// not finite) is refused or not cleared, and its lengths are not used; a caller's
+/// matrix, which may hold NaN there, takes the full sum.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
 #[inline]
