@@ -429,19 +429,19 @@ fn random_hexapod_ik(c: &mut Criterion, h: &pkm::hexapod::Hexapod) {
         .chunks_exact(6)
         .map(Vector6::from_column_slice)
         .collect();
+    // The poses one call each, as a controller sends them.
+    let one_by_one = |m: &pkm::hexapod::Hexapod| {
+        let mut sum = 0.0;
+        for x in &xs {
+            sum += Mechanism::<6, 6>::inverse(m, black_box(x)).unwrap()[0];
+        }
+        sum
+    };
     let mut g = c.benchmark_group("hexapod IK random poses");
     g.throughput(criterion::Throughput::Elements(xs.len() as u64));
     g.bench_function(
         "from X..C, one pose per call (1024 poses), one thread",
-        |b| {
-            b.iter(|| {
-                let mut sum = 0.0;
-                for x in &xs {
-                    sum += Mechanism::<6, 6>::inverse(h, black_box(x)).unwrap()[0];
-                }
-                sum
-            })
-        },
+        |b| b.iter(|| one_by_one(h)),
     );
     let n = 200_000;
     let many = random(n);
@@ -454,6 +454,38 @@ fn random_hexapod_ik(c: &mut Criterion, h: &pkm::hexapod::Hexapod) {
             (screened, qs[6 * n - 1])
         })
     });
+    // The same machine with its tool 100 mm below the platform's plane: its arms are
+    // then off that plane, and the kernels take the rotation's third column (the
+    // LinuxCNC hexapod's arms lie in it, which the kernels use: `hexapod/simd.rs`).
+    let text = std::fs::read_to_string(format!(
+        "{}/../../examples/machines/hexapod-linuxcnc.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap()
+    .replace("tip = [0.0, 0.0, 0.0]", "tip = [0.0, 0.0, -100.0]");
+    let Model::Hexapod(off) = Machine::from_toml_str(&text, "tool-off-plane.toml")
+        .unwrap()
+        .model
+    else {
+        panic!()
+    };
+    let off = *off;
+    assert_ne!(off.tool, h.tool);
+    g.throughput(criterion::Throughput::Elements(xs.len() as u64));
+    g.bench_function(
+        "from X..C, one pose per call (1024 poses), one thread, tool off the platform's plane",
+        |b| b.iter(|| one_by_one(&off)),
+    );
+    g.throughput(criterion::Throughput::Elements(n as u64));
+    g.bench_function(
+        "batch of 200k from X..C (block kernel), one thread, tool off the platform's plane",
+        |b| {
+            b.iter(|| {
+                let screened = off.inverse_screened(black_box(&many), &mut qs, &mut clear, false);
+                (screened, qs[6 * n - 1])
+            })
+        },
+    );
     g.bench_function(
         "batch of 200k from X..C with the limit screen (block kernel), one thread",
         |b| {
