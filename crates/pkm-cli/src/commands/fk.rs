@@ -249,11 +249,12 @@ fn batch(
                     }
                 }
                 // A row without a tool pose keeps its row: empty cells and the reason
-                // in its status (the batch goes on).
-                match m.tool_pose(&f.pose) {
+                // in its status (the batch goes on), and it counts as failed.
+                let tool = m.tool_pose(&f.pose);
+                match &tool {
                     Ok(pose) => {
                         let p = pose.translation.vector;
-                        let ang = conv.from_matrix(&rotation_matrix(&pose));
+                        let ang = conv.from_matrix(&rotation_matrix(pose));
                         for x in [p.x, p.y, p.z].into_iter().chain(ang.map(f64::to_degrees)) {
                             out.num(Some(x));
                         }
@@ -268,7 +269,7 @@ fn batch(
                 out.int(Some(f.iterations as u64));
                 out.num(Some(f.residual));
                 out.bool(v.is_empty());
-                if !v.is_empty() {
+                if !v.is_empty() || tool.is_err() {
                     failed += 1;
                 }
                 for x in &v {

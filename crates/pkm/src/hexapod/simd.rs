@@ -314,33 +314,22 @@ mod tests {
 
     use super::{pose_lengths_avx512, Lanes};
 
-    /// genhexkins' default joints (mm): arms in the platform's plane.
-    fn geometry(arm_z: f64) -> ([Vector3<f64>; 6], [Vector3<f64>; 6]) {
-        let b = [
-            [-582.93, 336.55],
-            [582.93, 336.55],
-            [582.93, 336.55],
-            [0.0, -673.1],
-            [0.0, -673.1],
-            [-582.93, 336.55],
-        ];
-        let a = [
-            [-25.4, 292.1],
-            [25.4, 292.1],
-            [265.6586, -124.0536],
-            [240.2586, -168.0464],
-            [-240.2586, -168.0464],
-            [-265.6586, -124.0536],
-        ];
-        (
-            a.map(|[x, y]| Vector3::new(x, y, arm_z)),
-            b.map(|[x, y]| Vector3::new(x, y, 0.0)),
-        )
+    /// An example hexapod's arms and base joints: the LinuxCNC one's arms lie in the
+    /// platform's plane, seed 001's tool is 150 mm below it.
+    fn geometry(file: &str) -> ([Vector3<f64>; 6], [Vector3<f64>; 6]) {
+        let path = format!(
+            "{}/../../examples/machines/{file}",
+            env!("CARGO_MANIFEST_DIR")
+        );
+        match crate::Machine::from_path(path).unwrap().model {
+            crate::machine::Model::Hexapod(h) => (h.set.arms, h.set.base),
+            _ => panic!("{file} is not a hexapod"),
+        }
     }
 
     #[test]
     fn planar_arms_are_recognised_and_moved_joints_unset_it() {
-        let (arms, base) = geometry(0.0);
+        let (arms, base) = geometry("hexapod-linuxcnc.toml");
         let mut lanes = Lanes::new(&arms, &base);
         assert!(lanes.planar);
         let mut lifted = arms;
@@ -349,7 +338,7 @@ mod tests {
         assert!(!lanes.planar, "one arm off the plane by 1e-300 mm");
         lanes.set_geometry(&arms, &base);
         assert!(lanes.planar);
-        let (arms, base) = geometry(-150.0);
+        let (arms, base) = geometry("hexapod-seed001.toml");
         assert!(!Lanes::new(&arms, &base).planar);
     }
 
@@ -358,8 +347,9 @@ mod tests {
     /// in the strut vectors: `p = base` in a coordinate); and the dispatch takes it.
     #[test]
     fn planar_kernel_equals_the_full_sum_bit_for_bit() {
-        let (arms, base) = geometry(0.0);
+        let (arms, base) = geometry("hexapod-linuxcnc.toml");
         let lanes = Lanes::new(&arms, &base);
+        assert!(lanes.planar, "the example's arms left the platform's plane");
         if !lanes.available {
             eprintln!("no AVX-512F on this CPU: the kernels are not run");
             return;
@@ -378,8 +368,9 @@ mod tests {
             })
             .collect();
         xs.extend([
-            Vector6::new(-582.93, 336.55, 0.0, 0.0, 0.0, 0.0),
-            Vector6::new(0.0, -673.1, -0.0, 0.0, -0.0, 0.0),
+            // The tool tip at a base joint's coordinates: zero offsets.
+            Vector6::new(base[0].x, base[0].y, base[0].z, 0.0, 0.0, 0.0),
+            Vector6::new(base[3].x, base[3].y, -0.0, 0.0, -0.0, 0.0),
             Vector6::new(-0.0, 0.0, 508.0, 0.3, -0.0, 1.0),
             Vector6::new(10.0, 20.0, 500.0, 1e3, -2.0, 7.0),
         ]);
