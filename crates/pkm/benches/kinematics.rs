@@ -7,6 +7,7 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use nalgebra::{Matrix3, Vector3, Vector6};
 use pkm::accuracy::Parametric;
 use pkm::machine::Model;
+use pkm::mechanism::abilities;
 use pkm::rotation::Convention;
 use pkm::{Machine, Mechanism};
 
@@ -25,7 +26,10 @@ fn tripod(c: &mut Criterion) {
     let p = Vector3::new(-20.0, 45.54, -286.25);
     let r: Matrix3<f64> = Convention::Rpy.to_matrix([15f64.to_radians(), 0.0, 0.0]);
     c.bench_function("tripod IK from rotation matrix", |b| {
-        b.iter(|| t.geometry.strut_lengths(black_box(&p), black_box(&r)))
+        b.iter(|| {
+            t.tripod_geometry()
+                .strut_lengths(black_box(&p), black_box(&r))
+        })
     });
     let x = Vector6::new(-20.0, 45.54, -286.25, 15f64.to_radians(), 0.0, 0.0);
     c.bench_function("tripod IK from X,Y,Z,A,B,C", |b| {
@@ -46,7 +50,7 @@ fn tripod(c: &mut Criterion) {
     c.bench_function("centre-leg tripod IK", |b| {
         b.iter(|| Mechanism::<3, 3>::inverse(&cl, black_box(&xc)).unwrap())
     });
-    let home = cl.home;
+    let home = cl.info().home();
     c.bench_function("centre-leg tripod FK (Newton from home)", |b| {
         b.iter(|| Mechanism::<3, 3>::forward(&cl, black_box(&qc), black_box(&home)).unwrap())
     });
@@ -373,7 +377,7 @@ fn hexapod(c: &mut Criterion) {
         .map(|k| {
             let t = k as f64 * 1e-3;
             let a = 2.5 * t;
-            let hm = h.home;
+            let hm = h.info().home();
             Vector6::new(
                 hm[0] + 40.0 * a.cos() - 40.0,
                 hm[1] + 40.0 * a.sin(),
@@ -401,7 +405,7 @@ fn hexapod(c: &mut Criterion) {
         })
     });
     g.finish();
-    let home = h.home;
+    let home = h.info().home();
     c.bench_function("hexapod FK from home", |b| {
         b.iter(|| Mechanism::<6, 6>::forward(&h, black_box(&q), black_box(&home)).unwrap())
     });
@@ -413,7 +417,7 @@ fn hexapod(c: &mut Criterion) {
 /// not cache-resident), from X..C by the block kernel and from rotation matrices.
 fn random_hexapod_ik(c: &mut Criterion, h: &pkm::hexapod::Hexapod) {
     use rand::{Rng, SeedableRng};
-    let home = Mechanism::<6, 6>::home(h);
+    let home = Mechanism::<6, 6>::info(h).home();
     let mut rng = rand::rngs::StdRng::seed_from_u64(1);
     let mut random = |n: usize| -> Vec<f64> {
         (0..6 * n)
@@ -450,7 +454,8 @@ fn random_hexapod_ik(c: &mut Criterion, h: &pkm::hexapod::Hexapod) {
     g.throughput(criterion::Throughput::Elements(n as u64));
     g.bench_function("batch of 200k from X..C (block kernel), one thread", |b| {
         b.iter(|| {
-            let screened = h.inverse_screened(black_box(&many), &mut qs, &mut clear, false);
+            let screened =
+                abilities::inverse_screened(h, black_box(&many), &mut qs, &mut clear, false);
             (screened, qs[6 * n - 1])
         })
     });
@@ -481,7 +486,8 @@ fn random_hexapod_ik(c: &mut Criterion, h: &pkm::hexapod::Hexapod) {
         "batch of 200k from X..C (block kernel), one thread, tool off the platform's plane",
         |b| {
             b.iter(|| {
-                let screened = off.inverse_screened(black_box(&many), &mut qs, &mut clear, false);
+                let screened =
+                    abilities::inverse_screened(&off, black_box(&many), &mut qs, &mut clear, false);
                 (screened, qs[6 * n - 1])
             })
         },
@@ -490,7 +496,8 @@ fn random_hexapod_ik(c: &mut Criterion, h: &pkm::hexapod::Hexapod) {
         "batch of 200k from X..C with the limit screen (block kernel), one thread",
         |b| {
             b.iter(|| {
-                let screened = h.inverse_screened(black_box(&many), &mut qs, &mut clear, true);
+                let screened =
+                    abilities::inverse_screened(h, black_box(&many), &mut qs, &mut clear, true);
                 (screened, clear[n - 1])
             })
         },
@@ -550,7 +557,7 @@ fn random_hexapod_ik(c: &mut Criterion, h: &pkm::hexapod::Hexapod) {
                     .zip(qs.par_chunks_mut(6 * CH))
                     .zip(clear.par_chunks_mut(CH))
                     .for_each(|((x, q), c)| {
-                        h.inverse_screened(x, q, c, false);
+                        abilities::inverse_screened(h, x, q, c, false);
                     });
                 qs[6 * n - 1]
             })
@@ -648,7 +655,7 @@ fn workspace(c: &mut Criterion) {
         ),
         |b| {
             b.iter(|| {
-                map(&h, black_box(&h.home), &axes, &[], &|_| {})
+                map(&h, black_box(&h.info().home()), &axes, &[], &|_| {})
                     .unwrap()
                     .points
                     .len()
@@ -884,7 +891,7 @@ fn serial(c: &mut Criterion) {
     let poses: Vec<Vector6<f64>> = (0..1024)
         .map(|_| {
             let q = Vector6::from_fn(|i, _| {
-                let r = arm.actuators()[i].range;
+                let r = arm.info().actuators()[i].range;
                 rng.random_range(r.min.max(-3.0)..r.max.min(3.0))
             });
             arm.coords_of_joints(&q)
@@ -906,7 +913,7 @@ fn serial(c: &mut Criterion) {
     // machine without tool-pose or TCP coordinates): its tool pose is its forward
     // kinematics, what `pkm fk`, the maps and the views ask of it per state.
     let joints =
-        pkm::serial::mechanism::SerialMechanism::<6>::new(arm.machine.clone(), arm.home_joints)
+        pkm::serial::mechanism::SerialMechanism::<6>::new(arm.machine().clone(), arm.home_joints())
             .expect("six joints");
     let states: Vec<Vector6<f64>> = poses.iter().filter_map(|x| arm.inverse(x).ok()).collect();
     c.bench_function(
@@ -989,7 +996,7 @@ fn accuracy(c: &mut Criterion) {
         centre: [
             0.0,
             0.0,
-            h.tool_pose(&h.home()).unwrap().translation.vector.z - 75.0,
+            h.tool_pose(&h.info().home()).unwrap().translation.vector.z - 75.0,
         ],
         azimuth: 0.0,
     };

@@ -80,8 +80,8 @@ fn peaks(h: &P3rpHead, dt: f64) -> Option<(f64, f64)> {
 
 fn values(p: &Vector4<f64>) -> Option<Vector4<f64>> {
     let h = head(p);
-    let g0 = h.geometry.separation(0.0).ok()?.g;
-    let g1 = h.geometry.separation(1.57).ok()?.g;
+    let g0 = h.geometry().separation(0.0).ok()?.g;
+    let g1 = h.geometry().separation(1.57).ok()?.g;
     let (v, a) = peaks(&h, 1e-4)?;
     Some(Vector4::new(g0, g1, v, a))
 }

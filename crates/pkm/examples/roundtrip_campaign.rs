@@ -135,18 +135,18 @@ impl Visitor for Campaign {
     type Output = Tally;
 
     fn visit<M: Analysable<P, A>, const P: usize, const A: usize>(self, m: &M) -> Tally {
-        let home = m.home();
-        let cq: [Quantity; P] = std::array::from_fn(|i| m.coordinates()[i].quantity);
-        let aq: [Quantity; A] = std::array::from_fn(|i| m.actuators()[i].quantity);
-        let driven = m.driven();
-        let lc = m.characteristic_length();
+        let home = m.info().home();
+        let cq: [Quantity; P] = std::array::from_fn(|i| m.info().coordinates()[i].quantity);
+        let aq: [Quantity; A] = std::array::from_fn(|i| m.info().actuators()[i].quantity);
+        let driven = m.info().driven();
+        let lc = m.info().characteristic_length();
         let span: [f64; P] = std::array::from_fn(|i| match cq[i] {
             Quantity::Length => 0.2 * lc,
             _ => 20f64.to_radians(),
         });
         let q_home = m.inverse(&home).expect("home is reachable");
         let ranges: [(f64, f64); A] = std::array::from_fn(|i| {
-            let r = m.actuators()[i].range;
+            let r = m.info().actuators()[i].range;
             if self.serial {
                 let (lo, hi) = (
                     r.min.max(-std::f64::consts::PI),
@@ -189,7 +189,7 @@ fn pose_distance<M: Analysable<P, A>, const P: usize, const A: usize>(
     b: &SVector<f64, P>,
     cq: &[Quantity; P],
 ) -> f64 {
-    if m.pose_space() == pkm::PoseSpace::Spatial {
+    if m.info().pose_space() == pkm::PoseSpace::Spatial {
         if let (Ok(pa), Ok(pb)) = (m.tool_pose(a), m.tool_pose(b)) {
             let dp = (pa.translation.vector - pb.translation.vector).norm();
             let dr = pa.rotation.angle_to(&pb.rotation);

@@ -25,19 +25,19 @@ pub struct DynForward {
 
 /// Object-safe mirror of [`crate::Mechanism`] with slices and vectors (internal units).
 pub trait DynMechanism: Send + Sync {
-    /// See [`crate::Mechanism::name`].
+    /// See [`crate::mechanism::MechanismInfo::name`].
     fn name(&self) -> &str;
-    /// See [`crate::Mechanism::kind`].
+    /// See [`crate::mechanism::MechanismInfo::kind`].
     fn kind(&self) -> &'static str;
-    /// See [`crate::Mechanism::coordinates`].
+    /// See [`crate::mechanism::MechanismInfo::coordinates`].
     fn coordinates(&self) -> &[Coordinate];
-    /// See [`crate::Mechanism::actuators`].
+    /// See [`crate::mechanism::MechanismInfo::actuators`].
     fn actuators(&self) -> &[Actuator];
-    /// See [`crate::Mechanism::driven`].
+    /// See [`crate::mechanism::MechanismInfo::driven`].
     fn driven(&self) -> Vec<usize>;
-    /// See [`crate::Mechanism::pose_space`].
+    /// See [`crate::mechanism::MechanismInfo::pose_space`].
     fn pose_space(&self) -> PoseSpace;
-    /// See [`crate::Mechanism::home`].
+    /// See [`crate::mechanism::MechanismInfo::home`].
     fn home(&self) -> Vec<f64>;
     /// See [`crate::Mechanism::inverse`].
     fn inverse(&self, x: &[f64]) -> Result<Vec<f64>>;
@@ -47,9 +47,9 @@ pub trait DynMechanism: Send + Sync {
     fn jacobian(&self, x: &[f64]) -> Result<DMatrix<f64>>;
     /// See [`crate::Mechanism::forward`].
     fn forward(&self, q: &[f64], start: &[f64]) -> Result<DynForward>;
-    /// See [`crate::Mechanism::inverse_method`].
+    /// See [`crate::mechanism::MechanismInfo::inverse_method`].
     fn inverse_method(&self) -> &'static str;
-    /// See [`crate::Mechanism::forward_closed_form`].
+    /// See [`crate::mechanism::MechanismInfo::forward_closed_form`].
     fn forward_closed_form(&self) -> bool;
     /// See [`crate::Mechanism::tool_pose`].
     fn tool_pose(&self, x: &[f64]) -> Result<Pose>;
@@ -61,7 +61,7 @@ pub trait DynMechanism: Send + Sync {
     fn skeleton(&self, x: &[f64]) -> Result<Skeleton>;
     /// See [`crate::Mechanism::condition`] (dimensionally consistent).
     fn condition(&self, x: &[f64]) -> Result<f64>;
-    /// See [`crate::Mechanism::characteristic_length`].
+    /// See [`crate::mechanism::MechanismInfo::characteristic_length`].
     fn characteristic_length(&self) -> f64;
 }
 
@@ -88,25 +88,28 @@ macro_rules! impl_dyn_mechanism {
     ($t:ty, $p:literal, $a:literal) => {
         impl $crate::dynamic::DynMechanism for $t {
             fn name(&self) -> &str {
-                $crate::Mechanism::<$p, $a>::name(self)
+                $crate::Mechanism::<$p, $a>::info(self).name()
             }
             fn kind(&self) -> &'static str {
-                $crate::Mechanism::<$p, $a>::kind(self)
+                $crate::Mechanism::<$p, $a>::info(self).kind()
             }
             fn coordinates(&self) -> &[$crate::Coordinate] {
-                $crate::Mechanism::<$p, $a>::coordinates(self)
+                $crate::Mechanism::<$p, $a>::info(self).coordinates()
             }
             fn actuators(&self) -> &[$crate::Actuator] {
-                $crate::Mechanism::<$p, $a>::actuators(self)
+                $crate::Mechanism::<$p, $a>::info(self).actuators()
             }
             fn driven(&self) -> Vec<usize> {
-                $crate::Mechanism::<$p, $a>::driven(self).to_vec()
+                $crate::Mechanism::<$p, $a>::info(self).driven().to_vec()
             }
             fn pose_space(&self) -> $crate::PoseSpace {
-                $crate::Mechanism::<$p, $a>::pose_space(self)
+                $crate::Mechanism::<$p, $a>::info(self).pose_space()
             }
             fn home(&self) -> Vec<f64> {
-                $crate::Mechanism::<$p, $a>::home(self).as_slice().to_vec()
+                $crate::Mechanism::<$p, $a>::info(self)
+                    .home()
+                    .as_slice()
+                    .to_vec()
             }
             fn inverse(&self, x: &[f64]) -> $crate::Result<Vec<f64>> {
                 let x = $crate::dynamic::fixed::<$p>("pose", x)?;
@@ -150,10 +153,10 @@ macro_rules! impl_dyn_mechanism {
                 })
             }
             fn inverse_method(&self) -> &'static str {
-                $crate::Mechanism::<$p, $a>::inverse_method(self)
+                $crate::Mechanism::<$p, $a>::info(self).inverse_method()
             }
             fn forward_closed_form(&self) -> bool {
-                $crate::Mechanism::<$p, $a>::forward_closed_form(self)
+                $crate::Mechanism::<$p, $a>::info(self).forward_closed_form()
             }
             fn tool_pose(&self, x: &[f64]) -> $crate::Result<$crate::Pose> {
                 let x = $crate::dynamic::fixed::<$p>("pose", x)?;
@@ -186,7 +189,7 @@ macro_rules! impl_dyn_mechanism {
                 $crate::Mechanism::<$p, $a>::condition(self, &x)
             }
             fn characteristic_length(&self) -> f64 {
-                $crate::Mechanism::<$p, $a>::characteristic_length(self)
+                $crate::Mechanism::<$p, $a>::info(self).characteristic_length()
             }
         }
     };

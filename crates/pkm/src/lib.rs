@@ -16,7 +16,7 @@
 //! )).unwrap();
 //! let machine = Machine::from_toml_str(&text, "tripod-seed000.toml").unwrap();
 //! let Model::TranslationalTripod(tripod) = &machine.model else { panic!() };
-//! let lengths = tripod.inverse(&tripod.home()).unwrap();
+//! let lengths = tripod.inverse(&tripod.info().home()).unwrap();
 //! assert!(lengths.iter().all(|l| *l > 0.0));
 //! ```
 

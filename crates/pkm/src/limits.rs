@@ -293,8 +293,8 @@ impl fmt::Display for Violation {
 /// A violated limit as a number in the mechanism's own list of its limits, with the
 /// value and bound in internal units (mm, rad): what a batch of a million poses keeps
 /// instead of a named [`Violation`] per row
-/// ([`crate::mechanism::Mechanism::inverse_first_limit`]); the mechanism turns it into
-/// the violation ([`crate::mechanism::Mechanism::limit_violation`]).
+/// ([`crate::mechanism::abilities::inverse_first_limit`]); the mechanism turns it into
+/// the violation ([`crate::mechanism::BlockKernels::limit_violation`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LimitCode {
     /// The limit's number (the mechanism's own numbering).

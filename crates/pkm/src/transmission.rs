@@ -61,10 +61,10 @@ where
     M: Mechanism<P, A> + ?Sized,
 {
     let j = m.jacobian(x)?;
-    let d = m.driven();
+    let d = m.info().driven();
     let jd = DMatrix::from_fn(A, A, |r, c| j[(r, d[c])]);
-    let lc = m.characteristic_length();
-    let is_angle = |c: usize| m.coordinates()[d[c]].quantity == Quantity::Angle;
+    let lc = m.info().characteristic_length();
+    let is_angle = |c: usize| m.info().coordinates()[d[c]].quantity == Quantity::Angle;
     let cols = |mat: &DMatrix<f64>, angle: bool| -> DMatrix<f64> {
         let idx: Vec<usize> = (0..A).filter(|&c| is_angle(c) == angle).collect();
         DMatrix::from_fn(mat.nrows(), idx.len(), |r, k| mat[(r, idx[k])])

@@ -32,7 +32,7 @@ where
     // one branch.
     let q = m.inverse(x)?;
     for k in 0..P {
-        let h = match m.coordinates()[k].quantity {
+        let h = match m.info().coordinates()[k].quantity {
             Quantity::Length => h_len,
             Quantity::Angle => h_ang,
         };
@@ -137,11 +137,11 @@ pub fn check_table<M, const P: usize, const A: usize>(
 where
     M: Mechanism<P, A> + ?Sized,
 {
-    let home = m.home();
-    let driven = m.driven();
+    let home = m.info().home();
+    let driven = m.info().driven();
     let mut poses = vec![("home".to_string(), home)];
     for k in 0..P {
-        let c = &m.coordinates()[k];
+        let c = &m.info().coordinates()[k];
         let h = match c.quantity {
             Quantity::Length => step_len,
             Quantity::Angle => step_ang,
@@ -171,7 +171,7 @@ where
         .into_iter()
         .map(|(label, x)| {
             let pose = (0..P)
-                .map(|k| m.coordinates()[k].quantity.to_user(x[k]))
+                .map(|k| m.info().coordinates()[k].quantity.to_user(x[k]))
                 .collect();
             let mut row = CheckRow {
                 label,
@@ -192,7 +192,7 @@ where
             };
             row.actuators = Some(
                 (0..A)
-                    .map(|i| m.actuators()[i].quantity.to_user(q[i]))
+                    .map(|i| m.info().actuators()[i].quantity.to_user(q[i]))
                     .collect(),
             );
             m.check_limits(&x, &q, &mut row.violations);

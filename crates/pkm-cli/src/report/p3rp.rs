@@ -27,7 +27,7 @@ const FIG6_ACCELERATION: [f64; 2] = [9806.65, 30.0];
 
 pub fn section(h: &mut Html, machine: &Machine, _ctx: &super::Context) -> Result<()> {
     let geometry = machine.p3rp_head()?;
-    let g = &geometry.geometry;
+    let g = &geometry.geometry();
     // The head as a machine of its own (for the hybrid machine, its head at home).
     let hm = machine.p3rp_head_machine()?;
     let head = hm.mechanism();

@@ -167,7 +167,7 @@ impl PoseError {
 
     /// The error without its rotation about the unit tool axis `k`: `w - (w . k) k`, the
     /// part that tilts the axis (`dk = w x k` is unchanged). For a mechanism that leaves
-    /// the tool free to spin ([`crate::mechanism::Mechanism::free_spin`]).
+    /// the tool free to spin ([`crate::mechanism::MechanismInfo::free_spin`]).
     pub fn without_spin(self, k: &Vector3<f64>) -> Self {
         PoseError {
             position: self.position,

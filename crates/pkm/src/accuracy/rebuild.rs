@@ -38,7 +38,7 @@ pub trait Rebuild<const P: usize, const A: usize>:
     /// Kind and name of the drive offsets: strut machines' zero lengths
     /// (`zero(L1)`), otherwise drive positioning deviations (`dq(U)`).
     fn drive_parameter(&self, actuator: usize) -> Parameter {
-        let a = &self.actuators()[actuator];
+        let a = &self.info().actuators()[actuator];
         Parameter::new(
             format!("dq({})", a.name),
             a.quantity,
@@ -96,7 +96,7 @@ impl<M: Rebuild<P, A>, const P: usize, const A: usize> Evaluate for RebuildEvalu
             self.m.forward_tool_pose(&(self.q + dq), &self.x)?
         };
         let e = PoseError::between(&self.nominal, &actual);
-        Ok(if self.m.free_spin() {
+        Ok(if self.m.info().free_spin() {
             e.without_spin(&(self.nominal.rotation * Vector3::z()))
         } else {
             e
@@ -193,7 +193,7 @@ macro_rules! strut_rebuild {
                 Ok(())
             }
             fn drive_parameter(&self, k: usize) -> Parameter {
-                zero_length_parameter(&self.actuators()[k].name)
+                zero_length_parameter(&self.info().actuators()[k].name)
             }
             fn passive_joints(&self) -> Vec<super::clearance::PassiveJoint> {
                 let s = crate::identify::struts::StrutMachine::struts(self);
@@ -263,7 +263,7 @@ pub(crate) fn implicit_sensitivities<M: Mechanism<6, A>, const A: usize>(
     x: &SVector<f64, 6>,
     jg: &DMatrix<f64>,
 ) -> Result<Vec<PoseError>> {
-    if m.pose_space() != PoseSpace::Spatial {
+    if m.info().pose_space() != PoseSpace::Spatial {
         return Err(Error::InvalidInput {
             what: "geometric accuracy".into(),
             message: "needs a spatial machine (pose X, Y, Z, A, B, C)".into(),
@@ -272,7 +272,7 @@ pub(crate) fn implicit_sensitivities<M: Mechanism<6, A>, const A: usize>(
     let ng = jg.ncols();
     let n = ng + A;
     let j = m.jacobian(x)?;
-    let driven = m.driven();
+    let driven = m.info().driven();
     let jd = DMatrix::from_fn(A, A, |r, c| j[(r, driven[c])]);
     let mut rhs = DMatrix::zeros(A, n);
     rhs.view_mut((0, 0), (A, ng)).copy_from(jg);
@@ -285,7 +285,7 @@ pub(crate) fn implicit_sensitivities<M: Mechanism<6, A>, const A: usize>(
     })?;
     let e = crate::rotation::rpy_rate_matrix([x[3], x[4], x[5]]);
     // A tool free to spin: only the tilt of its axis is an error.
-    let axis = if m.free_spin() {
+    let axis = if m.info().free_spin() {
         Some(m.tool_pose(x)?.rotation * Vector3::z())
     } else {
         None
@@ -315,7 +315,7 @@ strut_rebuild!(crate::tripod::TranslationalTripod, 3);
 
 impl Rebuild<3, 3> for crate::tripod::CentreLegTripod {
     fn geometry_parameters(&self) -> Vec<Parameter> {
-        let s = &self.geometry.struts;
+        let s = &self.tripod_geometry().struts;
         let b: Vec<&str> = s.iter().map(|s| s.base_name.as_str()).collect();
         let p: Vec<&str> = s.iter().map(|s| s.platform_name.as_str()).collect();
         let n: Vec<&str> = s.iter().map(|s| s.actuator.name.as_str()).collect();
@@ -328,11 +328,11 @@ impl Rebuild<3, 3> for crate::tripod::CentreLegTripod {
         v
     }
     fn geometry_values(&self) -> Vec<f64> {
-        let s = &self.geometry.struts;
+        let s = &self.tripod_geometry().struts;
         s.iter()
             .flat_map(|s| s.base.iter().copied())
             .chain(s.iter().flat_map(|s| s.platform.iter().copied()))
-            .chain(self.leg.base.iter().copied())
+            .chain(self.leg().base.iter().copied())
             .collect()
     }
     fn with_geometry_values(&self, v: &[f64]) -> Result<Self> {
@@ -342,7 +342,7 @@ impl Rebuild<3, 3> for crate::tripod::CentreLegTripod {
                 message: format!("expected 21 values, got {}", v.len()),
             });
         }
-        let old = &self.geometry;
+        let old = self.tripod_geometry();
         let mut s = old.struts.clone();
         for (j, st) in s.iter_mut().enumerate() {
             st.base = Vector3::from_column_slice(&v[3 * j..3 * j + 3]);
@@ -357,21 +357,23 @@ impl Rebuild<3, 3> for crate::tripod::CentreLegTripod {
         );
         geometry.zero_lengths = old.zero_lengths;
         geometry.axes = old.axes.clone();
-        let mut leg = self.leg.clone();
+        let mut leg = self.leg().clone();
         leg.base = Vector3::from_column_slice(&v[18..21]);
         Ok(crate::tripod::CentreLegTripod::new(
-            geometry, leg, self.home,
+            geometry,
+            leg,
+            self.info().home(),
         ))
     }
     fn drive_parameter(&self, k: usize) -> Parameter {
         Parameter::new(
-            format!("zero({})", self.actuators()[k].name),
+            format!("zero({})", self.info().actuators()[k].name),
             Quantity::Length,
             ParameterKind::ZeroLength,
         )
     }
     fn passive_joints(&self) -> Vec<super::clearance::PassiveJoint> {
-        let s = &self.geometry.struts;
+        let s = &self.tripod_geometry().struts;
         let b: Vec<&str> = s.iter().map(|s| s.base_name.as_str()).collect();
         let p: Vec<&str> = s.iter().map(|s| s.platform_name.as_str()).collect();
         let mut j = strut_joints(&b, &p);

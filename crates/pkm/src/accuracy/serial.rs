@@ -382,7 +382,7 @@ fn with_completions<T: Clone>(
 macro_rules! serial_parametric_common {
     (@ $x:ty) => {
         fn parameters(&self) -> Vec<Parameter> {
-            serial_parameters(&self.machine)
+            serial_parameters(&self.machine())
         }
         /// At the joints `q` the caller solved (actuators are the joints).
         fn sensitivities_into(
@@ -394,7 +394,7 @@ macro_rules! serial_parametric_common {
             out: &mut [PoseError],
         ) -> Result<Vector3<f64>> {
             serial_sensitivities_into(
-                &self.machine,
+                &self.machine(),
                 &self.completions,
                 q.as_slice(),
                 which,
@@ -406,12 +406,12 @@ macro_rules! serial_parametric_common {
             Some(self.evaluator(x).and_then(|e| e.analytic()))
         }
         fn with_given(&self, given: &[usize]) -> Result<Option<Self>> {
-            with_completions(self, &self.machine, &self.completions, given, |m| {
+            with_completions(self, &self.machine(), &self.completions, given, |m| {
                 &mut m.completions
             })
         }
         fn tolerable(&self) -> Vec<bool> {
-            serial_tolerable(&self.machine)
+            serial_tolerable(&self.machine())
         }
     };
 }
@@ -420,7 +420,7 @@ impl<const N: usize> Parametric<N, N> for crate::serial::mechanism::SerialMechan
     type Evaluator<'a> = SerialEvaluator<'a>;
     serial_parametric_common!(@ SVector<f64, N>);
     fn evaluator(&self, x: &SVector<f64, N>) -> Result<SerialEvaluator<'_>> {
-        SerialEvaluator::new(&self.machine, &self.completions, x.as_slice())
+        SerialEvaluator::new(self.machine(), &self.completions, x.as_slice())
     }
 }
 
@@ -434,7 +434,7 @@ macro_rules! serial_parametric_by_inverse {
         serial_parametric_common!(@ $x);
         fn evaluator(&self, x: &$x) -> Result<SerialEvaluator<'_>> {
             let q = self.inverse(x)?;
-            SerialEvaluator::new(&self.machine, &self.completions, q.as_slice())
+            SerialEvaluator::new(&self.machine(), &self.completions, q.as_slice())
         }
     };
 }

@@ -409,8 +409,8 @@ impl Visitor for AccuracyJob<'_> {
             None => None,
         };
         Ok(AccuracyReport {
-            machine: m.name().to_string(),
-            kind: m.kind().to_string(),
+            machine: m.info().name().to_string(),
+            kind: m.info().kind().to_string(),
             pose: self.pose.to_vec(),
             violations,
             parameters: params,

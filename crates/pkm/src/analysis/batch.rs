@@ -10,7 +10,7 @@ use serde::Serialize;
 use crate::error::{Error, Result};
 use crate::limits::FirstLimit;
 use crate::machine::{Analysable, Machine, Visitor};
-use crate::mechanism::inverse_continuing;
+use crate::mechanism::{abilities, inverse_continuing};
 
 mod causes;
 pub use causes::{BatchReason, Causes};
@@ -247,7 +247,7 @@ pub fn inverse_batch_with(machine: &Machine, poses: &[f64], check: bool) -> Resu
 /// it does, where [`inverse_batch`] takes each row's solution nearest home. Rows
 /// depend on each other: solved in order on the calling thread. A row without a
 /// solution leaves the next to continue the last row solved. A type whose inverse has
-/// one solution ([`crate::Mechanism::follows`] false) gives [`inverse_batch_with`]'s
+/// one solution ([`crate::Mechanism::follower`] `None`) gives [`inverse_batch_with`]'s
 /// rows, solved as those are, on all cores.
 pub fn inverse_path(machine: &Machine, poses: &[f64], check: bool) -> Result<BatchInverse> {
     machine.visit(InverseJob {
@@ -269,7 +269,7 @@ impl Visitor for InverseJob<'_> {
     fn visit<M: Analysable<P, A>, const P: usize, const A: usize>(self, m: &M) -> Self::Output {
         let n = rows(self.poses, P, "poses")?;
         // Only a type with several solutions per pose has a path to continue.
-        let continuous = self.continuous && m.follows();
+        let continuous = self.continuous && m.follower().is_some();
         let mut actuators = filled(n * A, f64::NAN);
         let mut reachable = filled(n, false);
         let mut causes = Causes::new(n);
@@ -292,7 +292,8 @@ impl Visitor for InverseJob<'_> {
                 let mut last = continuous.then(|| last.lock().unwrap_or_else(|e| e.into_inner()));
                 // The mechanism's block kernel, where it has one, settles the rows it
                 // clears; the rest go through the per-pose path.
-                let screened = !continuous && m.inverse_screened(xs, qs, ok, self.check);
+                let screened =
+                    !continuous && abilities::inverse_screened(m, xs, qs, ok, self.check);
                 for (i, x) in xs.chunks_exact(P).enumerate() {
                     if screened && ok[i] {
                         continue;
@@ -307,7 +308,7 @@ impl Visitor for InverseJob<'_> {
                             }
                             (q, buf.drain(..).next().map(FirstLimit::Violation))
                         }),
-                        None if self.check => m.inverse_first_limit(&x, &mut buf),
+                        None if self.check => abilities::inverse_first_limit(m, &x, &mut buf),
                         None => m.inverse(&x).map(|q| (q, None)),
                     };
                     match solved {
@@ -317,7 +318,7 @@ impl Visitor for InverseJob<'_> {
                                 None => ok[i] = true,
                                 Some(FirstLimit::Violation(v)) => why.violation(i, v),
                                 Some(FirstLimit::Code(c)) => {
-                                    why.coded(i, &c, || m.limit_violation(&c))
+                                    why.coded(i, &c, || abilities::limit_violation(m, &c))
                                 }
                             }
                         }
@@ -355,7 +356,7 @@ pub fn forward_batch(
             let n = rows(self.0, A, "actuators")?;
             let start = match self.1 {
                 Some(x) => crate::dynamic::fixed::<P>("start pose", x)?,
-                None => m.home(),
+                None => m.info().home(),
             };
             let mut poses = filled(n * P, f64::NAN);
             let mut reachable = vec![false; n];
@@ -427,7 +428,7 @@ pub fn condition_batch(machine: &Machine, poses: &[f64]) -> Result<Vec<f64>> {
                     .chunks_exact(P)
                     .map(nalgebra::SVector::<f64, P>::from_column_slice)
                     .collect();
-                m.conditions(&xs, &[], c);
+                abilities::conditions(m, &xs, &[], c);
             };
             per_chunk(self.0, P, &mut out, 1, work);
             Ok(out)

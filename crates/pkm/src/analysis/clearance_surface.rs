@@ -101,7 +101,7 @@ where
     let centre = match sr.centre {
         Some(c) => c,
         None => {
-            let p = m.tool_pose(&m.home())?.translation.vector;
+            let p = m.tool_pose(&m.info().home())?.translation.vector;
             [p.x, p.y, p.z - sr.radius]
         }
     };

@@ -87,7 +87,7 @@ pub struct ToolAxisSolution {
 /// length; from the tip towards the spindle), both in the frame of the pose
 /// coordinates (a TCP machine's part frame), with every limit checked per branch;
 /// `near`: the previous pose coordinates (internal units) for the continuity rule.
-/// Machines whose pose takes a tool axis ([`crate::Mechanism::poses_for_tool_axis`]);
+/// Machines whose pose takes a tool axis ([`crate::mechanism::ToolAxis::poses_for_tool_axis`]);
 /// the others answer [`Error::Unsupported`].
 pub fn inverse_for_tool_axis(
     machine: &Machine,
@@ -107,10 +107,11 @@ pub fn inverse_for_tool_axis(
             let tip = nalgebra::Vector3::from(self.0);
             let axis = nalgebra::Vector3::from(self.1);
             let sol = m
-                .poses_for_tool_axis(&tip, &axis, near.as_ref())
+                .tool_axis()
+                .map(|t| t.poses_for_tool_axis(&tip, &axis, near.as_ref()))
                 .ok_or_else(|| Error::Unsupported {
-                    machine: m.name().into(),
-                    kind: m.kind().into(),
+                    machine: m.info().name().into(),
+                    kind: m.info().kind().into(),
                     analysis: "a tool axis vector (I, J, K)",
                     reason: "its tool orientation is not set by two rotary axes in \
                              tool-centre-point coordinates"
@@ -150,7 +151,7 @@ pub struct ForwardSolution {
     pub pose: Vec<f64>,
     /// Actuator values solved for (internal units).
     pub actuators: Vec<f64>,
-    /// Whether the solver is closed-form ([`crate::Mechanism::forward_closed_form`]).
+    /// Whether the solver is closed-form ([`crate::mechanism::MechanismInfo::forward_closed_form`]).
     pub closed_form: bool,
     /// Iterations of an iterative solver (0 for a closed form).
     pub iterations: usize,

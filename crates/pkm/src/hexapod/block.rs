@@ -1,5 +1,5 @@
 //! Inverse kinematics of many poses eight at a time, with a conservative limit screen
-//! (what [`crate::mechanism::Mechanism::inverse_screened`] asks of a hexapod).
+//! (what [`crate::mechanism::BlockKernels::inverse_screened`] asks of a hexapod).
 //!
 //! The poses of a block are transposed into lanes, so everything vectorises over
 //! poses: the sines and cosines of A, B, C ([`crate::trig::sin_cos_array`], the same

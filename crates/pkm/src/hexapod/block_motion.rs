@@ -1,5 +1,5 @@
 //! The exact motion of many samples eight at a time, with the limit screen (what
-//! [`crate::mechanism::Mechanism::motion_screened`] asks of a hexapod): the motion
+//! [`crate::mechanism::BlockKernels::motion_screened`] asks of a hexapod): the motion
 //! engine's per-sample work for six struts in one AVX-512 pass over eight samples.
 //!
 //! The samples' poses, rates and accelerations are transposed into lanes

@@ -195,7 +195,7 @@ fn solve_from(
     };
     let mut p = *p0;
     let mut r = *r0;
-    let lc = h.characteristic_length;
+    let lc = h.info.characteristic_length();
     let inv_lc = 1.0 / lc;
     let soa = h.soa();
     let (l0, mut j) = soa.lengths_and_jacobian(&p, &r, lc);

@@ -125,7 +125,7 @@ impl Hexapod {
     ) {
         for (k, range) in &self.axes.ranges {
             if let Some((side, bound)) = range.crossed(x[*k]) {
-                let quantity = self.coordinates[*k].quantity;
+                let quantity = self.info.coordinates()[*k].quantity;
                 let (id, value) = (*k as u32, x[*k]);
                 if found(LimitCode {
                     id,
@@ -210,7 +210,7 @@ impl Hexapod {
         };
         let name = match self.limit_names.get(id) {
             Some(n) => n.clone(),
-            None => limit_name(&self.struts, &self.coordinates, id),
+            None => limit_name(&self.struts, self.info.coordinates(), id),
         };
         Violation::new(name, kind, c.side, c.quantity, c.value, c.bound)
     }

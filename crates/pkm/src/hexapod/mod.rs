@@ -24,10 +24,10 @@ use nalgebra::{Matrix3, SMatrix, Vector3, Vector6};
 
 use crate::error::Result;
 use crate::legs::{split_pose, StrutSet};
-use crate::limits::{FirstLimit, LimitCode, LimitName, Violation};
+use crate::limits::{LimitCode, LimitName, Violation};
 use crate::mechanism::{
-    spatial_coordinates, Actuator, ActuatorMotion, Coordinate, Forward, LinkKind, Mechanism,
-    PointRole, PoseSpace, Skeleton,
+    spatial_coordinates, Actuator, ActuatorMotion, BlockKernels, ConditionBatch, Forward, LinkKind,
+    Mechanism, MechanismInfo, PointRole, PoseSpace, Skeleton,
 };
 use crate::pose::Pose;
 use crate::rotation::Convention;
@@ -61,8 +61,6 @@ pub struct HexStrut {
 /// A hexapod machine.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Hexapod {
-    /// Machine name.
-    pub name: String,
     /// The six struts.
     pub struts: [HexStrut; 6],
     /// Tool tip in the platform frame (mm).
@@ -71,19 +69,15 @@ pub struct Hexapod {
     pub strut_diameter: Option<f64>,
     /// Soft limits of the pose coordinates (LinuxCNC's `[AXIS_n]`); none by default.
     pub axes: crate::limits::AxisLimits,
-    /// Home pose (X, Y, Z mm; A, B, C rad).
-    pub home: Vector6<f64>,
     /// Strut lengths at the control's zero readings (`L_j^(0)` of seed 001), from a
     /// calibration; `None`: the lengths at home.
     pub zero_lengths: Option<Vector6<f64>>,
-    /// Length that scales rotations against translations in conditioning (mm): the
-    /// mean distance of the platform joints from the tool tip.
-    pub characteristic_length: f64,
     set: StrutSet<6>,
     soa: crate::legs::StrutSoa<6>,
     lanes: simd::Lanes,
-    actuators: [Actuator; 6],
-    coordinates: [Coordinate; 6],
+    /// Name, coordinates, actuators, home pose and characteristic length (the mean
+    /// distance of the platform joints from the tool tip).
+    info: MechanismInfo<6, 6>,
     /// Pairs of struts that share a joint (never checked for interference).
     shares: [[bool; 6]; 6],
     /// The name of every limit code of [`Hexapod::scan`], built with the machine.
@@ -143,19 +137,23 @@ impl Hexapod {
         let coordinates = spatial_coordinates();
         Hexapod {
             limit_names: limit_names(&struts, &coordinates),
-            name,
+            info: MechanismInfo::new(
+                name,
+                "hexapod",
+                coordinates,
+                actuators,
+                PoseSpace::Spatial,
+                home,
+            )
+            .with_characteristic_length(characteristic_length),
             struts,
             tool,
             strut_diameter,
             axes: Default::default(),
-            home,
             zero_lengths: None,
-            characteristic_length,
             soa,
             lanes,
             set,
-            actuators,
-            coordinates,
             shares,
         }
     }
@@ -171,7 +169,8 @@ impl Hexapod {
         // Field by field, in place: the derived data (about 1.2 kB) is not built
         // elsewhere and copied over (a tenth of a Monte Carlo sample's time).
         self.set = StrutSet::new(*base, *platform, self.tool);
-        self.characteristic_length = characteristic_length(&self.set);
+        self.info
+            .set_characteristic_length(characteristic_length(&self.set));
         self.soa = (&self.set).into();
         self.lanes.set_geometry(&self.set.arms, &self.set.base);
     }
@@ -190,7 +189,7 @@ impl Hexapod {
     /// that its singular values are all in mm per mm: `J diag(I, I / l_c)`.
     pub fn scaled_twist_jacobian(&self, p: &Vector3<f64>, r: &Matrix3<f64>) -> SMatrix<f64, 6, 6> {
         self.soa
-            .lengths_and_jacobian(p, r, self.characteristic_length)
+            .lengths_and_jacobian(p, r, self.info.characteristic_length())
             .1
     }
 
@@ -203,32 +202,8 @@ impl Hexapod {
 }
 
 impl Mechanism<6, 6> for Hexapod {
-    fn name(&self) -> &str {
-        &self.name
-    }
-
-    fn kind(&self) -> &'static str {
-        "hexapod"
-    }
-
-    fn coordinates(&self) -> &[Coordinate; 6] {
-        &self.coordinates
-    }
-
-    fn actuators(&self) -> &[Actuator; 6] {
-        &self.actuators
-    }
-
-    fn driven(&self) -> [usize; 6] {
-        [0, 1, 2, 3, 4, 5]
-    }
-
-    fn pose_space(&self) -> PoseSpace {
-        PoseSpace::Spatial
-    }
-
-    fn home(&self) -> Vector6<f64> {
-        self.home
+    fn info(&self) -> &MechanismInfo<6, 6> {
+        &self.info
     }
 
     #[inline]
@@ -279,7 +254,7 @@ impl Mechanism<6, 6> for Hexapod {
         Ok(crate::legs::spatial_coords_from_pose(
             pose,
             orientation_given,
-            &self.home,
+            &self.info.home(),
         ))
     }
 
@@ -289,74 +264,6 @@ impl Mechanism<6, 6> for Hexapod {
             out.push(self.violation_of(&c));
             false
         });
-    }
-
-    /// One rotation and one set of joints for both, and the check stops at the first
-    /// violation.
-    fn inverse_first_violation(
-        &self,
-        x: &Vector6<f64>,
-        buf: &mut Vec<Violation>,
-    ) -> Result<(Vector6<f64>, Option<Violation>)> {
-        let (q, first) = self.inverse_first_limit(x, buf)?;
-        let v = first.map(|f| match f {
-            FirstLimit::Code(c) => self.violation_of(&c),
-            FirstLimit::Violation(v) => v,
-        });
-        Ok((q, v))
-    }
-
-    /// The first violated limit as a code (the limit scan's numbering: axis travel, strut
-    /// lengths, base and platform cones, strut pairs): no name is formatted.
-    fn inverse_first_limit(
-        &self,
-        x: &Vector6<f64>,
-        _buf: &mut Vec<Violation>,
-    ) -> Result<(Vector6<f64>, Option<FirstLimit>)> {
-        let (p, r) = split_pose(x);
-        let q = self.lengths(&p, &r);
-        let mut first = None;
-        self.scan(x, &q, &p, &r, |c| {
-            first = Some(c);
-            true
-        });
-        Ok((q, first.map(FirstLimit::Code)))
-    }
-
-    /// Eight poses at a time: the kernel and limit screen of `hexapod/block.rs`.
-    fn inverse_screened(
-        &self,
-        xs: &[f64],
-        qs: &mut [f64],
-        clear: &mut [bool],
-        check: bool,
-    ) -> bool {
-        let n = clear.len();
-        if xs.len() != 6 * n || qs.len() != 6 * n {
-            return false;
-        }
-        block::screen_rows(&block::Screen::new(self), xs, qs, clear, check)
-    }
-
-    fn motion_screened(
-        &self,
-        x: [&[f64]; 3],
-        q: [&mut [f64]; 3],
-        clear: &mut [bool],
-        computed: &mut [bool],
-    ) -> bool {
-        let n = clear.len();
-        if computed.len() != n
-            || x.iter().any(|x| x.len() != 6 * n)
-            || q.iter().any(|q| q.len() != 6 * n)
-        {
-            return false;
-        }
-        block_motion::motion_rows(&block::Screen::new(self), x, q, clear, computed)
-    }
-
-    fn limit_violation(&self, code: &LimitCode) -> Violation {
-        self.violation_of(code)
     }
 
     fn skeleton(&self, x: &Vector6<f64>) -> Result<Skeleton> {
@@ -416,20 +323,18 @@ impl Mechanism<6, 6> for Hexapod {
     /// of the largest to the smallest strut rate per unit tool twist.
     ///
     /// From the eigenvalues of `J^T J` ([`crate::linalg::gram_conditions`]: eight
-    /// poses per call of its lane kernel in [`Mechanism::conditions`], the same value
+    /// poses per call of its lane kernel in [`ConditionBatch::conditions`], the same value
     /// for one pose alone).
     fn condition(&self, x: &Vector6<f64>) -> Result<f64> {
         Ok(crate::linalg::gram_condition(&self.gram(x)))
     }
 
-    /// Eight poses per call of the lanes' eigenvalue kernel.
-    fn conditions(&self, xs: &[Vector6<f64>], _qs: &[Vector6<f64>], out: &mut [f64]) {
-        assert_eq!(out.len(), xs.len(), "one condition number per pose");
-        crate::linalg::gram_conditions_by(|k| self.gram(&xs[k]), out);
+    fn block_kernels(&self) -> Option<&dyn BlockKernels<6, 6>> {
+        Some(self)
     }
 
-    fn characteristic_length(&self) -> f64 {
-        self.characteristic_length
+    fn condition_batch(&self) -> Option<&dyn ConditionBatch<6, 6>> {
+        Some(self)
     }
 
     fn actuator_motion(
@@ -457,5 +362,65 @@ impl Mechanism<6, 6> for Hexapod {
             false
         });
         Ok(act)
+    }
+}
+
+impl BlockKernels<6, 6> for Hexapod {
+    /// The first violated limit as a code (the limit scan's numbering: axis travel, strut
+    /// lengths, base and platform cones, strut pairs): no name is formatted. One
+    /// rotation and one set of joints for both, and the check stops at the first
+    /// violation.
+    fn inverse_first_limit(&self, x: &Vector6<f64>) -> Result<(Vector6<f64>, Option<LimitCode>)> {
+        let (p, r) = split_pose(x);
+        let q = self.lengths(&p, &r);
+        let mut first = None;
+        self.scan(x, &q, &p, &r, |c| {
+            first = Some(c);
+            true
+        });
+        Ok((q, first))
+    }
+
+    fn limit_violation(&self, code: &LimitCode) -> Violation {
+        self.violation_of(code)
+    }
+
+    /// Eight poses at a time: the kernel and limit screen of `hexapod/block.rs`.
+    fn inverse_screened(
+        &self,
+        xs: &[f64],
+        qs: &mut [f64],
+        clear: &mut [bool],
+        check: bool,
+    ) -> bool {
+        let n = clear.len();
+        if xs.len() != 6 * n || qs.len() != 6 * n {
+            return false;
+        }
+        block::screen_rows(&block::Screen::new(self), xs, qs, clear, check)
+    }
+
+    fn motion_screened(
+        &self,
+        x: [&[f64]; 3],
+        q: [&mut [f64]; 3],
+        clear: &mut [bool],
+        computed: &mut [bool],
+    ) -> bool {
+        let n = clear.len();
+        if computed.len() != n
+            || x.iter().any(|x| x.len() != 6 * n)
+            || q.iter().any(|q| q.len() != 6 * n)
+        {
+            return false;
+        }
+        block_motion::motion_rows(&block::Screen::new(self), x, q, clear, computed)
+    }
+}
+
+impl ConditionBatch<6, 6> for Hexapod {
+    /// Eight poses per call of the lanes' eigenvalue kernel.
+    fn conditions(&self, xs: &[Vector6<f64>], _qs: &[Vector6<f64>], out: &mut [f64]) {
+        crate::linalg::gram_conditions_by(|k| self.gram(&xs[k]), out);
     }
 }

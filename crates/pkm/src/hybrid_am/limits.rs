@@ -11,7 +11,8 @@ use crate::units::Quantity;
 /// Pushes every violated limit at pose `x` with readings `q` onto `out`; allocates only
 /// for a violation.
 pub(super) fn check(m: &HybridAm, x: &Vector6<f64>, q: &SVector<f64, 5>, out: &mut Vec<Violation>) {
-    m.position_limits.check(&m.actuators, q.as_slice(), out);
+    m.position_limits
+        .check(m.info.actuators(), q.as_slice(), out);
     Range { min: 0.0, max: 0.0 }.check(
         || "nozzle angle A (the platform tilts about Y only)",
         LimitKind::Tilt,

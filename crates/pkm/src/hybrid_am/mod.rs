@@ -53,7 +53,7 @@ use crate::error::{Error, Result};
 use crate::hexapod::JointCone;
 use crate::limits::{PositionLimits, Range, Violation};
 use crate::mechanism::{
-    spatial_coordinates, Actuator, ActuatorMotion, Coordinate, LinkKind, Mechanism, PointRole,
+    spatial_coordinates, Actuator, ActuatorMotion, LinkKind, Mechanism, MechanismInfo, PointRole,
     PoseSpace, Skeleton,
 };
 use crate::pose::{rotation_matrix, Pose};
@@ -95,8 +95,6 @@ pub struct Placement {
 /// that keeps its Y axis, and a rotary table (see the module documentation).
 #[derive(Debug, Clone, PartialEq)]
 pub struct HybridAm {
-    /// Machine name.
-    pub name: String,
     /// The four legs.
     pub legs: [Leg; 4],
     /// Nozzle tip in the platform frame (mm).
@@ -115,11 +113,9 @@ pub struct HybridAm {
     pub platform_cone: Option<JointCone>,
     /// Strut diameter for strut-strut interference (mm), if checked.
     pub strut_diameter: Option<f64>,
-    /// Home pose (X, Y, Z mm; A, B, C rad).
-    pub home: Vector6<f64>,
-    actuators: [Actuator; 5],
-    coordinates: [Coordinate; 6],
-    characteristic_length: f64,
+    /// Name, coordinates, actuators, home pose, characteristic length (the mean
+    /// distance of the platform joints from the nozzle tip).
+    info: MechanismInfo<6, 5>,
     /// The carriages' and the table's position limits, named once.
     position_limits: PositionLimits,
 }
@@ -147,7 +143,6 @@ impl HybridAm {
             table,
         ];
         let mut m = HybridAm {
-            name,
             legs,
             tool,
             tool_tilt,
@@ -156,14 +151,19 @@ impl HybridAm {
             carriage_cone: None,
             platform_cone: None,
             strut_diameter: None,
-            home,
             position_limits: PositionLimits::from_fn(&actuators, |i, a| {
                 let what = if i < 4 { "carriage" } else { "table" };
                 format!("{what} {} position", a.name)
             }),
-            actuators,
-            coordinates: spatial_coordinates(),
-            characteristic_length: 1.0,
+            info: MechanismInfo::new(
+                name,
+                "hybrid-am",
+                spatial_coordinates(),
+                actuators,
+                PoseSpace::Spatial,
+                home,
+            )
+            .with_driven(DRIVEN),
         };
         m.derive();
         m
@@ -172,13 +172,14 @@ impl HybridAm {
     /// What the machine derives from its geometry: the characteristic length (mean
     /// distance of the platform joints from the nozzle tip).
     fn derive(&mut self) {
-        self.characteristic_length = (self
+        let l = (self
             .legs
             .iter()
             .map(|l| (l.platform - self.tool).norm())
             .sum::<f64>()
             / 4.0)
             .max(1e-9);
+        self.info.set_characteristic_length(l);
     }
 
     /// Pose coordinates `(B, C)` whose tool frame `Rz(C) Ry(B)` is `r`, preferring the
@@ -210,32 +211,8 @@ impl HybridAm {
 use crate::rotation::wrap_angle as wrap;
 
 impl Mechanism<6, 5> for HybridAm {
-    fn name(&self) -> &str {
-        &self.name
-    }
-
-    fn kind(&self) -> &'static str {
-        "hybrid-am"
-    }
-
-    fn coordinates(&self) -> &[Coordinate; 6] {
-        &self.coordinates
-    }
-
-    fn actuators(&self) -> &[Actuator; 5] {
-        &self.actuators
-    }
-
-    fn driven(&self) -> [usize; 5] {
-        DRIVEN
-    }
-
-    fn pose_space(&self) -> PoseSpace {
-        PoseSpace::Spatial
-    }
-
-    fn home(&self) -> Vector6<f64> {
-        self.home
+    fn info(&self) -> &MechanismInfo<6, 5> {
+        &self.info
     }
 
     fn inverse(&self, x: &Vector6<f64>) -> Result<SVector<f64, 5>> {
@@ -297,7 +274,7 @@ impl Mechanism<6, 5> for HybridAm {
                 }
             })?
         } else {
-            (self.home[4], self.home[5])
+            (self.info.home()[4], self.info.home()[5])
         };
         Ok(Vector6::new(p.x, p.y, p.z, 0.0, b, c))
     }
@@ -347,7 +324,7 @@ impl Mechanism<6, 5> for HybridAm {
         let tip = s.point("nozzle tip", PointRole::Tool, &pl.tip);
         s.link("extruder", LinkKind::Tool, oi, tip);
         let t = s.point("table centre", PointRole::Other, &self.table);
-        let reach = self.characteristic_length.max(50.0);
+        let reach = self.info.characteristic_length().max(50.0);
         let px = s.point(
             "part X axis",
             PointRole::Other,
@@ -368,13 +345,9 @@ impl Mechanism<6, 5> for HybridAm {
             return Ok(f64::INFINITY);
         };
         let mut j = Self::platform_jacobian(&pl, &k);
-        j.column_mut(3).scale_mut(1.0 / self.characteristic_length);
+        j.column_mut(3)
+            .scale_mut(1.0 / self.info.characteristic_length());
         Ok(crate::linalg::condition_number(&j))
-    }
-
-    /// Mean distance of the platform joints from the nozzle tip.
-    fn characteristic_length(&self) -> f64 {
-        self.characteristic_length
     }
 
     /// `q' = k . P'`, `q'' = (s . P'' + |s'|^2) / s_z` (from `s . s = L^2` twice, with

@@ -10,6 +10,7 @@ use crate::error::{Error, Result};
 use crate::hexapod::Hexapod;
 use crate::legs::split_pose;
 use crate::machine::StrutGeometry;
+use crate::mechanism::Mechanism;
 
 impl StrutMachine<6> for Hexapod {
     fn struts(&self) -> [StrutGeometry; 6] {
@@ -36,11 +37,11 @@ impl StrutMachine<6> for Hexapod {
             st.platform = g.platform;
         }
         let mut h = Hexapod::new(
-            self.name.clone(),
+            self.info().name().to_string(),
             s,
             self.tool,
             self.strut_diameter,
-            self.home,
+            self.info().home(),
         );
         h.zero_lengths = self.zero_lengths;
         h.axes = self.axes.clone();

@@ -115,7 +115,7 @@ pub trait Identifiable<const P: usize, const A: usize>: Mechanism<P, A> + Sized 
     /// from its file where it has one); default: the actuator positions at home, the
     /// zero state of the campaigns pkm simulates.
     fn zero_readings(&self) -> Result<SVector<f64, A>> {
-        self.inverse(&self.home())
+        self.inverse(&self.info().home())
     }
 }
 
@@ -258,7 +258,12 @@ pub fn parameter_names<M: Identifiable<P, A>, const P: usize, const A: usize>(
     m: &M,
 ) -> Vec<String> {
     let mut names = m.geometry_names();
-    names.extend(m.actuators().iter().map(|a| format!("zero({})", a.name)));
+    names.extend(
+        m.info()
+            .actuators()
+            .iter()
+            .map(|a| format!("zero({})", a.name)),
+    );
     names
 }
 

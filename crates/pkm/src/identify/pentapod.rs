@@ -160,7 +160,7 @@ impl Identifiable<6, 5> for Pentapod {
     fn zero_readings(&self) -> Result<SVector<f64, 5>> {
         match self.zero_lengths {
             Some(z) => Ok(z),
-            None => self.inverse(&self.home()),
+            None => self.inverse(&self.info().home()),
         }
     }
 }
@@ -189,8 +189,8 @@ impl Calibratable<5> for Pentapod {
         _meas: &Measurements,
     ) -> Result<SeedProcedure> {
         Err(Error::Unsupported {
-            machine: self.name().to_string(),
-            kind: self.kind().to_string(),
+            machine: self.info().name().to_string(),
+            kind: self.info().kind().to_string(),
             analysis: "seed 001's procedure",
             reason: "it solves each strut's two joints from that strut's equations with the \
                      platform pose measured whole; a pentapod's ring joints turn and its pose \

@@ -71,7 +71,7 @@ impl<M: Identifiable<P, A>, const P: usize, const A: usize> Problem<'_, M, P, A>
                     let jx = m.jacobian(&x)?;
                     // The driven coordinates move with the parameters; the held ones (a
                     // pentapod's C) stay.
-                    let driven = m.driven();
+                    let driven = m.info().driven();
                     let lu = DMatrix::from_fn(A, A, |r, c| jx[(r, driven[c])]).lu();
                     // dx/dtheta = -J_x^-1 [dq/dg, -I] (over the driven coordinates)
                     let mut dq = DMatrix::zeros(A, n);
@@ -174,7 +174,7 @@ pub fn residuals<M: Identifiable<P, A>, const P: usize, const A: usize>(
         meas,
         model,
         poses,
-        fk: vec![nominal.home(); meas.states.len()],
+        fk: vec![nominal.info().home(); meas.states.len()],
         theta: theta.to_vec(),
         free: (0..theta.len()).collect(),
         eval: None,

@@ -204,7 +204,7 @@ pub fn simulate_on<M: Identifiable<P, A>, const P: usize, const A: usize>(
         }
         Design::OneActuator => {
             let mut dq = SVector::<f64, A>::zeros();
-            let mut start = truth.home();
+            let mut start = truth.info().home();
             for i in 0..e.states {
                 if i > 0 {
                     let j = (i - 1) % A;
@@ -270,13 +270,13 @@ impl<const P: usize> RandomPoses<P> {
         rotation: f64,
         condition_ratio: f64,
     ) -> Self {
-        let driven = m.driven();
-        let span = SVector::<f64, P>::from_fn(|k, _| match m.coordinates()[k].quantity {
+        let driven = m.info().driven();
+        let span = SVector::<f64, P>::from_fn(|k, _| match m.info().coordinates()[k].quantity {
             _ if !driven.contains(&k) => 0.0,
             Quantity::Length => translation,
             Quantity::Angle => rotation,
         });
-        let home = m.home();
+        let home = m.info().home();
         let max_condition = if condition_ratio.is_finite() {
             m.condition(&home)
                 .ok()
@@ -361,7 +361,7 @@ fn home_stroke_length<M: Identifiable<P, A>, const P: usize, const A: usize>(m: 
         return 0.0;
     };
     let (sum, n) = (0..A)
-        .filter(|&j| m.actuators()[j].quantity == Quantity::Length)
+        .filter(|&j| m.info().actuators()[j].quantity == Quantity::Length)
         .fold((0.0, 0), |(s, n), j| (s + q[j].abs(), n + 1));
     if n == 0 {
         0.0
@@ -454,7 +454,7 @@ pub struct PoseErrors {
     /// RMS tool-point position error (mm).
     pub position_rms: f64,
     /// Largest orientation error (rad; the angle between tool axes where the spin is
-    /// free, [`crate::mechanism::Mechanism::free_spin`]).
+    /// free, [`crate::mechanism::MechanismInfo::free_spin`]).
     pub orientation_max: f64,
     /// RMS orientation error (rad).
     pub orientation_rms: f64,
@@ -472,7 +472,7 @@ pub(crate) struct PoseStats {
 
 impl PoseStats {
     /// Adds the difference between two tool poses; `free_spin`: the tool's spin about
-    /// its axis is free ([`crate::mechanism::Mechanism::free_spin`]), so the orientation
+    /// its axis is free ([`crate::mechanism::MechanismInfo::free_spin`]), so the orientation
     /// error is the angle between the tool axes.
     pub(crate) fn add(&mut self, a: &crate::pose::Pose, b: &crate::pose::Pose, free_spin: bool) {
         let dp = (a.translation.vector - b.translation.vector).norm();
@@ -519,7 +519,11 @@ pub fn pose_errors<M: Identifiable<P, A>, const P: usize, const A: usize>(
     for (r, x) in readings.iter().zip(poses) {
         let q = SVector::<f64, A>::from_fn(|j, _| zero[j] + r[j]);
         match m.forward(&q, x) {
-            Ok(f) => stats.add(&m.tool_pose(x)?, &m.tool_pose(&f.pose)?, m.free_spin()),
+            Ok(f) => stats.add(
+                &m.tool_pose(x)?,
+                &m.tool_pose(&f.pose)?,
+                m.info().free_spin(),
+            ),
             Err(e) => {
                 failed += 1;
                 first.get_or_insert(e);

@@ -40,9 +40,9 @@ pub fn identify<M: Identifiable<P, A>, const P: usize, const A: usize>(
             .map(|st| {
                 let q = SVector::<f64, A>::from_fn(|j, _| zero[j] + st.readings[j]);
                 nominal
-                    .forward(&q, &nominal.home())
+                    .forward(&q, &nominal.info().home())
                     .map(|f| f.pose)
-                    .unwrap_or_else(|_| nominal.home())
+                    .unwrap_or_else(|_| nominal.info().home())
             })
             .collect(),
         MeasurementModel::Pose => Vec::new(),

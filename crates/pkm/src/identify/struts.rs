@@ -112,7 +112,7 @@ impl<M: StrutMachine<A>, const A: usize> Identifiable<6, A> for M {
     }
 
     fn explain(&self, terms: &[(usize, f64)]) -> Option<String> {
-        let (p, r) = split_pose(&self.home());
+        let (p, r) = split_pose(&self.info().home());
         let (base, platform) = self.joints();
         let t = self.tool();
         let dirs: [Vector3<f64>; A] =
@@ -130,7 +130,7 @@ impl<M: StrutMachine<A>, const A: usize> Identifiable<6, A> for M {
     fn zero_readings(&self) -> Result<SVector<f64, A>> {
         match self.calibrated_zero() {
             Some(z) => Ok(z),
-            None => self.inverse(&self.home()),
+            None => self.inverse(&self.info().home()),
         }
     }
 }

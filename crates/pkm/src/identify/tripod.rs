@@ -8,12 +8,13 @@ use nalgebra::Vector3;
 
 use super::struts::StrutMachine;
 use crate::machine::StrutGeometry;
+use crate::mechanism::Mechanism;
 use crate::tripod::{TranslationalTripod, TripodGeometry};
 
 impl StrutMachine<3> for TranslationalTripod {
     fn struts(&self) -> [StrutGeometry; 3] {
         std::array::from_fn(|j| {
-            let s = &self.geometry.struts[j];
+            let s = &self.tripod_geometry().struts[j];
             StrutGeometry {
                 name: s.actuator.name.clone(),
                 base_name: s.base_name.clone(),
@@ -25,11 +26,11 @@ impl StrutMachine<3> for TranslationalTripod {
     }
 
     fn tool(&self) -> Vector3<f64> {
-        self.geometry.tool
+        self.tripod_geometry().tool
     }
 
     fn with_struts(&self, struts: &[StrutGeometry; 3]) -> Self {
-        let old = &self.geometry;
+        let old = self.tripod_geometry();
         let mut s = old.struts.clone();
         for (st, g) in s.iter_mut().zip(struts) {
             st.base = g.base;
@@ -44,11 +45,11 @@ impl StrutMachine<3> for TranslationalTripod {
         );
         geometry.zero_lengths = old.zero_lengths;
         geometry.axes = old.axes.clone();
-        TranslationalTripod::new(geometry, self.home)
+        TranslationalTripod::new(geometry, self.info().home())
     }
 
     fn calibrated_zero(&self) -> Option<Vector3<f64>> {
-        self.geometry.zero_lengths
+        self.tripod_geometry().zero_lengths
     }
 
     fn platform_turns(&self) -> bool {

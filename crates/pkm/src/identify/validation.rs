@@ -33,7 +33,7 @@ pub fn point_errors<M: Identifiable<P, A>, const P: usize, const A: usize>(
     let mut sum = 0.0;
     let mut count = 0usize;
     let mut failed = 0;
-    let mut start = m.home();
+    let mut start = m.info().home();
     let measured = if meas.fixture.len() >= m.pose_points() {
         measured_poses(m, meas).ok()
     } else {
@@ -48,7 +48,7 @@ pub fn point_errors<M: Identifiable<P, A>, const P: usize, const A: usize>(
                 start = f.pose;
                 if let Some(x) = measured.as_ref().map(|v| v[i]) {
                     if let (Ok(a), Ok(b)) = (m.tool_pose(&x), m.tool_pose(&f.pose)) {
-                        stats.add(&a, &b, m.free_spin());
+                        stats.add(&a, &b, m.info().free_spin());
                     }
                 }
                 for (s, p) in meas.fixture.iter().zip(&st.points) {

@@ -237,8 +237,8 @@ impl Geometry {
 /// machine whose points lie otherwise is refused, naming the point and its offset.
 pub(crate) fn tripod_geometry(t: &crate::tripod::TranslationalTripod) -> crate::Result<Geometry> {
     use crate::mechanism::Mechanism;
-    let g = &t.geometry;
-    let (_, r) = crate::legs::split_pose(&t.home());
+    let g = t.tripod_geometry();
+    let (_, r) = crate::legs::split_pose(&t.info().home());
     let a: [Vector3<f64>; 3] =
         std::array::from_fn(|i| g.struts[i].base - r * (g.struts[i].platform - g.tool));
     let scale = a.iter().map(|v| v.norm()).fold(1.0, f64::max);
@@ -260,8 +260,8 @@ pub(crate) fn tripod_geometry(t: &crate::tripod::TranslationalTripod) -> crate::
     for (what, d) in off {
         if d > tol {
             return Err(crate::Error::Unsupported {
-                machine: t.name().to_string(),
-                kind: t.kind().to_string(),
+                machine: t.info().name().to_string(),
+                kind: t.info().kind().to_string(),
                 analysis: "LinuxCNC export",
                 reason: format!(
                     "tripodkins fixes its world frame on the struts' base points (A at the \

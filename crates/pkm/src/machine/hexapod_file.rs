@@ -10,6 +10,7 @@ use super::source::{Exact, Seg, Source};
 use super::{v3, Model};
 use crate::error::Error;
 use crate::hexapod::{HexStrut, Hexapod, JointCone};
+use crate::mechanism::Mechanism;
 use crate::rotation::Convention;
 
 #[derive(Debug, Deserialize)]
@@ -199,7 +200,7 @@ pub(super) fn build(src: &Source, f: HexapodFile) -> Result<super::Parts, Error>
         h.zero_lengths = Some(Vector6::from(c.zero_lengths));
     }
     // The six struts must fix the platform: a regular Jacobian at home.
-    let (p, r) = crate::legs::split_pose(&h.home);
+    let (p, r) = crate::legs::split_pose(&h.info().home());
     let rc = crate::linalg::rcond1(&h.scaled_twist_jacobian(&p, &r));
     if rc < 1e-9 {
         return Err(src.error(&[key("home")], format!("the hexapod is singular at its home pose (reciprocal condition {rc:.2e}): check the joints")));

@@ -324,8 +324,8 @@ pub(super) fn build(src: &Source, f: HybridAmFile) -> Result<super::Parts, Error
     m.strut_diameter = lim.strut_diameter;
     // The home pose must be an assembly, and not a singular one.
     let home_err = |e: Error| src.error(&[key("home")], format!("not a pose of the machine: {e}"));
-    m.inverse(&m.home).map_err(home_err)?;
-    let rc = 1.0 / m.condition(&m.home).map_err(home_err)?;
+    m.inverse(&m.info().home()).map_err(home_err)?;
+    let rc = 1.0 / m.condition(&m.info().home()).map_err(home_err)?;
     if !(rc >= 1e-9) {
         return Err(src.error(
             &[key("home")],

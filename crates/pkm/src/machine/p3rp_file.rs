@@ -232,7 +232,7 @@ pub(super) fn build(src: &Source, f: P3rpFile) -> Result<super::Parts, Error> {
                 ));
             }
             let m = P3rpHead::new(name, geometry, sliders, head_home);
-            m.inverse(&m.home).map_err(home_err)?;
+            m.inverse(&m.info().home()).map_err(home_err)?;
             Model::P3rpHead(Box::new(m))
         }
         Some(t) => {
@@ -249,7 +249,7 @@ pub(super) fn build(src: &Source, f: P3rpFile) -> Result<super::Parts, Error> {
             );
             let [u, v] = sliders;
             let m = HybridMachine::new(name, geometry, [x, y, u, v], home);
-            m.inverse(&m.home).map_err(home_err)?;
+            m.inverse(&m.info().home()).map_err(home_err)?;
             Model::P3rpHybrid(Box::new(m))
         }
     };

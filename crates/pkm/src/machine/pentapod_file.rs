@@ -193,7 +193,7 @@ pub(super) fn build(src: &Source, f: PentapodFile) -> Result<super::Parts, Error
         m.zero_lengths = Some(nalgebra::SVector::<f64, 5>::from(c.zero_lengths.0));
     }
     // The five struts must fix the tool axis: a regular driven Jacobian at home.
-    let rc = match crate::mechanism::scaled_driven_jacobian(&m, &m.home()) {
+    let rc = match crate::mechanism::scaled_driven_jacobian(&m, &m.info().home()) {
         Ok(j) => crate::linalg::rcond1(&j),
         Err(e) => return Err(src.error(&[key("home")], e.to_string())),
     };

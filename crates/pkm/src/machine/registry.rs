@@ -13,6 +13,7 @@ use super::source::Source;
 use super::{Analysable, Machine, Parts, Visitor};
 use crate::error::{Error, Result};
 use crate::identify::Calibratable;
+use crate::mechanism::Mechanism;
 use crate::tripod::{CentreLegTripod, TranslationalTripod};
 
 /// One machine type as written in a file's `type` field.
@@ -310,8 +311,11 @@ impl Machine {
             }),
             Model::TranslationalTripod(t) => Ok(ControllerModel {
                 geometry: crate::linuxcnc::tripod_geometry(t)?,
-                axes: t.geometry.axes.clone(),
-                zero_lengths: t.geometry.zero_lengths.map(|z| z.iter().copied().collect()),
+                axes: t.tripod_geometry().axes.clone(),
+                zero_lengths: t
+                    .tripod_geometry()
+                    .zero_lengths
+                    .map(|z| z.iter().copied().collect()),
             }),
             _ => {
                 let m = self.mechanism();
@@ -350,7 +354,7 @@ impl Machine {
         let head = self.p3rp_head()?;
         Ok(Machine {
             source: self.source.clone(),
-            name: Some(head.name.clone()),
+            name: Some(head.info().name().to_string()),
             description: None,
             model: Model::P3rpHead(Box::new(head)),
             references: Vec::new(),

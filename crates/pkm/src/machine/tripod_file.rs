@@ -271,8 +271,9 @@ pub(super) fn build(src: &Source, f: TripodFile) -> Result<super::Parts, Error> 
                 },
                 v3(f.home.position),
             );
-            t.geometry.axes = super::axis_limits(src, &lim.axes, t.coordinates())?;
-            if let Err(e) = t.leg_state(&t.home) {
+            let axes = super::axis_limits(src, &lim.axes, t.info().coordinates())?;
+            t.set_axes(axes);
+            if let Err(e) = t.leg_state(&t.info().home()) {
                 return Err(src.error(
                     &[key("home"), key("position")],
                     format!("home is not attainable: {e}"),

@@ -54,11 +54,11 @@ pub fn scale_driven_columns<M, const P: usize, const A: usize>(
 where
     M: Mechanism<P, A> + ?Sized,
 {
-    let d = m.driven();
-    let lc = m.characteristic_length();
+    let d = m.info().driven();
+    let lc = m.info().characteristic_length();
     SMatrix::<f64, A, A>::from_fn(|r, c| {
         let k = d[c];
-        match m.coordinates()[k].quantity {
+        match m.info().coordinates()[k].quantity {
             crate::units::Quantity::Angle => j[(r, k)] / lc,
             crate::units::Quantity::Length => j[(r, k)],
         }
@@ -111,7 +111,7 @@ pub fn newton_forward<M, const P: usize, const A: usize>(
 where
     M: Mechanism<P, A> + ?Sized,
 {
-    let driven = m.driven();
+    let driven = m.info().driven();
     let mut x = *start;
     let mut r = m.inverse(&x)? - q;
     let mut res = max_abs(&r);
@@ -272,9 +272,9 @@ where
     M: Mechanism<P, A> + ?Sized,
 {
     const PRIMES: [usize; 8] = [2, 3, 5, 7, 11, 13, 17, 19];
-    let home = m.home();
-    let span = (2.0 * m.characteristic_length()).max(100.0);
-    let spatial = m.pose_space() == PoseSpace::Spatial && P == 6;
+    let home = m.info().home();
+    let span = (2.0 * m.info().characteristic_length()).max(100.0);
+    let spatial = m.info().pose_space() == PoseSpace::Spatial && P == 6;
     let mut out = vec![home];
     for i in 1..n {
         let u = |k: usize| halton(i, PRIMES[k % PRIMES.len()]) - 0.5;
@@ -300,14 +300,14 @@ where
             x[5] = a[2];
         } else {
             for k in 0..P {
-                x[k] = match m.coordinates()[k].quantity {
+                x[k] = match m.info().coordinates()[k].quantity {
                     crate::units::Quantity::Length => home[k] + 2.0 * span * u(k),
                     crate::units::Quantity::Angle => 2.0 * std::f64::consts::PI * u(k),
                 };
             }
         }
         // Held coordinates are the machine's, not the solver's: they stay at home.
-        let driven = m.driven();
+        let driven = m.info().driven();
         for k in (0..P).filter(|k| !driven.contains(k)) {
             x[k] = home[k];
         }

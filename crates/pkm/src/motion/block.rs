@@ -10,7 +10,7 @@ use super::plan::BLOCK;
 use super::run::{Move, Sample};
 use crate::error::Error;
 use crate::limits::Violation;
-use crate::mechanism::{ActuatorMotion, Mechanism};
+use crate::mechanism::{abilities, ActuatorMotion, Mechanism};
 
 /// Planned instants of a stretch of the run, then their computed samples.
 pub(crate) struct Block<M, const P: usize, const A: usize> {
@@ -100,11 +100,11 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Block<M, P, A> {
 /// at the first failure.
 ///
 /// The poses come first, then the mechanism's block kernel where it has one:
-/// [`Mechanism::motion_screened`] (the hexapod's: the motion of eight samples per
+/// [`crate::mechanism::BlockKernels::motion_screened`] (the hexapod's: the motion of eight samples per
 /// AVX-512 register, with the limit screen) computes the motion of the samples; those
 /// it does not clear of every limit have their limits checked by
 /// [`Mechanism::check_limits`] (a program beyond a limit costs the check, not a second
-/// motion). Else [`Mechanism::inverse_screened`]'s screen clears poses whose motion
+/// motion). Else [`crate::mechanism::BlockKernels::inverse_screened`]'s screen clears poses whose motion
 /// is then [`Mechanism::actuator_motion`] with no violation to look for. The others,
 /// and every sample of a type with neither, go through
 /// [`Mechanism::actuator_motion_checked`]. All give the same motion and violations,
@@ -166,7 +166,8 @@ fn compute_range<M: Mechanism<P, A>, const P: usize, const A: usize>(
         let [q0, q1, q2] = q;
         let (q0, q1, q2) = (&mut q0[..A * n], &mut q1[..A * n], &mut q2[..A * n]);
         // The motion kernel where the type has one, else the inverse's screen.
-        let kernel = m.motion_screened(
+        let kernel = abilities::motion_screened(
+            m,
             [&*x0, &*x1, &*x2],
             [&mut *q0, &mut *q1, &mut *q2],
             clear,
@@ -174,7 +175,7 @@ fn compute_range<M: Mechanism<P, A>, const P: usize, const A: usize>(
         );
         if !kernel {
             computed.fill(false);
-            if !m.inverse_screened(x0, q0, clear, true) {
+            if !abilities::inverse_screened(m, x0, q0, clear, true) {
                 clear.fill(false);
             }
         }

@@ -1,7 +1,7 @@
 //! Carrying the actuator positions on from sample to sample: for a mechanism whose
-//! inverse picks one of several solutions ([`Mechanism::follows`]: a 6R robot's
+//! inverse picks one of several solutions ([`Mechanism::follower`]: a 6R robot's
 //! posture and the whole turns of its joints), each computed sample is continued from
-//! the one before it ([`Mechanism::follow`]), in order, on the recorder's thread,
+//! the one before it ([`crate::mechanism::Follow::follow`]), in order, on the recorder's thread,
 //! before the sample is recorded.
 //!
 //! The blocks are computed independently across the pool, each sample by the type's
@@ -27,10 +27,10 @@ pub(crate) fn follow_block<M: Mechanism<P, A>, const P: usize, const A: usize>(
     b: &mut Block<M, P, A>,
     last: &mut Last<A>,
 ) {
-    if !m.follows() {
-        return;
-    }
     let m = b.tooled.as_deref().unwrap_or(m);
+    let Some(f) = m.follower() else {
+        return;
+    };
     let n = b.failed.as_ref().map_or(b.plan.len(), |f| f.0);
     let mut changed: Vec<u32> = Vec::new();
     for k in 0..n {
@@ -42,7 +42,7 @@ pub(crate) fn follow_block<M: Mechanism<P, A>, const P: usize, const A: usize>(
             None => last.as_ref().map(|(t, a)| (*t, a)),
         };
         if let Some((t, prev)) = prev {
-            if m.follow(&s.x, &s.xd, &s.xdd, s.t - t, prev, &mut s.act) {
+            if f.follow(&s.x, &s.xd, &s.xdd, s.t - t, prev, &mut s.act) {
                 changed.push(k as u32);
             }
         }

@@ -105,8 +105,8 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Planner<'m, M, P, A
             None if length == 0.0 => self.tooled = None,
             None => {
                 return Err(Error::Unsupported {
-                    machine: self.m.name().into(),
-                    kind: self.m.kind().into(),
+                    machine: self.m.info().name().into(),
+                    kind: self.m.info().kind().into(),
                     analysis: "a tool length from the program (G43)",
                     reason: "its tool is set in the machine file".into(),
                 })
@@ -143,10 +143,10 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Planner<'m, M, P, A
 
     /// Refuses a move that changes a coordinate the mechanism holds constant.
     fn check_driven(&self, mv: &Move<P>) -> Result<()> {
-        let driven = self.m.driven();
+        let driven = self.m.info().driven();
         for k in 0..P {
             if !driven.contains(&k) && (mv.segment.end[k] - mv.segment.start[k]).abs() > 1e-12 {
-                let c = &self.m.coordinates()[k];
+                let c = &self.m.info().coordinates()[k];
                 return Err(Error::NotAttainable {
                     reason: format!(
                         "{}the move changes {} from {:.4} to {:.4} {}, which the mechanism holds constant",

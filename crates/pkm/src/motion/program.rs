@@ -73,7 +73,7 @@ pub fn to_move<M: Mechanism<P, A>, const P: usize, const A: usize>(
     g: &GMove,
     o: &FeedOptions,
 ) -> Result<Move<P>> {
-    let space = m.pose_space();
+    let space = m.info().pose_space();
     let start = from_spatial(m, &g.start)?;
     let end = from_spatial(m, &g.end)?;
     if space == PoseSpace::Position && (3..6).any(|k| (g.end[k] - g.start[k]).abs() > 1e-12) {

@@ -70,20 +70,21 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'m, M, P, 
             spare_open: Vec::new(),
             dropped: 0,
             buf: Vec::new(),
-            act_scale: std::array::from_fn(|i| m.actuators()[i].quantity.user_scale()),
+            act_scale: std::array::from_fn(|i| m.info().actuators()[i].quantity.user_scale()),
             serial_scale: std::array::from_fn(|j| {
                 serial_idx
                     .get(j)
-                    .map_or(0.0, |&k| m.coordinates()[k].quantity.user_scale())
+                    .map_or(0.0, |&k| m.info().coordinates()[k].quantity.user_scale())
             }),
             rate_limits: std::array::from_fn(|i| {
-                let a = &m.actuators()[i];
+                let a = &m.info().actuators()[i];
                 (
                     a.max_velocity.unwrap_or(f64::INFINITY),
                     a.max_acceleration.unwrap_or(f64::INFINITY),
                 )
             }),
             rate_names: m
+                .info()
                 .actuators()
                 .iter()
                 .map(|a| {
@@ -93,7 +94,7 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'m, M, P, 
                 .collect(),
             peak_rates: [(0.0, 0.0); A],
             serial_idx,
-            singular: SingularTracker::new(m.actuators(), DEFAULT_SINGULAR_ANGLE)?,
+            singular: SingularTracker::new(m.info().actuators(), DEFAULT_SINGULAR_ANGLE)?,
             last: None,
         })
     }
@@ -195,7 +196,7 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
         // axis at its rapid rate whatever the direction: what a passage costs is the
         // feed moves'.
         if !rapid {
-            if let Some(d) = self.m.singular_distance(x) {
+            if let Some(d) = self.m.tool_axis().and_then(|t| t.singular_distance(x)) {
                 self.singular.add(t, s.line, d, act.qd.as_slice());
             }
         }
@@ -205,7 +206,7 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
     /// The violation of actuator `i`'s velocity (`order` 1) or acceleration (2) limit
     /// by `value` (internal units).
     fn rate_violation(&self, i: usize, order: u8, value: f64) -> Violation {
-        let a = &self.m.actuators()[i];
+        let a = &self.m.info().actuators()[i];
         let (kind, bound) = match order {
             1 => (LimitKind::ActuatorVelocity, self.rate_limits[i].0),
             _ => (LimitKind::ActuatorAcceleration, self.rate_limits[i].1),
@@ -284,17 +285,24 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
         let serial: Vec<AxisStats> = (0..self.serial_idx.len())
             .map(|j| self.serial.axis(j))
             .collect();
-        let coords = self.m.coordinates();
+        let coords = self.m.info().coordinates();
         let serial_q: Vec<Quantity> = self
             .serial_idx
             .iter()
             .map(|&k| coords[k].quantity)
             .collect();
-        let act_q: Vec<Quantity> = self.m.actuators().iter().map(|a| a.quantity).collect();
+        let act_q: Vec<Quantity> = self
+            .m
+            .info()
+            .actuators()
+            .iter()
+            .map(|a| a.quantity)
+            .collect();
         let ratios = ratios(&serial, &serial_q, &act, &act_q);
         MotionSummary {
             actuators: self
                 .m
+                .info()
                 .actuators()
                 .iter()
                 .map(|a| a.name.clone())

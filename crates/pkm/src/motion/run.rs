@@ -139,7 +139,7 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
             }
             _ => {}
         }
-        let serial_idx: Vec<usize> = match m.pose_space() {
+        let serial_idx: Vec<usize> = match m.info().pose_space() {
             PoseSpace::Own => (0..P).collect(),
             _ => (0..3).collect(),
         };
@@ -156,7 +156,7 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
         self.rec
             .serial_idx
             .iter()
-            .map(|&k| m.coordinates()[k].name.clone())
+            .map(|&k| m.info().coordinates()[k].name.clone())
             .collect()
     }
 
@@ -169,7 +169,7 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
     /// Sets the threshold (rad, 0 to pi/2) of a passage near the singular direction
     /// ([`SingularTracker`]); default [`super::singular::DEFAULT_SINGULAR_ANGLE`].
     pub fn set_singular_angle(&mut self, angle: f64) -> Result<()> {
-        self.rec.singular = SingularTracker::new(self.rec.m.actuators(), angle)?;
+        self.rec.singular = SingularTracker::new(self.rec.m.info().actuators(), angle)?;
         Ok(())
     }
 
@@ -226,10 +226,10 @@ fn gcode_slot<M: Mechanism<P, A>, const P: usize, const A: usize>(
     m: &M,
     k: usize,
 ) -> Option<usize> {
-    match (m.pose_space(), P) {
+    match (m.info().pose_space(), P) {
         (PoseSpace::Spatial, 6) | (PoseSpace::Position, 3) => Some(k),
         (PoseSpace::Tcp, _) if k < 3 => Some(k),
-        (PoseSpace::Tcp, _) => match m.coordinates()[k].name.as_str() {
+        (PoseSpace::Tcp, _) => match m.info().coordinates()[k].name.as_str() {
             "A" => Some(3),
             "B" => Some(4),
             "C" => Some(5),
@@ -253,10 +253,10 @@ pub fn from_spatial<M: Mechanism<P, A>, const P: usize, const A: usize>(
             None => {
                 return Err(Error::InvalidInput {
                     what: "tool path".into(),
-                    message: match m.pose_space() {
+                    message: match m.info().pose_space() {
                         PoseSpace::Tcp => format!(
                             "the rotary axis `{}` has no G-code letter (A, B or C)",
-                            m.coordinates()[k].name
+                            m.info().coordinates()[k].name
                         ),
                         _ => "this machine's pose is not X, Y, Z[, A, B, C]; give moves in its \
                               own coordinates"
@@ -287,7 +287,7 @@ pub fn to_spatial<M: Mechanism<P, A>, const P: usize, const A: usize>(
 /// G-code letters a TCP machine has no axis for (`A` on an XYZBC machine), by index
 /// 3..6 of the G-code position: a move that changes one is refused.
 pub fn missing_letters<M: Mechanism<P, A>, const P: usize, const A: usize>(m: &M) -> Vec<usize> {
-    if m.pose_space() != PoseSpace::Tcp {
+    if m.info().pose_space() != PoseSpace::Tcp {
         return Vec::new();
     }
     (3..6)
@@ -297,5 +297,5 @@ pub fn missing_letters<M: Mechanism<P, A>, const P: usize, const A: usize>(m: &M
 
 /// Quantities of the coordinates, for [`Segment::line`].
 pub fn quantities<M: Mechanism<P, A>, const P: usize, const A: usize>(m: &M) -> [Quantity; P] {
-    std::array::from_fn(|k| m.coordinates()[k].quantity)
+    std::array::from_fn(|k| m.info().coordinates()[k].quantity)
 }

@@ -1,5 +1,5 @@
 //! Passages of a path near a mechanism's singular direction
-//! ([`crate::mechanism::Mechanism::singular_distance`]): on a 5-axis machine, where the
+//! ([`crate::mechanism::ToolAxis::singular_distance`]): on a 5-axis machine, where the
 //! tool axis comes close to the rotary axis nearer the part (a trt table's C axis at
 //! B = 0), a small change of the tool axis needs a large turn of that axis, and the
 //! rotary axes speed up. Each passage within the threshold angle is reported with its

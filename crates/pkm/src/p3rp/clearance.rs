@@ -110,11 +110,11 @@ impl Rebuild<2, 2> for super::P3rpHead {
         head_parameters()
     }
     fn geometry_values(&self) -> Vec<f64> {
-        head_values(&self.geometry)
+        head_values(self.geometry())
     }
     fn with_geometry_values(&self, v: &[f64]) -> Result<Self> {
         let mut h = self.clone();
-        h.geometry = head_with(&self.geometry, v)?;
+        h.set_geometry(head_with(self.geometry(), v)?);
         Ok(h)
     }
     fn passive_joints(&self) -> Vec<PassiveJoint> {
@@ -128,11 +128,11 @@ impl Rebuild<6, 4> for super::HybridMachine {
         head_parameters()
     }
     fn geometry_values(&self) -> Vec<f64> {
-        head_values(&self.head)
+        head_values(self.head())
     }
     fn with_geometry_values(&self, v: &[f64]) -> Result<Self> {
         let mut h = self.clone();
-        h.head = head_with(&self.head, v)?;
+        h.set_head(head_with(self.head(), v)?);
         Ok(h)
     }
     fn passive_joints(&self) -> Vec<PassiveJoint> {

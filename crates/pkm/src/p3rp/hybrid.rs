@@ -6,7 +6,7 @@ use super::head::{head_motion, head_skeleton, HeadGeometry};
 use crate::error::{Error, Result};
 use crate::limits::{LimitKind, PositionLimits, Range, Violation};
 use crate::mechanism::{
-    spatial_coordinates, Actuator, ActuatorMotion, Coordinate, Forward, LinkKind, Mechanism,
+    spatial_coordinates, Actuator, ActuatorMotion, Forward, LinkKind, Mechanism, MechanismInfo,
     PointRole, PoseSpace, Skeleton,
 };
 use crate::pose::{rotation_matrix, Pose};
@@ -34,14 +34,11 @@ use crate::units::Quantity;
 /// compensate.
 #[derive(Debug, Clone, PartialEq)]
 pub struct HybridMachine {
-    /// Machine name.
-    pub name: String,
     /// The head's geometry and limits.
-    pub head: HeadGeometry,
-    /// Home pose X, Y, Z, A, B, C (B = C = 0).
-    pub home: Vector6<f64>,
-    actuators: [Actuator; 4],
-    coordinates: [Coordinate; 6],
+    head: HeadGeometry,
+    /// Name, coordinates, the table axes and sliders, home pose X, Y, Z, A, B, C
+    /// (B = C = 0), characteristic length (the head's `l1`).
+    info: MechanismInfo<6, 4>,
     /// The table axes' and sliders' position limits, named once.
     position_limits: PositionLimits,
 }
@@ -54,27 +51,49 @@ impl HybridMachine {
         actuators: [Actuator; 4],
         home: Vector6<f64>,
     ) -> Self {
+        let l1 = head.l1;
         HybridMachine {
-            name,
             head,
-            home,
             position_limits: PositionLimits::from_fn(&actuators, |i, a| {
                 let what = if i < 2 { "table axis" } else { "slider" };
                 format!("{what} {} position", a.name)
             }),
-            actuators,
-            coordinates: spatial_coordinates(),
+            info: MechanismInfo::new(
+                name,
+                "p3rp/hybrid",
+                spatial_coordinates(),
+                actuators,
+                PoseSpace::Spatial,
+                home,
+            )
+            .with_characteristic_length(l1)
+            .with_forward_closed_form(),
         }
+    }
+
+    /// The head's geometry and limits.
+    pub fn head(&self) -> &HeadGeometry {
+        &self.head
+    }
+
+    /// Replaces the head's geometry (names, actuators and home kept); the
+    /// characteristic length follows it.
+    pub fn set_head(&mut self, head: HeadGeometry) {
+        self.info.set_characteristic_length(head.l1);
+        self.head = head;
     }
 
     /// The head alone (pose `(z, theta)` of its output point, sliders U and V), at the
     /// home pose's head configuration: for the head's own analyses (seed 004's maps).
     pub fn head_mechanism(&self) -> super::P3rpHead {
         super::P3rpHead::new(
-            format!("{} (head)", self.name),
+            format!("{} (head)", self.info.name()),
             self.head.clone(),
-            [self.actuators[2].clone(), self.actuators[3].clone()],
-            self.head_pose(&self.home),
+            [
+                self.info.actuators()[2].clone(),
+                self.info.actuators()[3].clone(),
+            ],
+            self.head_pose(&self.info.home()),
         )
     }
 
@@ -85,32 +104,8 @@ impl HybridMachine {
 }
 
 impl Mechanism<6, 4> for HybridMachine {
-    fn name(&self) -> &str {
-        &self.name
-    }
-
-    fn kind(&self) -> &'static str {
-        "p3rp/hybrid"
-    }
-
-    fn coordinates(&self) -> &[Coordinate; 6] {
-        &self.coordinates
-    }
-
-    fn actuators(&self) -> &[Actuator; 4] {
-        &self.actuators
-    }
-
-    fn driven(&self) -> [usize; 4] {
-        [0, 1, 2, 3]
-    }
-
-    fn pose_space(&self) -> PoseSpace {
-        PoseSpace::Spatial
-    }
-
-    fn home(&self) -> Vector6<f64> {
-        self.home
+    fn info(&self) -> &MechanismInfo<6, 4> {
+        &self.info
     }
 
     fn inverse(&self, x: &Vector6<f64>) -> Result<Vector4<f64>> {
@@ -139,10 +134,6 @@ impl Mechanism<6, 4> for HybridMachine {
         j[(3, 2)] = 1.0;
         j[(3, 3)] = dg - l * s;
         Ok(j)
-    }
-
-    fn forward_closed_form(&self) -> bool {
-        true
     }
 
     /// Closed form: the head's forward solution on the branch of `start`, then the
@@ -184,7 +175,7 @@ impl Mechanism<6, 4> for HybridMachine {
             }
             a
         } else {
-            self.home[3]
+            self.info.home()[3]
         };
         Ok(Vector6::new(p.x, p.y, p.z, a, 0.0, 0.0))
     }
@@ -193,7 +184,7 @@ impl Mechanism<6, 4> for HybridMachine {
         // The table axes and the sliders, then the head's joints (the order of
         // `HeadGeometry::check_limits` after the table's).
         self.position_limits
-            .check(&self.actuators, q.as_slice(), out);
+            .check(self.info.actuators(), q.as_slice(), out);
         self.head.check_joint_limits(x[3], out);
         for (k, n) in [(4, "B"), (5, "C")] {
             Range { min: 0.0, max: 0.0 }.check(
@@ -209,7 +200,7 @@ impl Mechanism<6, 4> for HybridMachine {
     fn skeleton(&self, x: &Vector6<f64>) -> Result<Skeleton> {
         let q = self.inverse(x)?;
         let h = self.head_pose(x);
-        let mut s = head_skeleton(&self.head, &self.actuators[2..], h[0], h[1])?;
+        let mut s = head_skeleton(&self.head, &self.info.actuators()[2..], h[0], h[1])?;
         let o = s.point(
             "O (spindle axis on the table)",
             PointRole::Other,
@@ -222,11 +213,6 @@ impl Mechanism<6, 4> for HybridMachine {
         );
         s.link("table", LinkKind::Base, o, part);
         Ok(s)
-    }
-
-    /// The head's crank length `l1`.
-    fn characteristic_length(&self) -> f64 {
-        self.head.l1
     }
 
     fn actuator_motion(

@@ -53,7 +53,7 @@ fn row(
 /// The range of z over which pose `(z, theta)` is within every limit, scanning `z`
 /// across the U stroke (widened by 50 mm) in steps of `step` mm; `None` when empty.
 pub fn z_range(h: &P3rpHead, theta: f64, step: f64) -> Option<[f64; 2]> {
-    let r = h.actuators()[0].range;
+    let r = h.info().actuators()[0].range;
     let n = ((r.max - r.min + 100.0) / step).ceil() as usize;
     let mut v = Vec::new();
     let (mut lo, mut hi) = (f64::NAN, f64::NAN);
@@ -76,7 +76,7 @@ pub fn z_range(h: &P3rpHead, theta: f64, step: f64) -> Option<[f64; 2]> {
 /// The deflection of the singular configuration Q (rod stretched along the crank)
 /// beyond `from` rad, by bisection on the transmission angle; `None` if none up to pi.
 pub fn singular_theta(h: &P3rpHead, from: f64) -> Option<f64> {
-    let g = &h.geometry;
+    let g = &h.geometry();
     let f = |t: f64| g.transmission_angle(t).ok();
     let (mut a, mut b) = (from, std::f64::consts::PI);
     let fa = f(a)?;
@@ -145,7 +145,7 @@ pub fn reproduction(h: &P3rpHead) -> Result<Vec<Reproduced>> {
         let Some(d) = z_range(h, theta, 0.01) else {
             continue;
         };
-        let g = h.geometry.separation(theta)?.g;
+        let g = h.geometry().separation(theta)?.g;
         out.push(row(
             &format!("slider D range at {label} (fig. 4)"),
             d_paper.to_vec(),
@@ -165,7 +165,7 @@ pub fn reproduction(h: &P3rpHead) -> Result<Vec<Reproduced>> {
         out.push(row(
             &format!("slider separation g({label}) = z2 - z1"),
             vec![paper],
-            vec![h.geometry.separation(theta)?.g],
+            vec![h.geometry().separation(theta)?.g],
             "mm",
             Some("From the fig. 4 ranges (E - D at either end)."),
         ));

@@ -11,7 +11,6 @@ use crate::accuracy::rebuild::{
 };
 use crate::accuracy::{Parameter, ParameterKind, Rebuild};
 use crate::error::{Error, Result};
-use crate::mechanism::Mechanism;
 use crate::units::Quantity;
 
 /// 15 base joint coordinates, 5 ring radii, 5 ring heights, the tool length.
@@ -106,12 +105,14 @@ impl Rebuild<6, 5> for Pentapod {
             s.ring_height = v[HEIGHT + i];
         }
         target.tool = v[TOOL];
-        target.characteristic_length = super::characteristic_length(&target.struts, target.tool);
+        target
+            .info
+            .set_characteristic_length(super::characteristic_length(&target.struts, target.tool));
         Ok(())
     }
 
     fn drive_parameter(&self, k: usize) -> Parameter {
-        zero_length_parameter(&self.actuators()[k].name)
+        zero_length_parameter(&self.info.actuators()[k].name)
     }
 
     /// The base joints (a name several struts use is one joint).

@@ -30,7 +30,7 @@ use crate::hexapod::{strut_interference, JointCone};
 use crate::legs::split_pose;
 use crate::limits::{AxisLimits, PositionLimits, Violation};
 use crate::mechanism::{
-    spatial_coordinates, Actuator, ActuatorMotion, Coordinate, LinkKind, Mechanism, PointRole,
+    spatial_coordinates, Actuator, ActuatorMotion, LinkKind, Mechanism, MechanismInfo, PointRole,
     PoseSpace, Skeleton,
 };
 use crate::pose::Pose;
@@ -56,8 +56,6 @@ pub struct PentaStrut {
 /// A pentapod machine (see the module documentation).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Pentapod {
-    /// Machine name.
-    pub name: String,
     /// The five struts.
     pub struts: [PentaStrut; 5],
     /// Tool tip height `t` along the tool axis above the effector origin (mm).
@@ -66,16 +64,12 @@ pub struct Pentapod {
     pub strut_diameter: Option<f64>,
     /// Soft limits of the pose coordinates (LinuxCNC's `[AXIS_n]`).
     pub axes: AxisLimits,
-    /// Home pose (X, Y, Z mm; A, B, C rad).
-    pub home: Vector6<f64>,
     /// Strut lengths at the control's zero readings (`[calibration] zero_lengths`,
     /// written by `pkm calibrate`); `None`: the lengths at home.
     pub zero_lengths: Option<SVector<f64, 5>>,
-    /// Length that scales rotations against translations in conditioning (mm): the
-    /// mean distance of the ring joints from the tool tip.
-    pub characteristic_length: f64,
-    actuators: [Actuator; 5],
-    coordinates: [Coordinate; 6],
+    /// Name, coordinates, actuators, home pose, characteristic length (the mean
+    /// distance of the ring joints from the tool tip), the free spin.
+    info: MechanismInfo<6, 5>,
     /// The struts' length limits, named once (`strut 1 length`).
     position_limits: PositionLimits,
 }
@@ -122,17 +116,22 @@ impl Pentapod {
         let actuators = std::array::from_fn(|i| struts[i].actuator.clone());
         let characteristic_length = characteristic_length(&struts, tool);
         Pentapod {
-            name,
+            position_limits: PositionLimits::strut_lengths(&actuators),
+            info: MechanismInfo::new(
+                name,
+                "pentapod",
+                spatial_coordinates(),
+                actuators,
+                PoseSpace::Spatial,
+                home,
+            )
+            .with_characteristic_length(characteristic_length)
+            .with_free_spin(),
             struts,
             tool,
             strut_diameter,
             axes,
-            home,
             zero_lengths: None,
-            characteristic_length,
-            position_limits: PositionLimits::strut_lengths(&actuators),
-            actuators,
-            coordinates: spatial_coordinates(),
         }
     }
 
@@ -140,7 +139,7 @@ impl Pentapod {
     /// of home: `Rz(C) Ry(B) Rx(A) e_z = k` gives, with `k' = Rz(-C) k`,
     /// `A = atan2(-k'_y, sqrt(k'_x^2 + k'_z^2))`, `B = atan2(k'_x, k'_z)`.
     pub fn coords_from_axis(&self, p: &Vector3<f64>, k: &Vector3<f64>) -> Vector6<f64> {
-        let c = self.home[5];
+        let c = self.info.home()[5];
         let kk = crate::rotation::rz(-c) * k;
         let (a, b) = ((-kk.y).atan2(kk.x.hypot(kk.z)), kk.x.atan2(kk.z));
         Vector6::new(p.x, p.y, p.z, a, b, c)
@@ -236,37 +235,8 @@ fn characteristic_length(struts: &[PentaStrut; 5], tool: f64) -> f64 {
 }
 
 impl Mechanism<6, 5> for Pentapod {
-    fn name(&self) -> &str {
-        &self.name
-    }
-
-    fn kind(&self) -> &'static str {
-        "pentapod"
-    }
-
-    fn coordinates(&self) -> &[Coordinate; 6] {
-        &self.coordinates
-    }
-
-    fn actuators(&self) -> &[Actuator; 5] {
-        &self.actuators
-    }
-
-    fn driven(&self) -> [usize; 5] {
-        [0, 1, 2, 3, 4]
-    }
-
-    /// The rings turn: the spin about the tool axis is free.
-    fn free_spin(&self) -> bool {
-        true
-    }
-
-    fn pose_space(&self) -> PoseSpace {
-        PoseSpace::Spatial
-    }
-
-    fn home(&self) -> Vector6<f64> {
-        self.home
+    fn info(&self) -> &MechanismInfo<6, 5> {
+        &self.info
     }
 
     /// `L_i = sqrt((s_z - z_i)^2 + (|s_xy| - r_i)^2)`, `s = R^T (b_i - O)` (pentakins.c
@@ -294,7 +264,7 @@ impl Mechanism<6, 5> for Pentapod {
             q,
             start,
             &crate::mechanism::NewtonOptions::default(),
-            0.1 * self.characteristic_length,
+            0.1 * self.info.characteristic_length(),
         )
     }
 
@@ -335,19 +305,19 @@ impl Mechanism<6, 5> for Pentapod {
             p.x,
             p.y,
             p.z,
-            self.home[3],
-            self.home[4],
-            self.home[5],
+            self.info.home()[3],
+            self.info.home()[4],
+            self.info.home()[5],
         ))
     }
 
     fn check_limits(&self, x: &Vector6<f64>, q: &SVector<f64, 5>, out: &mut Vec<Violation>) {
-        self.axes.check(&self.coordinates, x, out);
+        self.axes.check(self.info.coordinates(), x, out);
         let joints = self.ring_joints(x);
         for i in 0..5 {
             let s = &self.struts[i];
             self.position_limits
-                .check_one(i, &self.actuators[i], q[i], out);
+                .check_one(i, &self.info.actuators()[i], q[i], out);
             if let Some(c) = &s.base_cone {
                 let d = joints[i] - s.base;
                 let cos = if d.norm() > 0.0 {
@@ -425,10 +395,6 @@ impl Mechanism<6, 5> for Pentapod {
         };
         s.link("tool", LinkKind::Tool, from, t);
         Ok(s)
-    }
-
-    fn characteristic_length(&self) -> f64 {
-        self.characteristic_length
     }
 
     /// `s' = -R^T (O' + w x (b - O))`,

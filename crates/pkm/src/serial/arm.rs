@@ -23,8 +23,8 @@ use super::PreparedChain;
 use crate::error::{Error, Result};
 use crate::limits::{PositionLimits, Violation};
 use crate::mechanism::{
-    spatial_coordinates, Actuator, ActuatorMotion, Coordinate, Forward, Mechanism, PoseSpace,
-    Skeleton,
+    spatial_coordinates, Actuator, ActuatorMotion, ConditionBatch, Follow, Forward, Mechanism,
+    MechanismInfo, PoseSpace, Skeleton,
 };
 use crate::pose::Pose;
 use crate::rotation::{rpy_angular_motion, rpy_rate_matrix, Convention};
@@ -37,19 +37,18 @@ pub(super) type Postures = [Vector6<f64>; 8];
 #[derive(Debug, Clone, PartialEq)]
 pub struct SerialArm {
     /// The chains and their geometry.
-    pub machine: SerialMachine,
+    machine: SerialMachine,
     /// Home joint values (rad, mm).
-    pub home_joints: Vector6<f64>,
-    home: Vector6<f64>,
+    home_joints: Vector6<f64>,
+    /// Name, tool-pose coordinates, joints as actuators, home pose, characteristic
+    /// length (the tool's distance from the first joint at home), the inverse's method.
+    info: MechanismInfo<6, 6>,
     tool: PreparedChain,
     /// The fixed workpiece frame's inverse (identity without a workpiece chain).
     part_inverse: Matrix4<f64>,
-    coordinates: [Coordinate; 6],
-    actuators: [Actuator; 6],
     /// The joints' position limits by name (`joint A4 position`), named once: a
     /// motion beyond one clones the name per sample.
     position_limits: PositionLimits,
-    characteristic_length: f64,
     /// Links whose angular deviations are completed from a triple (accuracy engine).
     pub(crate) completions: Vec<crate::accuracy::LinkCompletion>,
     /// The base origin in the part frame and an upper bound of the tool's distance from
@@ -93,16 +92,21 @@ impl SerialArm {
         let position_limits = PositionLimits::new("joint", &actuators);
         let tool = PreparedChain::new(&machine.tool, &[], &[]);
         let mut arm = SerialArm {
+            info: MechanismInfo::new(
+                machine.name.clone(),
+                "serial",
+                spatial_coordinates(),
+                actuators,
+                PoseSpace::Spatial,
+                Vector6::zeros(),
+            )
+            .with_forward_closed_form(),
             machine,
             home_joints: home,
-            home: Vector6::zeros(),
             tool,
             part_inverse,
-            coordinates: spatial_coordinates(),
-            actuators,
             position_limits,
             completions: Vec::new(),
-            characteristic_length: 1.0,
             base_origin: Vector3::zeros(),
             reach: f64::INFINITY,
             wrist: None,
@@ -127,16 +131,38 @@ impl SerialArm {
                 l.translation.norm() + travel
             })
             .sum::<f64>();
-        arm.home = arm.coords_of_joints(&home);
+        let home_pose = arm.coords_of_joints(&home);
+        arm.info.set_home(home_pose);
         // The reach at home (distance of the tool from the first joint's axis origin)
         // weighs a radian against millimetres.
         let (t, _) = arm.pose_and_jacobian(&home);
-        arm.characteristic_length = Vector3::new(t[(0, 3)], t[(1, 3)], t[(2, 3)])
+        let lc = Vector3::new(t[(0, 3)], t[(1, 3)], t[(2, 3)])
             .norm()
             .max(1.0);
-        arm.wrist =
-            closed_form::ClosedForm::detect(&arm.tool, &part_inverse, arm.characteristic_length);
+        arm.wrist = closed_form::ClosedForm::detect(&arm.tool, &part_inverse, lc);
+        arm.info = arm
+            .info
+            .with_characteristic_length(lc)
+            .with_inverse_method(match &arm.wrist {
+                Some(closed_form::ClosedForm::Spherical(_)) => {
+                    "closed form (spherical wrist, axes 2 and 3 parallel)"
+                }
+                Some(closed_form::ClosedForm::ParallelAxes(_)) => {
+                    "closed form (axes 2, 3, 4 parallel, axes 5 and 6 meeting)"
+                }
+                None => "numeric (Newton on SE(3) from the start, 32 spread restarts)",
+            });
         Ok(arm)
+    }
+
+    /// The chains and their geometry.
+    pub fn machine(&self) -> &SerialMachine {
+        &self.machine
+    }
+
+    /// Home joint values (rad, mm).
+    pub fn home_joints(&self) -> Vector6<f64> {
+        self.home_joints
     }
 
     /// Whether inverse kinematics is in closed form: a spherical wrist and parallel
@@ -202,7 +228,7 @@ impl SerialArm {
     /// Revolute joints shifted by whole turns to lie within half a turn of `near`.
     fn wrap(&self, mut q: Vector6<f64>, near: &Vector6<f64>) -> Vector6<f64> {
         use std::f64::consts::TAU;
-        for (i, a) in self.actuators.iter().enumerate() {
+        for (i, a) in self.info.actuators().iter().enumerate() {
             if a.quantity == Quantity::Angle {
                 q[i] -= TAU * crate::rotation::whole_turns(q[i] - near[i]);
             }
@@ -237,7 +263,7 @@ impl SerialArm {
     }
 
     fn inverse_geometric(&self, j: &Matrix6<f64>) -> Result<Matrix6<f64>> {
-        let lc = self.characteristic_length;
+        let lc = self.info.characteristic_length();
         let mut js = *j;
         for r in 3..6 {
             js.row_mut(r).scale_mut(lc);
@@ -270,32 +296,8 @@ fn coords_of(t: &Matrix4<f64>) -> Vector6<f64> {
 }
 
 impl Mechanism<6, 6> for SerialArm {
-    fn name(&self) -> &str {
-        &self.machine.name
-    }
-
-    fn kind(&self) -> &'static str {
-        "serial"
-    }
-
-    fn coordinates(&self) -> &[Coordinate; 6] {
-        &self.coordinates
-    }
-
-    fn actuators(&self) -> &[Actuator; 6] {
-        &self.actuators
-    }
-
-    fn driven(&self) -> [usize; 6] {
-        [0, 1, 2, 3, 4, 5]
-    }
-
-    fn pose_space(&self) -> PoseSpace {
-        PoseSpace::Spatial
-    }
-
-    fn home(&self) -> Vector6<f64> {
-        self.home
+    fn info(&self) -> &MechanismInfo<6, 6> {
+        &self.info
     }
 
     /// Numeric inverse kinematics from the home joint values
@@ -344,7 +346,7 @@ impl Mechanism<6, 6> for SerialArm {
     /// infinite at a singular configuration (a robot's stretched zero pose often is).
     /// The eigenvalues of `K^T K` (`K` the scaled `dq/dx`) by the kernel a map uses for
     /// eight poses at once ([`crate::linalg::gram_condition`]), so a pose gets the same
-    /// value here as in [`Mechanism::conditions`].
+    /// value here as in [`ConditionBatch::conditions`].
     fn condition_at(&self, x: &Vector6<f64>, q: &Vector6<f64>) -> Result<f64> {
         Ok(match self.condition_gram(x, q)? {
             Some(g) => crate::linalg::gram_condition(&g),
@@ -352,58 +354,10 @@ impl Mechanism<6, 6> for SerialArm {
         })
     }
 
-    /// Eight poses per call of the lanes' eigenvalue kernel, each equal to
-    /// [`Mechanism::condition_at`] (or [`Mechanism::condition`] without `qs`).
-    fn conditions(&self, xs: &[Vector6<f64>], qs: &[Vector6<f64>], out: &mut [f64]) {
-        assert!(
-            out.len() == xs.len() && (qs.is_empty() || qs.len() == xs.len()),
-            "one condition number per pose"
-        );
-        let grams: Vec<Result<Option<Matrix6<f64>>>> = xs
-            .iter()
-            .enumerate()
-            .map(|(i, x)| match qs.get(i) {
-                Some(q) => self.condition_gram(x, q),
-                None => self.inverse(x).and_then(|q| self.condition_gram(x, &q)),
-            })
-            .collect();
-        crate::linalg::gram_conditions_by(
-            |k| match &grams[k] {
-                Ok(Some(g)) => *g,
-                // A stand-in (lanes do not interact); its value is replaced below.
-                _ => Matrix6::identity(),
-            },
-            out,
-        );
-        for (o, g) in out.iter_mut().zip(&grams) {
-            match g {
-                Ok(Some(_)) => {}
-                Ok(None) => *o = f64::INFINITY,
-                Err(_) => *o = f64::NAN,
-            }
-        }
-    }
-
     /// [`Mechanism::condition_at`] at the joints of `x`'s inverse solution.
     fn condition(&self, x: &Vector6<f64>) -> Result<f64> {
         let q = self.inverse(x)?;
         self.condition_at(x, &q)
-    }
-
-    fn inverse_method(&self) -> &'static str {
-        match &self.wrist {
-            Some(closed_form::ClosedForm::Spherical(_)) => {
-                "closed form (spherical wrist, axes 2 and 3 parallel)"
-            }
-            Some(closed_form::ClosedForm::ParallelAxes(_)) => {
-                "closed form (axes 2, 3, 4 parallel, axes 5 and 6 meeting)"
-            }
-            None => "numeric (Newton on SE(3) from the start, 32 spread restarts)",
-        }
-    }
-
-    fn forward_closed_form(&self) -> bool {
-        true
     }
 
     /// Closed form: the chain's pose at `q` (`start` is not needed).
@@ -423,13 +377,13 @@ impl Mechanism<6, 6> for SerialArm {
         Ok(crate::legs::spatial_coords_from_pose(
             pose,
             orientation_given,
-            &self.home,
+            &self.info.home(),
         ))
     }
 
     fn check_limits(&self, _x: &Vector6<f64>, q: &Vector6<f64>, out: &mut Vec<Violation>) {
         self.position_limits
-            .check(&self.actuators, q.as_slice(), out);
+            .check(self.info.actuators(), q.as_slice(), out);
     }
 
     fn skeleton(&self, x: &Vector6<f64>) -> Result<Skeleton> {
@@ -437,14 +391,20 @@ impl Mechanism<6, 6> for SerialArm {
         chain_skeleton(&self.machine, q.as_slice(), &[])
     }
 
-    fn characteristic_length(&self) -> f64 {
-        self.characteristic_length
-    }
-
     /// At the inverse solution nearest the home joints ([`Mechanism::inverse`]):
     /// `q' = J^-1 [v; w]`, `q'' = J^-1 ([a; al] - J' q')` with `J' q'` exact from the
     /// chain's axes (one pass along the chain). A motion carries the posture on from
-    /// sample to sample ([`Mechanism::follow`]).
+    /// sample to sample ([`crate::mechanism::Follow::follow`]).
+    fn condition_batch(&self) -> Option<&dyn ConditionBatch<6, 6>> {
+        Some(self)
+    }
+
+    /// A posture is one of up to eight inverse solutions, and each revolute joint's
+    /// position is defined up to whole turns: a motion carries both on.
+    fn follower(&self) -> Option<&dyn Follow<6, 6>> {
+        Some(self)
+    }
+
     fn actuator_motion(
         &self,
         x: &Vector6<f64>,
@@ -452,30 +412,6 @@ impl Mechanism<6, 6> for SerialArm {
         xdd: &Vector6<f64>,
     ) -> Result<ActuatorMotion<6>> {
         self.motion_at(self.inverse(x)?, x, xd, xdd)
-    }
-
-    /// A posture is one of up to eight inverse solutions, and each revolute joint's
-    /// position is defined up to whole turns: a motion carries both on.
-    fn follows(&self) -> bool {
-        true
-    }
-
-    /// The solution continuing `prev`: each revolute joint shifted by whole turns to
-    /// within half a turn of `prev`; then, when a joint still moved more than the two
-    /// samples' rates explain (`|q - q_prev| > r = 2 dt max|q'| + dt^2 max|q''| +
-    /// 1e-9`: another posture) or the rates cannot tell (`r > 0.25` rad: coarse
-    /// samples), the inverse solved again from `prev` (closed form: the posture
-    /// nearest `prev`; else Newton from `prev`) and taken when nearer `prev`.
-    fn follow(
-        &self,
-        x: &Vector6<f64>,
-        xd: &Vector6<f64>,
-        xdd: &Vector6<f64>,
-        dt: f64,
-        prev: &ActuatorMotion<6>,
-        act: &mut ActuatorMotion<6>,
-    ) -> bool {
-        self.continue_motion(x, xd, xdd, dt, prev, act)
     }
 }
 
@@ -519,3 +455,53 @@ mod numeric;
 
 #[cfg(test)]
 mod tests;
+
+impl ConditionBatch<6, 6> for SerialArm {
+    /// Eight poses per call of the lanes' eigenvalue kernel, each equal to
+    /// [`Mechanism::condition_at`] (or [`Mechanism::condition`] without `qs`).
+    fn conditions(&self, xs: &[Vector6<f64>], qs: &[Vector6<f64>], out: &mut [f64]) {
+        let grams: Vec<Result<Option<Matrix6<f64>>>> = xs
+            .iter()
+            .enumerate()
+            .map(|(i, x)| match qs.get(i) {
+                Some(q) => self.condition_gram(x, q),
+                None => self.inverse(x).and_then(|q| self.condition_gram(x, &q)),
+            })
+            .collect();
+        crate::linalg::gram_conditions_by(
+            |k| match &grams[k] {
+                Ok(Some(g)) => *g,
+                // A stand-in (lanes do not interact); its value is replaced below.
+                _ => Matrix6::identity(),
+            },
+            out,
+        );
+        for (o, g) in out.iter_mut().zip(&grams) {
+            match g {
+                Ok(Some(_)) => {}
+                Ok(None) => *o = f64::INFINITY,
+                Err(_) => *o = f64::NAN,
+            }
+        }
+    }
+}
+
+impl Follow<6, 6> for SerialArm {
+    /// The solution continuing `prev`: each revolute joint shifted by whole turns to
+    /// within half a turn of `prev`; then, when a joint still moved more than the two
+    /// samples' rates explain (`|q - q_prev| > r = 2 dt max|q'| + dt^2 max|q''| +
+    /// 1e-9`: another posture) or the rates cannot tell (`r > 0.25` rad: coarse
+    /// samples), the inverse solved again from `prev` (closed form: the posture
+    /// nearest `prev`; else Newton from `prev`) and taken when nearer `prev`.
+    fn follow(
+        &self,
+        x: &Vector6<f64>,
+        xd: &Vector6<f64>,
+        xdd: &Vector6<f64>,
+        dt: f64,
+        prev: &ActuatorMotion<6>,
+        act: &mut ActuatorMotion<6>,
+    ) -> bool {
+        self.continue_motion(x, xd, xdd, dt, prev, act)
+    }
+}

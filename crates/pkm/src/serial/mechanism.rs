@@ -12,20 +12,20 @@ use super::PreparedChain;
 use crate::error::{Error, Result};
 use crate::limits::{PositionLimits, Violation};
 use crate::mechanism::{
-    Actuator, ActuatorMotion, Coordinate, LinkKind, Mechanism, PointRole, PoseSpace, Skeleton,
+    Actuator, ActuatorMotion, Coordinate, LinkKind, Mechanism, MechanismInfo, PointRole, PoseSpace,
+    Skeleton,
 };
 use crate::pose::Pose;
 
 /// A serial machine with `N` joints in all.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SerialMechanism<const N: usize> {
-    /// The chains and their geometry. Read it; a machine of other chains is built anew
-    /// with [`SerialMechanism::new`] (it prepares its chains from this one).
-    pub machine: SerialMachine,
-    /// Home joint values.
-    pub home: SVector<f64, N>,
-    coordinates: [Coordinate; N],
-    actuators: [Actuator; N],
+    /// The chains and their geometry ([`SerialMechanism::machine`]); a machine of other
+    /// chains is built anew with [`SerialMechanism::new`] (it prepares its chains from
+    /// this one).
+    machine: SerialMachine,
+    /// Name, joints as coordinates and actuators, home joint values.
+    info: MechanismInfo<N, N>,
     /// The axes' position limits by name, named once.
     position_limits: PositionLimits,
     /// Joints of the tool chain (the first ones).
@@ -60,12 +60,23 @@ impl<const N: usize> SerialMechanism<N> {
                 .workpiece
                 .as_ref()
                 .map(|w| PreparedChain::new(w, &[], &[])),
+            info: MechanismInfo::new(
+                machine.name.clone(),
+                "serial",
+                coordinates,
+                actuators,
+                PoseSpace::Own,
+                home,
+            )
+            .with_forward_closed_form(),
             machine,
-            home,
-            coordinates,
-            actuators,
             completions: Vec::new(),
         })
+    }
+
+    /// The chains and their geometry.
+    pub fn machine(&self) -> &SerialMachine {
+        &self.machine
     }
 
     fn split(&self, x: &SVector<f64, N>) -> (Vec<f64>, Vec<f64>) {
@@ -83,32 +94,8 @@ impl<const N: usize> SerialMechanism<N> {
 }
 
 impl<const N: usize> Mechanism<N, N> for SerialMechanism<N> {
-    fn name(&self) -> &str {
-        &self.machine.name
-    }
-
-    fn kind(&self) -> &'static str {
-        "serial"
-    }
-
-    fn coordinates(&self) -> &[Coordinate; N] {
-        &self.coordinates
-    }
-
-    fn actuators(&self) -> &[Actuator; N] {
-        &self.actuators
-    }
-
-    fn driven(&self) -> [usize; N] {
-        std::array::from_fn(|i| i)
-    }
-
-    fn pose_space(&self) -> PoseSpace {
-        PoseSpace::Own
-    }
-
-    fn home(&self) -> SVector<f64, N> {
-        self.home
+    fn info(&self) -> &MechanismInfo<N, N> {
+        &self.info
     }
 
     /// The joints are the pose coordinates: identity.
@@ -118,10 +105,6 @@ impl<const N: usize> Mechanism<N, N> for SerialMechanism<N> {
 
     fn jacobian(&self, _x: &SVector<f64, N>) -> Result<SMatrix<f64, N, N>> {
         Ok(SMatrix::<f64, N, N>::identity())
-    }
-
-    fn forward_closed_form(&self) -> bool {
-        true
     }
 
     fn forward(
@@ -168,7 +151,7 @@ impl<const N: usize> Mechanism<N, N> for SerialMechanism<N> {
 
     fn check_limits(&self, x: &SVector<f64, N>, _q: &SVector<f64, N>, out: &mut Vec<Violation>) {
         self.position_limits
-            .check(&self.actuators, x.as_slice(), out);
+            .check(self.info.actuators(), x.as_slice(), out);
     }
 
     /// Frame origins of both chains (bed frame), consecutive ones linked.
@@ -303,16 +286,16 @@ impl SerialAny {
 
     /// The machine's chains.
     pub fn machine(&self) -> &SerialMachine {
-        with_serial!(self, m => &m.machine)
+        with_serial!(self, m => &m.machine())
     }
 
     /// The home joint values (tool chain, then workpiece chain; internal units).
     pub fn home_joints(&self) -> Vec<f64> {
         match self {
-            SerialAny::Arm(a) => a.home_joints.as_slice().to_vec(),
-            SerialAny::Tcp4(a) => a.home_joints.as_slice().to_vec(),
-            SerialAny::Tcp5(a) => a.home_joints.as_slice().to_vec(),
-            other => with_serial!(other, m => m.home().as_slice().to_vec()),
+            SerialAny::Arm(a) => a.home_joints().as_slice().to_vec(),
+            SerialAny::Tcp4(a) => a.home_joints().as_slice().to_vec(),
+            SerialAny::Tcp5(a) => a.home_joints().as_slice().to_vec(),
+            other => with_serial!(other, m => m.info().home().as_slice().to_vec()),
         }
     }
 

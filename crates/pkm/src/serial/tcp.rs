@@ -39,7 +39,7 @@ use super::machine::SerialMachine;
 use super::{JointKind, PreparedChain};
 use crate::error::{Error, Result};
 use crate::limits::PositionLimits;
-use crate::mechanism::{Actuator, Coordinate};
+use crate::mechanism::{Actuator, Coordinate, MechanismInfo, PoseSpace};
 
 mod mechanism;
 
@@ -72,17 +72,17 @@ impl<const N: usize> Relative<N> {
 #[derive(Debug, Clone, PartialEq)]
 pub struct TcpMachine<const N: usize> {
     /// The chains (the tool chain's last link lengthened by [`TcpMachine::tool_length`]).
-    pub machine: SerialMachine,
+    machine: SerialMachine,
     /// Home joint values.
-    pub home_joints: SVector<f64, N>,
+    home_joints: SVector<f64, N>,
     /// Tool length added beyond the file's tool point along the tool axis (mm; a
     /// program's `G43 H`).
-    pub tool_length: f64,
+    tool_length: f64,
     /// The file's last tool link translation (before the tool length).
     tool_origin: Vector3<f64>,
-    home: SVector<f64, N>,
-    coordinates: [Coordinate; N],
-    actuators: [Actuator; N],
+    /// Name, TCP coordinates, joints as actuators, home pose, characteristic length (the
+    /// lever of the rotary axes at home).
+    pub(super) info: MechanismInfo<N, N>,
     kinds: [JointKind; N],
     tool_joints: usize,
     /// Actuator indices of the three prismatic joints.
@@ -97,7 +97,6 @@ pub struct TcpMachine<const N: usize> {
     work: Option<PreparedChain>,
     /// The axes' position limits by name, named once.
     position_limits: PositionLimits,
-    characteristic_length: f64,
     /// The relative kinematics at zero joint values: the rotary axes and the tool axis
     /// the tool-axis inverse turns ([`super::tcp_axis`]).
     pub(super) at_zero: Relative<N>,
@@ -166,20 +165,25 @@ impl<const N: usize> TcpMachine<N> {
                 .workpiece
                 .as_ref()
                 .map(|w| PreparedChain::new(w, &[], &[])),
+            info: MechanismInfo::new(
+                machine.name.clone(),
+                "serial/tcp",
+                coordinates,
+                actuators,
+                PoseSpace::Tcp,
+                SVector::zeros(),
+            )
+            .with_forward_closed_form(),
             machine,
             home_joints: home,
             tool_length: 0.0,
             tool_origin,
-            home: SVector::zeros(),
-            coordinates,
-            actuators,
             position_limits,
             kinds: std::array::from_fn(|i| joints[i].kind),
             tool_joints,
             linear: [prismatic[0], prismatic[1], prismatic[2]],
             rotary: std::array::from_fn(|k| revolute.get(k).copied().unwrap_or(0)),
             order,
-            characteristic_length: 1.0,
             at_zero: Relative {
                 tip: Vector3::zeros(),
                 frame: Matrix3::identity(),
@@ -197,13 +201,31 @@ impl<const N: usize> TcpMachine<N> {
                 "the three linear axes are not independent at home (reciprocal condition {rc:.1e})"
             )));
         }
-        m.home = m.coords_of_joints(&home);
+        let home_pose = m.coords_of_joints(&home);
+        m.info.set_home(home_pose);
         // A radian of a rotary axis counts as the tip's largest displacement per radian
         // at home: the lever of the rotary axes (at least 1 mm).
-        m.characteristic_length = (3..N)
+        let lever = (3..N)
             .map(|k| rel.column(m.rotary[k - 3], JointKind::Revolute).norm())
             .fold(1.0, f64::max);
+        m.info.set_characteristic_length(lever);
         Ok(m)
+    }
+
+    /// The chains (the tool chain's last link lengthened by the tool length).
+    pub fn machine(&self) -> &SerialMachine {
+        &self.machine
+    }
+
+    /// Home joint values.
+    pub fn home_joints(&self) -> SVector<f64, N> {
+        self.home_joints
+    }
+
+    /// Tool length added beyond the file's tool point along the tool axis (mm; a
+    /// program's `G43 H`).
+    pub fn tool_length(&self) -> f64 {
+        self.tool_length
     }
 
     /// The same machine with tool length `length` (mm) beyond the file's tool point,

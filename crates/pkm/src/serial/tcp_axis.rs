@@ -33,7 +33,6 @@ use serde::Serialize;
 
 use super::tcp::TcpMachine;
 use crate::error::{Error, Result};
-use crate::mechanism::Mechanism;
 
 /// The rotary angles that point the tool along an axis.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -122,7 +121,7 @@ impl<const N: usize> TcpMachine<N> {
             });
         }
         let target = axis / n;
-        let home = self.home();
+        let home = self.info.home();
         let near: [f64; 2] = match near {
             Some(v) if v.len() == 2 && v.iter().all(|x| x.is_finite()) => [v[0], v[1]],
             Some(v) => {
@@ -163,8 +162,8 @@ impl<const N: usize> TcpMachine<N> {
                     target.y,
                     target.z,
                     gap.to_degrees(),
-                    self.coordinates()[3 + k1].name,
-                    self.coordinates()[3 + k2].name
+                    self.info.coordinates()[3 + k1].name,
+                    self.info.coordinates()[3 + k2].name
                 )
                 .into(),
             });
@@ -178,7 +177,7 @@ impl<const N: usize> TcpMachine<N> {
         let singular_distance = f1.min(std::f64::consts::PI - f1);
         let singular = singular_distance < SINGULAR_ANGLE;
         let signs: &[f64] = if sin_a > 0.0 { &[1.0, -1.0] } else { &[1.0] };
-        let range = |k: usize| self.actuators()[rot[k]].range;
+        let range = |k: usize| self.info.actuators()[rot[k]].range;
         let mut branches = Vec::new();
         for &sg in signs {
             let z = w1 * f1.cos() + (u * cos_a + v * (sg * sin_a)) * f1.sin();

@@ -4,7 +4,7 @@ use super::geometry::TripodGeometry;
 use crate::error::{Error, Result};
 use crate::limits::{LimitKind, Range, Violation};
 use crate::mechanism::{
-    Actuator, ActuatorMotion, Coordinate, LinkKind, Mechanism, PointRole, PoseSpace, Skeleton,
+    ActuatorMotion, Coordinate, LinkKind, Mechanism, MechanismInfo, PointRole, PoseSpace, Skeleton,
 };
 use crate::pose::{pose_from_parts, rotation_matrix, Pose};
 use crate::rotation::{angle_between, rx, ry, Convention};
@@ -42,12 +42,11 @@ pub struct LegState {
 #[derive(Debug, Clone, PartialEq)]
 pub struct CentreLegTripod {
     /// Geometry and limits of the struts.
-    pub geometry: TripodGeometry,
+    geometry: TripodGeometry,
     /// The passive centre leg.
-    pub leg: CentreLeg,
-    /// Home tool position (mm).
-    pub home: Vector3<f64>,
-    coordinates: [Coordinate; 3],
+    leg: CentreLeg,
+    /// Name, coordinates, actuators (the geometry's) and home tool position.
+    info: MechanismInfo<3, 3>,
 }
 
 use crate::rotation::wrap_angle as wrap;
@@ -55,16 +54,38 @@ use crate::rotation::wrap_angle as wrap;
 impl CentreLegTripod {
     /// New centre-leg tripod.
     pub fn new(geometry: TripodGeometry, leg: CentreLeg, home: Vector3<f64>) -> Self {
-        CentreLegTripod {
-            geometry,
-            leg,
-            home,
-            coordinates: [
+        let info = MechanismInfo::new(
+            geometry.name.clone(),
+            "tripod/centre-leg",
+            [
                 Coordinate::length("X"),
                 Coordinate::length("Y"),
                 Coordinate::length("Z"),
             ],
+            geometry.actuators().clone(),
+            PoseSpace::Position,
+            home,
+        );
+        CentreLegTripod {
+            geometry,
+            leg,
+            info,
         }
+    }
+
+    /// Geometry and limits of the struts.
+    pub fn tripod_geometry(&self) -> &TripodGeometry {
+        &self.geometry
+    }
+
+    /// The passive centre leg.
+    pub fn leg(&self) -> &CentreLeg {
+        &self.leg
+    }
+
+    /// Sets the travel of the pose coordinates (`[limits] axes`).
+    pub fn set_axes(&mut self, axes: crate::limits::AxisLimits) {
+        self.geometry.axes = axes;
     }
 
     /// Closed-form leg configuration for tool tip `p`.
@@ -150,32 +171,8 @@ impl CentreLegTripod {
 }
 
 impl Mechanism<3, 3> for CentreLegTripod {
-    fn name(&self) -> &str {
-        &self.geometry.name
-    }
-
-    fn kind(&self) -> &'static str {
-        "tripod/centre-leg"
-    }
-
-    fn coordinates(&self) -> &[Coordinate; 3] {
-        &self.coordinates
-    }
-
-    fn actuators(&self) -> &[Actuator; 3] {
-        self.geometry.actuators()
-    }
-
-    fn driven(&self) -> [usize; 3] {
-        [0, 1, 2]
-    }
-
-    fn pose_space(&self) -> PoseSpace {
-        PoseSpace::Position
-    }
-
-    fn home(&self) -> Vector3<f64> {
-        self.home
+    fn info(&self) -> &MechanismInfo<3, 3> {
+        &self.info
     }
 
     fn inverse(&self, x: &Vector3<f64>) -> Result<Vector3<f64>> {
@@ -241,7 +238,7 @@ impl Mechanism<3, 3> for CentreLegTripod {
     }
 
     fn check_limits(&self, x: &Vector3<f64>, q: &Vector3<f64>, out: &mut Vec<Violation>) {
-        self.geometry.axes.check(&self.coordinates, x, out);
+        self.geometry.axes.check(self.info.coordinates(), x, out);
         let Ok(st) = self.leg_state(x) else {
             return;
         };

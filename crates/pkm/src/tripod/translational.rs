@@ -4,8 +4,7 @@ use super::geometry::TripodGeometry;
 use crate::error::{Error, Result};
 use crate::limits::Violation;
 use crate::mechanism::{
-    spatial_coordinates, Actuator, ActuatorMotion, Coordinate, Forward, Mechanism, PoseSpace,
-    Skeleton,
+    spatial_coordinates, ActuatorMotion, Forward, Mechanism, MechanismInfo, PoseSpace, Skeleton,
 };
 use crate::pose::Pose;
 
@@ -15,20 +14,34 @@ use crate::pose::Pose;
 #[derive(Debug, Clone, PartialEq)]
 pub struct TranslationalTripod {
     /// Geometry and limits.
-    pub geometry: TripodGeometry,
-    /// Home pose (X, Y, Z mm, A, B, C rad).
-    pub home: Vector6<f64>,
-    coordinates: [Coordinate; 6],
+    geometry: TripodGeometry,
+    /// Name, coordinates, actuators (the geometry's) and home pose.
+    info: MechanismInfo<6, 3>,
 }
 
 impl TranslationalTripod {
     /// New translational tripod with a home pose.
     pub fn new(geometry: TripodGeometry, home: Vector6<f64>) -> Self {
-        TranslationalTripod {
-            geometry,
+        let info = MechanismInfo::new(
+            geometry.name.clone(),
+            "tripod/translational",
+            spatial_coordinates(),
+            geometry.actuators().clone(),
+            PoseSpace::Spatial,
             home,
-            coordinates: spatial_coordinates(),
-        }
+        )
+        .with_forward_closed_form();
+        TranslationalTripod { geometry, info }
+    }
+
+    /// Geometry and limits.
+    pub fn tripod_geometry(&self) -> &TripodGeometry {
+        &self.geometry
+    }
+
+    /// Sets the travel of the pose coordinates (`[limits] axes`).
+    pub fn set_axes(&mut self, axes: crate::limits::AxisLimits) {
+        self.geometry.axes = axes;
     }
 
     /// Tool tip and rotation matrix of pose coordinates.
@@ -101,32 +114,8 @@ impl TranslationalTripod {
 }
 
 impl Mechanism<6, 3> for TranslationalTripod {
-    fn name(&self) -> &str {
-        &self.geometry.name
-    }
-
-    fn kind(&self) -> &'static str {
-        "tripod/translational"
-    }
-
-    fn coordinates(&self) -> &[Coordinate; 6] {
-        &self.coordinates
-    }
-
-    fn actuators(&self) -> &[Actuator; 3] {
-        self.geometry.actuators()
-    }
-
-    fn driven(&self) -> [usize; 3] {
-        [0, 1, 2]
-    }
-
-    fn pose_space(&self) -> PoseSpace {
-        PoseSpace::Spatial
-    }
-
-    fn home(&self) -> Vector6<f64> {
-        self.home
+    fn info(&self) -> &MechanismInfo<6, 3> {
+        &self.info
     }
 
     #[inline]
@@ -144,12 +133,8 @@ impl Mechanism<6, 3> for TranslationalTripod {
     /// [`crate::legs::StrutSet::tip_bound`] with the struts' longest strokes.
     fn position_bound(&self, x: &Vector6<f64>) -> Option<[[f64; 2]; 3]> {
         let (_, r) = Self::split(x);
-        let max = std::array::from_fn(|i| self.actuators()[i].range.max);
+        let max = std::array::from_fn(|i| self.info().actuators()[i].range.max);
         self.geometry.strut_set().tip_bound(&r, &max)
-    }
-
-    fn forward_closed_form(&self) -> bool {
-        true
     }
 
     fn forward(&self, q: &Vector3<f64>, start: &Vector6<f64>) -> Result<Forward<6>> {
@@ -173,14 +158,14 @@ impl Mechanism<6, 3> for TranslationalTripod {
         Ok(crate::legs::spatial_coords_from_pose(
             pose,
             orientation_given,
-            &self.home,
+            &self.info.home(),
         ))
     }
 
     fn check_limits(&self, x: &Vector6<f64>, q: &Vector3<f64>, out: &mut Vec<Violation>) {
         let (p, r) = Self::split(x);
         self.geometry.check_limits(&p, &r, q, out);
-        self.geometry.axes.check(&self.coordinates, x, out);
+        self.geometry.axes.check(self.info.coordinates(), x, out);
     }
 
     fn actuator_motion(

@@ -325,7 +325,7 @@ where
                 qs.push(q);
             });
             let mut cs = vec![0.0; xs.len()];
-            m.conditions(&xs, &qs, &mut cs);
+            crate::mechanism::abilities::conditions(m, &xs, &qs, &mut cs);
             let mut point = [r.unwrap_or_else(|| conditioned(0.0))];
             fold_conditions(
                 &mut point,
@@ -340,7 +340,7 @@ where
     // Chunks in parallel, each with its own tally of every violated limit (merged in
     // order afterwards: no locks, and the points keep their grid order). In a chunk,
     // inverse kinematics and limits point by point, then the condition numbers of
-    // every pose within the limits in one call (`Mechanism::conditions`: the
+    // every pose within the limits in one call (`abilities::conditions`: the
     // hexapod's runs eight poses across SIMD lanes), folded as `evaluate_all` does:
     // the worst over the orientations; singular at the first that is not finite, also
     // before an orientation beyond a limit.
@@ -377,7 +377,7 @@ where
                 }
             }
             let mut cs = vec![0.0; xs.len()];
-            m.conditions(&xs, &qs, &mut cs);
+            crate::mechanism::abilities::conditions(m, &xs, &qs, &mut cs);
             fold_conditions(&mut points, &owner, &cs, deferred, &mut tally);
             progress(range.len() as u64);
             (points, tally)

@@ -24,7 +24,7 @@ pub fn reachable_tilt<M: Mechanism<P, A>, const P: usize, const A: usize>(
     max_tilt: f64,
     tol: f64,
 ) -> Result<Vec<f64>> {
-    if P != 6 || m.pose_space() != crate::mechanism::PoseSpace::Spatial {
+    if P != 6 || m.info().pose_space() != crate::mechanism::PoseSpace::Spatial {
         return Err(Error::InvalidInput {
             what: "orientation workspace".into(),
             message: "needs a machine with X, Y, Z, A, B, C".into(),
@@ -201,12 +201,12 @@ pub fn reach_grid<M: Mechanism<P, A>, const P: usize, const A: usize>(
             message: format!("--step: expected a step > 0, found {s}"),
         });
     }
-    let idx: Vec<usize> = match m.pose_space() {
+    let idx: Vec<usize> = match m.info().pose_space() {
         PoseSpace::Own => (0..P.min(3)).collect(),
         _ => vec![0, 1, 2],
     };
-    let q = |k: usize| m.coordinates()[k].quantity;
-    let bound = if idx == [0, 1, 2] && m.pose_space() != PoseSpace::Own {
+    let q = |k: usize| m.info().coordinates()[k].quantity;
+    let bound = if idx == [0, 1, 2] && m.info().pose_space() != PoseSpace::Own {
         m.position_bound(base)
     } else {
         None
@@ -217,10 +217,10 @@ pub fn reach_grid<M: Mechanism<P, A>, const P: usize, const A: usize>(
             .iter()
             .map(|&k| {
                 span_of(
-                    m.coordinates(),
-                    m.actuators(),
-                    m.pose_space(),
-                    m.characteristic_length(),
+                    m.info().coordinates(),
+                    m.info().actuators(),
+                    m.info().pose_space(),
+                    m.info().characteristic_length(),
                     base.as_slice(),
                     k,
                 )
@@ -336,7 +336,7 @@ pub fn map_reach<M: Mechanism<P, A>, const P: usize, const A: usize>(
     loop {
         let mut wm = map(m, base, &axes, orientations, progress)?;
         wm.closed = g.closed.clone();
-        let open = wm.open_faces(m.coordinates());
+        let open = wm.open_faces(m.info().coordinates());
         if round == 3 || open.iter().all(|f| !f[0] && !f[1]) {
             return Ok((wm, method));
         }
@@ -345,7 +345,7 @@ pub fn map_reach<M: Mechanism<P, A>, const P: usize, const A: usize>(
         for (a, f) in axes.iter_mut().zip(&open) {
             // A quarter of the span, in whole steps so the grid keeps its points.
             let n = (0.25 * (a.max - a.min) / a.step).ceil().max(1.0) * a.step;
-            let name = &m.coordinates()[a.coordinate].name;
+            let name = &m.info().coordinates()[a.coordinate].name;
             if f[0] {
                 a.min -= n;
                 widened.push(format!("{name} min"));

@@ -84,12 +84,12 @@ fn strut_sensitivities_equal_exact_differences_on_hexapod_and_tripod() {
     let Model::Hexapod(h) = machine("hexapod-seed001.toml") else {
         panic!()
     };
-    let x = Vector6::new(30.0, -20.0, h.home[2] + 40.0, 0.1, -0.05, 0.2);
+    let x = Vector6::new(30.0, -20.0, h.info().home()[2] + 40.0, 0.1, -0.05, 0.2);
     strut_analytic_vs_exact(h.as_ref(), &x);
     let Model::TranslationalTripod(t) = machine("tripod-seed000.toml") else {
         panic!()
     };
-    let mut x = t.home;
+    let mut x = t.info().home();
     x[0] += 20.0;
     x[1] -= 10.0;
     strut_analytic_vs_exact(&t, &x);
@@ -101,7 +101,7 @@ struct Invariants(&'static str);
 impl Visitor for Invariants {
     type Output = ();
     fn visit<M: Analysable<P, A>, const P: usize, const A: usize>(self, m: &M) {
-        let x = m.home();
+        let x = m.info().home();
         let params = m.parameters();
         assert!(!params.is_empty(), "{}", self.0);
         // Central differences of the exact error against the analytic sensitivities.
@@ -139,7 +139,7 @@ impl Visitor for Invariants {
             .collect();
         assert_eq!(drives.len(), A, "{}", self.0);
         // (A robot's home may be a singular configuration: no inverse Jacobian there.)
-        let d = m.driven();
+        let d = m.info().driven();
         let jinv = m
             .jacobian(&x)
             .ok()
@@ -207,7 +207,7 @@ fn a_zero_length_error_moves_the_tool_by_the_inverse_jacobian_column() {
     let Model::Hexapod(h) = machine("hexapod-seed001.toml") else {
         panic!()
     };
-    let x = h.home;
+    let x = h.info().home();
     let s = sensitivities(h.as_ref(), &x).unwrap();
     let jinv = h.jacobian(&x).unwrap().try_inverse().unwrap();
     // zero(L1) longer by 1 mm: the strut is 1 mm longer at the same reading.
@@ -264,7 +264,7 @@ fn monte_carlo_converges_to_the_first_order_prediction_on_parallel_machines() {
     let Model::Hexapod(h) = machine("hexapod-seed001.toml") else {
         panic!()
     };
-    let x = Vector6::new(30.0, -20.0, h.home[2] + 40.0, 0.1, -0.05, 0.2);
+    let x = Vector6::new(30.0, -20.0, h.info().home()[2] + 40.0, 0.1, -0.05, 0.2);
     let tol: Vec<Tolerance> = (0..42)
         .map(|k| Tolerance {
             parameter: k,
@@ -276,7 +276,7 @@ fn monte_carlo_converges_to_the_first_order_prediction_on_parallel_machines() {
     let Model::P3rpHead(p) = machine("p3rp-seed004.toml") else {
         panic!()
     };
-    let x = nalgebra::Vector2::new(p.home[0] + 30.0, 0.5);
+    let x = nalgebra::Vector2::new(p.info().home()[0] + 30.0, 0.5);
     let tol: Vec<Tolerance> = (0..p.parameters().len())
         .map(|k| Tolerance {
             parameter: k,
@@ -407,7 +407,7 @@ fn monte_carlo_counts_beyond_the_limit_are_refused_up_front() {
     let Model::Hexapod(h) = machine("hexapod-seed001.toml") else {
         panic!()
     };
-    let x = h.home();
+    let x = h.info().home();
     let tol = [pkm::accuracy::Tolerance {
         parameter: 0,
         value: 0.01,
@@ -499,7 +499,7 @@ fn monte_carlo_is_the_same_on_one_and_two_threads_and_reports_progress() {
     let Model::Hexapod(h) = machine("hexapod-seed001.toml") else {
         panic!()
     };
-    let x = h.home();
+    let x = h.info().home();
     let tol: Vec<Tolerance> = (0..12)
         .map(|p| Tolerance {
             parameter: p,

@@ -44,7 +44,7 @@ fn by_hand(
     db: Vector2<f64>,
     dc: Vector2<f64>,
 ) -> Vector2<f64> {
-    let g = &h.geometry;
+    let g = &h.geometry();
     let a = Vector2::new(0.0, q[0]) + da;
     let c = Vector2::new(g.e, q[1]) + dc;
     let ab = Vector2::new(-g.l1 * g.delta.sin(), g.l1 * g.delta.cos()) + db;
@@ -67,7 +67,7 @@ fn by_hand(
 fn moved_hinges_solve_as_the_loop_built_by_hand() {
     let h = head();
     assert_eq!(h.passive_joints().len(), 3);
-    let x = Vector2::new(h.home()[0] + 20.0, 0.6);
+    let x = Vector2::new(h.info().home()[0] + 20.0, 0.6);
     let q = h.inverse(&x).unwrap();
     let nominal = h.tool_pose(&x).unwrap().translation.vector;
     let g0 = h.geometry_values();
@@ -116,7 +116,7 @@ fn moved_hinges_solve_as_the_loop_built_by_hand() {
 fn head_bounds_are_proportional_contain_the_monte_carlo_and_reproduce_by_hand() {
     let m = Machine::from_path(example("p3rp-seed004.toml")).unwrap();
     let h = head();
-    let x = Vector2::new(h.home()[0] + 20.0, 0.6);
+    let x = Vector2::new(h.info().home()[0] + 20.0, 0.6);
     let n = Vector3::new(0.0, 0.6f64.sin(), -0.6f64.cos());
     let req = |c: f64| ClearanceRequest {
         diametral: Some(c),
@@ -163,8 +163,8 @@ fn the_hybrid_machine_moves_the_tool_as_its_head_does() {
         panic!()
     };
     let h = hy.head_mechanism();
-    let x = hy.home();
-    let xh = h.home();
+    let x = hy.info().home();
+    let xh = h.info().home();
     let mut g = hy.geometry_values();
     for (k, v) in [(6, 0.05), (7, -0.02), (9, 0.03), (13, 0.04)] {
         g[k] = v;

@@ -79,10 +79,10 @@ fn a_completed_angle_turns_the_link_rigidly() {
         index(&m, "alpha_yy(1 slide)"),
     ];
     let prepared = m.with_given(&triple).unwrap().expect("completions");
-    let nominal = m.machine.pose(&qt, &qw, &[]).unwrap();
+    let nominal = m.machine().pose(&qt, &qw, &[]).unwrap();
     for a in [1e-4, -3e-3, 0.05] {
         let e = pose_error(&prepared, &x, &[(triple[0], a)]).unwrap();
-        let mut turned = m.machine.clone();
+        let mut turned = m.machine().clone();
         let n = turned.tool.links[1].rotation;
         turned.tool.links[1].rotation =
             n * Rotation3::from_axis_angle(&Vector3::y_axis(), a).matrix();
@@ -196,8 +196,8 @@ fn every_mc300_budget_row_means_something() {
             .zip(&tolerable)
             .filter(|(p, t)| **t && p.name.starts_with("alpha_"))
             .count(),
-        3 * (m.machine.tool.links.len()
-            + m.machine.workpiece.as_ref().map_or(0, |w| w.links.len())),
+        3 * (m.machine().tool.links.len()
+            + m.machine().workpiece.as_ref().map_or(0, |w| w.links.len())),
         "three angles per link"
     );
 }

@@ -652,3 +652,58 @@ fn batches_take_any_value_without_panicking() {
         assert_eq!(t.len(), 16 * (poses.len() / p));
     }
 }
+
+/// The optional abilities' functions agree with the core on every example: where a
+/// type has no block kernels, `inverse_screened` and `motion_screened` write nothing
+/// and `inverse_first_limit` returns the first violation of `check_limits`; where it
+/// has them, the code stands for that same violation. Batch condition numbers equal
+/// one pose at a time, bit for bit, with or without a type's own batch.
+#[test]
+fn abilities_fall_back_to_the_core_on_every_example() {
+    use pkm::limits::FirstLimit;
+    use pkm::machine::{Analysable, Visitor};
+    use pkm::mechanism::abilities;
+    struct Check(String);
+    impl Visitor for Check {
+        type Output = ();
+        fn visit<M: Analysable<P, A>, const P: usize, const A: usize>(self, m: &M) {
+            let name = self.0;
+            let home = m.info().home();
+            let mut x = home;
+            for (k, c) in m.info().driven().iter().enumerate() {
+                x[*c] += 0.3 + 0.1 * k as f64;
+            }
+            let xs: Vec<f64> = [home, x].iter().flat_map(|x| x.iter().copied()).collect();
+            let (mut qs, mut clear) = (vec![0.0; 2 * A], vec![false; 2]);
+            let screened = abilities::inverse_screened(m, &xs, &mut qs, &mut clear, true);
+            assert_eq!(screened, m.block_kernels().is_some(), "{name}");
+            let mut buf = Vec::new();
+            for x in [home, x] {
+                let Ok(q) = m.inverse(&x) else { continue };
+                let mut all = Vec::new();
+                m.check_limits(&x, &q, &mut all);
+                let (q2, first) = abilities::inverse_first_limit(m, &x, &mut buf).unwrap();
+                assert_eq!(q, q2, "{name}");
+                if m.block_kernels().is_none() {
+                    assert!(!matches!(first, Some(FirstLimit::Code(_))), "{name}");
+                }
+                let v = first.map(|f| abilities::first_violation(m, f));
+                assert_eq!(v.as_ref(), all.first(), "{name} {x:?}");
+            }
+            let poses = [home, x];
+            let mut batch = [0.0; 2];
+            abilities::conditions(m, &poses, &[], &mut batch);
+            for (x, b) in poses.iter().zip(batch) {
+                let one = m.condition(x).unwrap_or(f64::NAN);
+                assert!(
+                    one.to_bits() == b.to_bits() || (one.is_nan() && b.is_nan()),
+                    "{name}: {one} {b}"
+                );
+            }
+        }
+    }
+    for path in examples() {
+        let machine = Machine::from_path(&path).unwrap();
+        machine.visit(Check(path.display().to_string()));
+    }
+}

@@ -3,6 +3,7 @@
 use nalgebra::{Matrix3, Rotation3, Unit, Vector3, Vector6};
 use pkm::hexapod::Hexapod;
 use pkm::machine::Model;
+use pkm::mechanism::{abilities, BlockKernels};
 use pkm::rotation::Convention;
 use pkm::verify::jacobian_error;
 use pkm::{Error, LimitKind, Machine, Mechanism};
@@ -113,7 +114,7 @@ fn round_trip_100k_poses() {
             let a0 = Convention::Rpy.from_matrix(&r0);
             let p0 = p + dp;
             let near = Vector6::new(p0.x, p0.y, p0.z, a0[0], a0[1], a0[2]);
-            for start in [near, h.home()] {
+            for start in [near, h.info().home()] {
                 let f = h
                     .forward(&q, &start)
                     .unwrap_or_else(|e| panic!("{file}: {e} at {x}"));
@@ -164,14 +165,14 @@ fn singular_configuration_is_reported() {
         "{r:?}"
     );
     // Unreachable lengths: not converged, with the residual.
-    let r = h.forward(&Vector6::repeat(100.0), &h.home());
+    let r = h.forward(&Vector6::repeat(100.0), &h.info().home());
     assert!(r.is_err(), "{r:?}");
 }
 
 #[test]
 fn genhexkins_home_lengths() {
     let h = load("hexapod-linuxcnc.toml");
-    let q = h.inverse(&h.home()).unwrap();
+    let q = h.inverse(&h.info().home()).unwrap();
     for l in q.iter() {
         assert!((l - 29.7466 * 25.4).abs() < 0.01, "{l}");
     }
@@ -248,7 +249,7 @@ fn segment_distance_by_hand() {
 fn assembly_modes_from_several_starts() {
     use pkm::mechanism::{assembly_modes, spread_starts};
     let h = load("hexapod-linuxcnc.toml");
-    let x = h.home();
+    let x = h.info().home();
     let q = h.inverse(&x).unwrap();
     let starts = spread_starts(&h, 300);
     let modes = assembly_modes(&h, &q, &starts, 1e-6);
@@ -271,7 +272,7 @@ fn assembly_modes_from_several_starts() {
 #[test]
 fn transmission_figures_of_the_hexapod() {
     let h = load("hexapod-linuxcnc.toml");
-    let x = h.home();
+    let x = h.info().home();
     let t = pkm::transmission::transmission(&h, &x).unwrap();
     assert!((t.condition - h.condition(&x).unwrap()).abs() < 1e-6 * t.condition);
     // Independently, by directions over the sphere: the largest strut rate per unit
@@ -355,7 +356,7 @@ fn per_joint_cone_axes() {
         let Model::Hexapod(h) = &m.model else {
             panic!()
         };
-        let x = h.home();
+        let x = h.info().home();
         let q = h.inverse(&x).unwrap();
         let mut v = Vec::new();
         h.check_limits(&x, &q, &mut v);
@@ -376,7 +377,7 @@ fn per_joint_cone_axes() {
     let Model::Hexapod(h) = &with("").unwrap().model else {
         panic!()
     };
-    let (p, r) = pkm::legs::split_pose(&h.home());
+    let (p, r) = pkm::legs::split_pose(&h.info().home());
     let joints = h.strut_set().platform_joints(&p, &r);
     let axes: Vec<String> = (0..6)
         .map(|i| {
@@ -427,7 +428,7 @@ fn tracking_fk_follows_a_trajectory_and_survives_jumps() {
     use pkm::hexapod::{FkOptions, FkTracker};
     for file in ["hexapod-linuxcnc.toml", "hexapod-seed001.toml"] {
         let h = load(file);
-        let home = h.home();
+        let home = h.info().home();
         // 2 s at 1 kHz: a circle of radius 40 mm at 100 mm/s with a slow tilt.
         let pose = |k: usize| {
             let t = k as f64 * 1e-3;
@@ -656,7 +657,7 @@ fn coded_first_limits_are_the_first_checked_violation() {
     ] {
         let mut h = load(name);
         limits_to_hit(&mut h, open);
-        let home = h.home();
+        let home = h.info().home();
         let centre = Vector3::new(home[0], home[1], home[2]);
         let mut rng = rand::rngs::StdRng::seed_from_u64(21);
         let mut buf = Vec::new();
@@ -665,14 +666,19 @@ fn coded_first_limits_are_the_first_checked_violation() {
             let q = h.inverse(&x).unwrap();
             let mut all = Vec::new();
             h.check_limits(&x, &q, &mut all);
-            let (q2, first) = h.inverse_first_limit(&x, &mut buf).unwrap();
+            let (q2, first) = abilities::inverse_first_limit(&h, &x, &mut buf).unwrap();
             assert_eq!(q, q2);
             let coded = first.map(|f| match f {
-                FirstLimit::Code(c) => h.limit_violation(&c),
+                FirstLimit::Code(c) => BlockKernels::limit_violation(&h, &c),
                 FirstLimit::Violation(_) => panic!("the hexapod codes its limits"),
             });
             assert_eq!(coded.as_ref(), all.first(), "{name} {x:?}");
-            assert_eq!(h.inverse_first_violation(&x, &mut buf).unwrap().1, coded);
+            assert_eq!(
+                abilities::inverse_first_violation(&h, &x, &mut buf)
+                    .unwrap()
+                    .1,
+                coded
+            );
             if let Some(v) = coded {
                 *hits.entry(format!("{:?}", v.kind)).or_insert(0) += 1;
             }
@@ -719,12 +725,16 @@ fn screened_batch_equals_the_exact_path_on_and_near_every_limit() {
             panic!()
         };
         let h: &Hexapod = h;
-        let home = h.home();
+        let home = h.info().home();
         let centre = Vector3::new(home[0], home[1], home[2]);
         let mut rng = rand::rngs::StdRng::seed_from_u64(33);
         let mut buf = Vec::new();
-        let fine =
-            |x: &Vector6<f64>, buf: &mut Vec<_>| h.inverse_first_limit(x, buf).unwrap().1.is_none();
+        let fine = |x: &Vector6<f64>, buf: &mut Vec<_>| {
+            abilities::inverse_first_limit(h, x, buf)
+                .unwrap()
+                .1
+                .is_none()
+        };
         let mut poses: Vec<Vector6<f64>> = Vec::new();
         // Rows drawn at random (not on a boundary by construction).
         let mut random = Vec::new();
@@ -771,7 +781,7 @@ fn screened_batch_equals_the_exact_path_on_and_near_every_limit() {
         let flat: Vec<f64> = poses.iter().flat_map(|x| x.iter().copied()).collect();
         let mut qs = vec![0.0; 6 * n];
         let mut clear = vec![false; n];
-        if !h.inverse_screened(&flat, &mut qs, &mut clear, true) {
+        if !abilities::inverse_screened(h, &flat, &mut qs, &mut clear, true) {
             eprintln!("no AVX-512 on this CPU: the per-pose path only");
             clear.fill(false);
             qs.clear();
@@ -779,7 +789,7 @@ fn screened_batch_equals_the_exact_path_on_and_near_every_limit() {
         let batch = pkm::analysis::batch::inverse_batch(&machine, &flat).unwrap();
         let (mut within, mut cleared) = (0, 0);
         for (r, x) in poses.iter().enumerate() {
-            let (q, first) = h.inverse_first_limit(x, &mut buf).unwrap();
+            let (q, first) = abilities::inverse_first_limit(h, x, &mut buf).unwrap();
             let ok = first.is_none();
             if x.iter().all(|v| v.is_finite()) && !qs.is_empty() {
                 // The kernel's lengths are the single call's, bit for bit.
@@ -791,7 +801,7 @@ fn screened_batch_equals_the_exact_path_on_and_near_every_limit() {
             assert!(!clear[r] || ok, "{name} row {r}: cleared but {first:?}");
             assert_eq!(batch.reachable[r], ok, "{name} row {r}");
             let v = first.map(|f| match f {
-                FirstLimit::Code(c) => h.limit_violation(&c),
+                FirstLimit::Code(c) => BlockKernels::limit_violation(h, &c),
                 FirstLimit::Violation(v) => v,
             });
             assert_eq!(batch.causes.violation(r), v, "{name} row {r}");
@@ -811,7 +821,7 @@ fn screened_batch_equals_the_exact_path_on_and_near_every_limit() {
         // Without the check the screen settles every row but the NaN one and the one
         // with an angle beyond the fast sine's range (on a CPU with AVX-512; without
         // it there is no block kernel).
-        if h.inverse_screened(&flat, &mut qs, &mut clear, false) {
+        if abilities::inverse_screened(h, &flat, &mut qs, &mut clear, false) {
             for (r, x) in poses.iter().enumerate() {
                 let fast = x.iter().all(|v| v.abs() <= 1e4);
                 assert_eq!(clear[r], fast, "{name} row {r}");
@@ -821,7 +831,13 @@ fn screened_batch_equals_the_exact_path_on_and_near_every_limit() {
             // lengths bit for bit.
             for rows in [n, n - 8, n - 3] {
                 let (mut q, mut c) = (vec![f64::NAN; 6 * rows], vec![true; rows]);
-                assert!(h.inverse_screened(&flat[..6 * rows], &mut q, &mut c, false));
+                assert!(abilities::inverse_screened(
+                    h,
+                    &flat[..6 * rows],
+                    &mut q,
+                    &mut c,
+                    false
+                ));
                 for (r, x) in poses[..rows].iter().enumerate() {
                     let whole = r < rows / 8 * 8;
                     let fast = x.iter().all(|v| v.abs() <= 1e4);
@@ -844,7 +860,7 @@ fn screened_batch_equals_the_exact_path_on_and_near_every_limit() {
     }
 }
 
-/// The motion kernel (`Mechanism::motion_screened`, eight samples per AVX-512
+/// The motion kernel (`BlockKernels::motion_screened`, eight samples per AVX-512
 /// register) on `poses` with random rates and accelerations: a cleared row's `q`,
 /// `q'`, `q''` are `actuator_motion`'s bit for bit and `actuator_motion_checked` finds
 /// no violation on it; rows with held angles (no angular rate), level poses
@@ -892,7 +908,8 @@ fn motion_kernel_equals_the_exact_path(
     let mut clear = vec![false; n];
     let mut computed = vec![false; n];
     let [q0, q1, q2] = &mut q;
-    if !h.motion_screened(
+    if !abilities::motion_screened(
+        h,
         [&rows[0], &rows[1], &rows[2]],
         [q0, q1, q2],
         &mut clear,
@@ -962,7 +979,7 @@ fn motion_kernel_equals_the_exact_path(
 fn checked_actuator_motion_equals_motion_then_limits() {
     for file in ["hexapod-linuxcnc.toml", "hexapod-seed001.toml"] {
         let h = load(file);
-        let home = h.home();
+        let home = h.info().home();
         let mut rng = rand::rngs::StdRng::seed_from_u64(11);
         let mut violated = 0;
         for _ in 0..5000 {
@@ -989,7 +1006,7 @@ fn checked_actuator_motion_equals_motion_then_limits() {
 #[test]
 fn forward_tool_pose_equals_forward_then_tool_pose() {
     let h = load("hexapod-linuxcnc.toml");
-    let home = h.home();
+    let home = h.info().home();
     let mut rng = rand::rngs::StdRng::seed_from_u64(5);
     for _ in 0..2000 {
         let x = Vector6::from_fn(|k, _| {
@@ -1016,7 +1033,7 @@ fn strut_motion_across_lanes_is_the_three_vector_form_bit_for_bit() {
     let mut rng = rand::rngs::StdRng::seed_from_u64(19);
     for file in ["hexapod-linuxcnc.toml", "hexapod-seed001.toml"] {
         let h = load(file);
-        let home = h.home();
+        let home = h.info().home();
         // The bits, every NaN as one (the sign of a NaN follows operand order, which
         // an unoptimised build may swap; every NaN prints alike).
         let bits = |a: &pkm::ActuatorMotion<6>| {

@@ -143,7 +143,7 @@ proptest! {
         let p = pose(x, y, z, b, c);
         prop_assume!(within_limits(&m, &p) && m.condition(&p).unwrap() < 50.0);
         let q = m.inverse(&p).unwrap();
-        for start in [m.home(), p + Vector6::new(dx, -dx, dx, 0.0, db.to_radians(), 0.0)] {
+        for start in [m.info().home(), p + Vector6::new(dx, -dx, dx, 0.0, db.to_radians(), 0.0)] {
             let Ok(f) = m.forward(&q, &start) else {
                 // A start far from the pose may fail; it must say so, never answer wrong.
                 continue;
@@ -235,7 +235,7 @@ fn geometry_jacobian_and_sensitivities_match_finite_differences() {
     for x in [
         on_hemisphere(0.0, 20.0),
         on_hemisphere(50.0, -70.0),
-        m.home(),
+        m.info().home(),
     ] {
         let jg = m.inverse_geometry_jacobian(&x).unwrap();
         let g0 = m.geometry_values();
@@ -322,7 +322,7 @@ fn unreachable_poses_name_the_strut_and_limits_their_excess() {
         m.check_limits(&x, &q, &mut v);
         v
     };
-    let mut x = m.home();
+    let mut x = m.info().home();
     x[3] = 0.1;
     let v = violated(x);
     assert!(v

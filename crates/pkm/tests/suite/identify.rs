@@ -306,7 +306,7 @@ fn measurement_files_round_trip_and_errors_name_line_and_column() {
     let mut e = experiment(4, Design::Random, 2);
     e.point_noise = 0.005;
     let s = simulate(&h, &zero, &e).unwrap();
-    let acts = pkm::mechanism::Mechanism::actuators(&h);
+    let acts = pkm::mechanism::Mechanism::info(&h).actuators();
     let text = write(&s.measurements, acts, "a comment\nfixture: a triangle");
     let back = parse(&text, "m.csv", acts).unwrap();
     assert_eq!(back, s.measurements);

@@ -144,7 +144,7 @@ fn random_states_keep_away_from_singularities() {
     let z = pkm::identify::Identifiable::zero_readings(t).unwrap();
     let ratios = |e: &Experiment| {
         let sim = simulate(t, &z, e).unwrap();
-        let home = sim.truth.condition(&sim.truth.home()).unwrap();
+        let home = sim.truth.condition(&sim.truth.info().home()).unwrap();
         let r: Vec<f64> = sim
             .poses
             .iter()

@@ -1,6 +1,6 @@
 //! A six-axis robot along a path: a program's move "to" a pose that differs from the
 //! current one only by rounding is no motion (`motion/path.rs`, `MIN_MOVE`), and the
-//! joints of a run continue from sample to sample (`Mechanism::follow`): whole turns
+//! joints of a run continue from sample to sample (`Follow::follow`): whole turns
 //! and the posture are carried on, not taken afresh nearest the home joints.
 
 use nalgebra::{SVector, Vector6};
@@ -78,7 +78,7 @@ fn a_change_below_the_shortest_move_is_no_motion() {
     let m = load("kr30-dh.toml");
     let a = arm_of(&m);
     let q = quantities(a);
-    let start = a.home();
+    let start = a.info().home();
     let end = Vector6::from_fn(|k, _| {
         let user = (q[k].to_user(start[k]) * 1e4).round() / 1e4;
         match q[k] {

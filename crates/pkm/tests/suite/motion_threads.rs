@@ -368,7 +368,7 @@ fn run_move_stops_at_a_failing_sink() {
         panic!()
     };
     let h = *h;
-    let home = pkm::Mechanism::home(&h);
+    let home = pkm::Mechanism::info(&h).home();
     let mut to = home;
     to[0] += 50.0;
     let q = [pkm::Quantity::Length; 6];

@@ -45,7 +45,7 @@ fn hand_construction_closes_the_loop() {
     // Y = e, the angle from the spindle axis (vertical at theta = 0, turned by theta)
     // to AB is delta, and C lies above B.
     let h = head();
-    let g = &h.geometry;
+    let g = &h.geometry();
     for x in workspace_grid() {
         let [a, b, c, tool] = g.points(x[0], x[1]).unwrap();
         let q = h.inverse(&x).unwrap();
@@ -64,11 +64,11 @@ fn hand_construction_closes_the_loop() {
 #[test]
 fn round_trip_on_both_branches() {
     let h = head();
-    let g = &h.geometry;
+    let g = &h.geometry();
     let mut other = 0;
     for x in workspace_grid() {
         let q = h.inverse(&x).unwrap();
-        let f = h.forward(&q, &h.home).unwrap();
+        let f = h.forward(&q, &h.info().home()).unwrap();
         assert!((f.pose - x).amax() < 1e-9, "{x:?} -> {:?}", f.pose);
         assert_eq!(f.iterations, 0);
         // The other branch is also an assembly with the same sliders.
@@ -90,7 +90,7 @@ fn round_trip_on_both_branches() {
 #[test]
 fn branch_rule_of_the_paper() {
     let h = head();
-    let g = &h.geometry;
+    let g = &h.geometry();
     for x in workspace_grid() {
         let q = h.inverse(&x).unwrap();
         let [pos, neg] = g.forward_branches(q[0], q[1]);
@@ -119,7 +119,7 @@ proptest! {
         let h = head();
         let x = Vector2::new(z, theta);
         let q = h.inverse(&x).unwrap();
-        let f = h.forward(&q, &h.home).unwrap();
+        let f = h.forward(&q, &h.info().home()).unwrap();
         prop_assert!((f.pose - x).amax() < 1e-9);
         prop_assert!(f.residual < 1e-9);
     }
@@ -131,7 +131,7 @@ proptest! {
         let m = hybrid();
         let p = Vector6::new(x, y, z, a, 0.0, 0.0);
         let q = m.inverse(&p).unwrap();
-        let f = m.forward(&q, &m.home).unwrap();
+        let f = m.forward(&q, &m.info().home()).unwrap();
         prop_assert!((f.pose - p).amax() < 1e-9);
     }
 }
@@ -149,14 +149,14 @@ fn jacobians_equal_finite_differences() {
     for x in workspace_grid().step_by(5) {
         let w = 0.7;
         let d = 1e-6;
-        let g = &h.geometry;
+        let g = &h.geometry();
         let jd =
             (g.jacobian(x[1] + w * d).unwrap() - g.jacobian(x[1] - w * d).unwrap()) / (2.0 * d);
         let an = g.jacobian_derivative(x[1], w).unwrap();
         assert!((jd - an).amax() < 1e-6 * an.amax().max(1.0), "{jd} {an}");
     }
     // g' and g'' against central differences of g.
-    let g = &h.geometry;
+    let g = &h.geometry();
     for k in 0..=30 {
         let t = -0.3 + 0.07 * k as f64;
         let s = g.separation(t).unwrap();
@@ -214,13 +214,13 @@ fn slider_motion_equals_finite_differences() {
 #[test]
 fn singular_configuration_q_is_reported_not_returned() {
     let h = head();
-    let g = &h.geometry;
+    let g = &h.geometry();
     // At Q (rod stretched along the crank) the slider separation is largest.
     let dq = g.singular_separation();
     let err = g.forward(300.0, 300.0 + dq, Branch::Positive).unwrap_err();
     assert!(matches!(err, Error::Singular { .. }), "{err}");
     assert!(h
-        .forward(&Vector2::new(300.0, 300.0 + dq), &h.home)
+        .forward(&Vector2::new(300.0, 300.0 + dq), &h.info().home())
         .is_err());
     // Beyond it there is no assembly at all.
     let err = g
@@ -330,7 +330,7 @@ fn paper_move_reproduces_slider_v_peaks() {
 #[test]
 fn hybrid_machine_compensates_the_tool_tilt() {
     let m = hybrid();
-    let l = m.head.tool_length;
+    let l = m.head().tool_length;
     let p = Vector6::new(40.0, 25.0, 60.0, 0.5, 0.0, 0.0);
     let q = m.inverse(&p).unwrap();
     // Table X follows X; table Y takes back the tip's sideways swing L sin A; U lifts
@@ -442,7 +442,7 @@ fn assembly_modes_are_the_two_branches() {
     let modes = assembly_modes(&h, &q, &spread_starts(&h, 50), 1e-9);
     assert_eq!(modes.len(), 2);
     assert!((modes[0].pose - Vector2::new(300.0, 0.6)).amax() < 1e-9);
-    let g = &h.geometry;
+    let g = &h.geometry();
     assert_eq!(g.branch_of(modes[1].pose[1]).unwrap(), Branch::Negative);
 }
 
@@ -454,7 +454,7 @@ fn transmission_figures_of_the_head() {
     let h = head();
     for x in workspace_grid().step_by(11) {
         let t = pkm::transmission::transmission(&h, &x).unwrap();
-        let dg = h.geometry.separation(x[1]).unwrap().dg;
+        let dg = h.geometry().separation(x[1]).unwrap().dg;
         assert!((t.velocity.unwrap() - 2f64.sqrt()).abs() < 1e-12);
         assert!((t.angular_velocity.unwrap() - dg.abs()).abs() < 1e-9);
         assert!((t.force.unwrap() - 1.0).abs() < 1e-12);
@@ -472,9 +472,9 @@ fn transmission_figures_of_the_head() {
 fn position_limits_named_once_give_the_formatted_violations() {
     use pkm::Range;
     let h = head();
-    let acts = h.actuators().clone();
+    let acts = h.info().actuators().clone();
     let m = hybrid();
-    let macts = m.actuators().clone();
+    let macts = m.info().actuators().clone();
     let (mut seen_head, mut seen_hybrid) = (0, 0);
     for i in 0..=20 {
         for k in 0..=20 {
@@ -483,7 +483,7 @@ fn position_limits_named_once_give_the_formatted_violations() {
             let q = Vector2::new(-100.0 + 900.0 * t, 800.0 - 900.0 * s);
             let (mut named, mut formatted) = (Vec::new(), Vec::new());
             Mechanism::check_limits(&h, &x, &q, &mut named);
-            h.geometry
+            h.geometry()
                 .check_limits(&acts, x[1], q.as_slice(), &mut formatted);
             assert_eq!(named, formatted, "head at {x:?}, {q:?}");
             seen_head += named.len();
@@ -504,7 +504,7 @@ fn position_limits_named_once_give_the_formatted_violations() {
                     &mut expected,
                 );
             }
-            m.head
+            m.head()
                 .check_limits(&macts[2..], xm[3], &qm.as_slice()[2..], &mut expected);
             for (j, n) in [(4, "B"), (5, "C")] {
                 Range { min: 0.0, max: 0.0 }.check(

@@ -157,7 +157,10 @@ fn the_singular_angle_is_the_tool_axis_inverses_distance() {
         assert!((a - sol.singular_distance).abs() < 1e-9, "{a} {sol:?}");
         // MC-300's C table is on the B table: the angle to C's axis is |B|.
         assert!((a - q[3].abs().min(std::f64::consts::PI - q[3].abs())).abs() < 1e-9);
-        assert_eq!(t.singular_distance(&x), Some(a));
+        assert_eq!(
+            pkm::Mechanism::tool_axis(t).unwrap().singular_distance(&x),
+            Some(a)
+        );
     }
 }
 
@@ -443,7 +446,7 @@ fn sensitivities_along_a_path_are_at_the_runs_joints() {
     let SerialAny::Arm(arm) = &s.mechanism else {
         panic!("a robot expected")
     };
-    let machine = &arm.machine;
+    let machine = &arm.machine();
     let params = machine.all_parameters();
     let which: Vec<usize> = (0..params.len()).collect();
     let mut rng = rand::rngs::StdRng::seed_from_u64(21);

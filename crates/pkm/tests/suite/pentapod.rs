@@ -150,7 +150,7 @@ fn forward_kinematics_round_trips_from_home_and_from_a_nearby_start() {
         // Over the sim's whole travel (as large as its struts, across singular
         // surfaces: the condition number passes 1e4 inside it), the branch through home
         // need not be the pose's; whatever FK returns must have these strut lengths.
-        let f = m.forward(&q, &m.home()).unwrap();
+        let f = m.forward(&q, &m.info().home()).unwrap();
         assert!((m.inverse(&f.pose).unwrap() - q).amax() < 1e-9, "{f:?}");
         // From a start near the pose (a controller's last position, one servo period
         // away), the pose itself. Near the travel's edge (A = 50 deg) the condition
@@ -173,7 +173,7 @@ fn forward_kinematics_round_trips_from_home_and_from_a_nearby_start() {
             rng.random_range(-10f64..10.0).to_radians(),
             0.0,
         );
-        let rt = round_trip(&m, &x, &m.home()).unwrap();
+        let rt = round_trip(&m, &x, &m.info().home()).unwrap();
         assert!(
             rt.position_error < 1e-9 && rt.orientation_error < 1e-9,
             "from home: {rt:?} at {x:?} (condition {:?})",
@@ -263,7 +263,7 @@ fn geometry_sensitivities_match_finite_differences() {
 fn orientation_errors_are_the_tool_axis_tilt_without_the_free_spin() {
     use pkm::accuracy::Evaluate;
     let m = example();
-    assert!(m.free_spin());
+    assert!(m.info().free_spin());
     let mut rng = rand::rngs::StdRng::seed_from_u64(12);
     let n = m.parameters().len();
     for _ in 0..10 {
@@ -380,11 +380,11 @@ fn the_sim_home_joint_values_are_not_the_inverse_of_its_axis_home() {
     // What the INI ships as [JOINT_n] HOME, against the struts of the axis home (0, ..., 0):
     // the importer must not take them as home lengths.
     let m = example();
-    let q = m.inverse(&m.home()).unwrap();
+    let q = m.inverse(&m.info().home()).unwrap();
     let ini = SVector::<f64, 5>::from([598.5792, 697.1982, 682.785, 787.9175, 806.0397]);
     assert!((q - ini).amax() > 100.0);
     // And no pose near home has them: Newton from home does not reach them.
-    assert!(m.forward(&ini, &m.home()).is_err());
+    assert!(m.forward(&ini, &m.info().home()).is_err());
 }
 
 /// The struts' length limits, named when the machine is built: beyond every stroke,

@@ -3,7 +3,7 @@
 use nalgebra::{Matrix3, Matrix4, Rotation3, Vector3};
 use pkm::serial::completion::complete;
 use pkm::serial::{Chain, Joint, JointKind, Link, LinkDeviation};
-use pkm::{Error, Range};
+use pkm::{Error, Mechanism, Range};
 
 fn small_rotation(w: [f64; 3]) -> Matrix3<f64> {
     *Rotation3::new(Vector3::from(w)).matrix()
@@ -359,7 +359,7 @@ fn monte_carlo_converges_to_the_first_order_prediction() {
         nalgebra::SVector::<f64, 5>::from_column_slice(&[qt[0], qt[1], qt[2], qw[0], qw[1]]),
     )
     .unwrap();
-    let x = mech.home;
+    let x = mech.info().home();
     let all = m.all_parameters();
     let tol: Vec<Tolerance> = all
         .iter()
@@ -881,11 +881,11 @@ fn check_joint_space_tool_poses<const N: usize>(
     use pkm::Mechanism;
     use rand::{Rng, SeedableRng};
     let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
-    let nt = mech.machine.tool.dof();
+    let nt = mech.machine().tool.dof();
     for _ in 0..2000 {
         let x = nalgebra::SVector::<f64, N>::from_fn(|_, _| rng.random_range(-3.0..3.0));
         let (qt, qw) = x.as_slice().split_at(nt);
-        let by_walk = mech.machine.pose(qt, qw, &[]).unwrap();
+        let by_walk = mech.machine().pose(qt, qw, &[]).unwrap();
         let prepared = mech.tool_pose(&x).unwrap().to_homogeneous();
         let dp = (prepared.fixed_view::<3, 1>(0, 3) - by_walk.fixed_view::<3, 1>(0, 3)).amax();
         let dr = (prepared.fixed_view::<3, 3>(0, 0) - by_walk.fixed_view::<3, 3>(0, 0)).amax();
@@ -901,7 +901,7 @@ fn check_joint_space_tool_poses<const N: usize>(
 fn joint_space_tool_poses_equal_the_machines_pose() {
     use pkm::serial::mechanism::SerialMechanism;
     let five = SerialMechanism::<5>::new(five_axis(), nalgebra::SVector::zeros()).unwrap();
-    assert!(five.machine.workpiece.is_some());
+    assert!(five.machine().workpiece.is_some());
     check_joint_space_tool_poses(&five, 300.0, 1);
     let kr30 = crate::common::example("kr30-dh.toml");
     let pkm::machine::Model::Serial(s) = &kr30.model else {

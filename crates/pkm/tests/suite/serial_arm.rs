@@ -52,9 +52,10 @@ fn kr30_band(u: &[f64; 6]) -> Vector6<f64> {
 #[test]
 fn six_joint_files_take_tool_poses_and_five_axis_files_their_joints() {
     let a = arm("machines/kr30-dh.toml");
-    assert_eq!(a.pose_space(), PoseSpace::Spatial);
+    assert_eq!(a.info().pose_space(), PoseSpace::Spatial);
     assert_eq!(
-        a.coordinates()
+        a.info()
+            .coordinates()
             .iter()
             .map(|c| c.name.as_str())
             .collect::<Vec<_>>(),
@@ -62,7 +63,7 @@ fn six_joint_files_take_tool_poses_and_five_axis_files_their_joints() {
     );
     // Home: wrist centre at X = a1 + d4 = 1170, Z = d1 + a2 + a3 = 1810; wrist bent
     // 90 deg, so flange (170) and tool (100) hang straight down from it.
-    let h = a.home();
+    let h = a.info().home();
     assert!((h[0] - 1170.0).abs() < 1e-9, "{h}");
     assert!(h[1].abs() < 1e-9, "{h}");
     assert!((h[2] - 1540.0).abs() < 1e-9, "{h}");
@@ -80,8 +81,8 @@ fn six_joint_files_take_tool_poses_and_five_axis_files_their_joints() {
 fn pose_jacobian_and_forward_agree_with_the_chain() {
     let a = arm("machines/kr30-dh.toml");
     let q = kr30_joints(&[0.3, 0.6, 0.4, 0.7, 0.5, 0.2]);
-    let x = a.forward(&q, &a.home()).unwrap().pose;
-    let t = a.machine.pose(q.as_slice(), &[], &[]).unwrap();
+    let x = a.forward(&q, &a.info().home()).unwrap().pose;
+    let t = a.machine().pose(q.as_slice(), &[], &[]).unwrap();
     for r in 0..3 {
         assert!((x[r] - t[(r, 3)]).abs() < 1e-9);
     }
@@ -124,11 +125,11 @@ fn inverse_recovers_the_joints_from_a_nearby_start_and_the_pose_from_home() {
 fn unreachable_pose_reports_the_residual() {
     let a = arm("machines/kr30-dh.toml");
     // Beyond any reach: refused at once, with the distances.
-    let mut x = a.home();
+    let mut x = a.info().home();
     x[0] = 5000.0;
     // The bound: the sum of the tool chain's link translations (all joints revolute).
     let reach: f64 = a
-        .machine
+        .machine()
         .tool
         .links
         .iter()
@@ -154,7 +155,7 @@ fn unreachable_pose_reports_the_residual() {
         }
         other => panic!("{other:?}"),
     }
-    match a.inverse_numeric_from(&x, &a.home_joints) {
+    match a.inverse_numeric_from(&x, &a.home_joints()) {
         Err(pkm::Error::NotConverged { residual, .. }) => assert!(residual > 100.0, "{residual}"),
         other => panic!("{other:?}"),
     }
@@ -307,7 +308,7 @@ fn inverse_from_home_reaches_every_pose_forward_kinematics_produces() {
         let mut failures = Vec::new();
         for _ in 0..3000 {
             let q = Vector6::from_fn(|i, _| {
-                let r = a.actuators()[i].range;
+                let r = a.info().actuators()[i].range;
                 let (lo, hi) = (r.min.max(-PI), r.max.min(PI));
                 rng.random_range(lo..=hi)
             });

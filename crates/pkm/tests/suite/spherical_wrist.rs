@@ -22,7 +22,7 @@ const WRISTS: [&str; 4] = [
 /// Joint values uniform over each joint's range (clipped to one turn).
 fn random_joints(a: &SerialArm, rng: &mut impl Rng) -> Vector6<f64> {
     Vector6::from_fn(|i, _| {
-        let r = a.actuators()[i].range;
+        let r = a.info().actuators()[i].range;
         rng.random_range(r.min.max(-PI)..=r.max.min(PI))
     })
 }
@@ -172,7 +172,7 @@ fn inverse_from_returns_the_posture_nearest_the_start() {
 fn out_of_reach_agrees_with_the_numeric_solver() {
     for f in WRISTS {
         let a = arm(f);
-        let b = a.position_bound(&a.home()).unwrap();
+        let b = a.position_bound(&a.info().home()).unwrap();
         let mut rng = rand::rngs::StdRng::seed_from_u64(3);
         let (mut out, mut both) = (0, 0);
         for _ in 0..300 {
@@ -187,7 +187,7 @@ fn out_of_reach_agrees_with_the_numeric_solver() {
                 }
             });
             let closed = a.inverse(&x);
-            let numeric = a.inverse_numeric_from(&x, &a.home_joints);
+            let numeric = a.inverse_numeric_from(&x, &a.home_joints());
             match (&closed, &numeric) {
                 (Err(pkm::Error::NotAttainable { .. }), Err(_)) => out += 1,
                 (Ok(q), _) => {

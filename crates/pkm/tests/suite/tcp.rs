@@ -423,7 +423,12 @@ joint = { name = "C", type = "revolute", range = [-3600.0, 3600.0] }
 fn a_tilting_head_machine_inverts_forwards_and_differentiates_exactly() {
     let m = Machine::from_toml_str(HEAD, "head.toml").unwrap();
     let t = tcp5(&m);
-    let names: Vec<&str> = t.coordinates().iter().map(|c| c.name.as_str()).collect();
+    let names: Vec<&str> = t
+        .info()
+        .coordinates()
+        .iter()
+        .map(|c| c.name.as_str())
+        .collect();
     assert_eq!(names, ["X", "Y", "Z", "A", "C"]);
     // At A = C = 0 the tool hangs 150 mm below the head's axis, which is 300 mm above
     // the Z slide's origin: tip = slides + (0, 0, 150) less the table's origin.
@@ -445,14 +450,14 @@ fn a_tilting_head_machine_inverts_forwards_and_differentiates_exactly() {
     // rows and columns: by hand, dq/dx at home is I with the slides' compensation of
     // A (tip 150 mm below its axis: -(0, 150, 0) / 150) and of C (tip at (-10, -20) from
     // its axis, seen from the part turning the other way: (20, -10, 0) / 150).
-    assert_eq!(t.characteristic_length(), 150.0);
+    assert_eq!(t.info().characteristic_length(), 150.0);
     let mut hand = nalgebra::SMatrix::<f64, 5, 5>::identity();
     hand[(1, 3)] = -1.0;
     hand[(0, 4)] = 20.0 / 150.0;
     hand[(1, 4)] = -10.0 / 150.0;
     let sv = hand.singular_values();
     let want = sv.max() / sv.min();
-    let got = t.condition(&t.home()).unwrap();
+    let got = t.condition(&t.info().home()).unwrap();
     assert!((got - want).abs() < 1e-9 * want, "{got} vs {want}");
     let mut rng = rand::rngs::StdRng::seed_from_u64(5);
     for _ in 0..500 {
@@ -636,10 +641,15 @@ fn the_imported_sim_equals_xyzbc_trt_kins_both_directions() {
             let (m, imp) = import_sim(conv, tool);
             assert_eq!(imp.kinematics, "xyzbc-trt-kins");
             let t = tcp5(&m);
-            let names: Vec<&str> = t.actuators().iter().map(|a| a.name.as_str()).collect();
+            let names: Vec<&str> = t
+                .info()
+                .actuators()
+                .iter()
+                .map(|a| a.name.as_str())
+                .collect();
             assert_eq!(names, ["X", "Y", "Z", "B", "C"]);
-            assert_eq!(t.actuators()[3].range.max, 50f64.to_radians());
-            assert_eq!(t.actuators()[0].max_velocity, Some(20.0));
+            assert_eq!(t.info().actuators()[3].range.max, 50f64.to_radians());
+            assert_eq!(t.info().actuators()[0].max_velocity, Some(20.0));
             let p = Trt {
                 rot: [0.0; 3],
                 dx: -20.0,
@@ -834,7 +844,12 @@ fn an_xyzac_configuration_imports_as_xyzac_trt_kins() {
         assert_eq!(imp.kinematics, "xyzac-trt-kins");
         let m = Machine::from_toml_str(&imp.toml, "xyzac.toml").unwrap();
         let t = tcp5(&m);
-        let names: Vec<&str> = t.coordinates().iter().map(|c| c.name.as_str()).collect();
+        let names: Vec<&str> = t
+            .info()
+            .coordinates()
+            .iter()
+            .map(|c| c.name.as_str())
+            .collect();
         assert_eq!(names, ["X", "Y", "Z", "A", "C"]);
         let p = Trt {
             rot: [0.0; 3],
@@ -862,7 +877,7 @@ fn joint_rates_are_read_and_bad_ones_named() {
         "range = [-100.0, 100.0], max_velocity = 90.0, max_acceleration = 900.0 }",
     );
     let m = Machine::from_toml_str(&text, "head.toml").unwrap();
-    let a = &tcp5(&m).actuators()[3];
+    let a = &tcp5(&m).info().actuators()[3];
     assert_eq!(a.max_velocity, Some(90f64.to_radians()));
     assert_eq!(a.max_acceleration, Some(900f64.to_radians()));
     let bad = HEAD.replace(

@@ -53,7 +53,7 @@ proptest! {
         let t = translational();
         let pose = Vector6::new(x, y, z, a, b, c);
         prop_assume!(within_limits(&t, &pose));
-        let mut start = t.home();
+        let mut start = t.info().home();
         start.fixed_rows_mut::<3>(3).copy_from(&pose.fixed_rows::<3>(3));
         let r = round_trip(&t, &pose, &start).unwrap();
         prop_assert!(r.position_error < 1e-9, "{:?}", r);
@@ -66,7 +66,7 @@ proptest! {
         let t = centre_leg();
         let pose = Vector3::new(x, y, z);
         prop_assume!(within_limits(&t, &pose));
-        let r = round_trip(&t, &pose, &t.home()).unwrap();
+        let r = round_trip(&t, &pose, &t.info().home()).unwrap();
         prop_assert!(r.position_error < 1e-9, "{:?}", r);
         prop_assert!(r.orientation_error < 1e-9, "{:?}", r);
         prop_assert!(r.iterations <= 10, "{:?}", r);
@@ -95,7 +95,7 @@ proptest! {
         let t = translational();
         let pose = Vector6::new(x, y, z, a, b, 0.0);
         let q = t.inverse(&pose).unwrap();
-        let mut start = t.home();
+        let mut start = t.info().home();
         start[3] = a;
         start[4] = b;
         let closed = t.forward(&q, &start).unwrap();
@@ -112,9 +112,9 @@ fn centre_leg_holds_the_tool_on_the_leg_axis() {
     let t = centre_leg();
     let p = Vector3::new(40.0, -25.0, -300.0);
     let st = t.leg_state(&p).unwrap();
-    let b = t.leg.base + st.rotation * Vector3::new(0.0, 0.0, -st.length);
-    let ob = b - t.leg.base;
-    let ap = p - t.leg.base;
+    let b = t.leg().base + st.rotation * Vector3::new(0.0, 0.0, -st.length);
+    let ob = b - t.leg().base;
+    let ap = p - t.leg().base;
     assert!(ob.cross(&ap).norm() < 1e-9);
     assert!((ap.norm() - st.length - 90.0).abs() < 1e-9);
     // The universal joint never spins the platform about the leg: R = Rx Ry.
@@ -125,7 +125,7 @@ fn centre_leg_holds_the_tool_on_the_leg_axis() {
 #[test]
 fn translational_fk_picks_the_assembly_mode_near_the_start() {
     let t = translational();
-    let pose = t.home();
+    let pose = t.info().home();
     let q = t.inverse(&pose).unwrap();
     let f = t.forward(&q, &pose).unwrap();
     assert!((f.pose - pose).amax() < 1e-9);
@@ -140,7 +140,7 @@ fn translational_fk_picks_the_assembly_mode_near_the_start() {
 #[test]
 fn inconsistent_lengths_are_not_attainable() {
     let t = translational();
-    let r = t.forward(&Vector3::new(10.0, 10.0, 400.0), &t.home());
+    let r = t.forward(&Vector3::new(10.0, 10.0, 400.0), &t.info().home());
     assert!(matches!(r, Err(Error::NotAttainable { .. })), "{r:?}");
 }
 
@@ -190,7 +190,7 @@ fn tilt_and_strut_spindle_collision() {
     let tilt = v.iter().find(|x| x.kind == LimitKind::Tilt).unwrap();
     assert!((tilt.excess - 5.0).abs() < 1e-9 && tilt.unit == "deg");
     // Untilted: each strut leans lambda = atan(57.7 / 200) ~ 16.1 deg away from the spindle.
-    let ang = t.geometry.strut_spindle_angles(
+    let ang = t.tripod_geometry().strut_spindle_angles(
         &Vector3::new(0.0, 0.0, -290.0),
         &nalgebra::Matrix3::identity(),
     );
@@ -203,15 +203,15 @@ fn tilt_and_strut_spindle_collision() {
     let r = pkm::rotation::rx(-phi);
     let p = Vector3::new(0.0, 0.0, -290.0);
     let before = t
-        .geometry
+        .tripod_geometry()
         .strut_spindle_angles(&p, &nalgebra::Matrix3::identity());
     // Keep the platform centre where it was, so the strut geometry only rotates.
-    let b = p - t.geometry.tool;
-    let p_tilted = b + r * t.geometry.tool;
-    let after = t.geometry.strut_spindle_angles(&p_tilted, &r);
+    let b = p - t.tripod_geometry().tool;
+    let p_tilted = b + r * t.tripod_geometry().tool;
+    let after = t.tripod_geometry().strut_spindle_angles(&p_tilted, &r);
     let lambda_f = {
-        let plat = b + r * t.geometry.struts[1].platform;
-        let s = (t.geometry.struts[1].base - plat).normalize();
+        let plat = b + r * t.tripod_geometry().struts[1].platform;
+        let s = (t.tripod_geometry().struts[1].base - plat).normalize();
         s.y.atan2(s.z)
     };
     assert!(before[1] > after[1]);
@@ -256,7 +256,7 @@ fn singular_newton_is_reported() {
     // A degenerate start where the driven Jacobian vanishes: the tool tip at the leg
     // joint itself is not attainable at all.
     let t = centre_leg();
-    let r = t.inverse(&t.leg.base);
+    let r = t.inverse(&t.leg().base);
     assert!(matches!(r, Err(Error::NotAttainable { .. })), "{r:?}");
 }
 

@@ -2,6 +2,7 @@
 
 use nalgebra::Vector6;
 use pkm::machine::Model;
+use pkm::mechanism::abilities;
 use pkm::workspace::{flat_index, map, reachable_tilt, GridAxis};
 use pkm::{inverse_checked, Machine, Mechanism};
 
@@ -38,7 +39,7 @@ fn grid_points_agree_with_direct_evaluation() {
             step: 35.0,
         },
     ];
-    let wm = map(&t, &t.home(), &axes, &[], &|_| {}).unwrap();
+    let wm = map(&t, &t.info().home(), &axes, &[], &|_| {}).unwrap();
     assert_eq!(wm.points.len(), 11 * 9 * 5);
     let mut reachable = 0;
     let mut every: std::collections::BTreeMap<String, usize> = Default::default();
@@ -73,7 +74,7 @@ fn grid_points_agree_with_direct_evaluation() {
             }
         }
     }
-    let s = wm.summary_of(pkm::Mechanism::coordinates(&t));
+    let s = wm.summary_of(pkm::Mechanism::info(&t).coordinates());
     assert_eq!(s.reachable, reachable);
     // Every violated limit counted, not only the first: the tally equals a direct
     // count, and a point beyond several limits counts for each.
@@ -125,14 +126,14 @@ fn hexapod_conditioning_is_consistent() {
     };
     // The symmetric home pose is well conditioned; the condition number is that of the
     // twist Jacobian with rotations scaled by the characteristic length.
-    let c = h.condition(&h.home).unwrap();
+    let c = h.condition(&h.info().home()).unwrap();
     assert!(c > 1.0 && c < 3.0, "{c}");
-    let (p, r) = pkm::legs::split_pose(&h.home);
+    let (p, r) = pkm::legs::split_pose(&h.info().home());
     let sv = pkm::linalg::singular_values(&h.scaled_twist_jacobian(&p, &r));
     assert!((sv[0] / sv[5] - c).abs() < 1e-9 * c);
     // Orientation workspace at home: every returned tilt is reachable, a bit more is not.
     let az = [0.0, 1.0, 2.0, 3.0];
-    let tilts = reachable_tilt(h.as_ref(), &h.home, &az, 1.0, 1e-6).unwrap();
+    let tilts = reachable_tilt(h.as_ref(), &h.info().home(), &az, 1.0, 1e-6).unwrap();
     for (a, t) in az.iter().zip(&tilts) {
         assert!(*t > 0.05 && *t < 1.0, "{t}");
         let ok = |tt: f64| {
@@ -140,7 +141,14 @@ fn hexapod_conditioning_is_consistent() {
                 nalgebra::Unit::new_normalize(nalgebra::Vector3::new(-a.sin(), a.cos(), 0.0));
             let ang = pkm::Convention::Rpy
                 .from_matrix(nalgebra::Rotation3::from_axis_angle(&axis, tt).matrix());
-            let x = Vector6::new(h.home[0], h.home[1], h.home[2], ang[0], ang[1], ang[2]);
+            let x = Vector6::new(
+                h.info().home()[0],
+                h.info().home()[1],
+                h.info().home()[2],
+                ang[0],
+                ang[1],
+                ang[2],
+            );
             inverse_checked(h.as_ref(), &x).is_ok()
         };
         assert!(ok(t - 1e-5) && !ok(t + 1e-5));
@@ -166,9 +174,9 @@ fn hexapod_condition_numbers_agree_with_the_plain_ql_and_an_svd() {
             let spread = if k % 2 == 0 { 100.0 } else { 400.0 };
             let tilt = if k % 2 == 0 { 0.17 } else { 1.2 };
             let x = Vector6::new(
-                h.home[0] + rng.random_range(-spread..spread),
-                h.home[1] + rng.random_range(-spread..spread),
-                h.home[2] + rng.random_range(-spread..spread),
+                h.info().home()[0] + rng.random_range(-spread..spread),
+                h.info().home()[1] + rng.random_range(-spread..spread),
+                h.info().home()[2] + rng.random_range(-spread..spread),
                 rng.random_range(-tilt..tilt),
                 rng.random_range(-tilt..tilt),
                 rng.random_range(-tilt..tilt),
@@ -203,7 +211,7 @@ fn hexapod_condition_numbers_agree_with_the_plain_ql_and_an_svd() {
 /// set (the total orientation workspace of `--tilt 12`), a point is reachable when
 /// every orientation is, and its condition is the largest of theirs, bit for bit; a
 /// point beyond a limit names the first orientation's first violated limit.
-/// `Mechanism::conditions` equals `condition` pose by pose, bit for bit.
+/// `abilities::conditions` equals `condition` pose by pose, bit for bit.
 #[test]
 fn hexapod_map_conditions_equal_those_of_single_poses() {
     let Model::Hexapod(h) = machine("hexapod-linuxcnc.toml").model else {
@@ -230,8 +238,12 @@ fn hexapod_map_conditions_equal_those_of_single_poses() {
         },
     ];
     let tilts = pkm::workspace::tilt_orientations(12f64.to_radians());
-    let wm = map(h.as_ref(), &h.home, &axes, &tilts, &|_| {}).unwrap();
-    let base = pkm::Convention::Rpy.to_matrix([h.home[3], h.home[4], h.home[5]]);
+    let wm = map(h.as_ref(), &h.info().home(), &axes, &tilts, &|_| {}).unwrap();
+    let base = pkm::Convention::Rpy.to_matrix([
+        h.info().home()[3],
+        h.info().home()[4],
+        h.info().home()[5],
+    ]);
     let (mut reachable, mut beyond) = (0, 0);
     let mut xs = Vec::new();
     for (k, p) in wm.points.iter().enumerate() {
@@ -268,7 +280,7 @@ fn hexapod_map_conditions_equal_those_of_single_poses() {
     // Any count, not a multiple of eight.
     xs.truncate(8 * 40 + 5);
     let mut out = vec![0.0; xs.len()];
-    h.conditions(&xs, &[], &mut out);
+    abilities::conditions(&*h, &xs, &[], &mut out);
     for (x, c) in xs.iter().zip(&out) {
         assert_eq!(c.to_bits(), h.condition(x).unwrap().to_bits(), "{x}");
     }
@@ -299,7 +311,7 @@ fn total_orientation_workspace_is_smaller() {
             step: 40.0,
         },
     ];
-    let plain = map(h.as_ref(), &h.home, &axes, &[], &|_| {}).unwrap();
+    let plain = map(h.as_ref(), &h.info().home(), &axes, &[], &|_| {}).unwrap();
     let tilt = 10f64.to_radians();
     let set: Vec<[f64; 3]> = (0..8)
         .map(|k| {
@@ -310,7 +322,7 @@ fn total_orientation_workspace_is_smaller() {
                 .from_matrix(nalgebra::Rotation3::from_axis_angle(&axis, tilt).matrix())
         })
         .collect();
-    let total = map(h.as_ref(), &h.home, &axes, &set, &|_| {}).unwrap();
+    let total = map(h.as_ref(), &h.info().home(), &axes, &set, &|_| {}).unwrap();
     let n = |w: &pkm::workspace::WorkspaceMap| w.points.iter().filter(|p| p.reachable).count();
     assert!(
         n(&total) < n(&plain) && n(&total) > 0,
@@ -344,7 +356,7 @@ fn atlas_rates_are_the_worst_case_over_the_capacity_box() {
         acceleration: Vector2::new(9806.65, 30.0),
     };
     let axes = [axis(0, 200.0, 520.0, 40.0), axis(1, 0.0, 1.57, 0.157)];
-    let a = atlas(h.as_ref(), &h.home(), &axes, &cap, &|_| {}).unwrap();
+    let a = atlas(h.as_ref(), &h.info().home(), &axes, &cap, &|_| {}).unwrap();
     assert_eq!(a.points.len(), 9 * 11);
     for (k, p) in a.points.iter().enumerate() {
         let x = Vector2::new(axes[0].value(k / 11), axes[1].value(k % 11));
@@ -378,7 +390,14 @@ fn forward_map_poses_close_the_loop() {
         panic!()
     };
     let axes = [axis(0, 190.0, 530.0, 10.0), axis(1, 480.0, 840.0, 10.0)];
-    let f = forward_map(h.as_ref(), &Vector2::zeros(), &axes, &h.home(), &|_| {}).unwrap();
+    let f = forward_map(
+        h.as_ref(),
+        &Vector2::zeros(),
+        &axes,
+        &h.info().home(),
+        &|_| {},
+    )
+    .unwrap();
     let mut reachable = 0;
     for (k, p) in f.points.iter().enumerate() {
         let q = Vector2::new(axes[0].value(k / 37), axes[1].value(k % 37));
@@ -403,11 +422,11 @@ fn forward_map_poses_close_the_loop() {
     let Model::TranslationalTripod(t) = machine("tripod-seed000.toml").model else {
         panic!()
     };
-    let q0 = t.inverse(&t.home()).unwrap();
+    let q0 = t.inverse(&t.info().home()).unwrap();
     let axes: Vec<GridAxis> = (0..3)
         .map(|i| axis(i, q0[i] - 20.0, q0[i] + 20.0, 10.0))
         .collect();
-    let f = forward_map(&t, &Vector3::zeros(), &axes, &t.home(), &|_| {}).unwrap();
+    let f = forward_map(&t, &Vector3::zeros(), &axes, &t.info().home(), &|_| {}).unwrap();
     assert_eq!(f.points.len(), 125);
     for (k, p) in f.points.iter().enumerate() {
         let q = Vector3::new(
@@ -583,7 +602,7 @@ fn position_bounds_hold_every_reachable_tool_point() {
     let pkm::serial::mechanism::SerialAny::Arm(arm) = &s.mechanism else {
         panic!()
     };
-    let b = arm.position_bound(&arm.home()).unwrap();
+    let b = arm.position_bound(&arm.info().home()).unwrap();
     for _ in 0..20_000 {
         let q = Vector6::from_fn(|_, _| rng.random_range(-6.3..6.3));
         let x = arm.coords_of_joints(&q);
@@ -676,7 +695,7 @@ fn serial_arm_conditions_equal_single_poses_and_an_svd() {
     let pkm::serial::mechanism::SerialAny::Arm(arm) = &s.mechanism else {
         panic!()
     };
-    let home = arm.home();
+    let home = arm.info().home();
     let axes = [
         GridAxis {
             coordinate: 0,
@@ -721,7 +740,7 @@ fn serial_arm_conditions_equal_single_poses_and_an_svd() {
     xs.push(arm.coords_of_joints(&q));
     xs.push(Vector6::new(9000.0, 0.0, 0.0, 0.0, 0.0, 0.0));
     let mut out = vec![0.0; xs.len()];
-    arm.conditions(&xs, &[], &mut out);
+    abilities::conditions(arm, &xs, &[], &mut out);
     let (mut compared, mut beyond, mut singular) = (0, 0, 0);
     let mut solved = Vec::new();
     let mut with_q = Vec::new();
@@ -754,7 +773,7 @@ fn serial_arm_conditions_equal_single_poses_and_an_svd() {
         "{compared} {beyond} {singular}"
     );
     let mut by_q = vec![0.0; solved.len()];
-    arm.conditions(&solved, &with_q, &mut by_q);
+    abilities::conditions(arm, &solved, &with_q, &mut by_q);
     for ((x, q), c) in solved.iter().zip(&with_q).zip(&by_q) {
         assert_eq!(
             c.to_bits(),

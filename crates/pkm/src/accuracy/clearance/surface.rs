@@ -110,7 +110,7 @@ where
 {
     surface.validate()?;
     check_heights(heights)?;
-    let home = m.tool_pose(&m.home())?;
+    let home = m.tool_pose(&m.info().home())?;
     (0..heights)
         .into_par_iter()
         .map(|i| {

@@ -65,10 +65,10 @@ pub fn study_circle(machine: &Machine, centre: &[f64], fraction: f64) -> Result<
     impl Visitor for Job<'_> {
         type Output = Result<StudyCircle>;
         fn visit<M: Analysable<P, A>, const P: usize, const A: usize>(self, m: &M) -> Self::Output {
-            if m.pose_space() == PoseSpace::Own || P < 3 {
+            if m.info().pose_space() == PoseSpace::Own || P < 3 {
                 return Err(Error::Unsupported {
-                    machine: m.name().into(),
-                    kind: m.kind().into(),
+                    machine: m.info().name().into(),
+                    kind: m.info().kind().into(),
                     analysis: "a circle in the workspace",
                     reason: "its pose is not X, Y, Z[, A, B, C]".into(),
                 });

@@ -42,7 +42,7 @@ impl Visitor for Simulate<'_, '_> {
         runner.set_singular_angle(self.feed.singular_angle)?;
         let mut notes: Vec<(u64, String)> = Vec::new();
         let mut dropped = 0;
-        let serial_idx: Vec<usize> = match m.pose_space() {
+        let serial_idx: Vec<usize> = match m.info().pose_space() {
             PoseSpace::Own => (0..P).collect(),
             _ => (0..3).collect(),
         };
@@ -79,8 +79,8 @@ impl Visitor for Simulate<'_, '_> {
             if let Some(t) = tracker_cell.borrow_mut().as_mut() {
                 t.add(s.t, s.line, &s.x, &s.act.q)?;
             }
-            let act = m.actuators();
-            let coords = m.coordinates();
+            let act = m.info().actuators();
+            let coords = m.info().coordinates();
             traces.line(s.t, s.line);
             traces.rows.push(|r| {
                 r[0] = s.t;
@@ -127,7 +127,7 @@ impl Visitor for Simulate<'_, '_> {
                 let from = crate::dynamic::fixed::<P>("--from", &from)?;
                 let to = crate::dynamic::fixed::<P>("--to", &to)?;
                 let q = crate::motion::run::quantities(m);
-                let spatial = m.pose_space() != PoseSpace::Own;
+                let spatial = m.info().pose_space() != PoseSpace::Own;
                 let segment = Segment::line(from, to, &q, spatial);
                 let prof = match (duration, accel_time, self.feed.profile) {
                     (Some(d), Some(ta), ProfileKind::Trapezoid) => {
@@ -174,7 +174,7 @@ impl Visitor for Simulate<'_, '_> {
                     .feed
                     .ok_or_else(|| invalid("feed", "a path needs a feed (mm/s or deg/s)"))?;
                 let q = crate::motion::run::quantities(m);
-                let spatial = m.pose_space() != PoseSpace::Own;
+                let spatial = m.info().pose_space() != PoseSpace::Own;
                 let pts = points
                     .iter()
                     .enumerate()
@@ -206,7 +206,7 @@ impl Visitor for Simulate<'_, '_> {
                 from,
                 setup,
             } => {
-                if m.pose_space() == PoseSpace::Own {
+                if m.info().pose_space() == PoseSpace::Own {
                     return Err(invalid(
                         "G-code",
                         "needs a machine whose pose is X, Y, Z[, A, B, C] or tool-centre-point \
@@ -215,7 +215,7 @@ impl Visitor for Simulate<'_, '_> {
                 }
                 let x = match from {
                     Some(x) => crate::dynamic::fixed::<P>("start pose", &x)?,
-                    None => m.home(),
+                    None => m.info().home(),
                 };
                 let mut interp = Interpreter::new(crate::motion::run::to_spatial(m, &x));
                 interp.work_offsets = setup.work_offsets;

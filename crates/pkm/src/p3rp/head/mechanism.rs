@@ -7,7 +7,8 @@ use super::{Branch, HeadGeometry};
 use crate::error::{Error, Result};
 use crate::limits::{PositionLimits, Violation};
 use crate::mechanism::{
-    Actuator, ActuatorMotion, Coordinate, LinkKind, Mechanism, PointRole, PoseSpace, Skeleton,
+    Actuator, ActuatorMotion, Coordinate, LinkKind, Mechanism, MechanismInfo, PointRole, PoseSpace,
+    Skeleton,
 };
 use crate::pose::{pose_from_parts, rotation_matrix, Pose};
 use crate::rotation::{angle_between, rx};
@@ -16,14 +17,11 @@ use crate::rotation::{angle_between, rx};
 /// `U` (D) and `V` (E).
 #[derive(Debug, Clone, PartialEq)]
 pub struct P3rpHead {
-    /// Machine name.
-    pub name: String,
     /// Geometry and limits.
-    pub geometry: HeadGeometry,
-    /// Home pose `(z, theta)`.
-    pub home: Vector2<f64>,
-    actuators: [Actuator; 2],
-    coordinates: [Coordinate; 2],
+    geometry: HeadGeometry,
+    /// Name, coordinates `(z, theta)`, sliders, home pose, characteristic length
+    /// (the geometry's `l1`).
+    info: MechanismInfo<2, 2>,
     /// The sliders' position limits, named once (`slider U position`).
     position_limits: PositionLimits,
 }
@@ -36,14 +34,33 @@ impl P3rpHead {
         actuators: [Actuator; 2],
         home: Vector2<f64>,
     ) -> Self {
+        let l1 = geometry.l1;
         P3rpHead {
-            name,
             geometry,
-            home,
             position_limits: PositionLimits::new("slider", &actuators),
-            actuators,
-            coordinates: [Coordinate::length("z"), Coordinate::angle("theta")],
+            info: MechanismInfo::new(
+                name,
+                "p3rp/head",
+                [Coordinate::length("z"), Coordinate::angle("theta")],
+                actuators,
+                PoseSpace::Own,
+                home,
+            )
+            .with_characteristic_length(l1)
+            .with_forward_closed_form(),
         }
+    }
+
+    /// Geometry and limits.
+    pub fn geometry(&self) -> &HeadGeometry {
+        &self.geometry
+    }
+
+    /// Replaces the geometry (names, sliders and home kept); the characteristic length
+    /// follows it.
+    pub fn set_geometry(&mut self, geometry: HeadGeometry) {
+        self.info.set_characteristic_length(geometry.l1);
+        self.geometry = geometry;
     }
 
     /// Forward solution on the branch of `start` (the machine's last known state), or
@@ -105,32 +122,8 @@ pub(crate) fn head_skeleton(
 }
 
 impl Mechanism<2, 2> for P3rpHead {
-    fn name(&self) -> &str {
-        &self.name
-    }
-
-    fn kind(&self) -> &'static str {
-        "p3rp/head"
-    }
-
-    fn coordinates(&self) -> &[Coordinate; 2] {
-        &self.coordinates
-    }
-
-    fn actuators(&self) -> &[Actuator; 2] {
-        &self.actuators
-    }
-
-    fn driven(&self) -> [usize; 2] {
-        [0, 1]
-    }
-
-    fn pose_space(&self) -> PoseSpace {
-        PoseSpace::Own
-    }
-
-    fn home(&self) -> Vector2<f64> {
-        self.home
+    fn info(&self) -> &MechanismInfo<2, 2> {
+        &self.info
     }
 
     fn inverse(&self, x: &Vector2<f64>) -> Result<Vector2<f64>> {
@@ -139,10 +132,6 @@ impl Mechanism<2, 2> for P3rpHead {
 
     fn jacobian(&self, x: &Vector2<f64>) -> Result<Matrix2<f64>> {
         self.geometry.jacobian(x[1])
-    }
-
-    fn forward_closed_form(&self) -> bool {
-        true
     }
 
     /// Closed form ([`HeadGeometry::forward`]) on the branch of `start`.
@@ -199,17 +188,12 @@ impl Mechanism<2, 2> for P3rpHead {
     /// [`HeadGeometry::check_limits`], the sliders' names made once.
     fn check_limits(&self, x: &Vector2<f64>, q: &Vector2<f64>, out: &mut Vec<Violation>) {
         self.position_limits
-            .check(&self.actuators, q.as_slice(), out);
+            .check(self.info.actuators(), q.as_slice(), out);
         self.geometry.check_joint_limits(x[1], out);
     }
 
     fn skeleton(&self, x: &Vector2<f64>) -> Result<Skeleton> {
-        head_skeleton(&self.geometry, &self.actuators, x[0], x[1])
-    }
-
-    /// The crank length `l1`: a deflection of 1 rad moves hinge B by `l1`.
-    fn characteristic_length(&self) -> f64 {
-        self.geometry.l1
+        head_skeleton(&self.geometry, self.info.actuators(), x[0], x[1])
     }
 
     fn actuator_motion(

@@ -82,7 +82,9 @@ impl SerialArm {
         if !all {
             let nearest = Nearest {
                 near,
-                wrapped: std::array::from_fn(|i| self.actuators[i].quantity == Quantity::Angle),
+                wrapped: std::array::from_fn(|i| {
+                    self.info.actuators()[i].quantity == Quantity::Angle
+                }),
             };
             let n = self.polished(p, r, near, false, Some(&nearest), sols)?;
             if n > 0 {

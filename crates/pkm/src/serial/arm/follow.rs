@@ -60,7 +60,7 @@ impl SerialArm {
         let unsure = (0..6).any(|i| {
             let r = reach(i, act);
             (shifted[i] - prev.q[i]).abs() > r
-                || (self.actuators[i].quantity == Quantity::Angle && r > COARSE)
+                || (self.info.actuators()[i].quantity == Quantity::Angle && r > COARSE)
         });
         if unsure {
             let other = self

@@ -144,7 +144,7 @@ impl SerialArm {
         let mut out: Vec<Vector6<f64>> = Vec::new();
         for q in found {
             let mut q = self.wrap(q, &self.home_joints);
-            for (i, a) in self.actuators.iter().enumerate() {
+            for (i, a) in self.info.actuators().iter().enumerate() {
                 if a.quantity == Quantity::Angle {
                     while q[i] < a.range.min && q[i] + TAU <= a.range.max {
                         q[i] += TAU;
@@ -158,7 +158,7 @@ impl SerialArm {
             let same = |o: &Vector6<f64>| {
                 (0..6).all(|i| {
                     let d = (o[i] - q[i]).abs();
-                    if self.actuators[i].quantity == Quantity::Angle {
+                    if self.info.actuators()[i].quantity == Quantity::Angle {
                         let d = d.rem_euclid(TAU);
                         d.min(TAU - d) < 1e-6
                     } else {
@@ -182,7 +182,7 @@ impl SerialArm {
     fn spread_start(&self, k: usize) -> Vector6<f64> {
         const PRIMES: [usize; 6] = [2, 3, 5, 7, 11, 13];
         Vector6::from_fn(|i, _| {
-            let range = self.actuators[i].range;
+            let range = self.info.actuators()[i].range;
             let (lo, hi) = (range.min.max(-PI), range.max.min(PI));
             lo + crate::mechanism::halton(k, PRIMES[i]) * (hi - lo)
         })
@@ -200,7 +200,11 @@ impl SerialArm {
         let rt: Matrix3<f64> = t.fixed_view::<3, 3>(0, 0).into_owned();
         let dw = rotation_vector(&(r * rt.transpose()));
         let e = Vector6::new(dp.x, dp.y, dp.z, dw.x, dw.y, dw.z);
-        (e, j, dp.norm().max(dw.norm() * self.characteristic_length))
+        (
+            e,
+            j,
+            dp.norm().max(dw.norm() * self.info.characteristic_length()),
+        )
     }
 
     /// Newton from `q`; on failure the residual, the iterations spent and the joints
@@ -295,7 +299,7 @@ impl SerialArm {
     /// The truncated pseudo-inverse step `J+ e` in the scaled space (angular rows
     /// times the characteristic length).
     fn pseudo_inverse_step(&self, j: &Matrix6<f64>, e: &Vector6<f64>) -> Option<Vector6<f64>> {
-        let lc = self.characteristic_length;
+        let lc = self.info.characteristic_length();
         let mut js = *j;
         let mut es = *e;
         for k in 3..6 {
@@ -313,7 +317,7 @@ impl SerialArm {
     /// The Newton step: `J^-1 e` when `J` is well conditioned, else damped least squares
     /// in the scaled space (angular rows times the characteristic length).
     fn step(&self, j: &Matrix6<f64>, e: &Vector6<f64>) -> Vector6<f64> {
-        let lc = self.characteristic_length;
+        let lc = self.info.characteristic_length();
         let mut js = *j;
         let mut es = *e;
         for r in 3..6 {

@@ -140,7 +140,7 @@ fn the_nearest_branch_search_equals_the_whole_closed_form() {
         let (mut pruned_some, mut singular_fallbacks, mut on_axis) = (0, 0, (0, 0));
         for case in 0..6000 {
             let mut q = Vector6::from_fn(|i, _| {
-                let r = a.actuators[i].range;
+                let r = a.info().actuators()[i].range;
                 rng.random_range(r.min.max(-PI)..=r.max.min(PI))
             });
             match case % 6 {

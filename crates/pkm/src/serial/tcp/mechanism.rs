@@ -6,40 +6,14 @@ use nalgebra::{Isometry3, SMatrix, SVector, Translation3, Vector3};
 use super::TcpMachine;
 use crate::error::{Error, Result};
 use crate::limits::Violation;
-use crate::mechanism::{
-    Actuator, ActuatorMotion, Coordinate, Forward, Mechanism, PoseSpace, Skeleton,
-};
+use crate::mechanism::{ActuatorMotion, Forward, Mechanism, MechanismInfo, Skeleton, ToolAxis};
 use crate::pose::Pose;
 use crate::serial::mechanism::chain_skeleton;
 use crate::serial::JointKind;
 
 impl<const N: usize> Mechanism<N, N> for TcpMachine<N> {
-    fn name(&self) -> &str {
-        &self.machine.name
-    }
-
-    fn kind(&self) -> &'static str {
-        "serial/tcp"
-    }
-
-    fn coordinates(&self) -> &[Coordinate; N] {
-        &self.coordinates
-    }
-
-    fn actuators(&self) -> &[Actuator; N] {
-        &self.actuators
-    }
-
-    fn driven(&self) -> [usize; N] {
-        std::array::from_fn(|i| i)
-    }
-
-    fn pose_space(&self) -> PoseSpace {
-        PoseSpace::Tcp
-    }
-
-    fn home(&self) -> SVector<f64, N> {
-        self.home
+    fn info(&self) -> &MechanismInfo<N, N> {
+        &self.info
     }
 
     /// Closed form: the rotary joints at the pose's angles, the linear ones from
@@ -66,10 +40,6 @@ impl<const N: usize> Mechanism<N, N> for TcpMachine<N> {
             }
         }
         Ok(j)
-    }
-
-    fn forward_closed_form(&self) -> bool {
-        true
     }
 
     fn forward(&self, q: &SVector<f64, N>, _start: &SVector<f64, N>) -> Result<Forward<N>> {
@@ -102,13 +72,13 @@ impl<const N: usize> Mechanism<N, N> for TcpMachine<N> {
     /// (the branch nearest home when the orientation is given; home's angles otherwise).
     fn coords_from_pose(&self, pose: &Pose, orientation_given: bool) -> Result<SVector<f64, N>> {
         let p = pose.translation.vector;
-        let mut x = self.home;
+        let mut x = self.info.home();
         x[0] = p.x;
         x[1] = p.y;
         x[2] = p.z;
         if orientation_given {
             let axis = pose.rotation * Vector3::z();
-            let near: Vec<f64> = (3..N).map(|k| self.home[k]).collect();
+            let near: Vec<f64> = (3..N).map(|k| self.info.home()[k]).collect();
             let sol = self.rotary_for_axis(&axis, Some(&near))?;
             for k in 3..N {
                 x[k] = sol.chosen()[k - 3];
@@ -119,7 +89,7 @@ impl<const N: usize> Mechanism<N, N> for TcpMachine<N> {
 
     fn check_limits(&self, _x: &SVector<f64, N>, q: &SVector<f64, N>, out: &mut Vec<Violation>) {
         self.position_limits
-            .check(&self.actuators, q.as_slice(), out);
+            .check(self.info.actuators(), q.as_slice(), out);
     }
 
     fn skeleton(&self, x: &SVector<f64, N>) -> Result<Skeleton> {
@@ -128,44 +98,19 @@ impl<const N: usize> Mechanism<N, N> for TcpMachine<N> {
         chain_skeleton(&self.machine, qt, qw)
     }
 
-    fn poses_for_tool_axis(
-        &self,
-        tip: &Vector3<f64>,
-        axis: &Vector3<f64>,
-        near: Option<&SVector<f64, N>>,
-    ) -> Option<Result<crate::mechanism::ToolAxisPoses<N>>> {
-        let near: Option<Vec<f64>> = near.map(|x| x.as_slice()[3..].to_vec());
-        Some(self.rotary_for_axis(axis, near.as_deref()).map(|sol| {
-            crate::mechanism::ToolAxisPoses {
-                branches: sol
-                    .branches
-                    .iter()
-                    .map(|b| crate::serial::tcp_axis::tcp_coords(tip, b))
-                    .collect(),
-                chosen: sol.chosen,
-                singular: sol.singular,
-                singular_distance: sol.singular_distance,
-            }
-        }))
-    }
-
-    fn singular_distance(&self, x: &SVector<f64, N>) -> Option<f64> {
-        self.singular_angle(x)
-    }
-
-    fn characteristic_length(&self) -> f64 {
-        self.characteristic_length
+    fn tool_axis(&self) -> Option<&dyn ToolAxis<N>> {
+        Some(self)
     }
 
     /// The 2-norm condition number of `dq/dx` with every angle, of a coordinate (column)
-    /// or of a rotary axis (row), counted as [`Mechanism::characteristic_length`] mm per
+    /// or of a rotary axis (row), counted as [`MechanismInfo::characteristic_length`] mm per
     /// radian: the default scales only the columns, and a rotary axis' own row (1 rad
     /// per rad) would then weigh a 150th of a slide's.
     fn condition(&self, x: &SVector<f64, N>) -> Result<f64> {
         let mut j = crate::mechanism::scaled_driven_jacobian(self, x)?;
-        for (r, a) in self.actuators.iter().enumerate() {
+        for (r, a) in self.info.actuators().iter().enumerate() {
             if a.quantity == crate::units::Quantity::Angle {
-                j.row_mut(r).scale_mut(self.characteristic_length);
+                j.row_mut(r).scale_mut(self.info.characteristic_length());
             }
         }
         Ok(crate::linalg::condition_number(&j))
@@ -188,5 +133,31 @@ impl<const N: usize> Mechanism<N, N> for TcpMachine<N> {
         let h = self.velocity_product(&rel, &qd);
         let qdd = self.rates(&rel, &minv, xdd, h);
         Ok(ActuatorMotion { q, qd, qdd })
+    }
+}
+
+impl<const N: usize> ToolAxis<N> for TcpMachine<N> {
+    fn poses_for_tool_axis(
+        &self,
+        tip: &Vector3<f64>,
+        axis: &Vector3<f64>,
+        near: Option<&SVector<f64, N>>,
+    ) -> Result<crate::mechanism::ToolAxisPoses<N>> {
+        let near: Option<Vec<f64>> = near.map(|x| x.as_slice()[3..].to_vec());
+        self.rotary_for_axis(axis, near.as_deref())
+            .map(|sol| crate::mechanism::ToolAxisPoses {
+                branches: sol
+                    .branches
+                    .iter()
+                    .map(|b| crate::serial::tcp_axis::tcp_coords(tip, b))
+                    .collect(),
+                chosen: sol.chosen,
+                singular: sol.singular,
+                singular_distance: sol.singular_distance,
+            })
+    }
+
+    fn singular_distance(&self, x: &SVector<f64, N>) -> Option<f64> {
+        self.singular_angle(x)
     }
 }

@@ -79,7 +79,7 @@ pub fn check_position_names<M, const P: usize, const A: usize>(
 ) where
     M: pkm::Mechanism<P, A>,
 {
-    let acts = m.actuators();
+    let acts = m.info().actuators();
     let q = nalgebra::SVector::<f64, A>::from_fn(|i, _| {
         let r = &acts[i].range;
         if by > 0.0 {
@@ -89,7 +89,7 @@ pub fn check_position_names<M, const P: usize, const A: usize>(
         }
     });
     let mut v = Vec::new();
-    m.check_limits(&m.home(), &q, &mut v);
+    m.check_limits(&m.info().home(), &q, &mut v);
     let pos: Vec<_> = v
         .iter()
         .filter(|v| v.kind == pkm::LimitKind::ActuatorPosition)
