@@ -1,5 +1,5 @@
 """Speed of pkm's Python package, and of Pinocchio and the Robotics Toolbox on the same
-6R robot in the same run (issue 15). Not a test: a script that prints medians.
+6R robot in the same run. Not a test: a script that prints medians.
 
     target/py-venv/bin/pip install pin roboticstoolbox-python   # the peers, optional
     target/py-venv/bin/python crates/pkm-py/bench/bench_pkm.py [--quick]

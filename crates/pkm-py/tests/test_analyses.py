@@ -288,7 +288,7 @@ def test_errors_are_raised_with_pkm_messages(tmp_path):
         m.errors(deviations={"no such parameter": 1.0})
     with pytest.raises(pkm.InvalidInputError):
         m.errors(tolerances={"joint": 1e300})
-    # A range per kind of quantity (issue 17): 100 mm, 10 deg.
+    # A range per kind of quantity: 100 mm, 10 deg.
     with pytest.raises(pkm.InvalidInputError, match="is not a tolerance or deviation"):
         m.errors(deviations={m.parameters[0]["name"]: 1e5})
     with pytest.raises(pkm.InvalidInputError, match="from 0 to 100 mm"):

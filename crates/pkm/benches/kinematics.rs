@@ -1,5 +1,6 @@
-//! Kinematics speed (criterion, single thread). Targets (issue 2): tripod IK per pose
-//! from a rotation matrix <= 15 ns.
+//! Kinematics speed (criterion, one thread unless a name says otherwise; the medians and
+//! how to rerun them: `docs/performance.md`). Target: tripod IK per pose from a
+//! rotation matrix <= 15 ns.
 
 use std::hint::black_box;
 
@@ -129,9 +130,9 @@ fn motion(c: &mut Criterion) {
     group.finish();
 }
 
-/// Issue 20's target: LinuxCNC's boat program (1 867 lines, 316 s of motion) through
-/// MC-300 at 1 kHz with the accuracy along it (the file's 39 tolerances at every sample,
-/// a band of 100 machines at every 10th), one thread; and the run alone.
+/// LinuxCNC's boat program (1 867 lines, 316 s of motion) through MC-300 at 1 kHz with
+/// the accuracy along it (the file's 39 tolerances at every sample, a band of 100 machines
+/// at every 10th), one thread, within 1 s; and the run alone.
 fn five_axis_program(c: &mut Criterion) {
     use pkm::analysis::motion::{
         feed_options, run_motion_with, MotionSource, NoSink, PathAccuracyRequest,
@@ -173,7 +174,7 @@ fn five_axis_program(c: &mut Criterion) {
     g.finish();
 }
 
-/// Issue 15's batch: `analysis::kinematics::inverse_batch` of 10^6 random hexapod poses
+/// Python's `m.ik` batch: `analysis::kinematics::inverse_batch` of 10^6 random hexapod poses
 /// (uniform in +-100 mm, +-10 deg about home; the limit check included), rayon on all
 /// cores of the machine (2 here) and on one.
 fn batch_inverse(c: &mut Criterion) {
@@ -246,7 +247,7 @@ fn wave_program(lines: usize, centre: [f64; 3], a0: f64) -> String {
     s + "M2\n"
 }
 
-/// Issue 19: programs through a hexapod and a 6R robot at 1 kHz, the whole sampler
+/// Programs through a hexapod and a 6R robot at 1 kHz, the whole sampler
 /// (G-code, profile, exact actuator q, q', q'', statistics, limits), on one thread and
 /// on the global pool (`motion/plan.rs`).
 fn program_motion(c: &mut Criterion) {
@@ -411,7 +412,7 @@ fn hexapod(c: &mut Criterion) {
     });
 }
 
-/// Issue 19's hexapod IK on random poses (uniform in +-100 mm, +-10 deg about the
+/// The hexapod's IK on random poses (uniform in +-100 mm, +-10 deg about the
 /// LinuxCNC hexapod's home, seed 1), one thread: from X, Y, Z, A, B, C one pose per
 /// call (what a controller sends), and 200 000 poses as a batch (16 MB of input, so
 /// not cache-resident), from X..C by the block kernel and from rotation matrices.
@@ -770,7 +771,7 @@ fn serial(c: &mut Criterion) {
             })
         },
     );
-    // The same engine on the rows of the file before issue 13 (c008e08: the paper's
+    // The same engine on the rows of the file as it was at c008e08 (the paper's
     // 43, aligned-entry angles and installation angles included; evaluated, not
     // completed), so that before/after compare the same work.
     let names = mc300.parameters();

@@ -1,4 +1,4 @@
-//! A randomized round-trip campaign over every example machine (issue 17): no silent
+//! A randomized round-trip campaign over every example machine: no silent
 //! wrong answers from inverse or forward kinematics.
 //!
 //! ```text

@@ -183,7 +183,7 @@ pub enum Unattainable {
     /// A strut of fixed length whose carriage runs on a vertical guide cannot reach its
     /// platform joint: the joint is farther from the guide's axis than the strut is
     /// long (mm). A hybrid machine's map meets it at every point beyond its struts'
-    /// reach (formatting its three numbers was a third of such a map, session 38).
+    /// reach (formatting its three numbers was a third of such a map's time).
     StrutReach {
         /// The strut's actuator.
         strut: String,

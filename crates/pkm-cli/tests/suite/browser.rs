@@ -1,4 +1,4 @@
-//! The report's 3D view in a real browser (issue 16, item 1): headless Chromium loads
+//! The report's 3D view in a real browser: headless Chromium loads
 //! the report of a user's own hexapod offline, with the page's self-test
 //! (`index.html#selftest`): no script or console error, the scene holds the machine's
 //! joints and links, the workspace cloud and the animated path, the canvas is not

@@ -1,4 +1,4 @@
-//! `pkm simulate-measurements` and `pkm calibrate` end to end (issue 5).
+//! `pkm simulate-measurements` and `pkm calibrate` end to end.
 
 use serde_json::Value;
 
@@ -271,7 +271,7 @@ fn tripod_calibrates_with_its_platform_joints_held() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("no parameter matches `Q.*`"));
 }
 
-/// Issue 18: a pentapod is identified from points on its tool axis, and its identified
+/// A pentapod is identified from points on its tool axis, and its identified
 /// file goes back to LinuxCNC with the zero lengths as HOME_OFFSET.
 #[test]
 fn a_pentapod_calibrates_and_goes_back_to_linuxcnc() {

@@ -226,7 +226,7 @@ fn bad_files_give_located_errors() {
 }
 
 /// A malformed value on the command line exits with 2, the documented code for a bad
-/// command line (issue 17: these exited with 1), and names the value; a pose the
+/// command line (these once exited with 1), and names the value; a pose the
 /// machine cannot take exits with 3.
 #[test]
 fn bad_command_line_values() {
@@ -413,7 +413,7 @@ fn help_has_examples() {
     }
 }
 
-/// Issue 17, item 10: a closed-form forward solution says so instead of "0 iterations";
+/// A closed-form forward solution says so instead of "0 iterations";
 /// an iterative one gives its count.
 #[test]
 fn fk_names_its_solver() {
@@ -488,7 +488,7 @@ fn fk_batch_of_a_joint_space_machine_has_its_tool_pose() {
     }
 }
 
-/// Issue 17, item 10: a reference whose expected value is the project's correction of
+/// A reference whose expected value is the project's correction of
 /// its source is printed as a discrepancy with the paper's and pkm's values, never as
 /// reproduced; references quoting the same source are told apart by their pose.
 #[test]
@@ -542,7 +542,7 @@ fn a_published_value_without_its_correction_is_refused() {
     );
 }
 
-/// Issue 17, item 10: near the P3RP head's singular configuration Q the forward
+/// Near the P3RP head's singular configuration Q the forward
 /// solution is returned with its conditioning, flagged; at home it is not flagged.
 #[test]
 fn fk_reports_the_conditioning_of_its_solution() {

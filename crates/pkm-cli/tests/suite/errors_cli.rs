@@ -803,7 +803,7 @@ fn report_has_a_clearance_section_when_the_file_gives_clearances() {
     assert!(!html.contains("id=\"clearance\""));
 }
 
-/// Issue 17, item 10: orientation errors in deg, like every other angle pkm prints:
+/// Orientation errors in deg, like every other angle pkm prints:
 /// the JSON and text equal the library's radians converted.
 #[test]
 fn orientation_errors_are_in_degrees() {

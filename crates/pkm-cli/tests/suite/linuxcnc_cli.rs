@@ -127,7 +127,7 @@ fn import_never_writes_over_its_input_and_errors_name_the_line() {
         .contains("LinuxCNC export is not available for a serial"));
 }
 
-/// Issue 20's interface: the XYZBC sim imported, its joints for a TCP pose, LinuxCNC's
+/// A five-axis LinuxCNC machine: the XYZBC sim imported, its joints for a TCP pose, LinuxCNC's
 /// boat program run to its end (exit 3 with the violated limits listed: the sim's
 /// axes are slow for the program's inverse-time feeds).
 #[test]

@@ -218,7 +218,7 @@ fn rapid_rate_comes_from_the_machine_file() {
 
 #[test]
 fn seed004_move_and_report() {
-    // The issue's command: the head's fig. 7 move.
+    // Seed 004's fig. 7 move of the head.
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("p3");
     let o = pkm()
@@ -304,7 +304,7 @@ fn seed004_move_and_report() {
     }
 }
 
-/// Issue 16, item 5: the motion plots mark the G-code segment starts and the stroke
+/// The motion plots mark the G-code segment starts and the stroke
 /// limits a curve comes near, with the legends beside the panels.
 #[test]
 fn motion_plots_mark_segments_and_near_limits() {
@@ -338,7 +338,7 @@ fn motion_plots_mark_segments_and_near_limits() {
     assert!(!svg.contains("\nlimit\n"));
 }
 
-/// Issue 20: the boat program through MC-300 with the accuracy along it (the file's
+/// The boat program through MC-300 with the accuracy along it (the file's
 /// 39 tolerances; budget per G-code line, Monte Carlo band) and its closest approach
 /// to the singular direction.
 #[test]

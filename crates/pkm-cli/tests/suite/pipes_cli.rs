@@ -53,7 +53,7 @@ fn libc_sigpipe() -> i32 {
     13
 }
 
-/// A robot whose zero pose is singular (issue 17: `pkm check` failed on the UR5 with
+/// A robot whose zero pose is singular (`pkm check` once failed on the UR5 with
 /// "singular configuration") is a valid file with a warning.
 #[test]
 fn a_singular_robot_home_is_a_warning() {
@@ -77,7 +77,7 @@ fn a_singular_robot_home_is_a_warning() {
     assert_eq!(v["home"]["singular"], serde_json::Value::Bool(true));
 }
 
-/// Grid steps of zero, negative, NaN or absurdly fine (issue 17: `--step 0` overflowed
+/// Grid steps of zero, negative, NaN or absurdly fine (`--step 0` once overflowed
 /// into a panic) are refused with what was expected.
 #[test]
 fn bad_grid_steps_are_refused() {
@@ -103,7 +103,7 @@ fn bad_grid_steps_are_refused() {
     }
 }
 
-/// Every command takes `--json` (issue 17: `report` and `simulate-measurements` did
+/// Every command takes `--json` (`report` and `simulate-measurements` once did
 /// not).
 #[test]
 fn report_and_simulate_measurements_take_json() {
@@ -149,7 +149,7 @@ fn report_and_simulate_measurements_take_json() {
     assert_eq!(v["true_parameters"].as_object().unwrap().len(), 42);
 }
 
-/// A reading of 1e300 in a measurement file (issue 17: it surfaced as an
+/// A reading of 1e300 in a measurement file (it once surfaced as an
 /// identifiability failure naming no row) is refused at its row and column.
 #[test]
 fn an_absurd_measurement_names_its_row() {

@@ -1,11 +1,11 @@
-//! `pkm report` on a user's own machine (issue 16): every section written or its error
+//! `pkm report` on a user's own machine: every section written or its error
 //! shown in its place, options and the `[report]` table, content that fits the machine.
 
 use crate::common::{path, pkm};
 use serde_json::Value;
 
-/// The Gough-Stewart platform a new user writes from the docs (issue 16,
-/// `tests/fixtures/own-hexapod.toml`), with `extra` appended.
+/// The Gough-Stewart platform a new user writes from the docs
+/// (`tests/fixtures/own-hexapod.toml`), with `extra` appended.
 fn own_hexapod(extra: &str) -> String {
     let file = path("tests/fixtures/own-hexapod.toml");
     std::fs::read_to_string(file).unwrap() + extra
@@ -26,7 +26,7 @@ fn report(args: &[&str]) -> (i32, Value, String) {
     )
 }
 
-/// The issue's hexapod: the whole report, every section, no error; the motion path is
+/// That hexapod: the whole report, every section, no error; the motion path is
 /// a circle scaled to its reach, and no paper's figures appear in it.
 #[test]
 fn the_report_of_an_own_hexapod_has_every_section() {

@@ -347,8 +347,8 @@ pub(crate) fn in_chunks<T: Send>(
 /// Xoshiro256++ (Blackman, Vigna, "Scrambled linear pseudorandom number generators",
 /// ACM TOMS 2021), a fixed algorithm, so a seed gives the same samples on every
 /// platform and release. Its statistical quality is ample for sampling; it is not
-/// meant to be unpredictable. (Until 2026-11-28 it was `StdRng`, ChaCha12: 12 % of a
-/// hexapod's Monte Carlo, and results per seed differ from then.)
+/// meant to be unpredictable. (Earlier versions used `StdRng`, ChaCha12: 12 % of a
+/// hexapod's Monte Carlo, and their results per seed differ.)
 pub type SampleRng = Xoshiro256PlusPlus;
 
 /// The random generator of chunk `c` of a seeded run.

@@ -339,9 +339,9 @@ pub fn reachable_share<M: Identifiable<P, A>, const P: usize, const A: usize>(
 }
 
 /// Draws per [`reachable_share`]: the share's standard error is about 0.013 at
-/// [`SIZING_SHARE`] (0.025 with the 256 draws before 2026-11-29, when a micro tripod
-/// whose share at 1/8 of the default spans is 0.155 of 20 000 draws was found 0.21 in
-/// the first 256 and given that campaign).
+/// [`SIZING_SHARE`] (0.025 with 256 draws, too coarse: a micro tripod whose share at
+/// 1/8 of the default spans is 0.155 of 20 000 draws was found 0.21 in the first 256
+/// and given that campaign).
 pub const SIZING_DRAWS: usize = 1024;
 
 /// Smallest share of random poses within the limits [`sized`] accepts.

@@ -25,7 +25,7 @@ use crate::mechanism::Mechanism;
 /// millisecond of a serial robot's), small enough for the block's samples and the
 /// compute stage's rows (about 300 kB for a hexapod) to stay in the second-level
 /// cache from one stage to the next. Measured on a hexapod's and a 6R robot's
-/// programs (`docs/performance.md`, session 27): 512 beat 256, 1024 and 4096 on one
+/// programs (`docs/performance.md`): 512 beat 256, 1024 and 4096 on one
 /// thread and on two.
 pub(crate) const BLOCK: usize = 512;
 

@@ -165,8 +165,8 @@ pub fn link_transform(link: &Link, dev: &LinkDeviation) -> Matrix4<f64> {
 /// [`Chain::pose`] it is inlined into the AVX2 walk (`walk.rs`). Its range tests are
 /// folds that vectorise rather than nine compare-and-branch pairs each, and the
 /// deviations are read in place (a copy, stored and read back at other offsets,
-/// waited for its stores): a deviated 6R [`Chain::pose`] took 243 ns on an EPYC
-/// (2026-11-26), 211 ns on a Xeon (2026-11-27) and 168-178 ns since (2026-11-28).
+/// waited for its stores). Each of these cut the time of a deviated 6R [`Chain::pose`]
+/// (243 ns before them on one EPYC); `docs/performance.md` has the current figures.
 #[inline]
 pub fn deviated_block(link: &Link, dev: &LinkDeviation) -> Matrix3<f64> {
     #[cfg(target_arch = "x86_64")]

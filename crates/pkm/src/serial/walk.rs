@@ -178,7 +178,7 @@ pub(super) const VECTOR_JOINTS: usize = 8;
 /// `(sin v_k, cos v_k)` of the first `n` joint values `v_k = value(k)` (at most
 /// [`VECTOR_JOINTS`]; the other lanes `(0, 1)`), in one branch-free pass over eight
 /// lanes ([`crate::trig::sin_cos_array_inline`]): independent of each other and of the
-/// products, they overlap instead of sitting on the walk's chain. The values are made
+/// products, they overlap instead of waiting on the walk's chain. The values are made
 /// in registers, lane by lane, and the pass fills whole registers: a vector load of
 /// values stored one by one, or of a part-filled register's masked store, would wait
 /// for those stores to retire.

@@ -313,7 +313,7 @@ fn tolerances_from_a_file_by_name() {
     );
 }
 
-/// Issue 17: a tolerance of 1e5 mm was taken. Tolerances and deviations in files are
+/// A tolerance of 1e5 mm was once taken. Tolerances and deviations in files are
 /// held to a range per kind of quantity (100 mm, 10 deg), with file, line and field;
 /// the largest of each kind is taken.
 #[test]
@@ -350,7 +350,7 @@ fn tolerances_and_deviations_beyond_their_kinds_range_are_refused() {
     assert_eq!(ok.unwrap().len(), 2);
 }
 
-/// A tolerance of 1e300 (issue 17: it printed a 300-digit budget, exit 0) is refused
+/// A tolerance of 1e300 (it once printed a 300-digit budget, exit 0) is refused
 /// with its name; the largest sane one is accepted.
 #[test]
 fn absurd_kind_tolerances_are_refused() {
@@ -370,7 +370,7 @@ fn absurd_kind_tolerances_are_refused() {
             length: 2e6,
             ..Default::default()
         },
-        // Issue 17: a tolerance of 1e5 mm was still taken.
+        // A tolerance of 1e5 mm, once still taken.
         KindTolerances {
             length: 1e5,
             ..Default::default()
@@ -400,7 +400,7 @@ fn absurd_kind_tolerances_are_refused() {
     }
 }
 
-/// Issue 17: `--monte-carlo 10^14` grew past 600 MB before anything said no. A count
+/// `--monte-carlo 10^14` once grew past 600 MB before anything said no. A count
 /// beyond the limit is refused before any sample, with the memory it would need.
 #[test]
 fn monte_carlo_counts_beyond_the_limit_are_refused_up_front() {
@@ -422,7 +422,7 @@ fn monte_carlo_counts_beyond_the_limit_are_refused_up_front() {
     }
 }
 
-/// Issue 17, item 4: the Monte Carlo streams its statistics (constant memory). The
+/// The Monte Carlo streams its statistics (constant memory). The
 /// streamed moments equal the stored sample's to rounding, the streamed percentiles
 /// are within the sketch's relative 1e-4 of the exact order statistics, the
 /// histogram counts every sample.

@@ -339,7 +339,7 @@ fn clearance_entries_are_checked_with_file_line_and_field() {
             "diametral",
             "from 0 to 100 mm",
         ),
-        // Issue 17: a gap of a kilometre was taken (a range per kind of quantity).
+        // A gap of a kilometre was once taken (a range per kind of quantity).
         (
             "joints = [\"A1\"]\ndiametral = 1e5",
             "diametral",

@@ -144,7 +144,7 @@ fn malformed_programs_name_the_line() {
     }
 }
 
-/// Issue 17: `F1e300` said "unsupported word E300" (a word the user never wrote) and a
+/// `F1e300` once said "unsupported word E300" (a word the user never wrote) and a
 /// UTF-8 byte-order mark said "Unknown content"; now the exponent is explained and the
 /// mark is not content.
 #[test]
@@ -165,7 +165,7 @@ fn exponents_are_explained_and_a_byte_order_mark_is_ignored() {
     assert_eq!(mv.end[0], 10.0);
 }
 
-/// Found by fuzzing (issue 17): the gcode crate computes a code's number as
+/// Found by fuzzing: the gcode crate computes a code's number as
 /// `major * 10 + minor` in a u32, so `G2147483649` wrapped to `G1` (a silent linear
 /// move) in release builds and panicked in checked ones. Such a number is refused,
 /// named, with its line.

@@ -643,7 +643,7 @@ fn limits_to_hit(h: &mut Hexapod, open: bool) {
 }
 
 /// The batch's first violated limit comes as a code, named once per distinct limit
-/// (issue 15's speed): code and name must be the first violation `check_limits`
+/// (for the batch's speed): code and name must be the first violation `check_limits`
 /// reports, for every family of limit (axis travel, strut lengths, both cones,
 /// interference), over poses that hit each of them.
 #[test]
@@ -697,7 +697,7 @@ fn coded_first_limits_are_the_first_checked_violation() {
     }
 }
 
-/// The block kernel's screen changes no result (issue 15's speed): over random poses,
+/// The block kernel's screen changes no result (it is there for speed): over random poses,
 /// poses bisected onto the boundary of the limits to 1e-13 of the step (whichever
 /// limit binds), exact axis bounds, NaN and angles beyond the fast sine's range, a
 /// cleared row is one the exact scan finds within every limit, its lengths are the

@@ -1,4 +1,4 @@
-//! Identification of a hexapod's 42 parameters (seed 001; issue 5).
+//! Identification of a hexapod's 42 parameters (seed 001).
 
 use nalgebra::{Matrix3, Rotation3, Vector3, Vector6};
 use pkm::hexapod::Hexapod;
@@ -376,8 +376,8 @@ fn translational_tripod_identified_with_its_platform_joints_held() {
 /// The report's calibration study runs seed 001's one-strut design with the seven
 /// states the procedure needs, on every strut machine: the hexapods' systems solve;
 /// the translational tripod's are singular, and the study says so with the
-/// procedure's reason (it ran four states, A + 1, until session 41: "needs seven
-/// states", shown as "singular" for the wrong reason).
+/// procedure's reason ("needs seven states"; with the four states A + 1 it once ran,
+/// the study showed "singular" for the wrong reason).
 #[test]
 fn the_calibration_study_runs_the_one_strut_design_with_seven_states() {
     use pkm::analysis::identification::{calibration_study, sized_experiment};
@@ -408,7 +408,7 @@ fn the_calibration_study_runs_the_one_strut_design_with_seven_states() {
     }
 }
 
-/// Issue 17, item 10: a weak combination is explained by what it holds (a held zero
+/// A weak combination is explained by what it holds (a held zero
 /// reading is not blamed) and by what the machine can do (a translational tripod's
 /// platform never turns); held parameters make the standard errors conditional, and
 /// the identification says so.
@@ -472,7 +472,7 @@ fn explanations_name_only_free_parameters_and_what_the_machine_does() {
     assert!(free.standard_errors_note.is_none());
 }
 
-/// Issue 16: seed 001's one-strut Newton stopped on a step test alone; on a large,
+/// Seed 001's one-strut Newton once stopped on a step test alone; on a large,
 /// ill-conditioned machine (condition ~1e5 per strut) rounding keeps the steps above
 /// 1e-12 of the parameters, so a system solved to a residual of 2e-13 mm was
 /// reported as "did not converge". Over many campaigns of seed 001's design on such a

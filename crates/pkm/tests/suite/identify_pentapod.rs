@@ -1,4 +1,4 @@
-//! Identification of the pentapod (issue 18): 25 geometric parameters and 5 zero
+//! Identification of the pentapod: 25 geometric parameters and 5 zero
 //! readings from points measured on its tool axis (its spin about the axis is free),
 //! with both measurement models; the identified machine as a file and back to the
 //! controller.

@@ -205,7 +205,7 @@ fn each_mutated_example(
     tried
 }
 
-/// Absurd magnitudes (issue 17: a value of 1e300 made `pkm report` run for ever) are
+/// Absurd magnitudes (a value of 1e300 once made `pkm report` run for ever) are
 /// refused at load, naming the field and its line, in every example machine file and
 /// every numeric field tried; a URDF too.
 #[test]
@@ -262,8 +262,8 @@ fn tempfile_dir() -> std::path::PathBuf {
     d
 }
 
-/// Arrays with a value too many or too few (issue 17: `F = [-100, -57.74, 0, 1]` and
-/// `length = [150, 300, 1]` passed `check`) are refused, naming the field and line, on
+/// Arrays with a value too many or too few (`F = [-100, -57.74, 0, 1]` and
+/// `length = [150, 300, 1]` once passed `check`) are refused, naming the field and line, on
 /// every numeric array of every example machine file.
 #[test]
 fn arrays_with_more_or_fewer_values_are_refused() {
@@ -305,7 +305,7 @@ fn arrays_with_more_or_fewer_values_are_refused() {
     assert!(tried > 100, "{tried}");
 }
 
-/// Three exactly coincident joints (issue 17: the relative area test's bound underflowed
+/// Three exactly coincident joints (the relative area test's bound once underflowed
 /// to zero and passed them) are refused on both tripods, for base and platform.
 #[test]
 fn coincident_tripod_joints_are_refused() {
@@ -354,7 +354,7 @@ fn rotation_blocks_with_a_row_or_column_too_many_are_refused() {
     }
 }
 
-/// Issue 16: the `[report]` table is read for every machine type and checked, with
+/// The `[report]` table is read for every machine type and checked, with
 /// the file, line and field of a bad value.
 #[test]
 fn report_tables_are_read_and_checked() {

@@ -278,7 +278,7 @@ fn seed000_arc_study_scaling_with_feed() {
     assert!(r.travel > 1.0 && r.velocity.unwrap() > 1.0);
 }
 
-/// Issue 17, item 10: the ratios are seed 000's. Its "3.4x" and "3.3x" are the serial
+/// The ratios are seed 000's. Its "3.4x" and "3.3x" are the serial
 /// peak over the largest strut peak (166.7 / 49, 434 / 131), its "3.6x" travel the mean
 /// serial travel over the struts' mean travel; recomputed here from the axes'
 /// statistics by hand.
@@ -468,8 +468,8 @@ fn limits_and_feed_override_along_the_path() {
     );
 }
 
-/// Issue 17: a dwell of 30 years, a feed of a micrometre per minute, 1e8 full turns
-/// and 1e11 points per move ran for hours. Each move's samples are now counted before
+/// A dwell of 30 years, a feed of a micrometre per minute, 1e8 full turns
+/// and 1e11 points per move once ran for hours. Each move's samples are now counted before
 /// it is sampled and a run beyond the work limit is refused at once, naming the line;
 /// the limit is the caller's to raise.
 #[test]
@@ -544,7 +544,7 @@ fn decimated_streams_keep_evenly_spaced_items() {
     }
 }
 
-/// The study circle (issue 16): every point of the circle the report runs is within
+/// The study circle: every point of the circle the report runs is within
 /// every limit, checked at ten times the points the search used; a circle 3 % larger
 /// than the largest one found leaves the limits; its program runs to its end with no
 /// violation and the tool travels 2 pi r.

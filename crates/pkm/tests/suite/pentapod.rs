@@ -255,7 +255,7 @@ fn geometry_sensitivities_match_finite_differences() {
     }
 }
 
-/// Issue 18: the spin about the tool axis is free (the rings turn), so it is no error of
+/// The spin about the tool axis is free (the rings turn), so it is no error of
 /// the pentapod. Orientation errors keep only the tilt of the tool axis: none along the
 /// axis, and `w x k` equals the change of the deviated machine's tool axis (central
 /// differences of exact forward kinematics), both analytic and exact.

@@ -1,5 +1,5 @@
 //! Six-joint robots as spatial mechanisms: tool-pose coordinates through numeric
-//! inverse kinematics (issue 6, item 2).
+//! inverse kinematics.
 
 use nalgebra::{Matrix6, Vector6};
 use pkm::machine::Model;
@@ -288,7 +288,7 @@ fn all_inverse_solutions_include_the_wrist_flip_and_reach_the_pose() {
     assert!(a.inverse_solutions(&far, 64).is_empty());
 }
 
-/// Issue 17, item 7: inverse kinematics from home gave up on 1 in 450 poses the UR5's
+/// Inverse kinematics from home once gave up on 1 in 450 poses the UR5's
 /// forward kinematics had just produced (Newton stalled from home and from the first
 /// eight spread starts). Over 3 000 joint vectors drawn over each robot's whole ranges,
 /// the inverse from home must reach every pose (the same joints or another posture,

@@ -97,7 +97,7 @@ fn grid_points_agree_with_direct_evaluation() {
     );
 }
 
-/// Issue 17, item 10: a grid over a length and an angle (the P3RP head's z, theta)
+/// A grid over a length and an angle (the P3RP head's z, theta)
 /// has a measure in mm·deg, not a volume in mm^3.
 #[test]
 fn a_grid_over_a_length_and_an_angle_has_no_volume() {
@@ -439,7 +439,7 @@ fn forward_map_poses_close_the_loop() {
     }
 }
 
-/// The own Gough-Stewart platform of issue 16 (`tests/fixtures/own-hexapod.toml`).
+/// A user's own Gough-Stewart platform (`tests/fixtures/own-hexapod.toml`).
 fn own_hexapod() -> pkm::Machine {
     pkm::Machine::from_path(format!(
         "{}/../../tests/fixtures/own-hexapod.toml",
@@ -448,7 +448,7 @@ fn own_hexapod() -> pkm::Machine {
     .unwrap()
 }
 
-/// Issue 16, item 4: the default map covers the whole reach of every example machine
+/// The default map covers the whole reach of every example machine
 /// and of a user's own hexapod: no reachable point on a face of the grid that is not a
 /// bound of the reach, and every outcome counted once.
 #[test]
@@ -610,7 +610,7 @@ fn position_bounds_hold_every_reachable_tool_point() {
     }
 }
 
-/// Issue 16: the UR5 a user writes from its standard DH table was mapped up to
+/// The UR5 a user writes from its standard DH table was once mapped up to
 /// X = 173 mm (a box around home) though it reaches ~850 mm; the default map now holds
 /// its whole reach at the home orientation (the links' sphere bounds it), nothing cut.
 #[test]

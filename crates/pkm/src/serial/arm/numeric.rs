@@ -22,7 +22,7 @@ const ORIENTATION_TOLERANCE: f64 = 1e-13;
 /// branch far from the solution.
 const MAX_STEP: f64 = 0.3;
 /// Restarts from spread joint values when Newton stalls from the given start. Eight
-/// left 1 in 450 of a UR5's reachable poses unsolved (issue 17, item 7); with 32, none
+/// left 1 in 450 of a UR5's reachable poses unsolved; with 32, none
 /// of 10^5 per example robot (`examples/roundtrip_campaign.rs`). A stalled start gives
 /// up within ten iterations, so an unreachable pose costs about 33 x 10 of them.
 const RESTARTS: usize = 32;
