@@ -476,7 +476,7 @@ fn random_hexapod_ik(c: &mut Criterion, h: &pkm::hexapod::Hexapod) {
         panic!()
     };
     let off = *off;
-    assert_ne!(off.tool, h.tool);
+    assert_ne!(off.tool(), h.tool());
     g.throughput(criterion::Throughput::Elements(xs.len() as u64));
     g.bench_function(
         "from X..C, one pose per call (1024 poses), one thread, tool off the platform's plane",

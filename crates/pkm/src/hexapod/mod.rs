@@ -62,16 +62,16 @@ pub struct HexStrut {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Hexapod {
     /// The six struts.
-    pub struts: [HexStrut; 6],
+    struts: [HexStrut; 6],
     /// Tool tip in the platform frame (mm).
-    pub tool: Vector3<f64>,
+    tool: Vector3<f64>,
     /// Strut diameter for strut-strut interference (mm), if checked.
-    pub strut_diameter: Option<f64>,
+    strut_diameter: Option<f64>,
     /// Soft limits of the pose coordinates (LinuxCNC's `[AXIS_n]`); none by default.
-    pub axes: crate::limits::AxisLimits,
+    axes: crate::limits::AxisLimits,
     /// Strut lengths at the control's zero readings (`L_j^(0)` of seed 001), from a
     /// calibration; `None`: the lengths at home.
-    pub zero_lengths: Option<Vector6<f64>>,
+    zero_lengths: Option<Vector6<f64>>,
     set: StrutSet<6>,
     soa: crate::legs::StrutSoa<6>,
     lanes: simd::Lanes,
@@ -167,12 +167,79 @@ impl Hexapod {
             s.platform = *p;
         }
         // Field by field, in place: the derived data (about 1.2 kB) is not built
-        // elsewhere and copied over (a tenth of a Monte Carlo sample's time).
+        // elsewhere and copied over (a tenth of a Monte Carlo sample's time). The
+        // tool is the one set_tool left.
         self.set = StrutSet::new(*base, *platform, self.tool);
         self.info
             .set_characteristic_length(characteristic_length(&self.set));
         self.soa = (&self.set).into();
         self.lanes.set_geometry(&self.set.arms, &self.set.base);
+    }
+
+    /// The six struts (names, actuators, joint centres and cones).
+    pub fn hex_struts(&self) -> &[HexStrut; 6] {
+        &self.struts
+    }
+
+    /// Replaces the six struts; everything derived from them (strut geometry, lanes,
+    /// limit names, actuators, characteristic length) is built again, and the name,
+    /// tool, home, soft limits, strut diameter and zero lengths are kept.
+    pub fn set_struts(&mut self, struts: [HexStrut; 6]) {
+        let mut h = Hexapod::new(
+            self.info.name().to_string(),
+            struts,
+            self.tool,
+            self.strut_diameter,
+            self.info.home(),
+        );
+        h.axes = std::mem::take(&mut self.axes);
+        h.zero_lengths = self.zero_lengths;
+        *self = h;
+    }
+
+    /// Tool tip in the platform frame (mm).
+    pub fn tool(&self) -> Vector3<f64> {
+        self.tool
+    }
+
+    /// Moves the tool tip in the platform frame (mm); the strut geometry, its lanes and
+    /// the characteristic length are derived again.
+    pub fn set_tool(&mut self, tool: Vector3<f64>) {
+        self.tool = tool;
+        let base = std::array::from_fn(|i| self.struts[i].base);
+        let platform = std::array::from_fn(|i| self.struts[i].platform);
+        self.set_joint_centres(&base, &platform);
+    }
+
+    /// Strut diameter for strut-strut interference (mm), if checked.
+    pub fn strut_diameter(&self) -> Option<f64> {
+        self.strut_diameter
+    }
+
+    /// Sets the strut diameter for strut-strut interference (mm; `None`: unchecked).
+    pub fn set_strut_diameter(&mut self, d: Option<f64>) {
+        self.strut_diameter = d;
+    }
+
+    /// Soft limits of the pose coordinates (LinuxCNC's `[AXIS_n]`); none by default.
+    pub fn axes(&self) -> &crate::limits::AxisLimits {
+        &self.axes
+    }
+
+    /// Sets the soft limits of the pose coordinates.
+    pub fn set_axes(&mut self, axes: crate::limits::AxisLimits) {
+        self.axes = axes;
+    }
+
+    /// Strut lengths at the control's zero readings (`L_j^(0)` of seed 001), from a
+    /// calibration; `None`: the lengths at home.
+    pub fn zero_lengths(&self) -> Option<Vector6<f64>> {
+        self.zero_lengths
+    }
+
+    /// Sets the strut lengths at the control's zero readings (`None`: those at home).
+    pub fn set_zero_lengths(&mut self, z: Option<Vector6<f64>>) {
+        self.zero_lengths = z;
     }
 
     /// The strut geometry.

@@ -15,7 +15,7 @@ use crate::mechanism::Mechanism;
 impl StrutMachine<6> for Hexapod {
     fn struts(&self) -> [StrutGeometry; 6] {
         std::array::from_fn(|j| {
-            let s = &self.struts[j];
+            let s = &self.hex_struts()[j];
             StrutGeometry {
                 name: s.actuator.name.clone(),
                 base_name: s.base_name.clone(),
@@ -27,11 +27,11 @@ impl StrutMachine<6> for Hexapod {
     }
 
     fn tool(&self) -> Vector3<f64> {
-        self.tool
+        Hexapod::tool(self)
     }
 
     fn with_struts(&self, struts: &[StrutGeometry; 6]) -> Self {
-        let mut s = self.struts.clone();
+        let mut s = self.hex_struts().clone();
         for (st, g) in s.iter_mut().zip(struts) {
             st.base = g.base;
             st.platform = g.platform;
@@ -39,17 +39,17 @@ impl StrutMachine<6> for Hexapod {
         let mut h = Hexapod::new(
             self.info().name().to_string(),
             s,
-            self.tool,
-            self.strut_diameter,
+            self.tool(),
+            self.strut_diameter(),
             self.info().home(),
         );
-        h.zero_lengths = self.zero_lengths;
-        h.axes = self.axes.clone();
+        h.set_zero_lengths(self.zero_lengths());
+        h.set_axes(self.axes().clone());
         h
     }
 
     fn calibrated_zero(&self) -> Option<Vector6<f64>> {
-        self.zero_lengths
+        self.zero_lengths()
     }
 
     fn set_joints(&mut self, base: &[Vector3<f64>; 6], platform: &[Vector3<f64>; 6]) {

@@ -189,7 +189,11 @@ pub(super) fn build(src: &Source, f: HexapodFile) -> Result<super::Parts, Error>
         lim.strut_diameter,
         Vector6::new(hp[0], hp[1], hp[2], a[0], a[1], a[2]),
     );
-    h.axes = super::axis_limits(src, &lim.axes, &crate::mechanism::spatial_coordinates())?;
+    h.set_axes(super::axis_limits(
+        src,
+        &lim.axes,
+        &crate::mechanism::spatial_coordinates(),
+    )?);
     if let Some(c) = &f.calibration {
         if c.zero_lengths.iter().any(|l| !(l.is_finite() && *l > 0.0)) {
             return Err(src.error(
@@ -197,7 +201,7 @@ pub(super) fn build(src: &Source, f: HexapodFile) -> Result<super::Parts, Error>
                 "expected six positive strut lengths (mm)",
             ));
         }
-        h.zero_lengths = Some(Vector6::from(c.zero_lengths));
+        h.set_zero_lengths(Some(Vector6::from(c.zero_lengths)));
     }
     // The six struts must fix the platform: a regular Jacobian at home.
     let (p, r) = crate::legs::split_pose(&h.info().home());

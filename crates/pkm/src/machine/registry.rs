@@ -294,11 +294,11 @@ impl Machine {
         match &self.model {
             Model::Hexapod(h) => Ok(ControllerModel {
                 geometry: Geometry::Genhex {
-                    base: std::array::from_fn(|i| h.struts[i].base),
-                    platform: std::array::from_fn(|i| h.struts[i].platform - h.tool),
+                    base: std::array::from_fn(|i| h.hex_struts()[i].base),
+                    platform: std::array::from_fn(|i| h.hex_struts()[i].platform - h.tool()),
                 },
-                axes: h.axes.clone(),
-                zero_lengths: h.zero_lengths.map(|z| z.iter().copied().collect()),
+                axes: h.axes().clone(),
+                zero_lengths: h.zero_lengths().map(|z| z.iter().copied().collect()),
             }),
             Model::Pentapod(p) => Ok(ControllerModel {
                 geometry: Geometry::Penta {

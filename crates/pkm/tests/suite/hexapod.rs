@@ -203,8 +203,8 @@ fn joint_cone_and_interference_limits() {
     let mut dmin = f64::INFINITY;
     for i in 0..6 {
         for k in i + 1..6 {
-            if h.struts[i].base_name == h.struts[k].base_name
-                || h.struts[i].platform_name == h.struts[k].platform_name
+            if h.hex_struts()[i].base_name == h.hex_struts()[k].base_name
+                || h.hex_struts()[i].platform_name == h.hex_struts()[k].platform_name
             {
                 continue;
             }
@@ -220,9 +220,9 @@ fn joint_cone_and_interference_limits() {
             .filter(|v| v.kind == LimitKind::StrutInterference)
             .count()
     };
-    h.strut_diameter = Some(dmin + 0.5);
+    h.set_strut_diameter(Some(dmin + 0.5));
     assert!(count(&h) >= 1, "dmin {dmin}");
-    h.strut_diameter = Some(dmin - 0.5);
+    h.set_strut_diameter(Some(dmin - 0.5));
     assert_eq!(count(&h), 0);
 }
 
@@ -381,8 +381,14 @@ fn per_joint_cone_axes() {
     let joints = h.strut_set().platform_joints(&p, &r);
     let axes: Vec<String> = (0..6)
         .map(|i| {
-            let d = (joints[i] - h.struts[i].base).normalize();
-            format!("{} = [{}, {}, {}]", h.struts[i].base_name, d.x, d.y, d.z)
+            let d = (joints[i] - h.hex_struts()[i].base).normalize();
+            format!(
+                "{} = [{}, {}, {}]",
+                h.hex_struts()[i].base_name,
+                d.x,
+                d.y,
+                d.z
+            )
         })
         .collect();
     // Struts share no base joint in this file, so every joint gets one axis.
@@ -565,7 +571,7 @@ fn joint_centres_moved_in_place_equal_a_rebuilt_machine() {
             let (p, r) = pkm::legs::split_pose(&x);
             let q = Mechanism::<6, 6>::inverse(&moved, &x).unwrap();
             for j in 0..6 {
-                let by_hand = (p + r * (s[j].platform - h.tool) - s[j].base).norm();
+                let by_hand = (p + r * (s[j].platform - h.tool()) - s[j].base).norm();
                 assert!((q[j] - by_hand).abs() <= 1e-12 * by_hand, "{file} {j}");
             }
         }
@@ -618,27 +624,31 @@ fn axis_travel_is_checked_and_kept_by_a_rebuilt_hexapod() {
 fn limits_to_hit(h: &mut Hexapod, open: bool) {
     use pkm::limits::Range;
     if open {
-        for s in &mut h.struts {
+        let mut struts = h.hex_struts().clone();
+        for s in &mut struts {
             s.actuator.range = Range { min: 0.0, max: 1e5 };
             s.base_cone = None;
             s.platform_cone = None;
         }
-        h.strut_diameter = Some(150.0);
+        h.set_struts(struts);
+        h.set_strut_diameter(Some(150.0));
     } else {
-        h.axes.ranges.push((
+        let mut axes = h.axes().clone();
+        axes.ranges.push((
             0,
             Range {
                 min: -60.0,
                 max: 60.0,
             },
         ));
-        h.axes.ranges.push((
+        axes.ranges.push((
             4,
             Range {
                 min: -0.3,
                 max: 0.3,
             },
         ));
+        h.set_axes(axes);
     }
 }
 

@@ -30,6 +30,7 @@ mod rotation;
 mod seed000;
 mod serial;
 mod serial_arm;
+mod setters;
 mod spherical_wrist;
 mod tcp;
 mod tripod;
