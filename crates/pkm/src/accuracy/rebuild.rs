@@ -315,7 +315,7 @@ strut_rebuild!(crate::tripod::TranslationalTripod, 3);
 
 impl Rebuild<3, 3> for crate::tripod::CentreLegTripod {
     fn geometry_parameters(&self) -> Vec<Parameter> {
-        let s = &self.tripod_geometry().struts;
+        let s = &self.tripod_geometry().struts();
         let b: Vec<&str> = s.iter().map(|s| s.base_name.as_str()).collect();
         let p: Vec<&str> = s.iter().map(|s| s.platform_name.as_str()).collect();
         let n: Vec<&str> = s.iter().map(|s| s.actuator.name.as_str()).collect();
@@ -328,7 +328,7 @@ impl Rebuild<3, 3> for crate::tripod::CentreLegTripod {
         v
     }
     fn geometry_values(&self) -> Vec<f64> {
-        let s = &self.tripod_geometry().struts;
+        let s = &self.tripod_geometry().struts();
         s.iter()
             .flat_map(|s| s.base.iter().copied())
             .chain(s.iter().flat_map(|s| s.platform.iter().copied()))
@@ -343,15 +343,15 @@ impl Rebuild<3, 3> for crate::tripod::CentreLegTripod {
             });
         }
         let old = self.tripod_geometry();
-        let mut s = old.struts.clone();
+        let mut s = old.struts().clone();
         for (j, st) in s.iter_mut().enumerate() {
             st.base = Vector3::from_column_slice(&v[3 * j..3 * j + 3]);
             st.platform = Vector3::from_column_slice(&v[9 + 3 * j..9 + 3 * j + 3]);
         }
         let mut geometry = crate::tripod::TripodGeometry::new(
-            old.name.clone(),
+            old.name().to_string(),
             s,
-            old.tool,
+            old.tool(),
             old.max_tilt,
             old.min_strut_spindle_angle,
         );
@@ -373,7 +373,7 @@ impl Rebuild<3, 3> for crate::tripod::CentreLegTripod {
         )
     }
     fn passive_joints(&self) -> Vec<super::clearance::PassiveJoint> {
-        let s = &self.tripod_geometry().struts;
+        let s = &self.tripod_geometry().struts();
         let b: Vec<&str> = s.iter().map(|s| s.base_name.as_str()).collect();
         let p: Vec<&str> = s.iter().map(|s| s.platform_name.as_str()).collect();
         let mut j = strut_joints(&b, &p);

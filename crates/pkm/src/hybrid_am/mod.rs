@@ -96,23 +96,23 @@ pub struct Placement {
 #[derive(Debug, Clone, PartialEq)]
 pub struct HybridAm {
     /// The four legs.
-    pub legs: [Leg; 4],
+    legs: [Leg; 4],
     /// Nozzle tip in the platform frame (mm).
-    pub tool: Vector3<f64>,
+    tool: Vector3<f64>,
     /// Tilt `gamma` of the nozzle axis about the platform's Y axis (rad): the nozzle
     /// axis is `Ry(gamma) e_z` in the platform frame.
-    pub tool_tilt: f64,
+    tool_tilt: f64,
     /// Table centre `c_t`: the part frame's origin (base frame, mm); the table axis is
     /// vertical.
-    pub table: Vector3<f64>,
+    table: Vector3<f64>,
     /// Range of the platform tilt `beta` (rad), if limited.
-    pub tilt: Option<Range>,
+    tilt: Option<Range>,
     /// Cone of the carriage joints (base frame axis), if limited.
-    pub carriage_cone: Option<JointCone>,
+    carriage_cone: Option<JointCone>,
     /// Cone of the platform joints (platform frame axis), if limited.
-    pub platform_cone: Option<JointCone>,
+    platform_cone: Option<JointCone>,
     /// Strut diameter for strut-strut interference (mm), if checked.
-    pub strut_diameter: Option<f64>,
+    strut_diameter: Option<f64>,
     /// Name, coordinates, actuators, home pose, characteristic length (the mean
     /// distance of the platform joints from the nozzle tip).
     info: MechanismInfo<6, 5>,
@@ -167,6 +167,61 @@ impl HybridAm {
         };
         m.derive();
         m
+    }
+
+    /// The four legs.
+    pub fn legs(&self) -> &[Leg; 4] {
+        &self.legs
+    }
+
+    /// Nozzle tip in the platform frame (mm).
+    pub fn tool(&self) -> Vector3<f64> {
+        self.tool
+    }
+
+    /// Tilt `gamma` of the nozzle axis about the platform's Y axis (rad).
+    pub fn tool_tilt(&self) -> f64 {
+        self.tool_tilt
+    }
+
+    /// Table centre `c_t`: the part frame's origin (base frame, mm).
+    pub fn table(&self) -> Vector3<f64> {
+        self.table
+    }
+
+    /// Range of the platform tilt `beta` (rad), if limited.
+    pub fn tilt(&self) -> Option<Range> {
+        self.tilt
+    }
+
+    /// Cone of the carriage joints (base frame axis), if limited.
+    pub fn carriage_cone(&self) -> Option<&JointCone> {
+        self.carriage_cone.as_ref()
+    }
+
+    /// Cone of the platform joints (platform frame axis), if limited.
+    pub fn platform_cone(&self) -> Option<&JointCone> {
+        self.platform_cone.as_ref()
+    }
+
+    /// Strut diameter for strut-strut interference (mm), if checked.
+    pub fn strut_diameter(&self) -> Option<f64> {
+        self.strut_diameter
+    }
+
+    /// Sets the limits that derive nothing: the platform tilt's range, the joint cones
+    /// and the strut diameter.
+    pub fn set_limits(
+        &mut self,
+        tilt: Option<Range>,
+        carriage_cone: Option<JointCone>,
+        platform_cone: Option<JointCone>,
+        strut_diameter: Option<f64>,
+    ) {
+        self.tilt = tilt;
+        self.carriage_cone = carriage_cone;
+        self.platform_cone = platform_cone;
+        self.strut_diameter = strut_diameter;
     }
 
     /// What the machine derives from its geometry: the characteristic length (mean

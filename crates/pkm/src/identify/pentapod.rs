@@ -23,7 +23,7 @@ use crate::pentapod::TOOL;
 impl Pentapod {
     /// The tool tip in the effector frame.
     fn tip(&self) -> Vector3<f64> {
-        Vector3::new(0.0, 0.0, self.tool)
+        Vector3::new(0.0, 0.0, self.tool_height())
     }
 }
 
@@ -55,7 +55,7 @@ impl Identifiable<6, 5> for Pentapod {
             });
         }
         let mut v = g.to_vec();
-        v.push(self.tool);
+        v.push(self.tool_height());
         self.with_geometry_values(&v)
     }
 
@@ -83,7 +83,7 @@ impl Identifiable<6, 5> for Pentapod {
     /// The tool axis of `r` (its spin about the axis is dropped), through `c + t k`.
     fn coords_from_platform_frame(&self, c: &Vector3<f64>, r: &Matrix3<f64>) -> Vector6<f64> {
         let k = r.column(2).into_owned();
-        self.coords_from_axis(&(c + k * self.tool), &k)
+        self.coords_from_axis(&(c + k * self.tool_height()), &k)
     }
 
     fn pose_points(&self) -> usize {
@@ -154,11 +154,11 @@ impl Identifiable<6, 5> for Pentapod {
         }
         let k = d / len;
         let origin = m0 - k * h0;
-        Ok(self.coords_from_axis(&(origin + k * self.tool), &k))
+        Ok(self.coords_from_axis(&(origin + k * self.tool_height()), &k))
     }
 
     fn zero_readings(&self) -> Result<SVector<f64, 5>> {
-        match self.zero_lengths {
+        match self.zero_lengths() {
             Some(z) => Ok(z),
             None => self.inverse(&self.info().home()),
         }

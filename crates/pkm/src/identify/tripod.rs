@@ -14,7 +14,7 @@ use crate::tripod::{TranslationalTripod, TripodGeometry};
 impl StrutMachine<3> for TranslationalTripod {
     fn struts(&self) -> [StrutGeometry; 3] {
         std::array::from_fn(|j| {
-            let s = &self.tripod_geometry().struts[j];
+            let s = &self.tripod_geometry().struts()[j];
             StrutGeometry {
                 name: s.actuator.name.clone(),
                 base_name: s.base_name.clone(),
@@ -26,20 +26,20 @@ impl StrutMachine<3> for TranslationalTripod {
     }
 
     fn tool(&self) -> Vector3<f64> {
-        self.tripod_geometry().tool
+        self.tripod_geometry().tool()
     }
 
     fn with_struts(&self, struts: &[StrutGeometry; 3]) -> Self {
         let old = self.tripod_geometry();
-        let mut s = old.struts.clone();
+        let mut s = old.struts().clone();
         for (st, g) in s.iter_mut().zip(struts) {
             st.base = g.base;
             st.platform = g.platform;
         }
         let mut geometry = TripodGeometry::new(
-            old.name.clone(),
+            old.name().to_string(),
             s,
-            old.tool,
+            old.tool(),
             old.max_tilt,
             old.min_strut_spindle_angle,
         );

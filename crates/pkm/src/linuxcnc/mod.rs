@@ -240,7 +240,7 @@ pub(crate) fn tripod_geometry(t: &crate::tripod::TranslationalTripod) -> crate::
     let g = t.tripod_geometry();
     let (_, r) = crate::legs::split_pose(&t.info().home());
     let a: [Vector3<f64>; 3] =
-        std::array::from_fn(|i| g.struts[i].base - r * (g.struts[i].platform - g.tool));
+        std::array::from_fn(|i| g.struts()[i].base - r * (g.struts()[i].platform - g.tool()));
     let scale = a.iter().map(|v| v.norm()).fold(1.0, f64::max);
     let tol = 1e-9 * scale;
     let off = [

@@ -299,21 +299,24 @@ pub(super) fn build(src: &Source, f: HybridAmFile) -> Result<super::Parts, Error
         home,
     );
     let lim = &f.limits;
-    if let Some(r) = lim.tilt {
-        let r = ordered(src, &[key("limits"), key("tilt")], r, "deg")?;
-        m.tilt = Some(Range {
-            min: r.min.to_radians(),
-            max: r.max.to_radians(),
-        });
-    }
-    m.carriage_cone = super::joint_cone(
+    let tilt = match lim.tilt {
+        Some(r) => {
+            let r = ordered(src, &[key("limits"), key("tilt")], r, "deg")?;
+            Some(Range {
+                min: r.min.to_radians(),
+                max: r.max.to_radians(),
+            })
+        }
+        None => None,
+    };
+    let carriage_cone = super::joint_cone(
         src,
         lim.carriage_joint_axis,
         [0.0, 0.0, -1.0],
         lim.carriage_joint_max_angle,
         "carriage",
     )?;
-    m.platform_cone = super::joint_cone(
+    let platform_cone = super::joint_cone(
         src,
         lim.platform_joint_axis,
         [0.0, 0.0, 1.0],
@@ -321,7 +324,7 @@ pub(super) fn build(src: &Source, f: HybridAmFile) -> Result<super::Parts, Error
         "platform",
     )?;
     super::strut_diameter(src, lim.strut_diameter)?;
-    m.strut_diameter = lim.strut_diameter;
+    m.set_limits(tilt, carriage_cone, platform_cone, lim.strut_diameter);
     // The home pose must be an assembly, and not a singular one.
     let home_err = |e: Error| src.error(&[key("home")], format!("not a pose of the machine: {e}"));
     m.inverse(&m.info().home()).map_err(home_err)?;

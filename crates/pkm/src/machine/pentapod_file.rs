@@ -190,7 +190,7 @@ pub(super) fn build(src: &Source, f: PentapodFile) -> Result<super::Parts, Error
                 "expected five positive strut lengths (mm)",
             ));
         }
-        m.zero_lengths = Some(nalgebra::SVector::<f64, 5>::from(c.zero_lengths.0));
+        m.set_zero_lengths(Some(nalgebra::SVector::<f64, 5>::from(c.zero_lengths.0)));
     }
     // The five struts must fix the tool axis: a regular driven Jacobian at home.
     let rc = match crate::mechanism::scaled_driven_jacobian(&m, &m.info().home()) {

@@ -302,12 +302,14 @@ impl Machine {
             }),
             Model::Pentapod(p) => Ok(ControllerModel {
                 geometry: Geometry::Penta {
-                    base: std::array::from_fn(|i| p.struts[i].base),
-                    radius: std::array::from_fn(|i| p.struts[i].ring_radius),
-                    height: std::array::from_fn(|i| p.struts[i].ring_height - p.tool),
+                    base: std::array::from_fn(|i| p.penta_struts()[i].base),
+                    radius: std::array::from_fn(|i| p.penta_struts()[i].ring_radius),
+                    height: std::array::from_fn(|i| {
+                        p.penta_struts()[i].ring_height - p.tool_height()
+                    }),
                 },
-                axes: p.axes.clone(),
-                zero_lengths: p.zero_lengths.map(|z| z.iter().copied().collect()),
+                axes: p.axes().clone(),
+                zero_lengths: p.zero_lengths().map(|z| z.iter().copied().collect()),
             }),
             Model::TranslationalTripod(t) => Ok(ControllerModel {
                 geometry: crate::linuxcnc::tripod_geometry(t)?,

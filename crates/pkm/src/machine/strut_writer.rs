@@ -145,16 +145,20 @@ pub fn with_pentapod_geometry(
     let src = Source::parse(file, text)?;
     let mut doc: toml::Table = toml::from_str(text).map_err(|e| src.error(&[], e.to_string()))?;
     let f = |v: f64| toml::Value::Float(v);
-    let names: Vec<&str> = m.struts.iter().map(|s| s.base_name.as_str()).collect();
+    let names: Vec<&str> = m
+        .penta_struts()
+        .iter()
+        .map(|s| s.base_name.as_str())
+        .collect();
     let mut joints = toml::Table::new();
     let list = doc
         .get_mut("struts")
         .and_then(|v| v.as_array_mut())
-        .filter(|l| l.len() == m.struts.len())
+        .filter(|l| l.len() == m.penta_struts().len())
         .ok_or_else(|| src.error(&[Seg::Key("struts".into())], "expected 5 tables"))?;
-    for (j, s) in m.struts.iter().enumerate() {
+    for (j, s) in m.penta_struts().iter().enumerate() {
         let sharing = || (0..names.len()).filter(|&k| names[k] == names[j]);
-        let shared = sharing().count() > 1 && sharing().any(|k| m.struts[k].base != s.base);
+        let shared = sharing().count() > 1 && sharing().any(|k| m.penta_struts()[k].base != s.base);
         let name = if shared {
             format!("{}_{}", names[j], s.actuator.name)
         } else {
@@ -174,7 +178,7 @@ pub fn with_pentapod_geometry(
     let mut tool = toml::Table::new();
     tool.insert(
         "tip".into(),
-        toml::Value::Array(vec![f(0.0), f(0.0), f(m.tool)]),
+        toml::Value::Array(vec![f(0.0), f(0.0), f(m.tool_height())]),
     );
     doc.insert("tool".into(), toml::Value::Table(tool));
     finish(&src, doc, zero_lengths, comment)

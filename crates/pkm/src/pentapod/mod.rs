@@ -57,16 +57,16 @@ pub struct PentaStrut {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Pentapod {
     /// The five struts.
-    pub struts: [PentaStrut; 5],
+    struts: [PentaStrut; 5],
     /// Tool tip height `t` along the tool axis above the effector origin (mm).
-    pub tool: f64,
+    tool: f64,
     /// Strut diameter for strut-strut interference (mm), if checked.
-    pub strut_diameter: Option<f64>,
+    strut_diameter: Option<f64>,
     /// Soft limits of the pose coordinates (LinuxCNC's `[AXIS_n]`).
-    pub axes: AxisLimits,
+    axes: AxisLimits,
     /// Strut lengths at the control's zero readings (`[calibration] zero_lengths`,
     /// written by `pkm calibrate`); `None`: the lengths at home.
-    pub zero_lengths: Option<SVector<f64, 5>>,
+    zero_lengths: Option<SVector<f64, 5>>,
     /// Name, coordinates, actuators, home pose, characteristic length (the mean
     /// distance of the ring joints from the tool tip), the free spin.
     info: MechanismInfo<6, 5>,
@@ -133,6 +133,57 @@ impl Pentapod {
             axes,
             zero_lengths: None,
         }
+    }
+
+    /// The five struts (names, actuators, base joints, rings, cones).
+    pub fn penta_struts(&self) -> &[PentaStrut; 5] {
+        &self.struts
+    }
+
+    /// Tool tip height `t` along the tool axis above the effector origin (mm).
+    pub fn tool_height(&self) -> f64 {
+        self.tool
+    }
+
+    /// Strut diameter for strut-strut interference (mm), if checked.
+    pub fn strut_diameter(&self) -> Option<f64> {
+        self.strut_diameter
+    }
+
+    /// Soft limits of the pose coordinates (LinuxCNC's `[AXIS_n]`).
+    pub fn axes(&self) -> &AxisLimits {
+        &self.axes
+    }
+
+    /// Strut lengths at the control's zero readings; `None`: the lengths at home.
+    pub fn zero_lengths(&self) -> Option<SVector<f64, 5>> {
+        self.zero_lengths
+    }
+
+    /// Replaces the struts and the tool height; what derives from them (actuators,
+    /// their limits, the characteristic length) is built again, the name, home, soft
+    /// limits, strut diameter and zero lengths kept.
+    pub fn set_geometry(&mut self, struts: [PentaStrut; 5], tool: f64) {
+        let mut p = Pentapod::new(
+            self.info.name().to_string(),
+            struts,
+            tool,
+            self.strut_diameter,
+            std::mem::take(&mut self.axes),
+            self.info.home(),
+        );
+        p.zero_lengths = self.zero_lengths;
+        *self = p;
+    }
+
+    /// Sets the strut diameter for strut-strut interference (mm; `None`: unchecked).
+    pub fn set_strut_diameter(&mut self, d: Option<f64>) {
+        self.strut_diameter = d;
+    }
+
+    /// Sets the strut lengths at the control's zero readings (`None`: those at home).
+    pub fn set_zero_lengths(&mut self, z: Option<SVector<f64, 5>>) {
+        self.zero_lengths = z;
     }
 
     /// Pose coordinates of the tool tip `p` on the unit tool axis `k`, with the held C

@@ -55,7 +55,7 @@ impl CentreLegTripod {
     /// New centre-leg tripod.
     pub fn new(geometry: TripodGeometry, leg: CentreLeg, home: Vector3<f64>) -> Self {
         let info = MechanismInfo::new(
-            geometry.name.clone(),
+            geometry.name().to_string(),
             "tripod/centre-leg",
             [
                 Coordinate::length("X"),
@@ -95,7 +95,7 @@ impl CentreLegTripod {
     /// then `beta` solves `v_x cos(beta) + v_z sin(beta) = d_x` (the root nearest 0) and
     /// `alpha` turns `Ry(beta) v` onto `d` about X.
     pub fn leg_state(&self, p: &Vector3<f64>) -> Result<LegState> {
-        let t = self.geometry.tool;
+        let t = self.geometry.tool();
         let d = p - self.leg.base;
         let h2 = d.norm_squared() - t.x * t.x - t.y * t.y;
         if !(h2 > 0.0) {

@@ -27,11 +27,11 @@ pub struct Strut {
 #[derive(Debug, Clone, PartialEq)]
 pub struct TripodGeometry {
     /// Machine name.
-    pub name: String,
+    name: String,
     /// The three struts.
-    pub struts: [Strut; 3],
+    struts: [Strut; 3],
     /// Tool tip in the platform frame (mm).
-    pub tool: Vector3<f64>,
+    tool: Vector3<f64>,
     /// Largest tilt of the spindle axis from the base Z axis (rad), if limited.
     pub max_tilt: Option<f64>,
     /// Smallest allowed inclination of a strut relative to the spindle axis (rad), the
@@ -79,6 +79,22 @@ impl TripodGeometry {
             actuators,
             set,
         }
+    }
+
+    /// Machine name.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// The three struts (what the strut geometry, actuators and limits derive from:
+    /// a geometry of other struts is built anew with [`TripodGeometry::new`]).
+    pub fn struts(&self) -> &[Strut; 3] {
+        &self.struts
+    }
+
+    /// Tool tip in the platform frame (mm).
+    pub fn tool(&self) -> Vector3<f64> {
+        self.tool
     }
 
     /// The shared strut geometry.

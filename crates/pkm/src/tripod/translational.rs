@@ -23,7 +23,7 @@ impl TranslationalTripod {
     /// New translational tripod with a home pose.
     pub fn new(geometry: TripodGeometry, home: Vector6<f64>) -> Self {
         let info = MechanismInfo::new(
-            geometry.name.clone(),
+            geometry.name().to_string(),
             "tripod/translational",
             spatial_coordinates(),
             geometry.actuators().clone(),
@@ -61,7 +61,7 @@ impl TranslationalTripod {
         near: &Vector3<f64>,
     ) -> Result<Vector3<f64>> {
         let g = &self.geometry;
-        let c = [0, 1, 2].map(|i| g.struts[i].base - r * (g.struts[i].platform - g.tool));
+        let c = [0, 1, 2].map(|i| g.struts()[i].base - r * (g.struts()[i].platform - g.tool()));
         let d21 = c[1] - c[0];
         let d = d21.norm();
         let ex = d21 / d;

@@ -85,17 +85,17 @@ fn hand_construction_closes_every_loop() {
             let x = on_hemisphere(z, c);
             let q = m.inverse(&x).unwrap();
             let table = rz(-x[5]);
-            let tip = m.table + table * Vector3::new(x[0], x[1], x[2]);
-            let platform = ry(x[4] - m.tool_tilt);
-            let origin = tip - platform * m.tool;
-            for (i, leg) in m.legs.iter().enumerate() {
+            let tip = m.table() + table * Vector3::new(x[0], x[1], x[2]);
+            let platform = ry(x[4] - m.tool_tilt());
+            let origin = tip - platform * m.tool();
+            for (i, leg) in m.legs().iter().enumerate() {
                 let joint = origin + platform * leg.platform;
                 let carriage = leg.guide + Vector3::new(0.0, 0.0, q[i]);
                 assert!(((joint - carriage).norm() - leg.length).abs() < 1e-9);
                 assert!(carriage.z > joint.z, "carriage above its joint");
             }
             // The nozzle axis in the part frame is the hemisphere's outward normal.
-            let axis = table.transpose() * platform * ry(m.tool_tilt) * Vector3::z();
+            let axis = table.transpose() * platform * ry(m.tool_tilt()) * Vector3::z();
             let n = Vector3::new(x[0], x[1], x[2]) / 75.0;
             assert!((axis - n).norm() < 1e-12, "{axis} vs {n}");
             // The platform keeps its Y axis.
@@ -297,13 +297,13 @@ fn unreachable_poses_name_the_strut_and_limits_their_excess() {
         panic!("{e:?}")
     };
     let i = m
-        .legs
+        .legs()
         .iter()
         .position(|l| &l.actuator.name == strut)
         .expect("a strut of the machine");
-    assert_eq!(joint, &m.legs[i].platform_name);
-    assert_eq!(*length, m.legs[i].length);
-    let d = m.placement(&x).joints[i] - m.legs[i].guide;
+    assert_eq!(joint, &m.legs()[i].platform_name);
+    assert_eq!(*length, m.legs()[i].length);
+    let d = m.placement(&x).joints[i] - m.legs()[i].guide;
     assert!((distance - d.x.hypot(d.y)).abs() < 1e-9, "{distance}");
     assert!(distance > length, "{distance} {length}");
     let shown = e.to_string();

@@ -167,7 +167,7 @@ fn a_calibrated_pentapod_goes_back_to_the_controller() {
     let Model::Pentapod(bp) = &back.model else {
         panic!()
     };
-    let z = bp.zero_lengths.unwrap();
+    let z = bp.zero_lengths().unwrap();
     for i in 0..5 {
         assert!((z[i] - c.values[25 + i]).abs() < 1e-12);
     }
@@ -176,7 +176,7 @@ fn a_calibrated_pentapod_goes_back_to_the_controller() {
     let Model::Pentapod(tp) = &truth.model else {
         panic!()
     };
-    let zt = tp.zero_lengths.unwrap();
+    let zt = tp.zero_lengths().unwrap();
     let (a, t) = (back.mechanism(), truth.mechanism());
     let mut x = a.home();
     x[0] += 40.0;

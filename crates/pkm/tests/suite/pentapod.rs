@@ -199,7 +199,7 @@ fn a_tool_tip_below_the_effector_origin_moves_the_origin_up_the_axis() {
     // A 100 mm tool: the tip at p means the effector origin at p + 100 k (t = -100).
     let m = example();
     let mut long = m.clone();
-    long.tool = -100.0;
+    long.set_geometry(long.penta_struts().clone(), -100.0);
     let x = Vector6::new(10.0, -20.0, 30.0, 0.2, -0.1, 0.0);
     let k = pkm::rotation::rpy_matrix(x[3], x[4], x[5])
         .column(2)

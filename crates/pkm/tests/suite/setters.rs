@@ -100,3 +100,34 @@ fn a_p3rp_heads_geometry_set_moves_its_inverse_and_characteristic_length() {
     );
     assert_eq!(after, rebuilt.inverse(&x).unwrap());
 }
+
+#[test]
+fn a_pentapods_geometry_set_moves_its_inverse_and_characteristic_length() {
+    let machine = example("pentapod-linuxcnc.toml");
+    let Model::Pentapod(p) = &machine.model else {
+        panic!("pentapod-linuxcnc.toml is a pentapod")
+    };
+    let mut p = (**p).clone();
+    let x = p.info().home() + Vector6::new(4.0, -2.0, 3.0, 0.03, -0.02, 0.0);
+    let before = p.inverse(&x).unwrap();
+    let l_before = p.info().characteristic_length();
+    let mut struts = p.penta_struts().clone();
+    struts[1].ring_radius += 5.0;
+    p.set_geometry(struts.clone(), p.tool_height() - 30.0);
+    let rebuilt = pkm::pentapod::Pentapod::new(
+        p.info().name().to_string(),
+        struts,
+        p.tool_height(),
+        p.strut_diameter(),
+        p.axes().clone(),
+        p.info().home(),
+    );
+    let after = p.inverse(&x).unwrap();
+    assert!((after - before).norm() > 1.0, "{before} {after}");
+    assert_eq!(after, rebuilt.inverse(&x).unwrap());
+    assert_ne!(p.info().characteristic_length(), l_before);
+    assert_eq!(
+        p.info().characteristic_length(),
+        rebuilt.info().characteristic_length()
+    );
+}

@@ -206,12 +206,12 @@ fn tilt_and_strut_spindle_collision() {
         .tripod_geometry()
         .strut_spindle_angles(&p, &nalgebra::Matrix3::identity());
     // Keep the platform centre where it was, so the strut geometry only rotates.
-    let b = p - t.tripod_geometry().tool;
-    let p_tilted = b + r * t.tripod_geometry().tool;
+    let b = p - t.tripod_geometry().tool();
+    let p_tilted = b + r * t.tripod_geometry().tool();
     let after = t.tripod_geometry().strut_spindle_angles(&p_tilted, &r);
     let lambda_f = {
-        let plat = b + r * t.tripod_geometry().struts[1].platform;
-        let s = (t.tripod_geometry().struts[1].base - plat).normalize();
+        let plat = b + r * t.tripod_geometry().struts()[1].platform;
+        let s = (t.tripod_geometry().struts()[1].base - plat).normalize();
         s.y.atan2(s.z)
     };
     assert!(before[1] > after[1]);
