@@ -5,8 +5,8 @@
 use crate::parse_convention;
 use anyhow::{bail, Context, Result};
 use clap::Args;
-use pkm::analysis::{accuracy_with_progress, AccuracyOptions, MapRequest};
-use pkm::Convention;
+use pkm::analysis::{accuracy_with_progress, AccuracyOptions, AccuracyReport, MapRequest};
+use pkm::{Convention, DynMechanism};
 use std::path::PathBuf;
 
 use super::load;
@@ -107,78 +107,17 @@ pub struct ErrorsArgs {
 pub fn run(a: &ErrorsArgs) -> Result<u8> {
     let machine = load(&a.machine)?;
     let m = machine.mechanism();
-    let params = machine.parameters();
-    let pose = match (&a.pose, &a.actuators) {
-        (Some(_), Some(_)) => bail!("--pose and --actuators: give one of them"),
-        (Some(p), None) => Some(pose_from_user(m, &parse_list(p, "--pose")?, a.rotation)?),
-        (None, Some(q)) => {
-            let q = crate::poses::actuators_from_user(m, &parse_list(q, "--actuators")?)?;
-            Some(m.forward(&q, &m.home())?.pose)
-        }
-        (None, None) => None,
-    };
-    let read = |p: &std::path::Path| {
-        std::fs::read_to_string(p).with_context(|| format!("cannot read {}", p.display()))
-    };
-    let deviations = match &a.deviations {
-        Some(p) => pkm::machine::read_deviations(&params, &read(p)?, &p.display().to_string())?,
-        None => Vec::new(),
-    };
-    let tolerances = a.tol.tolerances(&params)?;
-    let map = match &a.map {
-        None => None,
-        Some(spec) => {
-            let names: Vec<&str> = spec.split(',').map(str::trim).collect();
-            let idx = names
-                .iter()
-                .map(|n| {
-                    m.coordinates()
-                        .iter()
-                        .position(|c| c.name == *n)
-                        .with_context(|| {
-                            format!(
-                                "--map: unknown axis `{n}`, expected two of {}",
-                                m.coordinates()
-                                    .iter()
-                                    .map(|c| c.name.as_str())
-                                    .collect::<Vec<_>>()
-                                    .join(", ")
-                            )
-                        })
-                })
-                .collect::<Result<Vec<usize>>>()?;
-            if idx.len() != 2 || idx[0] == idx[1] {
-                bail!("--map: expected two different axes, e.g. X,Y");
-            }
-            Some(MapRequest {
-                coordinates: [idx[0], idx[1]],
-                points: a.map_points,
-            })
-        }
-    };
-    let clearance = clearance_request(a, &machine)?;
+    let options = accuracy_options(a, &machine)?;
     let bar = crate::progress::bar(
         a.monte_carlo.unwrap_or(0) as u64,
         1_000_000,
         "{bar:40} {pos}/{len} machines {eta}",
     );
-    let r = accuracy_with_progress(
-        &machine,
-        &AccuracyOptions {
-            pose,
-            deviations,
-            tolerances,
-            monte_carlo: a.monte_carlo,
-            seed: a.seed,
-            map,
-            clearance,
-        },
-        &|n| {
-            if let Some(b) = &bar {
-                b.inc(n)
-            }
-        },
-    )?;
+    let r = accuracy_with_progress(&machine, &options, &|n| {
+        if let Some(b) = &bar {
+            b.inc(n)
+        }
+    })?;
     if let Some(b) = bar {
         b.finish_and_clear();
     }
@@ -188,33 +127,7 @@ pub fn run(a: &ErrorsArgs) -> Result<u8> {
         .chain(a.deviations.as_deref())
         .chain(a.tol.tolerances.as_deref())
         .collect();
-    let mut out = report_json(m, &r);
-    write_budget(&a.out, &r.budget, &inputs)?;
-    let o = out.as_object_mut().expect("object");
-    if let Some(mc) = &r.monte_carlo {
-        o.insert(
-            "monte_carlo".into(),
-            write_monte_carlo(&a.out, mc, a.seed, &inputs)?,
-        );
-    }
-    if let Some(em) = &r.map {
-        o.insert(
-            "error_map".into(),
-            write_map(&a.out, m, &r.pose, em, &inputs)?,
-        );
-    }
-    if let Some(c) = &r.clearance {
-        o.insert("clearance".into(), serde_json::to_value(c)?);
-        if let Some(sf) = &c.surface {
-            write_surface(&a.out, sf, &inputs)?;
-        }
-        if !c.series.is_empty() {
-            write_series(&a.out, &c.series, &inputs)?;
-        }
-        if let Some(p) = &c.path {
-            write_path(&a.out, m, p, &inputs)?;
-        }
-    }
+    let out = write_outputs(a, m, &r, &inputs)?;
     let text = serde_json::to_string_pretty(&out)?;
     write_atomic(&a.out.join("errors.json"), text.as_bytes(), &inputs)?;
     if a.json {
@@ -224,6 +137,116 @@ pub fn run(a: &ErrorsArgs) -> Result<u8> {
         println!("wrote {}", a.out.display());
     }
     Ok(0)
+}
+
+/// What the options ask of the accuracy analysis.
+fn accuracy_options(a: &ErrorsArgs, machine: &pkm::Machine) -> Result<AccuracyOptions> {
+    let params = machine.parameters();
+    let pose = pose(a, machine.mechanism())?;
+    let deviations = match &a.deviations {
+        Some(p) => {
+            let text = std::fs::read_to_string(p)
+                .with_context(|| format!("cannot read {}", p.display()))?;
+            pkm::machine::read_deviations(&params, &text, &p.display().to_string())?
+        }
+        None => Vec::new(),
+    };
+    let tolerances = a.tol.tolerances(&params)?;
+    let map = match &a.map {
+        None => None,
+        Some(spec) => Some(map_request(machine.mechanism(), spec, a.map_points)?),
+    };
+    let clearance = clearance_request(a, machine)?;
+    Ok(AccuracyOptions {
+        pose,
+        deviations,
+        tolerances,
+        monte_carlo: a.monte_carlo,
+        seed: a.seed,
+        map,
+        clearance,
+    })
+}
+
+/// The pose of `--pose`, or of `--actuators` (forward kinematics from home); `None`:
+/// home.
+fn pose(a: &ErrorsArgs, m: &dyn DynMechanism) -> Result<Option<Vec<f64>>> {
+    Ok(match (&a.pose, &a.actuators) {
+        (Some(_), Some(_)) => bail!("--pose and --actuators: give one of them"),
+        (Some(p), None) => Some(pose_from_user(m, &parse_list(p, "--pose")?, a.rotation)?),
+        (None, Some(q)) => {
+            let q = crate::poses::actuators_from_user(m, &parse_list(q, "--actuators")?)?;
+            Some(m.forward(&q, &m.home())?.pose)
+        }
+        (None, None) => None,
+    })
+}
+
+/// `--map X,Y`: the error map over two pose coordinates, `points` per axis.
+fn map_request(m: &dyn DynMechanism, spec: &str, points: usize) -> Result<MapRequest> {
+    let names: Vec<&str> = spec.split(',').map(str::trim).collect();
+    let idx = names
+        .iter()
+        .map(|n| {
+            m.coordinates()
+                .iter()
+                .position(|c| c.name == *n)
+                .with_context(|| {
+                    format!(
+                        "--map: unknown axis `{n}`, expected two of {}",
+                        m.coordinates()
+                            .iter()
+                            .map(|c| c.name.as_str())
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    )
+                })
+        })
+        .collect::<Result<Vec<usize>>>()?;
+    if idx.len() != 2 || idx[0] == idx[1] {
+        bail!("--map: expected two different axes, e.g. X,Y");
+    }
+    Ok(MapRequest {
+        coordinates: [idx[0], idx[1]],
+        points,
+    })
+}
+
+/// Writes the budget, Monte Carlo, map and clearance files; the `errors.json` document.
+fn write_outputs(
+    a: &ErrorsArgs,
+    m: &dyn DynMechanism,
+    r: &AccuracyReport,
+    inputs: &[&std::path::Path],
+) -> Result<serde_json::Value> {
+    let mut out = report_json(m, r);
+    write_budget(&a.out, &r.budget, inputs)?;
+    let o = out.as_object_mut().expect("object");
+    if let Some(mc) = &r.monte_carlo {
+        o.insert(
+            "monte_carlo".into(),
+            write_monte_carlo(&a.out, mc, a.seed, inputs)?,
+        );
+    }
+    if let Some(em) = &r.map {
+        o.insert(
+            "error_map".into(),
+            write_map(&a.out, m, &r.pose, em, inputs)?,
+        );
+    }
+    if let Some(c) = &r.clearance {
+        o.insert("clearance".into(), serde_json::to_value(c)?);
+        if let Some(sf) = &c.surface {
+            write_surface(&a.out, sf, inputs)?;
+        }
+        if !c.series.is_empty() {
+            write_series(&a.out, &c.series, inputs)?;
+        }
+        if let Some(p) = &c.path {
+            write_path(&a.out, m, p, inputs)?;
+        }
+    }
+    Ok(out)
 }
 
 /// The clearance request of the arguments: asked for by `--clearance`, or by the
@@ -245,39 +268,13 @@ fn clearance_request(
     let direction = match &a.direction {
         None => None,
         Some(d) => {
-            let v = parse_list(d, "--direction")?;
-            if v.len() != 3 {
-                bail!("--direction: expected X,Y,Z, got {} values", v.len());
-            }
+            let v = three(d, "--direction")?;
             Some(nalgebra::Vector3::new(v[0], v[1], v[2]))
         }
     };
     let surface = match &a.surface {
         None => None,
-        Some(spec) => {
-            let radius = spec
-                .strip_prefix("hemisphere:")
-                .and_then(|r| r.trim().parse::<f64>().ok())
-                .with_context(|| {
-                    format!("--surface: expected hemisphere:R (R in mm), found `{spec}`")
-                })?;
-            let centre = match &a.surface_centre {
-                None => None,
-                Some(c) => {
-                    let v = parse_list(c, "--surface-centre")?;
-                    if v.len() != 3 {
-                        bail!("--surface-centre: expected X,Y,Z, got {} values", v.len());
-                    }
-                    Some([v[0], v[1], v[2]])
-                }
-            };
-            Some(pkm::analysis::clearance::SurfaceRequest {
-                radius,
-                centre,
-                azimuth: 0.0,
-                heights: a.surface_points,
-            })
-        }
+        Some(spec) => Some(surface_request(a, spec)?),
     };
     let method = a
         .clearance_method
@@ -300,23 +297,58 @@ fn clearance_request(
         },
         path: match &a.path {
             None => None,
-            Some(p) => {
-                if !(a.path_rate > 0.0 && a.path_rate <= 1e6) {
-                    bail!(
-                        "--path-rate: expected 0 < rate <= 1e6 Hz, got {}",
-                        a.path_rate
-                    );
-                }
-                let feed = pkm::analysis::motion::feed_options(machine);
-                Some(pkm::analysis::clearance_path::PathRequest {
-                    program: std::fs::read_to_string(p)
-                        .with_context(|| format!("cannot read {}", p.display()))?,
-                    from: None,
-                    feed,
-                    sampling: pkm::motion::Sampling::Rate(a.path_rate),
-                    every: a.path_every,
-                })
-            }
+            Some(p) => Some(path_request(a, machine, p)?),
         },
     }))
+}
+
+/// Three values X,Y,Z of option `flag`.
+fn three(s: &str, flag: &str) -> Result<[f64; 3]> {
+    let v = parse_list(s, flag)?;
+    if v.len() != 3 {
+        bail!("{flag}: expected X,Y,Z, got {} values", v.len());
+    }
+    Ok([v[0], v[1], v[2]])
+}
+
+/// `--surface hemisphere:R` about `--surface-centre`.
+fn surface_request(a: &ErrorsArgs, spec: &str) -> Result<pkm::analysis::clearance::SurfaceRequest> {
+    let radius = spec
+        .strip_prefix("hemisphere:")
+        .and_then(|r| r.trim().parse::<f64>().ok())
+        .with_context(|| format!("--surface: expected hemisphere:R (R in mm), found `{spec}`"))?;
+    let centre = match &a.surface_centre {
+        None => None,
+        Some(c) => Some(three(c, "--surface-centre")?),
+    };
+    Ok(pkm::analysis::clearance::SurfaceRequest {
+        radius,
+        centre,
+        azimuth: 0.0,
+        heights: a.surface_points,
+    })
+}
+
+/// `--path FILE`: the program from home at the machine's feeds, sampled at
+/// `--path-rate`.
+fn path_request(
+    a: &ErrorsArgs,
+    machine: &pkm::Machine,
+    p: &std::path::Path,
+) -> Result<pkm::analysis::clearance_path::PathRequest> {
+    if !(a.path_rate > 0.0 && a.path_rate <= 1e6) {
+        bail!(
+            "--path-rate: expected 0 < rate <= 1e6 Hz, got {}",
+            a.path_rate
+        );
+    }
+    let feed = pkm::analysis::motion::feed_options(machine);
+    Ok(pkm::analysis::clearance_path::PathRequest {
+        program: std::fs::read_to_string(p)
+            .with_context(|| format!("cannot read {}", p.display()))?,
+        from: None,
+        feed,
+        sampling: pkm::motion::Sampling::Rate(a.path_rate),
+        every: a.path_every,
+    })
 }

@@ -7,9 +7,10 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use pkm::analysis::kinematics::{
-    inverse, inverse_for_tool_axis, inverse_solutions, transmission, InverseSolution, InverseStream,
+    inverse, inverse_for_tool_axis, inverse_solutions, transmission, InverseSolution,
+    InverseStream, ToolAxisSolution,
 };
-use pkm::{Machine, PoseSpace};
+use pkm::{DynMechanism, Machine, PoseSpace};
 use serde_json::{json, Map, Value};
 
 use super::csvio::{read_table, BatchTable};
@@ -111,17 +112,7 @@ pub fn run(a: &IkArgs) -> Result<u8> {
     let vals = parse_list(a.pose.as_deref().unwrap_or_default(), "--pose")?;
     let (r, axis) = match &a.tool_axis {
         Some(t) => {
-            let tip: [f64; 3] = vals.as_slice().try_into().map_err(|_| {
-                anyhow::anyhow!(
-                    "--pose: with --tool-axis expected X,Y,Z (mm), got {} values",
-                    vals.len()
-                )
-            })?;
-            let ijk = parse_list(t, "--tool-axis")?;
-            let ijk: [f64; 3] = ijk.as_slice().try_into().map_err(|_| {
-                anyhow::anyhow!("--tool-axis: expected I,J,K, got {} values", ijk.len())
-            })?;
-            let sol = inverse_for_tool_axis(&machine, tip, ijk, None)?;
+            let sol = tool_axis_solution(&machine, &vals, t)?;
             (sol.branches[sol.chosen].clone(), Some(sol))
         }
         None => {
@@ -135,107 +126,11 @@ pub fn run(a: &IkArgs) -> Result<u8> {
     if a.opts.json {
         let mut v = to_json(&machine, &r, conv)?;
         if let Some(sol) = &axis {
-            v["tool_axis"] = json!({
-                "branches": sol.branches.iter().map(|b| json!({
-                    "pose": coords_json(m, &b.pose),
-                    "reachable": b.violations.is_empty(),
-                })).collect::<Vec<_>>(),
-                "chosen": sol.chosen,
-                "singular": sol.singular,
-                "singular_distance_deg": sol.singular_distance.to_degrees(),
-            });
+            v["tool_axis"] = tool_axis_json(m, sol);
         }
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else {
-        println!("{} ({})", m.name(), m.kind());
-        println!("pose       {}", coords_text(m, &r.pose));
-        if let Some(sol) = &axis {
-            for (k, b) in sol.branches.iter().enumerate() {
-                println!(
-                    "branch {}{}  {}{}",
-                    k + 1,
-                    if k == sol.chosen { "*" } else { " " },
-                    coords_text(m, &b.pose),
-                    if b.violations.is_empty() {
-                        String::new()
-                    } else {
-                        format!("  ({} limit(s) violated)", b.violations.len())
-                    }
-                );
-            }
-            println!(
-                "tool axis  {:.4} deg from the singular direction{}",
-                sol.singular_distance.to_degrees(),
-                if sol.singular {
-                    ": along it, the first rotary angle held at home's"
-                } else {
-                    ""
-                }
-            );
-        }
-        // Actuator names as long as a user's file makes them stay in one column too.
-        let aw = name_width(m.actuators().iter().map(|a| a.name.as_str()), 8);
-        for (act, v) in m.actuators().iter().zip(&r.actuators) {
-            println!(
-                "actuator   {:<aw$} {:>12.4} {}   range [{:.3}, {:.3}]",
-                act.name,
-                Shown(act.quantity.to_user(*v)),
-                act.quantity.unit(),
-                act.quantity.to_user(act.range.min),
-                act.quantity.to_user(act.range.max)
-            );
-        }
-        let points = m.skeleton(&r.pose)?.points;
-        // Names as long as a user's file makes them stay in one column.
-        let w = name_width(points.iter().map(|p| p.name.as_str()), 8);
-        for p in points {
-            println!(
-                "joint      {:<w$} {:>10.4} {:>10.4} {:>10.4} mm",
-                p.name,
-                Shown(p.position[0]),
-                Shown(p.position[1]),
-                Shown(p.position[2])
-            );
-        }
-        match transmission(&machine, &r.pose) {
-            Ok(t) => {
-                let f = |v: Option<f64>, unit: &str| {
-                    v.map(|v| format!("{v:.4} {unit}"))
-                        .unwrap_or_else(|| "-".into())
-                };
-                // Actuator rates in mm/s (linear drives) or rad/s (revolute ones),
-                // efforts in N or N mm.
-                let angular = |a: &pkm::mechanism::Actuator| a.quantity == pkm::Quantity::Angle;
-                let (rate, effort) = if m.actuators().iter().all(angular) {
-                    ("rad/s", "N mm")
-                } else if m.actuators().iter().any(angular) {
-                    ("mm/s or rad/s", "N or N mm")
-                } else {
-                    ("mm/s", "N")
-                };
-                println!(
-                    "transmit   velocity {}, angular {}, force {}, moment {}",
-                    f(t.velocity, &format!("({rate})/(mm/s)")),
-                    f(
-                        t.angular_velocity.map(|v| v.to_radians()),
-                        &format!("({rate})/(deg/s)")
-                    ),
-                    f(t.force, &format!("({effort})/N")),
-                    f(t.moment, &format!("({effort})/(N mm)"))
-                );
-                println!(
-                    "singular   distance {:.4} (smallest scaled singular value; 0 = singular), condition {:.3}",
-                    t.distance_to_singularity, t.condition
-                );
-            }
-            Err(e) => println!("transmit   {e}"),
-        }
-        if r.violations.is_empty() {
-            println!("limits     all satisfied");
-        }
-        for v in &r.violations {
-            println!("limit      VIOLATED: {v}");
-        }
+        print_text(&machine, &r, axis.as_ref())?;
     }
     if r.violations.is_empty() {
         Ok(0)
@@ -248,6 +143,149 @@ pub fn run(a: &IkArgs) -> Result<u8> {
         );
         Ok(EXIT_UNREACHABLE)
     }
+}
+
+/// `--tool-axis`: both branches of the rotary axes for the tip `vals` (X,Y,Z) and the
+/// tool axis I,J,K.
+fn tool_axis_solution(machine: &Machine, vals: &[f64], axis: &str) -> Result<ToolAxisSolution> {
+    let tip: [f64; 3] = vals.try_into().map_err(|_| {
+        anyhow::anyhow!(
+            "--pose: with --tool-axis expected X,Y,Z (mm), got {} values",
+            vals.len()
+        )
+    })?;
+    let ijk = parse_list(axis, "--tool-axis")?;
+    let ijk: [f64; 3] = ijk
+        .as_slice()
+        .try_into()
+        .map_err(|_| anyhow::anyhow!("--tool-axis: expected I,J,K, got {} values", ijk.len()))?;
+    Ok(inverse_for_tool_axis(machine, tip, ijk, None)?)
+}
+
+/// The `tool_axis` entry of `pkm ik --json`: the branches and the one chosen.
+fn tool_axis_json(m: &dyn DynMechanism, sol: &ToolAxisSolution) -> Value {
+    json!({
+        "branches": sol.branches.iter().map(|b| json!({
+            "pose": coords_json(m, &b.pose),
+            "reachable": b.violations.is_empty(),
+        })).collect::<Vec<_>>(),
+        "chosen": sol.chosen,
+        "singular": sol.singular,
+        "singular_distance_deg": sol.singular_distance.to_degrees(),
+    })
+}
+
+/// The solution as text: pose, branches, actuators, joints, transmission, limits.
+fn print_text(
+    machine: &Machine,
+    r: &InverseSolution,
+    axis: Option<&ToolAxisSolution>,
+) -> Result<()> {
+    let m = machine.mechanism();
+    println!("{} ({})", m.name(), m.kind());
+    println!("pose       {}", coords_text(m, &r.pose));
+    if let Some(sol) = axis {
+        print_branches(m, sol);
+    }
+    // Actuator names as long as a user's file makes them stay in one column too.
+    let aw = name_width(m.actuators().iter().map(|a| a.name.as_str()), 8);
+    for (act, v) in m.actuators().iter().zip(&r.actuators) {
+        println!(
+            "actuator   {:<aw$} {:>12.4} {}   range [{:.3}, {:.3}]",
+            act.name,
+            Shown(act.quantity.to_user(*v)),
+            act.quantity.unit(),
+            act.quantity.to_user(act.range.min),
+            act.quantity.to_user(act.range.max)
+        );
+    }
+    let points = m.skeleton(&r.pose)?.points;
+    // Names as long as a user's file makes them stay in one column.
+    let w = name_width(points.iter().map(|p| p.name.as_str()), 8);
+    for p in points {
+        println!(
+            "joint      {:<w$} {:>10.4} {:>10.4} {:>10.4} mm",
+            p.name,
+            Shown(p.position[0]),
+            Shown(p.position[1]),
+            Shown(p.position[2])
+        );
+    }
+    print_transmission(machine, &r.pose);
+    if r.violations.is_empty() {
+        println!("limits     all satisfied");
+    }
+    for v in &r.violations {
+        println!("limit      VIOLATED: {v}");
+    }
+    Ok(())
+}
+
+/// The branches of a `--tool-axis` solution (the chosen one starred) and the distance
+/// to the singular direction.
+fn print_branches(m: &dyn DynMechanism, sol: &ToolAxisSolution) {
+    for (k, b) in sol.branches.iter().enumerate() {
+        println!(
+            "branch {}{}  {}{}",
+            k + 1,
+            if k == sol.chosen { "*" } else { " " },
+            coords_text(m, &b.pose),
+            if b.violations.is_empty() {
+                String::new()
+            } else {
+                format!("  ({} limit(s) violated)", b.violations.len())
+            }
+        );
+    }
+    println!(
+        "tool axis  {:.4} deg from the singular direction{}",
+        sol.singular_distance.to_degrees(),
+        if sol.singular {
+            ": along it, the first rotary angle held at home's"
+        } else {
+            ""
+        }
+    );
+}
+
+/// Velocity and force transmission at the pose, and the distance to a singularity.
+fn print_transmission(machine: &Machine, pose: &[f64]) {
+    let m = machine.mechanism();
+    let t = match transmission(machine, pose) {
+        Ok(t) => t,
+        Err(e) => {
+            println!("transmit   {e}");
+            return;
+        }
+    };
+    let f = |v: Option<f64>, unit: &str| {
+        v.map(|v| format!("{v:.4} {unit}"))
+            .unwrap_or_else(|| "-".into())
+    };
+    // Actuator rates in mm/s (linear drives) or rad/s (revolute ones),
+    // efforts in N or N mm.
+    let angular = |a: &pkm::mechanism::Actuator| a.quantity == pkm::Quantity::Angle;
+    let (rate, effort) = if m.actuators().iter().all(angular) {
+        ("rad/s", "N mm")
+    } else if m.actuators().iter().any(angular) {
+        ("mm/s or rad/s", "N or N mm")
+    } else {
+        ("mm/s", "N")
+    };
+    println!(
+        "transmit   velocity {}, angular {}, force {}, moment {}",
+        f(t.velocity, &format!("({rate})/(mm/s)")),
+        f(
+            t.angular_velocity.map(|v| v.to_radians()),
+            &format!("({rate})/(deg/s)")
+        ),
+        f(t.force, &format!("({effort})/N")),
+        f(t.moment, &format!("({effort})/(N mm)"))
+    );
+    println!(
+        "singular   distance {:.4} (smallest scaled singular value; 0 = singular), condition {:.3}",
+        t.distance_to_singularity, t.condition
+    );
 }
 
 fn batch(
@@ -264,26 +302,14 @@ fn batch(
         accepted.push(names[..3].to_vec());
     }
     let table = read_table(input, &accepted)?;
-    let mut columns: Vec<(String, Kind)> = table
-        .header
-        .iter()
-        .map(|h| (h.clone(), Kind::F64))
-        .collect();
-    columns.extend(
-        m.actuators()
-            .iter()
-            .map(|a| (format!("{}_{}", a.name, a.quantity.unit()), Kind::OptF64)),
-    );
-    columns.push(("reachable".into(), Kind::Bool));
-    columns.push(("violations".into(), Kind::OptText));
     let meta = machine_metadata(
         m,
         "pkm ik batch: the input poses, the actuator values (null without a solution), \
          whether every limit holds, the violated limits",
     );
+    let columns = batch_columns(m, &table.header);
     let mut out = BatchTable::create(output, &[input, &a.machine], &columns, meta)?;
-    let mut unreachable = 0usize;
-    let mut counts: BTreeMap<String, usize> = BTreeMap::new();
+    let mut tally = Tally::default();
     let mut text = String::new();
     let mut stream = a.continuous.then(|| InverseStream::new(machine));
     for (line, vals) in &table.rows {
@@ -298,26 +324,10 @@ fn batch(
             });
         text.clear();
         match res {
-            Ok(r) => {
-                for (act, q) in m.actuators().iter().zip(&r.actuators) {
-                    out.num(Some(act.quantity.to_user(*q)));
-                }
-                out.bool(r.violations.is_empty());
-                if !r.violations.is_empty() {
-                    unreachable += 1;
-                    for (k, v) in r.violations.iter().enumerate() {
-                        *counts.entry(v.limit.to_string()).or_default() += 1;
-                        if k > 0 {
-                            text.push_str("; ");
-                        }
-                        let _ = write!(text, "{v}");
-                    }
-                }
-                out.text((!text.is_empty()).then_some(text.as_str()));
-            }
+            Ok(r) => write_solution(&mut out, m, &r, &mut tally, &mut text),
             Err(e) => {
-                unreachable += 1;
-                *counts.entry("no solution".into()).or_default() += 1;
+                tally.unreachable += 1;
+                *tally.counts.entry("no solution".into()).or_default() += 1;
                 for _ in m.actuators() {
                     out.num(None);
                 }
@@ -328,11 +338,58 @@ fn batch(
         }
         out.end_row()?;
     }
-    let code = out.finish(output, unreachable, "reachable")?;
-    for (k, n) in &counts {
+    let code = out.finish(output, tally.unreachable, "reachable")?;
+    for (k, n) in &tally.counts {
         eprintln!("  {n} x {k}");
     }
     Ok(code)
+}
+
+/// The batch's columns: the input's, the actuators, `reachable`, `violations`.
+fn batch_columns(m: &dyn DynMechanism, header: &[String]) -> Vec<(String, Kind)> {
+    let mut columns: Vec<(String, Kind)> = header.iter().map(|h| (h.clone(), Kind::F64)).collect();
+    columns.extend(
+        m.actuators()
+            .iter()
+            .map(|a| (format!("{}_{}", a.name, a.quantity.unit()), Kind::OptF64)),
+    );
+    columns.push(("reachable".into(), Kind::Bool));
+    columns.push(("violations".into(), Kind::OptText));
+    columns
+}
+
+/// What a batch counts: the rows not reachable, and the rows per violated limit (or
+/// without a solution).
+#[derive(Default)]
+struct Tally {
+    unreachable: usize,
+    counts: BTreeMap<String, usize>,
+}
+
+/// The cells of a solved row: actuators, reachable, the violated limits (`text`, the
+/// row's buffer).
+fn write_solution(
+    out: &mut BatchTable,
+    m: &dyn DynMechanism,
+    r: &InverseSolution,
+    tally: &mut Tally,
+    text: &mut String,
+) {
+    for (act, q) in m.actuators().iter().zip(&r.actuators) {
+        out.num(Some(act.quantity.to_user(*q)));
+    }
+    out.bool(r.violations.is_empty());
+    if !r.violations.is_empty() {
+        tally.unreachable += 1;
+        for (k, v) in r.violations.iter().enumerate() {
+            *tally.counts.entry(v.limit.to_string()).or_default() += 1;
+            if k > 0 {
+                text.push_str("; ");
+            }
+            let _ = write!(text, "{v}");
+        }
+    }
+    out.text((!text.is_empty()).then_some(text.as_str()));
 }
 
 /// Quotes a text cell for CSV.

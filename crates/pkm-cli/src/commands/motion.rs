@@ -13,10 +13,11 @@ use pkm::analysis::motion::{run_motion_with, MotionRun, MotionSource, ProgramSet
 use pkm::motion::program::FeedOptions;
 use pkm::motion::tools::parse_tool_table;
 use pkm::motion::{MotionSummary, Sampling};
-use pkm::Machine;
+use pkm::{DynMechanism, Machine};
 use serde_json::json;
 
 mod plots;
+mod text;
 pub use plots::plots;
 
 use super::load;
@@ -24,7 +25,6 @@ use super::motion_series::SeriesSink;
 use crate::columnar::SeriesFormat;
 use crate::io::{write_atomic, AtomicFile};
 use crate::poses::{parse_list, pose_from_user};
-use crate::EXIT_UNREACHABLE;
 
 #[derive(Args)]
 pub struct MotionArgs {
@@ -190,52 +190,64 @@ pub fn summary_json(machine: &Machine, s: &MotionSummary, feed: &FeedOptions) ->
     })
 }
 
-pub fn run(a: &MotionArgs) -> Result<u8> {
-    let machine = load(&a.machine)?;
-    let m = machine.mechanism();
-    let conv = a.rotation;
-    let feed = FeedOptions {
+/// Feed options of the run: the options over the machine file's.
+fn feed_options(a: &MotionArgs, machine: &Machine) -> FeedOptions {
+    FeedOptions {
         profile: a.profile.into(),
         acceleration: a.accel,
         jerk: a.jerk,
         rapid: a
             .rapid
             .map(|r| r / 60.0)
-            .unwrap_or(pkm::analysis::motion::feed_options(&machine).rapid),
+            .unwrap_or(pkm::analysis::motion::feed_options(machine).rapid),
         feed: a.feed.map(|f| f / 60.0),
         max_samples: a.max_samples,
         singular_angle: a.singular_angle.to_radians(),
-    };
-    let sampling = match (a.rate, a.points) {
+    }
+}
+
+/// Sampling of the run: points per move, else a rate (default 1000 Hz).
+fn sampling(a: &MotionArgs) -> Sampling {
+    match (a.rate, a.points) {
         (_, Some(n)) => Sampling::Points(n),
         (Some(r), None) => Sampling::Rate(r),
         (None, None) => Sampling::Rate(1000.0),
-    };
+    }
+}
+
+/// What the run moves through: the G-code program (and its size in bytes, for the
+/// progress bar), or the point-to-point move (0 bytes).
+fn motion_source(a: &MotionArgs, machine: &Machine) -> Result<(MotionSource<'static>, u64)> {
+    let m = machine.mechanism();
+    let conv = a.rotation;
     let from = match &a.from {
         Some(s) => Some(pose_from_user(m, &parse_list(s, "--from")?, conv)?),
         None => None,
     };
-    let mut bytes = 0;
-    let source = if let Some(g) = &a.gcode {
+    if let Some(g) = &a.gcode {
         let f = File::open(g).with_context(|| format!("cannot read {}", g.display()))?;
-        bytes = f.metadata().map(|x| x.len()).unwrap_or(0);
-        MotionSource::Gcode {
+        let bytes = f.metadata().map(|x| x.len()).unwrap_or(0);
+        let source = MotionSource::Gcode {
             reader: Box::new(BufReader::new(f)),
-            from: from.clone(),
+            from,
             setup: Box::new(program_setup(a)?),
-        }
-    } else {
-        let to =
-            a.to.as_ref()
-                .context("give --gcode FILE, or --from POSE --to POSE")?;
-        MotionSource::PointToPoint {
-            from: from.unwrap_or_else(|| m.home()),
-            to: pose_from_user(m, &parse_list(to, "--to")?, conv)?,
-            duration: a.duration,
-            accel_time: a.accel_time,
-        }
+        };
+        return Ok((source, bytes));
+    }
+    let to =
+        a.to.as_ref()
+            .context("give --gcode FILE, or --from POSE --to POSE")?;
+    let source = MotionSource::PointToPoint {
+        from: from.unwrap_or_else(|| m.home()),
+        to: pose_from_user(m, &parse_list(to, "--to")?, conv)?,
+        duration: a.duration,
+        accel_time: a.accel_time,
     };
-    let accuracy = a.accuracy.request(&machine)?;
+    Ok((source, 0))
+}
+
+/// The files the outputs are made from: the machine, the program, the tolerances.
+fn inputs(a: &MotionArgs) -> Vec<&Path> {
     let mut inputs: Vec<&Path> = vec![&a.machine];
     if let Some(g) = &a.gcode {
         inputs.push(g);
@@ -243,28 +255,47 @@ pub fn run(a: &MotionArgs) -> Result<u8> {
     if let Some(t) = &a.accuracy.tol.tolerances {
         inputs.push(t);
     }
-    std::fs::create_dir_all(&a.out)
-        .with_context(|| format!("cannot create {}", a.out.display()))?;
+    inputs
+}
+
+/// What a run takes besides its source.
+struct RunPlan<'a> {
+    feed: &'a FeedOptions,
+    sampling: Sampling,
+    accuracy: Option<&'a pkm::analysis::motion::PathAccuracyRequest>,
+    /// Program size, for the progress bar.
+    bytes: u64,
+}
+
+/// Runs the motion, the sample series written to `DIR/actuators.*` (unless
+/// `--summary-only`) while it goes on.
+fn run_with_series(
+    a: &MotionArgs,
+    machine: &Machine,
+    source: MotionSource,
+    plan: &RunPlan,
+    inputs: &[&Path],
+) -> Result<MotionRun> {
     let series = a.out.join(a.format.file("actuators"));
     let mut writer = if a.summary_only {
         None
     } else {
-        Some(AtomicFile::create(&series, &inputs)?)
+        Some(AtomicFile::create(&series, inputs)?)
     };
     let outcome = std::thread::scope(|scope| -> Result<MotionRun> {
         let (mut sink, csv) = SeriesSink::start(
             scope,
-            &machine,
+            machine,
             writer.as_mut().map(|w| w as &mut (dyn Write + Send)),
             a.format,
-            bytes,
+            plan.bytes,
         )?;
         let run = run_motion_with(
-            &machine,
+            machine,
             source,
-            &feed,
-            sampling,
-            accuracy.as_ref(),
+            plan.feed,
+            plan.sampling,
+            plan.accuracy,
             &mut sink,
         );
         // A failed write stops the run: its error is the one to report.
@@ -275,8 +306,18 @@ pub fn run(a: &MotionArgs) -> Result<u8> {
     if let Some(w) = writer {
         w.commit()?;
     }
-    let s = &outcome.summary;
-    let mut summary = summary_json(&machine, s, &feed);
+    Ok(outcome)
+}
+
+/// `summary.json` of the run with its notes, what timed a `--duration` move and the
+/// accuracy along the path.
+fn run_summary(
+    a: &MotionArgs,
+    machine: &Machine,
+    outcome: &MotionRun,
+    feed: &FeedOptions,
+) -> serde_json::Value {
+    let mut summary = summary_json(machine, &outcome.summary, feed);
     if !outcome.notes.is_empty() {
         summary["notes"] = json!(outcome
             .notes
@@ -296,177 +337,56 @@ pub fn run(a: &MotionArgs) -> Result<u8> {
     }
     if let Some(acc) = &outcome.accuracy {
         summary["accuracy"] = super::motion_accuracy::summary(acc);
-        super::motion_accuracy::write(&a.out, acc, m.name(), &inputs)?;
+    }
+    summary
+}
+
+/// Writes the accuracy files, `summary.json` and the plots to `DIR`.
+fn write_outputs(
+    a: &MotionArgs,
+    m: &dyn DynMechanism,
+    outcome: &MotionRun,
+    summary: &serde_json::Value,
+    inputs: &[&Path],
+) -> Result<()> {
+    if let Some(acc) = &outcome.accuracy {
+        super::motion_accuracy::write(&a.out, acc, m.name(), inputs)?;
     }
     write_atomic(
         &a.out.join("summary.json"),
-        serde_json::to_string_pretty(&summary)?.as_bytes(),
-        &inputs,
+        serde_json::to_string_pretty(summary)?.as_bytes(),
+        inputs,
     )?;
-    let (act_svg, ser_svg) = plots(m, &outcome, m.name())?;
-    write_atomic(&a.out.join("actuators.svg"), act_svg.as_bytes(), &inputs)?;
-    write_atomic(&a.out.join("serial.svg"), ser_svg.as_bytes(), &inputs)?;
+    let (act_svg, ser_svg) = plots(m, outcome, m.name())?;
+    write_atomic(&a.out.join("actuators.svg"), act_svg.as_bytes(), inputs)?;
+    write_atomic(&a.out.join("serial.svg"), ser_svg.as_bytes(), inputs)?;
+    Ok(())
+}
+
+pub fn run(a: &MotionArgs) -> Result<u8> {
+    let machine = load(&a.machine)?;
+    let m = machine.mechanism();
+    let feed = feed_options(a, &machine);
+    let sampling = sampling(a);
+    let (source, bytes) = motion_source(a, &machine)?;
+    let accuracy = a.accuracy.request(&machine)?;
+    let inputs = inputs(a);
+    std::fs::create_dir_all(&a.out)
+        .with_context(|| format!("cannot create {}", a.out.display()))?;
+    let plan = RunPlan {
+        feed: &feed,
+        sampling,
+        accuracy: accuracy.as_ref(),
+        bytes,
+    };
+    let outcome = run_with_series(a, &machine, source, &plan, &inputs)?;
+    let summary = run_summary(a, &machine, &outcome, &feed);
+    write_outputs(a, m, &outcome, &summary, &inputs)?;
     if a.json {
         println!("{}", serde_json::to_string_pretty(&summary)?);
     } else {
-        println!(
-            "{} ({}): {} samples over {:.4} s",
-            m.name(),
-            m.kind(),
-            s.samples,
-            s.duration_s
-        );
-        // The first column as wide as the longest axis label (a machine's own
-        // actuator names, `actuator north-west`, keep the columns aligned).
-        let lists = [("actuator", &s.actuators), ("serial", &s.serial)];
-        let w = lists
-            .iter()
-            .flat_map(|(kind, list)| {
-                list.iter()
-                    .map(move |(n, _)| kind.len() + 1 + n.chars().count())
-            })
-            .fold(10, usize::max);
-        println!(
-            "{:<w$} {:>12} {:>14} {:>14} {:>16} {:>16}",
-            "axis", "travel", "peak |v|", "mean |v|", "peak |a|", "mean |a|"
-        );
-        for (kind, list) in lists {
-            for (n, st) in list.iter() {
-                println!(
-                    "{:<w$} {:>12.4} {:>14.4} {:>14.4} {:>16.4} {:>16.4}",
-                    format!("{kind} {n}"),
-                    st.travel,
-                    st.peak_velocity,
-                    st.mean_abs_velocity,
-                    st.peak_acceleration,
-                    st.mean_abs_acceleration
-                );
-            }
-        }
-        let ratio = |r: Option<f64>| r.map_or("n/a".to_string(), |r| format!("{r:.3}"));
-        match &s.ratios {
-            Some(r) => {
-                println!(
-                    "ratios serial/PKM (seed 000's): travel {:.3} (mean over mean), peak \
-                     velocity {}, peak acceleration {} (largest over largest); of mean \
-                     peaks: velocity {}, acceleration {}",
-                    r.travel,
-                    ratio(r.velocity),
-                    ratio(r.acceleration),
-                    ratio(r.velocity_of_mean_peaks),
-                    ratio(r.acceleration_of_mean_peaks)
-                );
-                if r.velocity.is_none() {
-                    println!(
-                        "  (n/a: no sample caught the machine moving: every move is shorter \
-                         than the sampling period, so its samples are its ends, at rest; \
-                         a higher --rate samples it)"
-                    );
-                } else if r.acceleration.is_none() {
-                    println!(
-                        "  (acceleration n/a: no sample caught a serial axis accelerating{})",
-                        match a.profile {
-                            ProfileArg::Constant =>
-                                ": under `--profile constant` the serial axes keep their \
-                                 speed along each straight move, and the speed steps at the \
-                                 corners are not samples; `--profile trapezoid` or `scurve` \
-                                 gives the ramps",
-                            _ => "",
-                        }
-                    );
-                }
-            }
-            None => println!(
-                "ratios serial/PKM: none (no serial axis moved, or an actuator or axis turns: \
-                 mm over deg means nothing)"
-            ),
-        }
-        match s.feed_override_max {
-            Some(k) => println!(
-                "largest feed override within the actuator rate limits: {:.4}",
-                k
-            ),
-            None => println!("largest feed override: no rate limits in the machine file"),
-        }
-        if let Some(sg) = &s.singular {
-            print_singular(sg);
-        }
-        if let Some(acc) = &outcome.accuracy {
-            super::motion_accuracy::print(acc);
-        }
-        for (l, t) in outcome.notes.iter().take(20) {
-            println!("note: line {l}: {t}");
-        }
-        let more = outcome.notes.len().saturating_sub(20) as u64 + outcome.notes_dropped;
-        if more > 0 {
-            println!("note: {more} more in summary.json");
-        }
+        text::print_text(m, &outcome, a.profile);
         println!("wrote {}", a.out.display());
     }
-    if s.violations.is_empty() {
-        Ok(0)
-    } else {
-        // The first stretch: where it starts, and the worst value in it (not the
-        // value at its start).
-        let v = &s.violations[0];
-        let n = s.violations.len() as u64 + s.violations_not_listed;
-        eprintln!(
-            "error: {n} limit violation{} along the path; first: {} beyond {:.3} {} from t = {:.4} s{}, worst {:.3} {}",
-            if n == 1 { "" } else { "s" },
-            v.limit,
-            v.bound,
-            v.unit,
-            v.start_s,
-            v.line.map(|l| format!(" (G-code line {l})")).unwrap_or_default(),
-            v.worst,
-            v.unit,
-        );
-        Ok(EXIT_UNREACHABLE)
-    }
-}
-
-/// The closest approach to the singular direction and the worst passages near it.
-fn print_singular(sg: &pkm::motion::singular::SingularReport) {
-    let line = |l: Option<u64>| l.map(|l| format!("line {l}")).unwrap_or("-".into());
-    let (deg, t, l) = sg.closest;
-    println!(
-        "singular direction (tool axis along the rotary axis nearer the part), feed moves: \
-         closest {deg:.4} deg at t = {t:.3} s ({}); {} passage(s) within {:.3} deg{}",
-        line(l),
-        sg.passages.len() as u64 + sg.passages_not_listed,
-        sg.threshold_deg,
-        if sg.passages.is_empty() {
-            ""
-        } else {
-            ", largest speed-ups:"
-        }
-    );
-    for p in sg.worst().into_iter().take(5) {
-        let peaks: Vec<String> = p
-            .rotary
-            .iter()
-            .zip(&sg.peak_outside)
-            .map(|(r, o)| {
-                format!(
-                    "{} {:.2} deg/s ({}{}; {:.2} elsewhere)",
-                    r.axis,
-                    r.peak,
-                    line(r.line),
-                    r.limit
-                        .map(|lim| format!(", limit {lim:.2}"))
-                        .unwrap_or_default(),
-                    o.1
-                )
-            })
-            .collect();
-        println!(
-            "  {} to {} (t {:.3}-{:.3} s), closest {:.4} deg: {}",
-            line(p.start_line),
-            line(p.end_line),
-            p.start_s,
-            p.end_s,
-            p.closest_deg,
-            peaks.join(", ")
-        );
-    }
+    Ok(text::exit_code(&outcome.summary))
 }

@@ -7,7 +7,7 @@ use pkm::workspace::{flat_index, GridAxis, WorkspaceMap, WorkspaceSummary};
 use pkm::Convention;
 use pkm::{DynMechanism, Machine, PoseSpace};
 use serde_json::json;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use super::load;
 use crate::columnar::SeriesFormat;
@@ -15,7 +15,9 @@ use crate::io::write_atomic;
 use crate::poses::{parse_list, pose_from_user};
 use crate::report::heatmap::{slice_svg, Cell, Scale};
 
+mod extra;
 mod points;
+mod summary;
 use points::write_points;
 
 #[derive(Args)]
@@ -219,9 +221,8 @@ pub fn slices(m: &dyn DynMechanism, wm: &WorkspaceMap) -> Result<Vec<(String, St
     Ok(out)
 }
 
-pub fn run(a: &WorkspaceArgs) -> Result<u8> {
-    let machine: Machine = load(&a.machine)?;
-    let m = machine.mechanism();
+/// The map's pose: home, or home's position at `--orientation`.
+fn base_pose(a: &WorkspaceArgs, m: &dyn DynMechanism) -> Result<Vec<f64>> {
     let mut base = m.home();
     if let Some(o) = &a.orientation {
         if m.pose_space() != PoseSpace::Spatial {
@@ -232,139 +233,110 @@ pub fn run(a: &WorkspaceArgs) -> Result<u8> {
         pose.extend(v);
         base = pose_from_user(m, &pose, a.rotation)?;
     }
-    std::fs::create_dir_all(&a.out)
-        .with_context(|| format!("cannot create {}", a.out.display()))?;
-    let inputs = [a.machine.as_path()];
-    if let Some(at) = &a.at {
-        let p = parse_list(at, "--at")?;
-        let x = pose_from_user(m, &p[..3.min(p.len())], a.rotation)?;
-        let mut x = x;
-        if x.len() == 6 {
-            x[3..6].copy_from_slice(&base[3..6]);
-        }
-        let az: Vec<f64> = (0..36).map(|k| (k as f64 * 10.0).to_radians()).collect();
-        let tilts =
-            pkm::analysis::workspace::reachable_tilt(&machine, &x, &az, a.max_tilt.to_radians())?;
-        let min = tilts.iter().copied().fold(f64::INFINITY, f64::min);
-        let v = json!({
-            "position": &p[..3.min(p.len())],
-            "azimuth_deg": az.iter().map(|a| a.to_degrees()).collect::<Vec<_>>(),
-            "max_tilt_deg": tilts.iter().map(|t| t.to_degrees()).collect::<Vec<_>>(),
-            "reachable_tilt_all_directions_deg": min.to_degrees(),
-        });
-        write_atomic(
-            &a.out.join("tilt.json"),
-            serde_json::to_string_pretty(&v)?.as_bytes(),
-            &inputs,
-        )?;
-        println!(
-            "reachable tilt in every direction at this point: {:.3} deg (search up to {} deg)",
-            min.to_degrees(),
-            a.max_tilt
-        );
-        return Ok(0);
+    Ok(base)
+}
+
+/// `--at`: the orientation workspace at a point, to `DIR/tilt.json`.
+fn tilt_at(
+    a: &WorkspaceArgs,
+    machine: &Machine,
+    base: &[f64],
+    at: &str,
+    inputs: &[&Path],
+) -> Result<u8> {
+    let m = machine.mechanism();
+    let p = parse_list(at, "--at")?;
+    let mut x = pose_from_user(m, &p[..3.min(p.len())], a.rotation)?;
+    if x.len() == 6 {
+        x[3..6].copy_from_slice(&base[3..6]);
     }
+    let az: Vec<f64> = (0..36).map(|k| (k as f64 * 10.0).to_radians()).collect();
+    let tilts =
+        pkm::analysis::workspace::reachable_tilt(machine, &x, &az, a.max_tilt.to_radians())?;
+    let min = tilts.iter().copied().fold(f64::INFINITY, f64::min);
+    let v = json!({
+        "position": &p[..3.min(p.len())],
+        "azimuth_deg": az.iter().map(|a| a.to_degrees()).collect::<Vec<_>>(),
+        "max_tilt_deg": tilts.iter().map(|t| t.to_degrees()).collect::<Vec<_>>(),
+        "reachable_tilt_all_directions_deg": min.to_degrees(),
+    });
+    write_atomic(
+        &a.out.join("tilt.json"),
+        serde_json::to_string_pretty(&v)?.as_bytes(),
+        inputs,
+    )?;
+    println!(
+        "reachable tilt in every direction at this point: {:.3} deg (search up to {} deg)",
+        min.to_degrees(),
+        a.max_tilt
+    );
+    Ok(0)
+}
+
+/// The map over `--bounds` (else the machine's reach), at every tilt of `--tilt`.
+fn map(a: &WorkspaceArgs, machine: &Machine, base: &[f64]) -> Result<(WorkspaceMap, String)> {
     let bounds = match &a.bounds {
         Some(b) => Some(parse_list(b, "--bounds")?),
         None => None,
     };
-
     let orientations: Vec<[f64; 3]> = a
         .tilt
         .map(|t| pkm::workspace::tilt_orientations(t.to_radians()))
         .unwrap_or_default();
-    let start = std::time::Instant::now();
-    let (wm, grid_bounds) = run_map(
-        &machine,
-        &base,
+    run_map(
+        machine,
+        base,
         bounds.as_deref(),
         a.step,
         &orientations,
         true,
-    )?;
-    let axes = wm.axes.clone();
+    )
+}
+
+/// The point files and the slice heat maps; the point files are written while the
+/// slices are drawn.
+fn write_points_and_slices(
+    a: &WorkspaceArgs,
+    m: &dyn DynMechanism,
+    wm: &WorkspaceMap,
+    inputs: &[&Path],
+) -> Result<()> {
+    std::thread::scope(|scope| -> Result<()> {
+        let points = scope.spawn(|| write_points(m, wm, &a.out, a.format, inputs));
+        let drawn = slices(m, wm).and_then(|list| {
+            list.iter()
+                .try_for_each(|(name, svg)| write_atomic(&a.out.join(name), svg.as_bytes(), inputs))
+        });
+        points
+            .join()
+            .unwrap_or_else(|_| Err(anyhow::anyhow!("the point-cloud writer panicked")))?;
+        drawn
+    })
+}
+
+pub fn run(a: &WorkspaceArgs) -> Result<u8> {
+    let machine: Machine = load(&a.machine)?;
+    let m = machine.mechanism();
+    let base = base_pose(a, m)?;
+    std::fs::create_dir_all(&a.out)
+        .with_context(|| format!("cannot create {}", a.out.display()))?;
+    let inputs = [a.machine.as_path()];
+    if let Some(at) = &a.at {
+        return tilt_at(a, &machine, &base, at, &inputs);
+    }
+    let start = std::time::Instant::now();
+    let (wm, grid_bounds) = map(a, &machine, &base)?;
     let secs = start.elapsed().as_secs_f64();
     let s = summarise(m, &wm);
-    let counts = |v: &[(String, usize)]| {
-        let mut o = serde_json::Map::new();
-        for (k, n) in v {
-            o.insert(k.clone(), json!(n));
-        }
-        o
+    let mapped = Mapped {
+        wm: &wm,
+        summary: &s,
+        base: &base,
+        grid_bounds: &grid_bounds,
+        seconds: secs,
     };
-    let (binding, violated) = (counts(&s.binding), counts(&s.violated));
-    let mut outcomes = serde_json::Map::new();
-    for (k, n) in &s.outcomes {
-        outcomes.insert(
-            serde_json::to_value(k)?.as_str().unwrap_or("").into(),
-            json!(n),
-        );
-    }
-    let axes_json: Vec<_> = axes
-        .iter()
-        .map(|x| {
-            let c = &m.coordinates()[x.coordinate];
-            json!({"name": c.name, "unit": c.quantity.unit(), "min": c.quantity.to_user(x.min), "max": c.quantity.to_user(x.max), "step": c.quantity.to_user(x.step), "count": x.count()})
-        })
-        .collect();
-    let mut extra = serde_json::Map::new();
-    if a.atlas_velocity.is_some() || a.atlas_acceleration.is_some() {
-        let list = |o: &Option<String>, flag: &str| -> Result<Option<Vec<f64>>> {
-            o.as_ref().map(|s| parse_list(s, flag)).transpose()
-        };
-        let v = list(&a.atlas_velocity, "--atlas-velocity")?;
-        let acc = list(&a.atlas_acceleration, "--atlas-acceleration")?;
-        let at = super::atlas::run_atlas(
-            &machine,
-            &base,
-            &axes,
-            &super::atlas::capacity(m, v.as_deref(), "--atlas-velocity")?,
-            &super::atlas::capacity(m, acc.as_deref(), "--atlas-acceleration")?,
-        )?;
-        let coords_user = |k: usize| user_coords(m, &wm, k);
-        let o = super::atlas::atlas_outputs(m, &axes, &base, &at, &coords_user)?;
-        write_atomic(&a.out.join("atlas.csv"), o.csv.as_bytes(), &inputs)?;
-        for (name, svg) in o.plots {
-            write_atomic(&a.out.join(name), svg.as_bytes(), &inputs)?;
-        }
-        extra.insert(
-            "atlas".into(),
-            json!({"velocity": v, "acceleration": acc, "actuators": o.summary}),
-        );
-    }
-    if a.forward {
-        let faxes = super::atlas::forward_axes(m, a.forward_step)?;
-        let fm = super::atlas::run_forward(&machine, &faxes, &base)?;
-        let base_q = m.inverse(&base)?;
-        let o = super::atlas::forward_outputs(m, &faxes, &base_q, &fm)?;
-        write_atomic(&a.out.join("forward.csv"), o.csv.as_bytes(), &inputs)?;
-        for (name, svg) in o.plots {
-            write_atomic(&a.out.join(name), svg.as_bytes(), &inputs)?;
-        }
-        extra.insert("forward".into(), o.summary);
-    }
-    let mut summary = json!({
-        "machine": m.name(),
-        "type": m.kind(),
-        "axes": axes_json,
-        "base_pose": crate::poses::coords_json(m, &base),
-        "tilt_set_deg": a.tilt,
-        "points": s.points,
-        "reachable": s.reachable,
-        "reachable_fraction": s.reachable_fraction,
-        "volume_mm3": s.volume_mm3,
-        "measure": s.measure,
-        "measure_unit": s.measure_unit,
-        "measure_name": s.measure_name,
-        "bounding_box": s.bounding_box,
-        "condition": s.condition,
-        "grid_bounds": grid_bounds,
-        "outcomes": outcomes,
-        "binding": binding,
-        "violated": violated,
-        "cut": s.cut,
-        "seconds": secs,
-    });
+    let mut summary = summary::summary_json(m, &mapped, a.tilt)?;
+    let extra = extra::write_extras(a, &machine, &mapped, &inputs)?;
     if let Some(o) = summary.as_object_mut() {
         o.extend(extra);
     }
@@ -373,88 +345,24 @@ pub fn run(a: &WorkspaceArgs) -> Result<u8> {
         serde_json::to_string_pretty(&summary)?.as_bytes(),
         &inputs,
     )?;
-    // The point files are written while the slices are drawn.
-    std::thread::scope(|scope| -> Result<()> {
-        let points = scope.spawn(|| write_points(m, &wm, &a.out, a.format, &inputs));
-        let drawn = slices(m, &wm).and_then(|list| {
-            list.iter().try_for_each(|(name, svg)| {
-                write_atomic(&a.out.join(name), svg.as_bytes(), &inputs)
-            })
-        });
-        points
-            .join()
-            .unwrap_or_else(|_| Err(anyhow::anyhow!("the point-cloud writer panicked")))?;
-        drawn
-    })?;
+    write_points_and_slices(a, m, &wm, &inputs)?;
     if a.json {
         println!("{}", serde_json::to_string_pretty(&summary)?);
     } else {
-        println!(
-            "{} ({}): {} points in {:.3} s",
-            m.name(),
-            m.kind(),
-            s.points,
-            secs
-        );
-        println!(
-            "reachable  {} ({:.1} %), {} {:.4e} {}",
-            s.reachable,
-            100.0 * s.reachable_fraction,
-            s.measure_name,
-            s.measure,
-            s.measure_unit
-        );
-        for (i, b) in s.bounding_box.iter().enumerate() {
-            let c = &m.coordinates()[axes[i].coordinate];
-            println!(
-                "range      {} [{:.3}, {:.3}] {}",
-                c.name,
-                b[0],
-                b[1],
-                c.quantity.unit()
-            );
-        }
-        println!(
-            "condition  min {:.3}, median {:.3}, p95 {:.3}, max {:.3}",
-            s.condition.min, s.condition.median, s.condition.p95, s.condition.max
-        );
-        println!("grid       over {grid_bounds}");
-        use pkm::workspace::PointStatus as St;
-        println!(
-            "outcomes   {} reachable, {} beyond a limit, {} without solution, {} solver failures, {} singular, {} in separate regions",
-            s.outcome(St::Reachable),
-            s.outcome(St::Limits),
-            s.outcome(St::NoSolution),
-            s.outcome(St::SolverFailed),
-            s.outcome(St::Singular),
-            s.outcome(St::Separate)
-        );
-        for (k, n) in s.binding.iter().take(8) {
-            println!("first      {n:>8} x {k}");
-        }
-        for (k, n) in s.violated.iter().take(8) {
-            println!("violated   {n:>8} x {k}");
-        }
-        if !s.cut.is_empty() {
-            println!(
-                "warning    reachable points lie on the grid's faces ({}): the reachable region may go on beyond the grid; widen --bounds",
-                s.cut.join(", ")
-            );
-        }
+        summary::print_text(m, &mapped);
         println!("wrote {}", a.out.display());
     }
     Ok(0)
 }
 
-/// The map's axis coordinates of point `k`, user units.
-fn user_coords(m: &dyn DynMechanism, wm: &WorkspaceMap, k: usize) -> Vec<f64> {
-    let x = wm.coords(k);
-    wm.axes
-        .iter()
-        .map(|ax| {
-            m.coordinates()[ax.coordinate]
-                .quantity
-                .to_user(x[ax.coordinate])
-        })
-        .collect()
+/// A map made: what the summary, the text and the extra outputs are made of.
+struct Mapped<'a> {
+    wm: &'a WorkspaceMap,
+    summary: &'a WorkspaceSummary,
+    /// The map's pose.
+    base: &'a [f64],
+    /// What the grid's bounds are ("the machine's reach", the options).
+    grid_bounds: &'a str,
+    /// Time the map took.
+    seconds: f64,
 }

@@ -3,7 +3,7 @@
 //! them, and every toleranced parameter (`pkm::analysis::accuracy`).
 
 use anyhow::Result;
-use pkm::analysis::{accuracy, AccuracyOptions, ToleranceSource};
+use pkm::analysis::{accuracy, AccuracyOptions, AccuracyReport, ToleranceSource};
 use pkm::Machine;
 
 use super::html::{esc, Html};
@@ -50,6 +50,12 @@ pub fn section(h: &mut Html, machine: &Machine, ctx: &super::Context) -> Result<
     if let Some(mc) = &r.monte_carlo {
         budget_and_monte_carlo(h, &r.budget, mc)?;
     }
+    parameter_table(h, &r);
+    Ok(())
+}
+
+/// Every toleranced parameter with its tolerance and the error it causes, folded.
+fn parameter_table(h: &mut Html, r: &AccuracyReport) {
     let rows: Vec<Vec<String>> = r
         .budget
         .items
@@ -82,7 +88,6 @@ pub fn section(h: &mut Html, machine: &Machine, ctx: &super::Context) -> Result<
             &rows,
         ),
     );
-    Ok(())
 }
 
 /// The budget and Monte Carlo figures of a tolerance study: the summary table, the

@@ -4,7 +4,7 @@
 //! (`pkm::analysis::clearance`).
 
 use anyhow::Result;
-use pkm::analysis::clearance::{clearance, ClearanceRequest};
+use pkm::analysis::clearance::{clearance, ClearanceReport, ClearanceRequest};
 use pkm::Machine;
 
 use super::html::{esc, Html};
@@ -42,6 +42,16 @@ pub fn section(h: &mut Html, machine: &Machine, _ctx: &super::Context) -> Result
             ""
         }
     ));
+    bounds_table(h, &r);
+    let views = plots(&r)?;
+    h.raw(&format!("<div class=\"views\">{views}</div>"));
+    worst_states(h, &r);
+    Ok(())
+}
+
+/// The bounds, first order and exact, and the Monte Carlo's range (µm).
+fn bounds_table(h: &mut Html, r: &ClearanceReport) {
+    let b = &r.bounds;
     let mc = r.monte_carlo.as_ref();
     h.table(
         &[
@@ -63,7 +73,12 @@ pub fn section(h: &mut Html, machine: &Machine, _ctx: &super::Context) -> Result
             mc.map_or("-".into(), |m| format!("{:.3}", 1e3 * m.std)),
         ]],
     );
-    let top: Vec<(String, f64)> = b
+}
+
+/// Each joint's share of the bound, and the Monte Carlo's histogram: SVG.
+fn plots(r: &ClearanceReport) -> Result<String> {
+    let top: Vec<(String, f64)> = r
+        .bounds
         .contributions
         .iter()
         .take(20)
@@ -75,7 +90,7 @@ pub fn section(h: &mut Html, machine: &Machine, _ctx: &super::Context) -> Result
         &top,
         640,
     )?;
-    let hist = match mc {
+    let hist = match &r.monte_carlo {
         Some(m) => {
             let bins: Vec<(f64, usize)> = m.histogram.iter().map(|(x, c)| (1e3 * x, *c)).collect();
             histogram_svg(
@@ -90,11 +105,15 @@ pub fn section(h: &mut Html, machine: &Machine, _ctx: &super::Context) -> Result
         }
         None => String::new(),
     };
-    h.raw(&format!("<div class=\"views\">{bars}{hist}</div>"));
+    Ok(format!("{bars}{hist}"))
+}
+
+/// The joint states that give the upper bound, folded.
+fn worst_states(h: &mut Html, r: &ClearanceReport) {
     let rows: Vec<Vec<String>> = r
         .clearances
         .iter()
-        .zip(&b.worst_joint_states.upper)
+        .zip(&r.bounds.worst_joint_states.upper)
         .map(|(c, s)| {
             vec![
                 esc(&c.joint),
@@ -121,5 +140,4 @@ pub fn section(h: &mut Html, machine: &Machine, _ctx: &super::Context) -> Result
             &rows,
         ),
     );
-    Ok(())
 }

@@ -156,46 +156,48 @@ fn check_table_html(machine: &Machine, rows: &[CheckRow]) -> String {
         ]
         .map(String::from),
     );
-    let mut body = Vec::new();
-    for r in rows {
-        let mut cells = vec![esc(&r.label)];
-        match &r.actuators {
-            Some(q) => cells.extend(q.iter().map(|v| format!("{:.4}", Shown(*v)))),
-            None => cells.extend(m.actuators().iter().map(|_| "-".to_string())),
-        }
-        cells.push(match &r.round_trip {
-            Some(t) => {
-                let ok = t.position_error <= ROUND_TRIP_TOL_MM
-                    && t.orientation_error <= ROUND_TRIP_TOL_RAD;
-                format!(
-                    "{} {:.1e} / {:.1e}",
-                    mark(ok),
-                    t.position_error,
-                    t.orientation_error
-                )
-            }
-            None => "-".into(),
-        });
-        cells.push(match r.jacobian_error {
-            Some(e) => format!("{} {:.1e}", mark(e <= JACOBIAN_TOL), e),
-            None => "-".into(),
-        });
-        cells.push(r.condition.map(|c| format!("{c:.3}")).unwrap_or("-".into()));
-        let mut lim = if r.violations.is_empty() {
-            "<span class=\"ok\">all satisfied</span>".to_string()
-        } else {
-            r.violations
-                .iter()
-                .map(|v| format!("<span class=\"bad\">{}</span>", esc(&v.to_string())))
-                .collect::<Vec<_>>()
-                .join("<br>")
-        };
-        if let Some(e) = &r.error {
-            lim.push_str(&format!("<br><span class=\"bad\">{}</span>", esc(e)));
-        }
-        cells.push(lim);
-        body.push(cells);
-    }
+    let body: Vec<Vec<String>> = rows.iter().map(|r| check_row_html(m, r)).collect();
     let head_refs: Vec<&str> = head.iter().map(String::as_str).collect();
     Html::table_string(&head_refs, &body)
+}
+
+/// The cells of one checked pose: actuators, round trip, Jacobian, condition, limits.
+fn check_row_html(m: &dyn pkm::DynMechanism, r: &CheckRow) -> Vec<String> {
+    let mut cells = vec![esc(&r.label)];
+    match &r.actuators {
+        Some(q) => cells.extend(q.iter().map(|v| format!("{:.4}", Shown(*v)))),
+        None => cells.extend(m.actuators().iter().map(|_| "-".to_string())),
+    }
+    cells.push(match &r.round_trip {
+        Some(t) => {
+            let ok =
+                t.position_error <= ROUND_TRIP_TOL_MM && t.orientation_error <= ROUND_TRIP_TOL_RAD;
+            format!(
+                "{} {:.1e} / {:.1e}",
+                mark(ok),
+                t.position_error,
+                t.orientation_error
+            )
+        }
+        None => "-".into(),
+    });
+    cells.push(match r.jacobian_error {
+        Some(e) => format!("{} {:.1e}", mark(e <= JACOBIAN_TOL), e),
+        None => "-".into(),
+    });
+    cells.push(r.condition.map(|c| format!("{c:.3}")).unwrap_or("-".into()));
+    let mut lim = if r.violations.is_empty() {
+        "<span class=\"ok\">all satisfied</span>".to_string()
+    } else {
+        r.violations
+            .iter()
+            .map(|v| format!("<span class=\"bad\">{}</span>", esc(&v.to_string())))
+            .collect::<Vec<_>>()
+            .join("<br>")
+    };
+    if let Some(e) = &r.error {
+        lim.push_str(&format!("<br><span class=\"bad\">{}</span>", esc(e)));
+    }
+    cells.push(lim);
+    cells
 }

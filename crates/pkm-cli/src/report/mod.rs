@@ -5,6 +5,7 @@
 mod accuracy;
 mod calibration;
 mod clearance;
+mod context;
 mod drawing;
 pub mod heatmap;
 mod html;
@@ -19,12 +20,12 @@ mod workspace;
 
 use anyhow::{bail, Context as _, Result};
 use clap::Args;
-use pkm::machine::{Comparison, REPORT_SECTIONS};
-use pkm::{Convention, Machine};
+use pkm::machine::REPORT_SECTIONS;
+use pkm::Machine;
 use std::path::PathBuf;
 
 use crate::io::write_atomic;
-use crate::poses::{parse_list, pose_from_user};
+pub use context::Context;
 use html::{esc, Html};
 
 #[derive(Args)]
@@ -71,132 +72,8 @@ pub struct ReportArgs {
 pub const DEFAULT_MACHINE: &str = include_str!("../../../../examples/machines/tripod-seed000.toml");
 /// Name under which the bundled machine appears in messages.
 pub const DEFAULT_MACHINE_NAME: &str = "examples/machines/tripod-seed000.toml (bundled)";
-/// The bundled machine's `[report]` program (its file names it relative to itself).
-const DEFAULT_PROGRAM: (&str, &str) = (
-    "../paths/seed000-arc.ngc",
-    include_str!("../../../../examples/paths/seed000-arc.ngc"),
-);
-
 /// Exit code of a report written with sections that could not be computed.
 pub const EXIT_PARTIAL: u8 = 4;
-
-/// A G-code program: its name for the text and its contents.
-pub struct Program {
-    pub name: String,
-    pub text: String,
-}
-
-/// What the sections are computed with: the command line over the machine file's
-/// `[report]` table over the defaults (internal units).
-pub struct Context {
-    /// Pose of the drawing, the map's orientation, the circle's centre, the accuracy.
-    pub pose: Vec<f64>,
-    /// How the text names it (`home`, `the pose X... Y...`).
-    pub pose_label: String,
-    /// Workspace grid bounds (user units).
-    pub bounds: Option<Vec<f64>>,
-    /// Workspace grid step (user units).
-    pub step: Option<f64>,
-    /// The motion section's program.
-    pub program: Option<Program>,
-    /// Where it starts.
-    pub from: Option<Vec<f64>>,
-    /// Feeds (mm/min).
-    pub feeds: Vec<f64>,
-    /// Samples per move.
-    pub points: Option<usize>,
-    /// Published results shown beside the sections.
-    pub comparisons: Vec<Comparison>,
-    /// What the workspace and motion sections leave for the 3D view.
-    pub scene: std::cell::RefCell<view3d::Scene>,
-}
-
-impl Context {
-    /// The settings of `a` over `machine`'s `[report]` table.
-    pub fn new(a: &ReportArgs, machine: &Machine, bundled: bool) -> Result<Context> {
-        let m = machine.mechanism();
-        let r = &machine.report;
-        let user_pose = |v: &[f64]| pose_from_user(m, v, Convention::Rpy);
-        let (pose, pose_label) = match (&a.pose, &r.pose) {
-            (Some(s), _) => {
-                let v = parse_list(s, "--pose")?;
-                (user_pose(&v)?, format!("the pose {}", v_text(&v)))
-            }
-            (None, Some(v)) => (
-                user_pose(v).context("the machine file's [report] pose")?,
-                format!("the pose {}", v_text(v)),
-            ),
-            (None, None) => (m.home(), "home".to_string()),
-        };
-        let bounds = match &a.bounds {
-            Some(b) => Some(parse_list(b, "--bounds")?),
-            None => r.bounds.clone(),
-        };
-        // The file's start, feeds and sampling belong to the file's program: a program
-        // from the command line runs from home at its own feeds unless told otherwise.
-        let own_program = a.gcode.is_some();
-        let from = match (&a.from, &r.from) {
-            (Some(s), _) => Some(user_pose(&parse_list(s, "--from")?)?),
-            (None, Some(v)) if !own_program => {
-                Some(user_pose(v).context("the machine file's [report] from")?)
-            }
-            _ => None,
-        };
-        let feeds = match &a.feeds {
-            Some(f) => {
-                let v = parse_list(f, "--feeds")?;
-                if let Some(x) = v.iter().find(|x| !(**x > 0.0 && x.is_finite())) {
-                    bail!("--feeds: expected feeds > 0 mm/min, found {x}");
-                }
-                v
-            }
-            None if own_program => Vec::new(),
-            None => r.feeds.clone(),
-        };
-        let program = match (&a.gcode, &r.gcode) {
-            (Some(p), _) => Some(Program {
-                name: p.display().to_string(),
-                text: std::fs::read_to_string(p)
-                    .with_context(|| format!("cannot read the program {}", p.display()))?,
-            }),
-            (None, Some(p)) => {
-                let path = machine.resolve(p);
-                let text = match std::fs::read_to_string(&path) {
-                    Ok(t) => t,
-                    Err(_) if bundled && p == DEFAULT_PROGRAM.0 => DEFAULT_PROGRAM.1.to_string(),
-                    Err(e) => bail!(
-                        "cannot read {} (the machine file's [report] gcode): {e}",
-                        path.display()
-                    ),
-                };
-                Some(Program {
-                    name: p.clone(),
-                    text,
-                })
-            }
-            (None, None) => None,
-        };
-        Ok(Context {
-            pose,
-            pose_label,
-            bounds,
-            step: a.step.or(r.step),
-            program,
-            from,
-            feeds,
-            points: if own_program { None } else { r.points },
-            comparisons: r.comparisons.clone(),
-            scene: Default::default(),
-        })
-    }
-}
-
-fn v_text(v: &[f64]) -> String {
-    v.iter()
-        .map(|x| format!("{x}"))
-        .collect::<Vec<_>>()
-        .join(", ")
-}
 
 /// One section of the report.
 struct Section {
@@ -323,43 +200,12 @@ pub fn build(
     let asked = asked.or(machine.report.sections.as_deref());
     let (shown, missing) = chosen(machine, asked);
     let mut h = Html::new(&format!("pkm report: {}", m.name()));
-    h.h1(&format!("pkm report: {}", m.name()));
-    h.p(&format!(
-        "Machine file <code>{}</code>, type <code>{}</code>. Generated by pkm {}. \
-         Units: mm and degrees.",
-        esc(&machine.source),
-        m.kind(),
-        env!("CARGO_PKG_VERSION")
-    ));
-    if let Some(d) = &machine.description {
-        h.p(&esc(d));
-    }
-    let nav: Vec<String> = shown
-        .iter()
-        .map(|s| format!("<a href=\"#{}\">{}</a>", s.id, s.title))
-        .collect();
-    h.raw(&format!("<nav>{}</nav>", nav.join(" · ")));
-    if !missing.is_empty() {
-        h.p(&format!(
-            "Sections asked for that this machine has not: {}.",
-            esc(&missing.join(", "))
-        ));
-    }
+    head(&mut h, machine, &shown, &missing);
     let mut failed = Vec::new();
     for s in &shown {
         progress(s.title);
-        let mut part = Html::new("");
-        match (s.render)(&mut part, machine, ctx) {
-            Ok(()) => h.raw(&part.body()),
-            Err(e) => {
-                let msg = format!("{e:#}");
-                h.h2_id(s.id, s.title);
-                h.p(&format!(
-                    "<span class=\"bad\">This section could not be computed for this machine: {}</span>",
-                    esc(&msg)
-                ));
-                failed.push((s.id, msg));
-            }
+        if let Err(msg) = render(&mut h, s, machine, ctx) {
+            failed.push((s.id, msg));
         }
         for c in ctx.comparisons.iter().filter(|c| c.section == s.id) {
             h.raw(&format!(
@@ -396,51 +242,64 @@ pub fn build(
     }
 }
 
+/// The report's title, what made it, the machine's description and the navigation.
+fn head(h: &mut Html, machine: &Machine, shown: &[&Section], missing: &[String]) {
+    let m = machine.mechanism();
+    h.h1(&format!("pkm report: {}", m.name()));
+    h.p(&format!(
+        "Machine file <code>{}</code>, type <code>{}</code>. Generated by pkm {}. \
+         Units: mm and degrees.",
+        esc(&machine.source),
+        m.kind(),
+        env!("CARGO_PKG_VERSION")
+    ));
+    if let Some(d) = &machine.description {
+        h.p(&esc(d));
+    }
+    let nav: Vec<String> = shown
+        .iter()
+        .map(|s| format!("<a href=\"#{}\">{}</a>", s.id, s.title))
+        .collect();
+    h.raw(&format!("<nav>{}</nav>", nav.join(" · ")));
+    if !missing.is_empty() {
+        h.p(&format!(
+            "Sections asked for that this machine has not: {}.",
+            esc(&missing.join(", "))
+        ));
+    }
+}
+
+/// Section `s`, or in its place the error it gave (returned).
+fn render(h: &mut Html, s: &Section, machine: &Machine, ctx: &Context) -> Result<(), String> {
+    let mut part = Html::new("");
+    match (s.render)(&mut part, machine, ctx) {
+        Ok(()) => {
+            h.raw(&part.body());
+            Ok(())
+        }
+        Err(e) => {
+            let msg = format!("{e:#}");
+            h.h2_id(s.id, s.title);
+            h.p(&format!(
+                "<span class=\"bad\">This section could not be computed for this machine: {}</span>",
+                esc(&msg)
+            ));
+            Err(msg)
+        }
+    }
+}
+
 pub fn run(a: &ReportArgs) -> Result<u8> {
     let machine = match &a.machine {
         Some(p) => Machine::from_path(p)?,
         None => Machine::from_toml_str(DEFAULT_MACHINE, DEFAULT_MACHINE_NAME)?,
     };
-    let asked: Option<Vec<String>> = match &a.sections {
-        Some(s) => {
-            let v: Vec<String> = s
-                .split(',')
-                .map(|x| x.trim().to_string())
-                .filter(|x| !x.is_empty())
-                .collect();
-            if let Some(x) = v.iter().find(|x| !REPORT_SECTIONS.contains(&x.as_str())) {
-                bail!(
-                    "--sections: unknown section `{x}`, expected some of: {}",
-                    REPORT_SECTIONS.join(", ")
-                );
-            }
-            Some(v)
-        }
+    let asked = match &a.sections {
+        Some(s) => Some(sections(s)?),
         None => None,
     };
     let ctx = Context::new(a, &machine, a.machine.is_none())?;
-    let total = chosen(
-        &machine,
-        asked.as_deref().or(machine.report.sections.as_deref()),
-    )
-    .0
-    .len();
-    let bar = crate::progress::bar(total as u64, 0, "{bar:30} {pos}/{len} {msg} {elapsed}");
-    if let Some(b) = &bar {
-        b.enable_steady_tick(std::time::Duration::from_millis(100));
-    }
-    let tick = |title: &str| {
-        if let Some(b) = &bar {
-            if !b.message().is_empty() {
-                b.inc(1);
-            }
-            b.set_message(title.to_string());
-        }
-    };
-    let built = build(&machine, &ctx, asked.as_deref(), &tick);
-    if let Some(b) = bar {
-        b.finish_and_clear();
-    }
+    let built = build_with_progress(&machine, &ctx, asked.as_deref());
     let path = a.out.join("index.html");
     let inputs: Vec<&std::path::Path> = a
         .machine
@@ -461,12 +320,57 @@ pub fn run(a: &ReportArgs) -> Result<u8> {
         });
         println!("{}", serde_json::to_string_pretty(&v)?);
     }
+    Ok(outcome(&built, &path))
+}
+
+/// `--sections`: the names, each one of [`REPORT_SECTIONS`].
+fn sections(s: &str) -> Result<Vec<String>> {
+    let v: Vec<String> = s
+        .split(',')
+        .map(|x| x.trim().to_string())
+        .filter(|x| !x.is_empty())
+        .collect();
+    if let Some(x) = v.iter().find(|x| !REPORT_SECTIONS.contains(&x.as_str())) {
+        bail!(
+            "--sections: unknown section `{x}`, expected some of: {}",
+            REPORT_SECTIONS.join(", ")
+        );
+    }
+    Ok(v)
+}
+
+/// [`build`] with a progress bar over the sections.
+fn build_with_progress(machine: &Machine, ctx: &Context, asked: Option<&[String]>) -> Built {
+    let total = chosen(machine, asked.or(machine.report.sections.as_deref()))
+        .0
+        .len();
+    let bar = crate::progress::bar(total as u64, 0, "{bar:30} {pos}/{len} {msg} {elapsed}");
+    if let Some(b) = &bar {
+        b.enable_steady_tick(std::time::Duration::from_millis(100));
+    }
+    let tick = |title: &str| {
+        if let Some(b) = &bar {
+            if !b.message().is_empty() {
+                b.inc(1);
+            }
+            b.set_message(title.to_string());
+        }
+    };
+    let built = build(machine, ctx, asked, &tick);
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    built
+}
+
+/// Says on stderr what was written and what could not be: the exit code.
+fn outcome(built: &Built, path: &std::path::Path) -> u8 {
     for m in &built.missing {
         eprintln!("warning: this machine has no `{m}` section");
     }
     eprintln!("wrote {}", path.display());
     if built.failed.is_empty() {
-        return Ok(0);
+        return 0;
     }
     for (s, e) in &built.failed {
         eprintln!("error: section `{s}` could not be computed: {e}");
@@ -476,7 +380,7 @@ pub fn run(a: &ReportArgs) -> Result<u8> {
         built.failed.len(),
         built.sections.len()
     );
-    Ok(EXIT_PARTIAL)
+    EXIT_PARTIAL
 }
 
 /// Four significant digits, for values spanning several decades (feeds 10 to 10 000).

@@ -30,7 +30,6 @@ pub fn section(h: &mut Html, machine: &Machine, _ctx: &super::Context) -> Result
     let g = &geometry.geometry();
     // The head as a machine of its own (for the hybrid machine, its head at home).
     let hm = machine.p3rp_head_machine()?;
-    let head = hm.mechanism();
     h.h2_id("seed004", "P3RP head: seed 004 reproduced");
     h.p(&format!(
         "The head's structural parameters: l1 = |AB| = {:.2} mm, l2 = |BC| = {:.2} mm, \
@@ -44,6 +43,14 @@ pub fn section(h: &mut Html, machine: &Machine, _ctx: &super::Context) -> Result
         g.tool_length,
         g.branch
     ));
+    reproduction_table(h, machine)?;
+    atlas_figures(h, &hm)?;
+    forward_figure(h, &hm)?;
+    move_figure(h, &hm)
+}
+
+/// Seed 004's numbers beside pkm's.
+fn reproduction_table(h: &mut Html, machine: &Machine) -> Result<()> {
     let rows: Vec<Vec<String>> = reproduction(machine)?
         .iter()
         .map(|r| {
@@ -65,8 +72,12 @@ pub fn section(h: &mut Html, machine: &Machine, _ctx: &super::Context) -> Result
         &["quantity", "paper", "pkm", "unit", "deviation", "note"],
         &rows,
     );
+    Ok(())
+}
 
-    // Fig. 4 and 6: the atlas over (z, theta).
+/// Fig. 4 and 6: the atlas of the head `hm` over (z, theta).
+fn atlas_figures(h: &mut Html, hm: &Machine) -> Result<()> {
+    let head = hm.mechanism();
     let axes = vec![
         GridAxis {
             coordinate: 0,
@@ -82,7 +93,7 @@ pub fn section(h: &mut Html, machine: &Machine, _ctx: &super::Context) -> Result
         },
     ];
     let base = head.home();
-    let at = run_atlas(&hm, &base, &axes, &FIG6_VELOCITY, &FIG6_ACCELERATION)?;
+    let at = run_atlas(hm, &base, &axes, &FIG6_VELOCITY, &FIG6_ACCELERATION)?;
     let coords_user = |k: usize| {
         let n1 = axes[1].count();
         vec![axes[0].value(k / n1), axes[1].value(k % n1).to_degrees()]
@@ -117,10 +128,15 @@ pub fn section(h: &mut Html, machine: &Machine, _ctx: &super::Context) -> Result
         pick("v-velocity"),
         pick("v-acceleration")
     ));
+    Ok(())
+}
 
-    // Fig. 5: forward workspace over the slider strokes.
+/// Fig. 5: the forward workspace of the head `hm` over the slider strokes.
+fn forward_figure(h: &mut Html, hm: &Machine) -> Result<()> {
+    let head = hm.mechanism();
+    let base = head.home();
     let faxes = forward_axes(head, Some(8.0))?;
-    let fm = run_forward(&hm, &faxes, &base)?;
+    let fm = run_forward(hm, &faxes, &base)?;
     let q0 = head.inverse(&head.home())?;
     let fo = forward_outputs(head, &faxes, &q0, &fm)?;
     let svgs: String = fo.plots.iter().map(|(_, s)| s.as_str()).collect();
@@ -131,13 +147,16 @@ pub fn section(h: &mut Html, machine: &Machine, _ctx: &super::Context) -> Result
         fo.summary["reachable"], fo.summary["points"]
     ));
     h.raw(&format!("<div class=\"views\">{svgs}</div>"));
+    Ok(())
+}
 
-    // Fig. 7: the paper's move.
+/// Fig. 7: the paper's move of the head `hm`.
+fn move_figure(h: &mut Html, hm: &Machine) -> Result<()> {
     use crate::commands::motion::plots;
     use pkm::analysis::motion::{run_motion, MotionSource, NoSink};
     use pkm::motion::program::{FeedOptions, ProfileKind};
     let sim = run_motion(
-        &hm,
+        hm,
         MotionSource::PointToPoint {
             from: vec![200.0, 0.0],
             to: vec![335.0, 0.9],
@@ -151,7 +170,7 @@ pub fn section(h: &mut Html, machine: &Machine, _ctx: &super::Context) -> Result
         pkm::motion::Sampling::Rate(1000.0),
         &mut NoSink,
     )?;
-    let (a, b) = plots(head, &sim, "fig. 7 move")?;
+    let (a, b) = plots(hm.mechanism(), &sim, "fig. 7 move")?;
     h.p(
         "<b>The fig. 7 move</b>: (z, theta) from (200 mm, 0) to (335 mm, 0.9 rad) in 1 s, \
          trapezoidal velocity with 0.1 s ramps, 1 kHz; the same as \

@@ -1,6 +1,7 @@
 //! Time-series plots (SVG, plotters), in the manner of seed 000's fig. 6.
 
 use anyhow::{anyhow, Result};
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 
 use super::ticks::tick;
@@ -68,6 +69,18 @@ pub struct Panel<'a> {
 /// Width of the legend strip right of each panel (px).
 const LEGEND_W: u32 = 120;
 
+/// A panel's chart.
+type Chart<'a, 'b> = ChartContext<'a, SVGBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
+/// A drawing area of the plot.
+type Area<'b> = DrawingArea<SVGBackend<'b>, plotters::coord::Shift>;
+
+/// Grey of the segment marks.
+const GREY: RGBColor = RGBColor(170, 170, 170);
+
+/// Red of the limit lines.
+const RED: RGBColor = RGBColor(198, 40, 40);
+
 /// Stacked panels sharing the x axis, each with its legend in a strip to its right
 /// (never over the curves), its limits as dashed red lines (drawn when within half the
 /// curves' span of them: a limit far away would flatten the curves), and `marks`
@@ -90,125 +103,160 @@ pub fn panels_marked(
             .map_err(|e| anyhow!("{e}"))?;
         let areas = root.split_evenly((panels.len(), 1));
         for (area, p) in areas.iter().zip(panels) {
-            let (w, _) = area.dim_in_pixel();
-            let (plot_area, legend_area) = area.split_horizontally(w.saturating_sub(LEGEND_W));
-            let (mut t0, mut t1, mut y0, mut y1) = (
-                f64::INFINITY,
-                f64::NEG_INFINITY,
-                f64::INFINITY,
-                f64::NEG_INFINITY,
-            );
-            for s in p.series {
-                for &(t, y) in &s.points {
-                    t0 = t0.min(t);
-                    t1 = t1.max(t);
-                    y0 = y0.min(y);
-                    y1 = y1.max(y);
-                }
-            }
-            if let Some((a, b)) = span {
-                (t0, t1) = (a, b);
-            }
-            if !t0.is_finite() {
-                continue;
-            }
-            if t1 - t0 < 1e-12 {
-                t1 = t0 + 1.0;
-            }
-            let reach = 0.5 * (y1 - y0).max(1e-9 * y0.abs().max(y1.abs()).max(1.0));
-            let limits: Vec<&(f64, String)> = p
-                .limits
-                .iter()
-                .filter(|(v, _)| v.is_finite() && *v >= y0 - reach && *v <= y1 + reach)
-                .collect();
-            for (v, _) in &limits {
-                y0 = y0.min(*v);
-                y1 = y1.max(*v);
-            }
-            // Plotters needs a range that is not too narrow for its tick marks.
-            let pad = ((y1 - y0) * 0.08).max(1e-3 * y0.abs().max(y1.abs()).max(1.0));
-            let (y0, y1) = (y0 - pad, y1 + pad);
-            let mut chart = ChartBuilder::on(&plot_area)
-                .margin(8)
-                .caption(p.title, ("sans-serif", 14))
-                .x_label_area_size(30)
-                .y_label_area_size(64)
-                .build_cartesian_2d(t0..t1, y0..y1)
-                .map_err(|e| anyhow!("{e}"))?;
-            chart
-                .configure_mesh()
-                .x_desc(xlabel)
-                .y_desc(p.ylabel)
-                .x_label_formatter(&|v| tick(*v, t1 - t0))
-                .y_label_formatter(&|v| tick(*v, y1 - y0))
-                .light_line_style(RGBColor(235, 235, 235))
-                .draw()
-                .map_err(|e| anyhow!("{e}"))?;
-            let grey = RGBColor(170, 170, 170);
-            for (x, label) in marks.iter().filter(|m| m.0 >= t0 && m.0 <= t1) {
-                chart
-                    .draw_series(std::iter::once(PathElement::new(
-                        vec![(*x, y0), (*x, y1)],
-                        grey.stroke_width(1),
-                    )))
-                    .map_err(|e| anyhow!("{e}"))?;
-                if marks.len() <= 12 {
-                    chart
-                        .draw_series(std::iter::once(Text::new(
-                            label.clone(),
-                            (*x, y1),
-                            ("sans-serif", 10).into_font().color(&grey),
-                        )))
-                        .map_err(|e| anyhow!("{e}"))?;
-                }
-            }
-            let red = RGBColor(198, 40, 40);
-            for (v, _) in &limits {
-                chart
-                    .draw_series(DashedLineSeries::new(
-                        vec![(t0, *v), (t1, *v)],
-                        6,
-                        4,
-                        red.stroke_width(1),
-                    ))
-                    .map_err(|e| anyhow!("{e}"))?;
-            }
-            for (i, s) in p.series.iter().enumerate() {
-                let c = COLORS[i % COLORS.len()];
-                chart
-                    .draw_series(LineSeries::new(s.points.iter().copied(), c.stroke_width(2)))
-                    .map_err(|e| anyhow!("{e}"))?;
-            }
-            // The legend, in its own strip.
-            let mut entries: Vec<(String, ShapeStyle)> = p
-                .series
-                .iter()
-                .enumerate()
-                .map(|(i, s)| (s.name.clone(), COLORS[i % COLORS.len()].stroke_width(2)))
-                .collect();
-            if !limits.is_empty() {
-                entries.push(("limit".into(), red.stroke_width(1)));
-            }
-            if !marks.is_empty() {
-                entries.push(("segment start".into(), grey.stroke_width(1)));
-            }
-            for (k, (name, style)) in entries.iter().enumerate() {
-                let y = 34 + 16 * k as i32;
-                legend_area
-                    .draw(&PathElement::new(vec![(4, y), (22, y)], *style))
-                    .map_err(|e| anyhow!("{e}"))?;
-                legend_area
-                    .draw(&Text::new(
-                        name.clone(),
-                        (27, y - 7),
-                        ("sans-serif", 12).into_font(),
-                    ))
-                    .map_err(|e| anyhow!("{e}"))?;
-            }
+            draw_panel(area, p, xlabel, span, marks)?;
         }
         root.present().map_err(|e| anyhow!("{e}"))?;
     }
     Ok(out)
+}
+
+/// One panel of [`panels_marked`] in `area`: the chart, and its legend right of it.
+fn draw_panel(
+    area: &Area,
+    p: &Panel,
+    xlabel: &str,
+    span: Option<(f64, f64)>,
+    marks: &[(f64, String)],
+) -> Result<()> {
+    let (w, _) = area.dim_in_pixel();
+    let (plot_area, legend_area) = area.split_horizontally(w.saturating_sub(LEGEND_W));
+    let Some((t0, t1, mut y0, mut y1)) = extent(p, span) else {
+        return Ok(());
+    };
+    let reach = 0.5 * (y1 - y0).max(1e-9 * y0.abs().max(y1.abs()).max(1.0));
+    let limits: Vec<&(f64, String)> = p
+        .limits
+        .iter()
+        .filter(|(v, _)| v.is_finite() && *v >= y0 - reach && *v <= y1 + reach)
+        .collect();
+    for (v, _) in &limits {
+        y0 = y0.min(*v);
+        y1 = y1.max(*v);
+    }
+    // Plotters needs a range that is not too narrow for its tick marks.
+    let pad = ((y1 - y0) * 0.08).max(1e-3 * y0.abs().max(y1.abs()).max(1.0));
+    let (y0, y1) = (y0 - pad, y1 + pad);
+    let mut chart = ChartBuilder::on(&plot_area)
+        .margin(8)
+        .caption(p.title, ("sans-serif", 14))
+        .x_label_area_size(30)
+        .y_label_area_size(64)
+        .build_cartesian_2d(t0..t1, y0..y1)
+        .map_err(|e| anyhow!("{e}"))?;
+    chart
+        .configure_mesh()
+        .x_desc(xlabel)
+        .y_desc(p.ylabel)
+        .x_label_formatter(&|v| tick(*v, t1 - t0))
+        .y_label_formatter(&|v| tick(*v, y1 - y0))
+        .light_line_style(RGBColor(235, 235, 235))
+        .draw()
+        .map_err(|e| anyhow!("{e}"))?;
+    draw_marks(&mut chart, marks, (t0, t1), (y0, y1))?;
+    for (v, _) in &limits {
+        chart
+            .draw_series(DashedLineSeries::new(
+                vec![(t0, *v), (t1, *v)],
+                6,
+                4,
+                RED.stroke_width(1),
+            ))
+            .map_err(|e| anyhow!("{e}"))?;
+    }
+    for (i, s) in p.series.iter().enumerate() {
+        let c = COLORS[i % COLORS.len()];
+        chart
+            .draw_series(LineSeries::new(s.points.iter().copied(), c.stroke_width(2)))
+            .map_err(|e| anyhow!("{e}"))?;
+    }
+    draw_legend(&legend_area, p, !limits.is_empty(), !marks.is_empty())
+}
+
+/// The x and y ranges of a panel's curves, x over `span` when given (at least 1e-12
+/// wide); `None` without an x range.
+fn extent(p: &Panel, span: Option<(f64, f64)>) -> Option<(f64, f64, f64, f64)> {
+    let (mut t0, mut t1, mut y0, mut y1) = (
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    );
+    for s in p.series {
+        for &(t, y) in &s.points {
+            t0 = t0.min(t);
+            t1 = t1.max(t);
+            y0 = y0.min(y);
+            y1 = y1.max(y);
+        }
+    }
+    if let Some((a, b)) = span {
+        (t0, t1) = (a, b);
+    }
+    if !t0.is_finite() {
+        return None;
+    }
+    if t1 - t0 < 1e-12 {
+        t1 = t0 + 1.0;
+    }
+    Some((t0, t1, y0, y1))
+}
+
+/// The marks within the x range `t` as vertical lines, labelled when at most 12.
+fn draw_marks(
+    chart: &mut Chart,
+    marks: &[(f64, String)],
+    (t0, t1): (f64, f64),
+    (y0, y1): (f64, f64),
+) -> Result<()> {
+    for (x, label) in marks.iter().filter(|m| m.0 >= t0 && m.0 <= t1) {
+        chart
+            .draw_series(std::iter::once(PathElement::new(
+                vec![(*x, y0), (*x, y1)],
+                GREY.stroke_width(1),
+            )))
+            .map_err(|e| anyhow!("{e}"))?;
+        if marks.len() <= 12 {
+            chart
+                .draw_series(std::iter::once(Text::new(
+                    label.clone(),
+                    (*x, y1),
+                    ("sans-serif", 10).into_font().color(&GREY),
+                )))
+                .map_err(|e| anyhow!("{e}"))?;
+        }
+    }
+    Ok(())
+}
+
+/// The legend of a panel, in its own strip: the curves, then the limit and the marks
+/// when drawn.
+fn draw_legend(legend_area: &Area, p: &Panel, limits: bool, marks: bool) -> Result<()> {
+    let mut entries: Vec<(String, ShapeStyle)> = p
+        .series
+        .iter()
+        .enumerate()
+        .map(|(i, s)| (s.name.clone(), COLORS[i % COLORS.len()].stroke_width(2)))
+        .collect();
+    if limits {
+        entries.push(("limit".into(), RED.stroke_width(1)));
+    }
+    if marks {
+        entries.push(("segment start".into(), GREY.stroke_width(1)));
+    }
+    for (k, (name, style)) in entries.iter().enumerate() {
+        let y = 34 + 16 * k as i32;
+        legend_area
+            .draw(&PathElement::new(vec![(4, y), (22, y)], *style))
+            .map_err(|e| anyhow!("{e}"))?;
+        legend_area
+            .draw(&Text::new(
+                name.clone(),
+                (27, y - 7),
+                ("sans-serif", 12).into_font(),
+            ))
+            .map_err(|e| anyhow!("{e}"))?;
+    }
+    Ok(())
 }
 
 /// Horizontal bar chart (largest first, as given): labels and values.

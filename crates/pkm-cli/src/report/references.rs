@@ -47,14 +47,33 @@ fn one(h: &mut Html, machine: &Machine, r: &ReferenceCheck) -> Result<()> {
     if let Some(e) = &r.error {
         h.p(&format!("<span class=\"bad\">{}</span>", esc(e)));
     }
+    h.table(
+        &["value", "published", "pkm", "deviation", "within tolerance"],
+        &item_rows(r),
+    );
+    if r.error.is_none() {
+        let x = pkm::dynamic::pose_from_user(m, &r.pose, pkm::Convention::Rpy)?;
+        let sk = m.skeleton(&x)?;
+        let home = m.skeleton(&m.home())?;
+        let mut svgs = String::new();
+        for v in drawing::views_for(&sk) {
+            svgs.push_str(&drawing::view_svg(&[&sk, &home], v, (400, 400))?);
+        }
+        h.p("The machine at this pose (home pose faint):");
+        h.raw(&format!("<div class=\"views\">{svgs}</div>"));
+    }
+    Ok(())
+}
+
+/// One row per value of the reference: published, pkm's, deviation, pass.
+fn item_rows(r: &ReferenceCheck) -> Vec<Vec<String>> {
     let fmt = |v: &[f64]| {
         v.iter()
             .map(|x| format!("{:.3}", Shown(*x)))
             .collect::<Vec<_>>()
             .join(", ")
     };
-    let rows: Vec<Vec<String>> = r
-        .items
+    r.items
         .iter()
         .map(|i| {
             vec![
@@ -70,21 +89,5 @@ fn one(h: &mut Html, machine: &Machine, r: &ReferenceCheck) -> Result<()> {
                 mark(i.pass).into(),
             ]
         })
-        .collect();
-    h.table(
-        &["value", "published", "pkm", "deviation", "within tolerance"],
-        &rows,
-    );
-    if r.error.is_none() {
-        let x = pkm::dynamic::pose_from_user(m, &r.pose, pkm::Convention::Rpy)?;
-        let sk = m.skeleton(&x)?;
-        let home = m.skeleton(&m.home())?;
-        let mut svgs = String::new();
-        for v in drawing::views_for(&sk) {
-            svgs.push_str(&drawing::view_svg(&[&sk, &home], v, (400, 400))?);
-        }
-        h.p("The machine at this pose (home pose faint):");
-        h.raw(&format!("<div class=\"views\">{svgs}</div>"));
-    }
-    Ok(())
+        .collect()
 }

@@ -74,15 +74,13 @@ pub fn html(machine: &Machine, ctx: &Context) -> Result<String> {
                 .into(),
         );
     }
-    let m = machine.mechanism();
-    let sk = m.skeleton(&ctx.pose)?;
-    let r = |v: f64| (v * 100.0).round() / 100.0;
+    let sk = machine.mechanism().skeleton(&ctx.pose)?;
     let points: Vec<serde_json::Value> = sk
         .points
         .iter()
         .map(|p| {
             json!({"name": p.name, "role": format!("{:?}", p.role),
-                   "p": [r(p.position[0]), r(p.position[1]), r(p.position[2])]})
+                   "p": [cm(p.position[0]), cm(p.position[1]), cm(p.position[2])]})
         })
         .collect();
     let links: Vec<serde_json::Value> = sk
@@ -91,20 +89,7 @@ pub fn html(machine: &Machine, ctx: &Context) -> Result<String> {
         .map(|l| json!({"from": l.from, "to": l.to, "kind": format!("{:?}", l.kind)}))
         .collect();
     let scene = ctx.scene.borrow();
-    let cloud = if scene.cloud.is_empty() {
-        serde_json::Value::Null
-    } else {
-        let stride = scene.cloud.len().div_ceil(MAX_CLOUD);
-        let kept: Vec<&([f64; 3], f64)> = scene.cloud.iter().step_by(stride).collect();
-        let (lo, hi) = kept.iter().fold((f64::INFINITY, 0.0f64), |(a, b), c| {
-            (a.min(c.1), b.max(c.1))
-        });
-        json!({
-            "points": kept.iter().flat_map(|c| c.0.map(r)).collect::<Vec<f64>>(),
-            "condition": kept.iter().map(|c| (c.1 * 1000.0).round() / 1000.0).collect::<Vec<f64>>(),
-            "min": lo, "max": hi,
-        })
-    };
+    let cloud = cloud_json(&scene.cloud);
     let motion = motion_json(machine, &scene.frames)?;
     let data =
         json!({"skeleton": {"points": points, "links": links}, "cloud": cloud, "motion": motion});
@@ -127,6 +112,29 @@ pub fn html(machine: &Machine, ctx: &Context) -> Result<String> {
         notes.join("; "),
         BUNDLE.replace("</script", "<\\/script")
     ))
+}
+
+/// A coordinate (mm) rounded to 0.01 mm for the scene.
+fn cm(v: f64) -> f64 {
+    (v * 100.0).round() / 100.0
+}
+
+/// The workspace map's reachable points (at most [`MAX_CLOUD`]) with their condition
+/// numbers and its range; null without a map.
+fn cloud_json(cloud: &[([f64; 3], f64)]) -> serde_json::Value {
+    if cloud.is_empty() {
+        return serde_json::Value::Null;
+    }
+    let stride = cloud.len().div_ceil(MAX_CLOUD);
+    let kept: Vec<&([f64; 3], f64)> = cloud.iter().step_by(stride).collect();
+    let (lo, hi) = kept.iter().fold((f64::INFINITY, 0.0f64), |(a, b), c| {
+        (a.min(c.1), b.max(c.1))
+    });
+    json!({
+        "points": kept.iter().flat_map(|c| c.0.map(cm)).collect::<Vec<f64>>(),
+        "condition": kept.iter().map(|c| (c.1 * 1000.0).round() / 1000.0).collect::<Vec<f64>>(),
+        "min": lo, "max": hi,
+    })
 }
 
 /// The animation: per frame the skeleton's point positions, the tool path, the

@@ -1,17 +1,17 @@
 //! The report's workspace section.
 
 use anyhow::Result;
-use pkm::Machine;
+use pkm::workspace::{PointStatus as St, WorkspaceMap, WorkspaceSummary};
+use pkm::{DynMechanism, Machine};
 
 use super::html::{esc, Html};
 use super::Context;
+use crate::commands::workspace::{run_map, slices, summarise};
 
 /// Workspace at the report pose's orientation, over the machine's whole reach or the
 /// given bounds: summary, slices with the condition number, the outcomes and the
 /// limits that bind.
 pub fn section(h: &mut Html, machine: &Machine, ctx: &Context) -> Result<()> {
-    use crate::commands::workspace::{run_map, slices, summarise};
-    use pkm::workspace::PointStatus as St;
     let m = machine.mechanism();
     let (wm, grid_bounds) = run_map(
         machine,
@@ -41,10 +41,36 @@ pub fn section(h: &mut Html, machine: &Machine, ctx: &Context) -> Result<()> {
         .iter()
         .map(|a| m.coordinates()[a.coordinate].name.clone())
         .collect();
+    h.p(&grid_text(m, &wm, &s, &names, &grid_bounds, ctx));
+    if !s.cut.is_empty() {
+        h.p(&format!(
+            "<span class=\"bad\">Reachable points lie on the grid's faces ({}): the region \
+             may go on beyond the map (pkm workspace MACHINE --bounds ... maps it).</span>",
+            esc(&s.cut.join(", "))
+        ));
+    }
+    summary_table(h, &s, &names);
+    let svgs: String = slices(m, &wm)?.into_iter().map(|(_, s)| s).collect();
+    h.raw(&format!("<div class=\"views\">{svgs}</div>"));
+    h.p("Grey cells: not reachable. Every point falls in one category:");
+    outcome_table(h, &s);
+    limit_table(h, &s);
+    Ok(())
+}
+
+/// The paragraph saying what the grid is and what reachable means.
+fn grid_text(
+    m: &dyn DynMechanism,
+    wm: &WorkspaceMap,
+    s: &WorkspaceSummary,
+    names: &[String],
+    grid_bounds: &str,
+    ctx: &Context,
+) -> String {
     let span: Vec<String> = wm
         .axes
         .iter()
-        .zip(&names)
+        .zip(names)
         .map(|(a, n)| {
             let q = m.coordinates()[a.coordinate].quantity;
             format!(
@@ -55,7 +81,7 @@ pub fn section(h: &mut Html, machine: &Machine, ctx: &Context) -> Result<()> {
             )
         })
         .collect();
-    h.p(&format!(
+    format!(
         "A grid of {} points over {} ({}), bounds from {}; the other coordinates at {}. \
          A point is reachable when inverse kinematics has a solution within every limit, \
          the Jacobian is regular, and the region of the pose reaches it through such \
@@ -64,21 +90,18 @@ pub fn section(h: &mut Html, machine: &Machine, ctx: &Context) -> Result<()> {
         s.points,
         names.join(", "),
         span.join(", "),
-        esc(&grid_bounds),
+        esc(grid_bounds),
         ctx.pose_label,
         m.characteristic_length()
-    ));
-    if !s.cut.is_empty() {
-        h.p(&format!(
-            "<span class=\"bad\">Reachable points lie on the grid's faces ({}): the region \
-             may go on beyond the map (pkm workspace MACHINE --bounds ... maps it).</span>",
-            esc(&s.cut.join(", "))
-        ));
-    }
+    )
+}
+
+/// Reachable points, measure, reachable range and conditioning.
+fn summary_table(h: &mut Html, s: &WorkspaceSummary, names: &[String]) {
     let bbox: Vec<String> = s
         .bounding_box
         .iter()
-        .zip(&names)
+        .zip(names)
         .map(|(b, n)| format!("{n} [{:.1}, {:.1}]", b[0], b[1]))
         .collect();
     let c = &s.condition;
@@ -99,9 +122,10 @@ pub fn section(h: &mut Html, machine: &Machine, ctx: &Context) -> Result<()> {
             ),
         ]],
     );
-    let svgs: String = slices(m, &wm)?.into_iter().map(|(_, s)| s).collect();
-    h.raw(&format!("<div class=\"views\">{svgs}</div>"));
-    h.p("Grey cells: not reachable. Every point falls in one category:");
+}
+
+/// The points of each outcome.
+fn outcome_table(h: &mut Html, s: &WorkspaceSummary) {
     h.table(
         &["outcome", "points"],
         &[
@@ -120,6 +144,10 @@ pub fn section(h: &mut Html, machine: &Machine, ctx: &Context) -> Result<()> {
         ]
         .map(|(k, st)| vec![k.to_string(), s.outcome(st).to_string()]),
     );
+}
+
+/// The points violating each limit, and where it is the first violated.
+fn limit_table(h: &mut Html, s: &WorkspaceSummary) {
     let first: std::collections::HashMap<&str, usize> =
         s.binding.iter().map(|(k, n)| (k.as_str(), *n)).collect();
     let rows: Vec<Vec<String>> = s
@@ -139,5 +167,4 @@ pub fn section(h: &mut Html, machine: &Machine, ctx: &Context) -> Result<()> {
          the first violated limit in the machine's check order.",
     );
     h.table(&["limit", "points violating it", "first violated"], &rows);
-    Ok(())
 }

@@ -1,6 +1,7 @@
 //! What `pkm errors` prints: the report as JSON (`--json`, and `errors.json` in
 //! `--out`) and as text for the terminal.
 
+use pkm::analysis::clearance::ClearanceReport;
 use pkm::analysis::AccuracyReport;
 use serde_json::json;
 
@@ -67,20 +68,52 @@ pub(super) fn print_text(m: &dyn pkm::DynMechanism, r: &AccuracyReport) {
     for v in &r.violations {
         println!("limit            VIOLATED at this pose: {v}");
     }
+    if !r.deviations.is_empty() {
+        print_pose_error(r);
+    }
+    print_budget(r);
+    if let Some(mc) = &r.monte_carlo {
+        println!(
+            "monte carlo      {} samples: mean {:.4}, std {:.4}, p95 {:.4}, p99 {:.4}, max {:.4} mm{}",
+            mc.samples, mc.mean, mc.std, mc.p95, mc.p99, mc.max,
+            if mc.failed > 0 { format!(" ({} machines without a forward solution left out)", mc.failed) } else { String::new() }
+        );
+    }
+    if let Some(c) = &r.clearance {
+        print_clearance(c);
+    }
+    if let Some(em) = &r.map {
+        println!(
+            "error map        {} points, {} unreachable, largest RSS {:.4} mm",
+            em.cells.len(),
+            em.unreachable,
+            em.max_rss
+        );
+    }
+}
+
+/// The exact tool-pose error of the given deviations.
+fn print_pose_error(r: &AccuracyReport) {
     let (dp, dw) = (
         r.pose_error.position,
         r.pose_error.orientation.map(f64::to_degrees),
     );
-    if !r.deviations.is_empty() {
-        println!(
-            "position error   dx={:+.6} dy={:+.6} dz={:+.6} mm (|e| = {:.6} mm, {} deviations given)",
-            dp.x, dp.y, dp.z, dp.norm(), r.deviations.len()
-        );
-        println!(
-            "orientation      rx={:+.3e} ry={:+.3e} rz={:+.3e} deg",
-            dw.x, dw.y, dw.z
-        );
-    }
+    println!(
+        "position error   dx={:+.6} dy={:+.6} dz={:+.6} mm (|e| = {:.6} mm, {} deviations given)",
+        dp.x,
+        dp.y,
+        dp.z,
+        dp.norm(),
+        r.deviations.len()
+    );
+    println!(
+        "orientation      rx={:+.3e} ry={:+.3e} rz={:+.3e} deg",
+        dw.x, dw.y, dw.z
+    );
+}
+
+/// The parameters, the tolerances' source and the error budget with its largest items.
+fn print_budget(r: &AccuracyReport) {
     let source = r.tolerance_source.describe();
     println!(
         "parameters       {} ({} sensitivities), {} toleranced, {source}",
@@ -101,103 +134,102 @@ pub(super) fn print_text(m: &dyn pkm::DynMechanism, r: &AccuracyReport) {
     for i in r.budget.items.iter().take(5) {
         println!("  largest        {:<28} {:.4} mm", i.name, i.position);
     }
-    if let Some(mc) = &r.monte_carlo {
+}
+
+/// The clearance bounds at the pose, their Monte Carlo, over the surface and the path,
+/// and the largest clearances within the tolerance.
+fn print_clearance(c: &ClearanceReport) {
+    let b = &c.bounds;
+    let d = b.direction;
+    println!(
+        "clearance        {} joints, along ({:.4}, {:.4}, {:.4}): upper {:+.5} mm, lower {:+.5} mm ({}, {} solves{})",
+        c.clearances.len(), d[0], d[1], d[2], b.upper, b.lower,
+        match b.method { pkm::accuracy::clearance::ClearanceMethod::FirstOrder => "first-order states re-solved", _ => "enumeration" },
+        b.solves,
+        if b.refined { ", refined" } else { "" }
+    );
+    println!(
+        "  largest |e|    {:.5} mm (first order {:.5} mm)",
+        b.deviation_3d.norm, b.deviation_3d.first_order
+    );
+    for j in b.contributions.iter().take(5) {
         println!(
-            "monte carlo      {} samples: mean {:.4}, std {:.4}, p95 {:.4}, p99 {:.4}, max {:.4} mm{}",
-            mc.samples, mc.mean, mc.std, mc.p95, mc.p99, mc.max,
-            if mc.failed > 0 { format!(" ({} machines without a forward solution left out)", mc.failed) } else { String::new() }
+            "  largest        {:<28} {:.5} mm ({:.0} %)",
+            j.joint,
+            j.first_order,
+            100.0 * j.share
         );
     }
-    if let Some(c) = &r.clearance {
-        let b = &c.bounds;
-        let d = b.direction;
+    if let Some(mc) = &c.monte_carlo {
         println!(
-            "clearance        {} joints, along ({:.4}, {:.4}, {:.4}): upper {:+.5} mm, lower {:+.5} mm ({}, {} solves{})",
-            c.clearances.len(), d[0], d[1], d[2], b.upper, b.lower,
-            match b.method { pkm::accuracy::clearance::ClearanceMethod::FirstOrder => "first-order states re-solved", _ => "enumeration" },
-            b.solves,
-            if b.refined { ", refined" } else { "" }
+            "  monte carlo    {} states: along the direction {:+.5} .. {:+.5} mm (std {:.5}), largest |e| {:.5} mm",
+            mc.samples, mc.min, mc.max, mc.std, mc.max_norm
         );
+    }
+    print_clearance_sweeps(c);
+    if let (Some(t), Some(s)) = (c.tolerance, c.largest_clearance_scale) {
+        print_clearance_tolerance(c, t, s);
+    }
+}
+
+/// The clearance bounds over the part surface and along the path.
+fn print_clearance_sweeps(c: &ClearanceReport) {
+    if let Some(sf) = &c.surface {
         println!(
-            "  largest |e|    {:.5} mm (first order {:.5} mm)",
-            b.deviation_3d.norm, b.deviation_3d.first_order
+            "  surface        hemisphere R = {} mm, {} heights ({} unreachable): largest {}",
+            sf.hemisphere.radius,
+            sf.points.len(),
+            sf.unreachable,
+            match (sf.worst, sf.worst_z) {
+                (Some(w), Some(z)) => format!("{w:.5} mm at z = {z:.3} mm"),
+                _ => "- (no reachable height)".into(),
+            }
         );
-        for j in b.contributions.iter().take(5) {
+    }
+    if let Some(p) = &c.path {
+        if let Some(w) = p.worst.and_then(|i| p.points.get(i)) {
             println!(
-                "  largest        {:<28} {:.5} mm ({:.0} %)",
-                j.joint,
-                j.first_order,
-                100.0 * j.share
+                "  path           {} of {} samples bounded: largest {:.5} mm at t = {:.3} s{}",
+                p.points.len(),
+                p.samples,
+                w.upper.max(-w.lower),
+                w.sample.t,
+                w.sample
+                    .line
+                    .map(|l| format!(" (line {l})"))
+                    .unwrap_or_default()
             );
-        }
-        if let Some(mc) = &c.monte_carlo {
-            println!(
-                "  monte carlo    {} states: along the direction {:+.5} .. {:+.5} mm (std {:.5}), largest |e| {:.5} mm",
-                mc.samples, mc.min, mc.max, mc.std, mc.max_norm
-            );
-        }
-        if let Some(sf) = &c.surface {
-            println!(
-                "  surface        hemisphere R = {} mm, {} heights ({} unreachable): largest {}",
-                sf.hemisphere.radius,
-                sf.points.len(),
-                sf.unreachable,
-                match (sf.worst, sf.worst_z) {
-                    (Some(w), Some(z)) => format!("{w:.5} mm at z = {z:.3} mm"),
-                    _ => "- (no reachable height)".into(),
-                }
-            );
-        }
-        if let Some(p) = &c.path {
-            if let Some(w) = p.worst.and_then(|i| p.points.get(i)) {
-                println!(
-                    "  path           {} of {} samples bounded: largest {:.5} mm at t = {:.3} s{}",
-                    p.points.len(),
-                    p.samples,
-                    w.upper.max(-w.lower),
-                    w.sample.t,
-                    w.sample
-                        .line
-                        .map(|l| format!(" (line {l})"))
-                        .unwrap_or_default()
-                );
-            }
-        }
-        if let (Some(t), Some(s)) = (c.tolerance, c.largest_clearance_scale) {
-            let over = match (&c.surface, &c.path) {
-                (None, None) => " at the pose",
-                (Some(_), None) => " over the surface",
-                (None, Some(_)) => " along the path",
-                (Some(_), Some(_)) => " over the surface and the path",
-            };
-            match c.largest_clearance_mm {
-                Some(mm) => println!("  tolerance      {t} mm: largest clearance{over} {mm:.5} mm"),
-                None => println!("  tolerance      {t} mm: every clearance times {s:.4}{over}"),
-            }
-            for k in &c.largest_per_class {
-                let what = match (k.largest_mm, k.largest_scale) {
-                    (Some(mm), _) => format!("largest {mm:.5} mm"),
-                    (None, Some(s)) => format!("clearances times {s:.4}"),
-                    (None, None) if k.others_alone_mm >= t => format!(
-                        "none: the other joints alone give {:.5} mm",
-                        k.others_alone_mm
-                    ),
-                    (None, None) => "any: these joints move nothing along it".to_string(),
-                };
-                println!(
-                    "  class {:<9}{} joints, the others as given: {what}",
-                    k.class,
-                    k.joints.len()
-                );
-            }
         }
     }
-    if let Some(em) = &r.map {
+}
+
+/// The largest clearance within tolerance `t` (mm; `s` the scale of every clearance),
+/// and per joint class with the others as given.
+fn print_clearance_tolerance(c: &ClearanceReport, t: f64, s: f64) {
+    let over = match (&c.surface, &c.path) {
+        (None, None) => " at the pose",
+        (Some(_), None) => " over the surface",
+        (None, Some(_)) => " along the path",
+        (Some(_), Some(_)) => " over the surface and the path",
+    };
+    match c.largest_clearance_mm {
+        Some(mm) => println!("  tolerance      {t} mm: largest clearance{over} {mm:.5} mm"),
+        None => println!("  tolerance      {t} mm: every clearance times {s:.4}{over}"),
+    }
+    for k in &c.largest_per_class {
+        let what = match (k.largest_mm, k.largest_scale) {
+            (Some(mm), _) => format!("largest {mm:.5} mm"),
+            (None, Some(s)) => format!("clearances times {s:.4}"),
+            (None, None) if k.others_alone_mm >= t => format!(
+                "none: the other joints alone give {:.5} mm",
+                k.others_alone_mm
+            ),
+            (None, None) => "any: these joints move nothing along it".to_string(),
+        };
         println!(
-            "error map        {} points, {} unreachable, largest RSS {:.4} mm",
-            em.cells.len(),
-            em.unreachable,
-            em.max_rss
+            "  class {:<9}{} joints, the others as given: {what}",
+            k.class,
+            k.joints.len()
         );
     }
 }
