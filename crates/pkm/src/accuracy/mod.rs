@@ -29,7 +29,6 @@ pub mod map;
 pub mod monte_carlo;
 pub mod path;
 pub(crate) mod rebuild;
-mod serial;
 pub mod streamed;
 pub use budget::tolerances_of_kind;
 
@@ -78,10 +77,12 @@ pub fn check_tolerance_magnitude(q: Quantity, v: f64) -> std::result::Result<(),
         q.unit()
     ))
 }
+pub use crate::serial::accuracy::{
+    serial_completions, serial_parameters, serial_tolerable, LinkCompletion,
+};
 pub use map::{error_map, ErrorMap};
 pub use monte_carlo::{monte_carlo, monte_carlo_with_progress, statistics, MonteCarlo};
 pub use rebuild::Rebuild;
-pub use serial::{serial_completions, serial_parameters, serial_tolerable, LinkCompletion};
 
 /// What a geometric parameter of a machine is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
@@ -261,7 +262,7 @@ pub trait Parametric<const P: usize, const A: usize>: Mechanism<P, A> {
 /// call for the parameters asked for (a serial machine's plan), reused by the next.
 #[derive(Debug, Clone, Default)]
 pub struct SensitivityScratch {
-    pub(crate) serial: Option<serial::SerialScratch>,
+    pub(crate) serial: Option<crate::serial::accuracy::SerialScratch>,
 }
 
 /// `out[i] = all[which[i]]`, refusing an index beyond `all`.

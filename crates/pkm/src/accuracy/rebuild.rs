@@ -167,44 +167,55 @@ macro_rules! parametric_by_rebuild {
 }
 pub(crate) use parametric_by_rebuild;
 
-// ---- strut machines (hexapod, translational tripod): their identifiable geometry ----
-
-/// Geometry of a strut machine as [`Rebuild`] parameters: every joint-centre
-/// coordinate (the parameters identification estimates); the drives are the struts'
-/// zero lengths.
+/// Implements [`Rebuild`] and [`super::Parametric`] for a strut machine (`$t` with
+/// `$a` struts, [`crate::identify::struts::StrutMachine`]): every joint-centre
+/// coordinate is a parameter (what identification estimates), the drives are the
+/// struts' zero lengths, the sensitivities analytic. Invoked in the type's own folder
+/// (`hexapod/accuracy.rs`, `tripod/accuracy.rs`).
 macro_rules! strut_rebuild {
     ($t:ty, $a:literal) => {
-        impl Rebuild<6, $a> for $t {
-            fn geometry_parameters(&self) -> Vec<Parameter> {
-                self.geometry_names()
+        impl $crate::accuracy::Rebuild<6, $a> for $t {
+            fn geometry_parameters(&self) -> Vec<$crate::accuracy::Parameter> {
+                $crate::identify::Identifiable::geometry_names(self)
                     .into_iter()
-                    .map(|n| Parameter::new(n, Quantity::Length, ParameterKind::JointCentre))
+                    .map(|n| {
+                        $crate::accuracy::Parameter::new(
+                            n,
+                            $crate::units::Quantity::Length,
+                            $crate::accuracy::ParameterKind::JointCentre,
+                        )
+                    })
                     .collect()
             }
             fn geometry_values(&self) -> Vec<f64> {
-                self.geometry()
+                $crate::identify::Identifiable::geometry(self)
             }
-            fn with_geometry_values(&self, v: &[f64]) -> Result<Self> {
-                self.with_geometry(v)
+            fn with_geometry_values(&self, v: &[f64]) -> $crate::error::Result<Self> {
+                $crate::identify::Identifiable::with_geometry(self, v)
             }
-            fn update_geometry(&self, target: &mut Self, v: &[f64]) -> Result<()> {
-                let (base, platform) = crate::identify::struts::split(v)?;
-                crate::identify::struts::StrutMachine::set_joints(target, &base, &platform);
+            fn update_geometry(&self, target: &mut Self, v: &[f64]) -> $crate::error::Result<()> {
+                let (base, platform) = $crate::identify::struts::split(v)?;
+                $crate::identify::struts::StrutMachine::set_joints(target, &base, &platform);
                 Ok(())
             }
-            fn drive_parameter(&self, k: usize) -> Parameter {
-                zero_length_parameter(&self.info().actuators()[k].name)
+            fn drive_parameter(&self, k: usize) -> $crate::accuracy::Parameter {
+                $crate::accuracy::rebuild::zero_length_parameter(
+                    &$crate::Mechanism::info(self).actuators()[k].name,
+                )
             }
-            fn passive_joints(&self) -> Vec<super::clearance::PassiveJoint> {
-                let s = crate::identify::struts::StrutMachine::struts(self);
+            fn passive_joints(&self) -> Vec<$crate::accuracy::clearance::PassiveJoint> {
+                let s = $crate::identify::struts::StrutMachine::struts(self);
                 let base: Vec<&str> = s.iter().map(|s| s.base_name.as_str()).collect();
                 let platform: Vec<&str> = s.iter().map(|s| s.platform_name.as_str()).collect();
-                strut_joints(&base, &platform)
+                $crate::accuracy::rebuild::strut_joints(&base, &platform)
             }
         }
-        parametric_by_rebuild!($t, 6, $a, |m, x| Some(strut_sensitivities(m, x)));
+        $crate::accuracy::rebuild::parametric_by_rebuild!($t, 6, $a, |m, x| Some(
+            $crate::accuracy::rebuild::strut_sensitivities(m, x)
+        ));
     };
 }
+pub(crate) use strut_rebuild;
 
 /// The zero length of strut `name` as a parameter (`zero(L1)`): the drive parameter of
 /// every strut machine.
@@ -244,7 +255,7 @@ pub(crate) fn strut_joints(
 
 /// Analytic sensitivities of a strut machine (implicit function theorem, see
 /// [`implicit_sensitivities`]).
-fn strut_sensitivities<M: Identifiable<6, A>, const A: usize>(
+pub(crate) fn strut_sensitivities<M: Identifiable<6, A>, const A: usize>(
     m: &M,
     x: &SVector<f64, 6>,
 ) -> Result<Vec<PoseError>> {
@@ -307,86 +318,3 @@ pub(crate) fn implicit_sensitivities<M: Mechanism<6, A>, const A: usize>(
         })
         .collect())
 }
-
-strut_rebuild!(crate::hexapod::Hexapod, 6);
-strut_rebuild!(crate::tripod::TranslationalTripod, 3);
-
-// ---- centre-leg tripod: strut joints, the leg's base joint ----
-
-impl Rebuild<3, 3> for crate::tripod::CentreLegTripod {
-    fn geometry_parameters(&self) -> Vec<Parameter> {
-        let s = &self.tripod_geometry().struts();
-        let b: Vec<&str> = s.iter().map(|s| s.base_name.as_str()).collect();
-        let p: Vec<&str> = s.iter().map(|s| s.platform_name.as_str()).collect();
-        let n: Vec<&str> = s.iter().map(|s| s.actuator.name.as_str()).collect();
-        let mut v: Vec<Parameter> = crate::identify::struts::names(&b, &p, &n)
-            .into_iter()
-            .chain(["x", "y", "z"].map(|a| format!("leg.{a}")))
-            .map(|n| Parameter::new(n, Quantity::Length, ParameterKind::JointCentre))
-            .collect();
-        v.shrink_to_fit();
-        v
-    }
-    fn geometry_values(&self) -> Vec<f64> {
-        let s = &self.tripod_geometry().struts();
-        s.iter()
-            .flat_map(|s| s.base.iter().copied())
-            .chain(s.iter().flat_map(|s| s.platform.iter().copied()))
-            .chain(self.leg().base.iter().copied())
-            .collect()
-    }
-    fn with_geometry_values(&self, v: &[f64]) -> Result<Self> {
-        if v.len() != 21 {
-            return Err(Error::InvalidInput {
-                what: "centre-leg tripod geometry".into(),
-                message: format!("expected 21 values, got {}", v.len()),
-            });
-        }
-        let old = self.tripod_geometry();
-        let mut s = old.struts().clone();
-        for (j, st) in s.iter_mut().enumerate() {
-            st.base = Vector3::from_column_slice(&v[3 * j..3 * j + 3]);
-            st.platform = Vector3::from_column_slice(&v[9 + 3 * j..9 + 3 * j + 3]);
-        }
-        let mut geometry = crate::tripod::TripodGeometry::new(
-            old.name().to_string(),
-            s,
-            old.tool(),
-            old.max_tilt,
-            old.min_strut_spindle_angle,
-        );
-        geometry.zero_lengths = old.zero_lengths;
-        geometry.axes = old.axes.clone();
-        let mut leg = self.leg().clone();
-        leg.base = Vector3::from_column_slice(&v[18..21]);
-        Ok(crate::tripod::CentreLegTripod::new(
-            geometry,
-            leg,
-            self.info().home(),
-        ))
-    }
-    fn drive_parameter(&self, k: usize) -> Parameter {
-        Parameter::new(
-            format!("zero({})", self.info().actuators()[k].name),
-            Quantity::Length,
-            ParameterKind::ZeroLength,
-        )
-    }
-    fn passive_joints(&self) -> Vec<super::clearance::PassiveJoint> {
-        let s = &self.tripod_geometry().struts();
-        let b: Vec<&str> = s.iter().map(|s| s.base_name.as_str()).collect();
-        let p: Vec<&str> = s.iter().map(|s| s.platform_name.as_str()).collect();
-        let mut j = strut_joints(&b, &p);
-        // The leg's base joint follows the struts' base and platform joints.
-        let k = 6 * s.len();
-        j.push(super::clearance::PassiveJoint {
-            name: "leg".into(),
-            body: "base".into(),
-            centres: vec![[k, k + 1, k + 2]],
-        });
-        j
-    }
-}
-parametric_by_rebuild!(crate::tripod::CentreLegTripod, 3, 3);
-
-// ---- P3RP head and the hybrid machine on it: crate::p3rp::clearance ----

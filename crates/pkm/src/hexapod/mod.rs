@@ -8,6 +8,7 @@
 // Struts, joints and sample vectors are indexed together.
 #![allow(clippy::needless_range_loop)]
 
+mod accuracy;
 mod block;
 mod block_motion;
 pub mod forward;

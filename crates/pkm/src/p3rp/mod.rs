@@ -24,7 +24,7 @@
 //! `z2 = z + g(theta)`, `g(theta) = l1 cos psi + sqrt(l2^2 - (e + l1 sin psi)^2)`, the
 //! root with C above B (the paper's `0 <= phi < pi/2`, phi from Z to BC).
 
-mod clearance;
+mod accuracy;
 mod head;
 mod hybrid;
 pub mod seed004;

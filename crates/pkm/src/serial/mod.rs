@@ -25,7 +25,6 @@ pub mod machine;
 pub mod mechanism;
 mod parallel_axes;
 mod prepared;
-pub mod sensitivity;
 pub mod spherical_wrist;
 pub mod tcp;
 pub mod tcp_axis;
@@ -403,6 +402,7 @@ fn matrix_of(a: &Affine) -> Matrix4<f64> {
     m
 }
 
+pub use accuracy::sensitivity;
 pub use jacobian::{jacobian_of_axes, jacobian_rate_times_rates};
 pub use machine::{ChainDeviations, Parameter as Deviation, SerialMachine};
 pub use prepared::{JointAxis, PreparedChain};

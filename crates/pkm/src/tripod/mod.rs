@@ -15,6 +15,7 @@
 //!
 //! Inverse kinematics for any platform pose is [`TripodGeometry::strut_lengths`].
 
+mod accuracy;
 mod centre_leg;
 mod geometry;
 mod translational;

@@ -131,3 +131,54 @@ fn a_pentapods_geometry_set_moves_its_inverse_and_characteristic_length() {
         rebuilt.info().characteristic_length()
     );
 }
+
+#[test]
+fn the_p3rp_hybrids_head_set_moves_its_inverse_and_characteristic_length() {
+    let machine = example("p3rp-hybrid-seed004.toml");
+    let Model::P3rpHybrid(h) = &machine.model else {
+        panic!("p3rp-hybrid-seed004.toml is the P3RP hybrid machine")
+    };
+    let mut h = (**h).clone();
+    let x = h.info().home();
+    let before = h.inverse(&x).unwrap();
+    let mut g = h.head().clone();
+    g.l1 += 10.0;
+    h.set_head(g.clone());
+    assert_eq!(h.info().characteristic_length(), g.l1);
+    let after = h.inverse(&x).unwrap();
+    assert!((after - before).norm() > 1e-3, "{before} {after}");
+    let rebuilt = pkm::p3rp::HybridMachine::new(
+        h.info().name().to_string(),
+        g,
+        h.info().actuators().clone(),
+        x,
+    );
+    assert_eq!(after, rebuilt.inverse(&x).unwrap());
+}
+
+#[test]
+fn a_tripods_travel_set_is_checked() {
+    use pkm::limits::{AxisLimits, Range};
+    let machine = example("tripod-seed000.toml");
+    let Model::TranslationalTripod(t) = &machine.model else {
+        panic!("tripod-seed000.toml is a translational tripod")
+    };
+    let mut t = t.clone();
+    let x = t.info().home();
+    let q = t.inverse(&x).unwrap();
+    let mut v = Vec::new();
+    t.check_limits(&x, &q, &mut v);
+    assert!(v.is_empty(), "{v:?}");
+    t.set_axes(AxisLimits {
+        ranges: vec![(
+            2,
+            Range {
+                min: x[2] + 1.0,
+                max: x[2] + 2.0,
+            },
+        )],
+    });
+    t.check_limits(&x, &q, &mut v);
+    assert_eq!(v.len(), 1, "{v:?}");
+    assert!(v[0].to_string().contains("axis Z"), "{}", v[0]);
+}

@@ -3,10 +3,16 @@
 
 use nalgebra::{Matrix3, Matrix4, Vector3};
 
-use super::machine::{installation, installation_axis, inverse};
-use super::machine::{ChainDeviations, Parameter, SerialMachine};
-use super::{joint_transform, link_transform, Chain, JointKind, LinkDeviation};
 use crate::error::{Error, Result};
+use crate::serial::machine::{installation, installation_axis, inverse};
+use crate::serial::machine::{ChainDeviations, Parameter, SerialMachine};
+use crate::serial::{joint_transform, link_transform, Chain, JointKind, LinkDeviation};
+
+mod parametric;
+pub mod sensitivity;
+
+pub(crate) use parametric::SerialScratch;
+pub use parametric::{serial_completions, serial_parameters, serial_tolerable, LinkCompletion};
 
 impl SerialMachine {
     /// First-order sensitivity of the tool pose relative to the workpiece to each of

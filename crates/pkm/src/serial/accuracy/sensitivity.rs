@@ -21,11 +21,11 @@
 
 use nalgebra::{Matrix3, Vector3};
 
-use super::machine::{installation_axis, Parameter, SerialMachine};
-use super::{affine_mul, apply_joint, link_affine, Affine, JointKind, LinkDeviation};
-use super::{Chain, AFFINE_IDENTITY};
 use crate::accuracy::LinkCompletion;
 use crate::error::{Error, Result};
+use crate::serial::machine::{installation_axis, Parameter, SerialMachine};
+use crate::serial::{affine_mul, apply_joint, link_affine, Affine, JointKind, LinkDeviation};
+use crate::serial::{Chain, AFFINE_IDENTITY};
 
 /// One factor of a chain: a link's fixed transform or a joint.
 #[derive(Debug, Clone, PartialEq)]
@@ -118,7 +118,7 @@ impl SensitivityPlan {
                         }
                     }
                     Parameter::Dq { chain, joint } => {
-                        let (c, factor, _) = super::accuracy::derivative(m, p, &zeros[0], qw, &[])?;
+                        let (c, factor, _) = super::derivative(m, p, &zeros[0], qw, &[])?;
                         let kind =
                             chains[c]
                                 .joints()
@@ -135,8 +135,7 @@ impl SensitivityPlan {
                         }
                     }
                     Parameter::Delta { chain, link, .. } | Parameter::Alpha { chain, link, .. } => {
-                        let (c, factor, dm) =
-                            super::accuracy::derivative(m, p, &zeros[0], qw, &[])?;
+                        let (c, factor, dm) = super::derivative(m, p, &zeros[0], qw, &[])?;
                         let mut d: Matrix3<f64> = dm.fixed_view::<3, 3>(0, 0).into_owned();
                         let t: Vector3<f64> = dm.fixed_view::<3, 1>(0, 3).into_owned();
                         if let Parameter::Alpha { row, col, .. } = *p {

@@ -14,7 +14,7 @@
 
 use nalgebra::{Matrix4, SVector, Vector3};
 
-use super::{Evaluate, Parameter, ParameterKind, Parametric, PoseError};
+use crate::accuracy::{Evaluate, Parameter, ParameterKind, Parametric, PoseError};
 use crate::error::{Error, Result};
 use crate::mechanism::Mechanism;
 use crate::serial::completion::TripleCompletion;
@@ -306,8 +306,8 @@ impl Evaluate for SerialEvaluator<'_> {
 #[derive(Debug, Clone)]
 pub(crate) struct SerialScratch {
     which: Vec<usize>,
-    plan: crate::serial::sensitivity::SensitivityPlan,
-    frames: crate::serial::sensitivity::SensitivityScratch,
+    plan: super::sensitivity::SensitivityPlan,
+    frames: super::sensitivity::SensitivityScratch,
     buf: Vec<(Vector3<f64>, Vector3<f64>)>,
 }
 
@@ -319,7 +319,7 @@ fn serial_sensitivities_into(
     completions: &[LinkCompletion],
     q: &[f64],
     which: &[usize],
-    s: &mut super::SensitivityScratch,
+    s: &mut crate::accuracy::SensitivityScratch,
     out: &mut [PoseError],
 ) -> Result<Vector3<f64>> {
     if s.serial.as_ref().is_none_or(|x| x.which != which) {
@@ -333,7 +333,7 @@ fn serial_sensitivities_into(
                 })
             })
             .collect::<Result<Vec<_>>>()?;
-        let plan = crate::serial::sensitivity::SensitivityPlan::new(m, completions, &params)?;
+        let plan = super::sensitivity::SensitivityPlan::new(m, completions, &params)?;
         s.serial = Some(SerialScratch {
             which: which.to_vec(),
             frames: plan.scratch(),
@@ -390,7 +390,7 @@ macro_rules! serial_parametric_common {
             _x: &$x,
             q: &$x,
             which: &[usize],
-            s: &mut super::SensitivityScratch,
+            s: &mut crate::accuracy::SensitivityScratch,
             out: &mut [PoseError],
         ) -> Result<Vector3<f64>> {
             serial_sensitivities_into(
