@@ -17,6 +17,19 @@ use crate::workspace::GridAxis;
 
 /// One tolerance per kind of parameter, for machines whose file gives none (internal
 /// units; a value of 0 leaves that kind out).
+///
+/// # Examples
+///
+/// ```
+/// use pkm::accuracy::Distribution;
+/// use pkm::analysis::KindTolerances;
+/// // +-10 um on lengths and 10 urad on angles, uniform, unless changed.
+/// let k = KindTolerances { joint: 0.02, ..Default::default() };
+/// assert_eq!((k.joint, k.length, k.zero, k.angle), (0.02, 0.01, 0.01, 1e-5));
+/// assert_eq!(k.distribution, Distribution::Uniform);
+/// assert!(k.validate().is_ok());
+/// assert!(KindTolerances { length: -1.0, ..k }.validate().is_err());
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct KindTolerances {
     /// Joint-centre coordinates (mm).
@@ -91,6 +104,19 @@ impl KindTolerances {
     }
 
     /// The tolerance of parameter `p`, `None` when its kind is left out.
+    ///
+    /// # Examples
+    ///
+    /// ```
+    /// use pkm::accuracy::{Parameter, ParameterKind};
+    /// use pkm::analysis::KindTolerances;
+    /// use pkm::Quantity;
+    /// let k = KindTolerances { zero: 0.0, ..Default::default() };
+    /// let joint = Parameter::new("A1.x", Quantity::Length, ParameterKind::JointCentre);
+    /// let zero = Parameter::new("zero(L1)", Quantity::Length, ParameterKind::ZeroLength);
+    /// assert_eq!(k.of(&joint), Some(0.01));
+    /// assert_eq!(k.of(&zero), None); // a tolerance of 0 leaves the kind out
+    /// ```
     pub fn of(&self, p: &Parameter) -> Option<f64> {
         let t = match (p.kind, p.quantity) {
             (ParameterKind::Clearance, _) => return None,
@@ -104,6 +130,22 @@ impl KindTolerances {
 
     /// The tolerances of every parameter of `params` whose kind has one and that can
     /// be toleranced alone (`tolerable`, [`crate::accuracy::Parametric::tolerable`]).
+    ///
+    /// # Examples
+    ///
+    /// ```
+    /// use pkm::analysis::KindTolerances;
+    /// let machine = pkm::Machine::from_path(concat!(
+    ///     env!("CARGO_MANIFEST_DIR"),
+    ///     "/../../examples/machines/hexapod-linuxcnc.toml"
+    /// ))
+    /// .unwrap();
+    /// let params = machine.parameters();
+    /// let t = KindTolerances::default().tolerances(&params, &[]);
+    /// // Every parameter of the hexapod has a kind with a tolerance.
+    /// assert_eq!(t.len(), params.len());
+    /// assert!(t.iter().all(|t| t.value > 0.0));
+    /// ```
     pub fn tolerances(&self, params: &[Parameter], tolerable: &[bool]) -> Vec<Tolerance> {
         params
             .iter()
@@ -121,6 +163,13 @@ impl KindTolerances {
 }
 
 /// Where the tolerances of an accuracy analysis came from.
+///
+/// # Examples
+///
+/// ```
+/// use pkm::analysis::ToleranceSource;
+/// assert_eq!(ToleranceSource::MachineFile.describe(), "from the machine file");
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum ToleranceSource {
@@ -133,6 +182,27 @@ pub enum ToleranceSource {
 }
 
 /// The tolerances an accuracy analysis uses.
+///
+/// # Examples
+///
+/// ```
+/// use pkm::analysis::{KindTolerances, ToleranceSource, Tolerances};
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/mc300.toml"
+/// ))
+/// .unwrap();
+/// // The MC-300 file gives tolerances: the default takes them.
+/// let (params, file) = (machine.parameters(), machine.tolerances());
+/// let (source, t) = Tolerances::Default.resolve(&params, &[], file).unwrap();
+/// assert_eq!(source, ToleranceSource::MachineFile);
+/// assert_eq!(t, file);
+/// // One per kind instead.
+/// let by_kind = Tolerances::ByKind(KindTolerances::default());
+/// let (source, t) = by_kind.resolve(&params, &[], file).unwrap();
+/// assert_eq!(source, ToleranceSource::ByKind);
+/// assert!(!t.is_empty());
+/// ```
 #[derive(Debug, Clone, PartialEq)]
 pub enum Tolerances {
     /// These (from a tolerances file).
@@ -182,6 +252,26 @@ impl Tolerances {
 
 /// An error map request: two pose coordinates over their default span
 /// ([`crate::workspace::default_span`]), `points` per axis.
+///
+/// # Examples
+///
+/// ```
+/// use pkm::analysis::{accuracy, AccuracyOptions, MapRequest};
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/hexapod-linuxcnc.toml"
+/// ))
+/// .unwrap();
+/// // The error over X and Y at home height, 3 x 3 points.
+/// let opt = AccuracyOptions {
+///     map: Some(MapRequest { coordinates: [0, 1], points: 3 }),
+///     ..Default::default()
+/// };
+/// let r = accuracy(&machine, &opt).unwrap();
+/// assert!(r.map.is_some());
+/// let bad = AccuracyOptions { map: Some(MapRequest { coordinates: [0, 0], points: 3 }), ..opt };
+/// assert!(accuracy(&machine, &bad).is_err()); // two different coordinates
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MapRequest {
     /// Indices of the two pose coordinates.
@@ -191,6 +281,20 @@ pub struct MapRequest {
 }
 
 /// What [`accuracy()`] computes.
+///
+/// # Examples
+///
+/// ```
+/// use pkm::analysis::{AccuracyOptions, Tolerances};
+/// // By default: at home, no deviations, the file's tolerances, budget only.
+/// let o = AccuracyOptions::default();
+/// assert!(o.pose.is_none() && o.deviations.is_empty());
+/// assert_eq!(o.tolerances, Tolerances::Default);
+/// assert!(o.monte_carlo.is_none() && o.map.is_none() && o.clearance.is_none());
+/// // Parameter 0 off by 0.05 mm, and a Monte Carlo of 1000 machines.
+/// let o = AccuracyOptions { deviations: vec![(0, 0.05)], monte_carlo: Some(1000), ..o };
+/// assert_eq!(o.seed, 1);
+/// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct AccuracyOptions {
     /// Pose coordinates (internal units); `None`: the home pose.
@@ -225,6 +329,26 @@ impl Default for AccuracyOptions {
 }
 
 /// Everything [`accuracy()`] found (internal units: mm, rad).
+///
+/// # Examples
+///
+/// ```
+/// use pkm::analysis::{accuracy, AccuracyOptions, ToleranceSource};
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/hexapod-linuxcnc.toml"
+/// ))
+/// .unwrap();
+/// let r = accuracy(&machine, &AccuracyOptions::default()).unwrap();
+/// assert_eq!(r.pose, machine.mechanism().home());
+/// assert!(r.violations.is_empty());
+/// // One sensitivity per parameter; the file gives no tolerances: one per kind.
+/// assert_eq!(r.sensitivities.len(), r.parameters.len());
+/// assert_eq!(r.tolerance_source, ToleranceSource::ByKind);
+/// // The worst case bounds the root sum of squares.
+/// assert!(r.budget.worst_case >= r.budget.rss && r.budget.rss > 0.0);
+/// assert_eq!(r.pose_error.position.norm(), 0.0); // no deviations given
+/// ```
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct AccuracyReport {
     /// Machine name.
@@ -263,12 +387,58 @@ pub struct AccuracyReport {
 /// The accuracy of `machine` at one pose: exact error of the given deviations,
 /// sensitivities, budget, and optionally Monte Carlo and an error map. Every machine
 /// type supports it.
+///
+/// # Examples
+///
+/// A deviation's exact error against its first-order sensitivity, and a Monte Carlo
+/// of the tolerances within the budget's worst case.
+///
+/// ```
+/// use pkm::analysis::{accuracy, AccuracyOptions};
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/hexapod-linuxcnc.toml"
+/// ))
+/// .unwrap();
+/// let d = 0.01; // mm on parameter 0
+/// let opt = AccuracyOptions {
+///     deviations: vec![(0, d)],
+///     monte_carlo: Some(2000),
+///     ..Default::default()
+/// };
+/// let r = accuracy(&machine, &opt).unwrap();
+/// let first_order = r.sensitivities[0].position * d;
+/// assert!((r.pose_error.position - first_order).norm() < 1e-3 * first_order.norm());
+/// let mc = r.monte_carlo.unwrap();
+/// assert_eq!(mc.samples, 2000);
+/// assert!(mc.max <= r.budget.worst_case * 1.001);
+/// ```
 pub fn accuracy(machine: &Machine, opt: &AccuracyOptions) -> Result<AccuracyReport> {
     accuracy_with_progress(machine, opt, &|_| {})
 }
 
 /// [`accuracy()`], telling `progress` of the Monte Carlo machines done (from one
 /// thread, every 262 144 machines).
+///
+/// # Examples
+///
+/// ```
+/// use std::sync::atomic::{AtomicU64, Ordering};
+/// use pkm::analysis::{accuracy_with_progress, AccuracyOptions};
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/hexapod-linuxcnc.toml"
+/// ))
+/// .unwrap();
+/// let done = AtomicU64::new(0);
+/// let opt = AccuracyOptions { monte_carlo: Some(1000), ..Default::default() };
+/// let r = accuracy_with_progress(&machine, &opt, &|n| {
+///     done.fetch_add(n, Ordering::Relaxed);
+/// })
+/// .unwrap();
+/// assert_eq!(r.monte_carlo.unwrap().samples, 1000);
+/// assert!(done.load(Ordering::Relaxed) <= 1000);
+/// ```
 pub fn accuracy_with_progress(
     machine: &Machine,
     opt: &AccuracyOptions,

@@ -25,6 +25,26 @@ pub const BATCH_CHUNK: usize = 4096;
 pub const MAX_BATCH: usize = 100_000_000;
 
 /// Inverse kinematics of many poses: [`inverse_batch`].
+///
+/// # Examples
+///
+/// ```
+/// use pkm::analysis::batch::inverse_batch;
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/hexapod-linuxcnc.toml"
+/// ))
+/// .unwrap();
+/// // Two poses, row-major: home, and 400 mm above it (beyond the 1000 mm strokes).
+/// let poses = [0.0, 0.0, 508.0, 0.0, 0.0, 0.0, 0.0, 0.0, 908.0, 0.0, 0.0, 0.0];
+/// let b = inverse_batch(&machine, &poses).unwrap();
+/// assert_eq!((b.len(), b.actuators.len()), (2, 12));
+/// assert_eq!(b.reachable, [true, false]);
+/// // The second row has a solution, beyond a limit: its causes say which.
+/// assert!(b.actuators[6..].iter().all(|l| *l > 1000.0));
+/// assert_eq!(b.causes.reason[0], -1);
+/// assert!(b.causes.message(1).unwrap().contains("length"));
+/// ```
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct BatchInverse {
     /// Actuators per pose, row-major (`poses x actuators`, internal units); NaN where
@@ -49,6 +69,10 @@ impl BatchInverse {
 }
 
 /// Forward kinematics of many actuator sets: [`forward_batch`].
+///
+/// # Examples
+///
+/// See [`forward_batch`].
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct BatchForward {
     /// Pose coordinates per set, row-major (`sets x coordinates`, internal units); NaN
@@ -226,6 +250,32 @@ fn chunked<E, F>(
 /// on all cores. The first violated limit of a pose is kept as a code into a table of
 /// distinct causes with its value and bound ([`Causes`]), so a row's message is only
 /// formatted when asked for ([`Causes::message`]).
+///
+/// # Examples
+///
+/// Row by row the batch equals the single call ([`crate::analysis::kinematics::inverse`]).
+///
+/// ```
+/// use pkm::analysis::batch::inverse_batch;
+/// use pkm::analysis::kinematics::inverse;
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/hexapod-linuxcnc.toml"
+/// ))
+/// .unwrap();
+/// let poses: Vec<f64> = (0..5)
+///     .flat_map(|k| [10.0 * k as f64, 0.0, 508.0 + 100.0 * k as f64, 0.0, 0.0, 0.0])
+///     .collect();
+/// let b = inverse_batch(&machine, &poses).unwrap();
+/// for (i, x) in poses.chunks(6).enumerate() {
+///     let one = inverse(&machine, x).unwrap();
+///     assert_eq!(&b.actuators[6 * i..6 * i + 6], &one.actuators[..]);
+///     assert_eq!(b.reachable[i], one.violations.is_empty());
+/// }
+/// assert!(b.reachable[0] && !b.reachable[4]);
+/// // Not whole rows of six: refused.
+/// assert!(inverse_batch(&machine, &poses[..7]).is_err());
+/// ```
 pub fn inverse_batch(machine: &Machine, poses: &[f64]) -> Result<BatchInverse> {
     inverse_batch_with(machine, poses, true)
 }
@@ -233,6 +283,25 @@ pub fn inverse_batch(machine: &Machine, poses: &[f64]) -> Result<BatchInverse> {
 /// [`inverse_batch`], with the limit check only when `check` is set: without it a
 /// pose counts as reachable when it has a geometric solution (the inverse kinematics
 /// alone, for callers that check limits of their own).
+///
+/// # Examples
+///
+/// ```
+/// use pkm::analysis::batch::inverse_batch_with;
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/hexapod-linuxcnc.toml"
+/// ))
+/// .unwrap();
+/// // Two poses, row-major: home, and 400 mm above it (beyond the 1000 mm strokes).
+/// let poses = [0.0, 0.0, 508.0, 0.0, 0.0, 0.0, 0.0, 0.0, 908.0, 0.0, 0.0, 0.0];
+/// let checked = inverse_batch_with(&machine, &poses, true).unwrap();
+/// let unchecked = inverse_batch_with(&machine, &poses, false).unwrap();
+/// // The same struts; without the check both poses have a solution.
+/// assert_eq!(checked.actuators, unchecked.actuators);
+/// assert_eq!(checked.reachable, [true, false]);
+/// assert_eq!(unchecked.reachable, [true, true]);
+/// ```
 pub fn inverse_batch_with(machine: &Machine, poses: &[f64], check: bool) -> Result<BatchInverse> {
     machine.visit(InverseJob {
         poses,
@@ -249,6 +318,37 @@ pub fn inverse_batch_with(machine: &Machine, poses: &[f64], check: bool) -> Resu
 /// solution leaves the next to continue the last row solved. A type whose inverse has
 /// one solution ([`crate::Mechanism::follower`] `None`) gives [`inverse_batch_with`]'s
 /// rows, solved as those are, on all cores.
+///
+/// # Examples
+///
+/// A six-axis robot along a short path keeps its posture: each row equals the solve
+/// from the previous row's joints.
+///
+/// ```
+/// use pkm::analysis::batch::inverse_path;
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/kr30-dh.toml"
+/// ))
+/// .unwrap();
+/// let m = machine.mechanism();
+/// let home = m.home();
+/// let poses: Vec<f64> = (0..4)
+///     .flat_map(|k| {
+///         let mut x = home.clone();
+///         x[1] += 20.0 * k as f64; // 20 mm steps along Y
+///         x
+///     })
+///     .collect();
+/// let b = inverse_path(&machine, &poses, true).unwrap();
+/// assert!(b.reachable.iter().all(|r| *r));
+/// let mut last: Option<Vec<f64>> = None;
+/// for (i, x) in poses.chunks(6).enumerate() {
+///     let q = m.inverse_continuing(x, last.as_deref()).unwrap();
+///     assert!(b.actuators[6 * i..6 * i + 6].iter().zip(&q).all(|(a, b)| (a - b).abs() < 1e-9));
+///     last = Some(q);
+/// }
+/// ```
 pub fn inverse_path(machine: &Machine, poses: &[f64], check: bool) -> Result<BatchInverse> {
     machine.visit(InverseJob {
         poses,
@@ -344,6 +444,27 @@ impl Visitor for InverseJob<'_> {
 /// each other is better served by [`super::kinematics::ForwardStream`]). Per row the
 /// pose, whether the solver found one, its iterations and residual, and the first
 /// violated limit or the solver's failure ([`Causes`]).
+///
+/// # Examples
+///
+/// ```
+/// use pkm::analysis::batch::forward_batch;
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/hexapod-linuxcnc.toml"
+/// ))
+/// .unwrap();
+/// // Every strut 755.6 mm, then every strut 1100 mm (beyond the 1000 mm stroke).
+/// let mut q = vec![755.6; 6];
+/// q.extend([1100.0; 6]);
+/// let f = forward_batch(&machine, &q, None).unwrap();
+/// assert_eq!(f.solved, [true, true]);
+/// assert_eq!(f.reachable, [true, false]);
+/// assert!((f.poses[2] - 508.0).abs() < 0.1); // the platform near home height
+/// assert!(f.poses[8] > 908.0); // and much higher
+/// assert!(f.residual.iter().all(|r| *r < 1e-9));
+/// assert!(f.causes.violation(1).is_some_and(|v| v.bound == 1000.0));
+/// ```
 pub fn forward_batch(
     machine: &Machine,
     actuators: &[f64],
@@ -414,6 +535,26 @@ pub fn forward_batch(
 /// Jacobian, dimensionally consistent) of every pose in `poses` (row-major, `n x P`,
 /// internal units) on all cores; NaN where the pose has no inverse solution or the
 /// Jacobian cannot be formed, infinity at a singular pose.
+///
+/// # Examples
+///
+/// ```
+/// use pkm::analysis::batch::condition_batch;
+/// use pkm::analysis::kinematics::transmission;
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/hexapod-linuxcnc.toml"
+/// ))
+/// .unwrap();
+/// let home = machine.mechanism().home();
+/// let mut poses = home.clone();
+/// poses.extend([0.0, 0.0, 5000.0, 0.0, 0.0, 0.0]); // far out of reach
+/// let c = condition_batch(&machine, &poses).unwrap();
+/// assert_eq!(c.len(), 2);
+/// let at_home = transmission(&machine, &home).unwrap().condition;
+/// assert!((c[0] - at_home).abs() < 1e-6 * at_home);
+/// assert!(c[1].is_nan() || c[1] > c[0]);
+/// ```
 pub fn condition_batch(machine: &Machine, poses: &[f64]) -> Result<Vec<f64>> {
     struct Job<'a>(&'a [f64]);
     impl Visitor for Job<'_> {
@@ -443,6 +584,25 @@ pub fn condition_batch(machine: &Machine, poses: &[f64]) -> Result<Vec<f64>> {
 /// fails for the row. For a machine
 /// in its own coordinates (a serial machine in joint coordinates) this is its forward
 /// kinematics, from its prepared chains.
+///
+/// # Examples
+///
+/// ```
+/// use pkm::analysis::batch::tool_pose_batch;
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/hexapod-linuxcnc.toml"
+/// ))
+/// .unwrap();
+/// let x = [10.0, 20.0, 500.0, 0.0, 0.0, 0.5];
+/// let t = tool_pose_batch(&machine, &x).unwrap();
+/// assert_eq!(t.len(), 16);
+/// // Row-major 4 x 4: the translation in the last column, the bottom row 0 0 0 1.
+/// assert_eq!([t[3], t[7], t[11]], [10.0, 20.0, 500.0]);
+/// assert_eq!(&t[12..], [0.0, 0.0, 0.0, 1.0]);
+/// // A rotation of 0.5 rad about Z.
+/// assert!((t[0] - 0.5f64.cos()).abs() < 1e-12 && (t[4] - 0.5f64.sin()).abs() < 1e-12);
+/// ```
 pub fn tool_pose_batch(machine: &Machine, poses: &[f64]) -> Result<Vec<f64>> {
     struct Job<'a>(&'a [f64]);
     impl Visitor for Job<'_> {

@@ -16,6 +16,10 @@ use super::batch::MAX_BATCH;
 use crate::error::{Error, Result};
 
 /// A batch file read: its header as written, and the rows with their 1-based lines.
+///
+/// # Examples
+///
+/// See [`parse_batch_table`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct BatchTable {
     /// Header names as written.
@@ -47,6 +51,26 @@ fn error(file: &str, line: u64, field: &str, message: String) -> Error {
 
 /// Parses `text` (the contents of `file`) as a batch table whose header names one of
 /// the `accepted` column lists; at most [`MAX_BATCH`] rows.
+///
+/// # Examples
+///
+/// ```
+/// use pkm::analysis::batch_table::parse_batch_table;
+/// let names = |s: &str| s.split(',').map(String::from).collect::<Vec<_>>();
+/// let accepted = [names("x,y,z,a,b,c"), names("l1,l2,l3,l4,l5,l6")];
+/// let text = "# poses from the CAM system\nX_mm,Y_mm,Z_mm,A_deg,B_deg,C_deg\n\
+///             0, 0, 508, 0, 0, 0\n\n10,5,500,2,0,0\n";
+/// let t = parse_batch_table(text, "poses.csv", &accepted).unwrap();
+/// assert_eq!(t.header[0], "X_mm"); // as written
+/// // Rows with their lines: the blank line is skipped.
+/// assert_eq!(t.rows.len(), 2);
+/// assert_eq!(t.rows[0], (3, vec![0.0, 0.0, 508.0, 0.0, 0.0, 0.0]));
+/// assert_eq!(t.rows[1], (5, vec![10.0, 5.0, 500.0, 2.0, 0.0, 0.0]));
+/// // A header naming other columns, or a cell that is not a number, is refused.
+/// assert!(parse_batch_table("U,V\n1,2\n", "poses.csv", &accepted).is_err());
+/// let e = parse_batch_table("X,Y,Z,A,B,C\n1,2,3,4,5,six\n", "poses.csv", &accepted).unwrap_err();
+/// assert!(e.to_string().contains("six"));
+/// ```
 pub fn parse_batch_table(text: &str, file: &str, accepted: &[Vec<String>]) -> Result<BatchTable> {
     let mut rdr = csv::ReaderBuilder::new()
         .has_headers(true)

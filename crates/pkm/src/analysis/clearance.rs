@@ -21,6 +21,24 @@ use crate::error::{Error, Result};
 use crate::machine::{Analysable, Analysis, Machine, Visitor};
 
 /// What [`clearance()`] computes.
+///
+/// # Examples
+///
+/// ```
+/// use pkm::analysis::clearance::ClearanceRequest;
+/// // By default: the file's clearances, bounds along the tool axis, nothing more.
+/// let r = ClearanceRequest::default();
+/// assert!(r.diametral.is_none() && r.options.direction.is_none());
+/// assert!(r.monte_carlo.is_none() && r.tolerance.is_none() && r.surface.is_none());
+/// // 20 um in every joint, 1000 sampled joint states, the largest clearance for 10 um.
+/// let r = ClearanceRequest {
+///     diametral: Some(0.02),
+///     monte_carlo: Some(1000),
+///     tolerance: Some(0.01),
+///     ..Default::default()
+/// };
+/// assert_eq!(r.seed, 1);
+/// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct ClearanceRequest {
     /// One diametral clearance (mm) for every passive joint: the file's joint types,
@@ -61,6 +79,10 @@ impl Default for ClearanceRequest {
 }
 
 /// Everything [`clearance()`] found (mm, rad).
+///
+/// # Examples
+///
+/// See [`clearance()`].
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ClearanceReport {
     /// The clearances used, per joint.
@@ -93,6 +115,26 @@ pub struct ClearanceReport {
 }
 
 /// The bounds at one clearance of a series (mm).
+///
+/// # Examples
+///
+/// Seed 002's Fig. 5: the bounds grow with the clearance.
+///
+/// ```
+/// use pkm::analysis::clearance::{clearance, ClearanceRequest};
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/hybrid-am-seed002.toml"
+/// ))
+/// .unwrap();
+/// let req = ClearanceRequest { series: vec![0.05, 0.1, 0.2], ..Default::default() };
+/// let r = clearance(&machine, None, &req).unwrap();
+/// assert_eq!(r.series.len(), 3);
+/// assert_eq!(r.series[1].clearance_mm, 0.1);
+/// for w in r.series.windows(2) {
+///     assert!(w[1].upper > w[0].upper && w[1].lower < w[0].lower);
+/// }
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct SeriesPoint {
     /// Diametral clearance of every joint (mm).
@@ -105,6 +147,26 @@ pub struct SeriesPoint {
 
 /// The clearances of `req` on `machine`: one diametral value for every joint, or the
 /// file's.
+///
+/// # Examples
+///
+/// ```
+/// use pkm::analysis::clearance::{effective_clearances, ClearanceRequest};
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/hybrid-am-seed002.toml"
+/// ))
+/// .unwrap();
+/// let joints = machine.passive_joints();
+/// // The file gives 0.1 mm in every joint.
+/// let file = effective_clearances(&machine, &joints, &ClearanceRequest::default()).unwrap();
+/// assert_eq!(file.len(), joints.len());
+/// assert!(file.iter().all(|c| c.diametral == 0.1));
+/// // One value for every joint replaces it.
+/// let req = ClearanceRequest { diametral: Some(0.02), ..Default::default() };
+/// let given = effective_clearances(&machine, &joints, &req).unwrap();
+/// assert!(given.iter().all(|c| c.diametral == 0.02));
+/// ```
 pub fn effective_clearances(
     machine: &Machine,
     joints: &[PassiveJoint],
@@ -139,6 +201,10 @@ pub fn effective_clearances(
 
 /// What a clearance analysis needs from the loaded machine before it visits the
 /// concrete type: its passive joints, the clearances in effect, the path's samples.
+///
+/// # Examples
+///
+/// See [`prepare`] and [`clearance_at`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct Prepared {
     /// The machine's passive joints.
@@ -151,6 +217,29 @@ pub struct Prepared {
 }
 
 /// Checks that `machine` supports clearances and prepares `req` on it.
+///
+/// # Examples
+///
+/// ```
+/// use pkm::analysis::clearance::{prepare, ClearanceRequest};
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/hybrid-am-seed002.toml"
+/// ))
+/// .unwrap();
+/// let p = prepare(&machine, &ClearanceRequest::default()).unwrap();
+/// // Seed 002's machine: four carriage joints and four platform joints.
+/// assert_eq!(p.joints.len(), 8);
+/// assert_eq!(p.clearances.len(), 8);
+/// assert!(p.path.is_none());
+/// // A machine without passive joints' clearances says so.
+/// let robot = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/kr30-dh.toml"
+/// ))
+/// .unwrap();
+/// assert!(prepare(&robot, &ClearanceRequest::default()).is_err());
+/// ```
 pub fn prepare(machine: &Machine, req: &ClearanceRequest) -> Result<Prepared> {
     machine.supports(Analysis::Clearance)?;
     let joints = machine.passive_joints();
@@ -168,6 +257,37 @@ pub fn prepare(machine: &Machine, req: &ClearanceRequest) -> Result<Prepared> {
 }
 
 /// The clearance analysis of `machine` at `pose` (internal units; `None`: home).
+///
+/// # Examples
+///
+/// Seed 002's machine at home with the file's 0.1 mm in every joint: the error along
+/// the nozzle axis lies between the bounds, and so do 500 sampled joint states; with a
+/// tolerance, the largest uniform clearance that keeps within it at the pose.
+///
+/// ```
+/// use pkm::analysis::clearance::{clearance, ClearanceRequest};
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/hybrid-am-seed002.toml"
+/// ))
+/// .unwrap();
+/// let req = ClearanceRequest {
+///     monte_carlo: Some(500),
+///     tolerance: Some(0.01),
+///     ..Default::default()
+/// };
+/// let r = clearance(&machine, None, &req).unwrap();
+/// let b = &r.bounds;
+/// assert!(b.upper > 0.0 && b.lower < 0.0);
+/// let mc = r.monte_carlo.as_ref().unwrap();
+/// assert!(mc.max <= b.upper + 1e-12 && mc.min >= b.lower - 1e-12);
+/// let c = r.largest_clearance_at_pose_mm.unwrap();
+/// assert!(c > 0.0);
+/// // The error grows about linearly with the clearance: within 10 um at `c`.
+/// let at_c = ClearanceRequest { diametral: Some(c), ..Default::default() };
+/// let r = clearance(&machine, None, &at_c).unwrap();
+/// assert!(r.bounds.upper.max(-r.bounds.lower) <= 0.01 * (1.0 + 1e-6));
+/// ```
 pub fn clearance(
     machine: &Machine,
     pose: Option<&[f64]>,
@@ -198,6 +318,24 @@ impl Visitor for ClearanceJob<'_> {
 }
 
 /// [`clearance()`] on a concrete machine, `prepared` by [`prepare`].
+///
+/// # Examples
+///
+/// ```
+/// use pkm::analysis::clearance::{clearance, clearance_at, prepare, ClearanceRequest};
+/// use pkm::machine::Model;
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/hybrid-am-seed002.toml"
+/// ))
+/// .unwrap();
+/// let Model::HybridAm(am) = &machine.model else { panic!() };
+/// let req = ClearanceRequest::default();
+/// let prepared = prepare(&machine, &req).unwrap();
+/// let home = nalgebra::SVector::<f64, 6>::from_column_slice(&machine.mechanism().home());
+/// let r = clearance_at(am.as_ref(), &home, &req, &prepared).unwrap();
+/// assert_eq!(r, clearance(&machine, None, &req).unwrap());
+/// ```
 pub fn clearance_at<M, const P: usize, const A: usize>(
     m: &M,
     x: &SVector<f64, P>,

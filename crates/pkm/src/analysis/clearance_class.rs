@@ -9,6 +9,27 @@ use crate::accuracy::clearance::Region;
 use crate::error::Result;
 
 /// The largest clearance of one class of joints.
+///
+/// # Examples
+///
+/// ```
+/// use pkm::analysis::clearance::{clearance, ClearanceRequest};
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/hybrid-am-seed002.toml"
+/// ))
+/// .unwrap();
+/// let req = ClearanceRequest { tolerance: Some(0.05), ..Default::default() };
+/// let r = clearance(&machine, None, &req).unwrap();
+/// let classes: Vec<&str> = r.largest_per_class.iter().map(|c| c.class.as_str()).collect();
+/// assert!(classes.contains(&"carriage") && classes.contains(&"platform"));
+/// for c in &r.largest_per_class {
+///     assert_eq!(c.joints.len(), 4);
+///     assert_eq!(c.given_mm, Some(0.1));
+///     // What the other classes leave is below the whole machine's worst error.
+///     assert!(c.others_alone_mm < r.bounds.upper.max(-r.bounds.lower));
+/// }
+/// ```
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ClassClearance {
     /// The class: the body that carries its joints.

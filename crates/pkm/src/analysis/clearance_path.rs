@@ -15,6 +15,36 @@ use crate::motion::Sampling;
 pub const MAX_PATH_SAMPLES: usize = 100_000;
 
 /// A G-code path to bound the clearance error along.
+///
+/// # Examples
+///
+/// 10 mm along X at 600 mm/min from home, sampled at 20 Hz, bounds at every 4th
+/// sample.
+///
+/// ```
+/// use pkm::analysis::clearance::{clearance, ClearanceRequest};
+/// use pkm::analysis::clearance_path::PathRequest;
+/// use pkm::motion::Sampling;
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/hybrid-am-seed002.toml"
+/// ))
+/// .unwrap();
+/// let req = PathRequest {
+///     program: "G21 G90\nG1 X10 F600\n".into(),
+///     from: None,
+///     feed: Default::default(),
+///     sampling: Sampling::Rate(20.0),
+///     every: 4,
+/// };
+/// let with_path = ClearanceRequest { path: Some(req), ..Default::default() };
+/// let r = clearance(&machine, None, &with_path).unwrap();
+/// let path = r.path.unwrap();
+/// assert_eq!(path.samples, 21); // 1 s at 20 Hz
+/// assert_eq!(path.points.len(), 6); // samples 0, 4, ..., 20
+/// let worst = &path.points[path.worst.unwrap()];
+/// assert!(path.points.iter().all(|p| p.upper.max(-p.lower) <= worst.upper.max(-worst.lower)));
+/// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct PathRequest {
     /// The program text.
@@ -30,6 +60,10 @@ pub struct PathRequest {
 }
 
 /// One pose of the path (internal units).
+///
+/// # Examples
+///
+/// See [`path_samples`].
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct PathSample {
     /// Time (s).
@@ -41,6 +75,10 @@ pub struct PathSample {
 }
 
 /// The bounds at one sample of the path (mm).
+///
+/// # Examples
+///
+/// See [`PathRequest`].
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct PathPoint {
     /// The sample.
@@ -55,6 +93,10 @@ pub struct PathPoint {
 }
 
 /// The bounds along a path.
+///
+/// # Examples
+///
+/// See [`PathRequest`].
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct PathReport {
     /// Every bounded sample.
@@ -106,6 +148,33 @@ impl SampleSink for Keep {
 
 /// Runs the program through `machine` and keeps the samples to bound: every
 /// `every`-th, and the last.
+///
+/// # Examples
+///
+/// ```
+/// use pkm::analysis::clearance_path::{path_samples, PathRequest};
+/// use pkm::motion::Sampling;
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/hybrid-am-seed002.toml"
+/// ))
+/// .unwrap();
+/// let req = PathRequest {
+///     program: "G21 G90\nG1 X10 F600\n".into(),
+///     from: None,
+///     feed: Default::default(),
+///     sampling: Sampling::Rate(20.0),
+///     every: 4,
+/// };
+/// let (samples, run) = path_samples(&machine, &req).unwrap();
+/// assert_eq!(run, 21);
+/// assert_eq!(samples.len(), 6);
+/// assert_eq!(samples[0].line, Some(2));
+/// // The last sample is at the end of the move: 10 mm on in X, at one second.
+/// let last = samples.last().unwrap();
+/// let home = machine.mechanism().home();
+/// assert!((last.t - 1.0).abs() < 1e-9 && (last.x[0] - home[0] - 10.0).abs() < 1e-9);
+/// ```
 pub fn path_samples(machine: &Machine, req: &PathRequest) -> Result<(Vec<PathSample>, u64)> {
     if req.every == 0 {
         return Err(Error::InvalidInput {

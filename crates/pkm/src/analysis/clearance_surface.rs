@@ -11,6 +11,31 @@ use crate::error::Result;
 use crate::machine::Analysable;
 
 /// A hemisphere to sweep (seed 002's Figs. 4 and 5).
+///
+/// # Examples
+///
+/// Seed 002's part: a hemisphere of radius 75 mm whose pole is at the home tool point,
+/// five heights along one meridian, the nozzle normal to it.
+///
+/// ```
+/// use pkm::analysis::clearance::{clearance, ClearanceRequest, SurfaceRequest};
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/hybrid-am-seed002.toml"
+/// ))
+/// .unwrap();
+/// let surface = SurfaceRequest { radius: 75.0, centre: None, azimuth: 0.0, heights: 5 };
+/// let req = ClearanceRequest {
+///     surface: Some(surface),
+///     tolerance: Some(0.05),
+///     ..Default::default()
+/// };
+/// let r = clearance(&machine, None, &req).unwrap();
+/// let s = r.surface.unwrap();
+/// assert_eq!(s.points.len(), 5);
+/// assert_eq!(s.unreachable, 0);
+/// assert!(s.worst.unwrap() > 0.0 && s.largest_clearance_scale.unwrap() > 0.0);
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SurfaceRequest {
     /// Radius (mm).
@@ -24,6 +49,10 @@ pub struct SurfaceRequest {
 }
 
 /// The bounds over a surface.
+///
+/// # Examples
+///
+/// See [`SurfaceRequest`].
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SurfaceReport {
     /// The surface.

@@ -16,6 +16,21 @@ use crate::machine::{Analysable, CalibratableVisitor, Machine};
 
 /// Settings of [`simulate_measurements`]: the experiment and how many of its states
 /// are held out for validation.
+///
+/// # Examples
+///
+/// ```
+/// use pkm::analysis::identification::SimulateOptions;
+/// use pkm::identify::simulate::Experiment;
+/// let opt = SimulateOptions {
+///     experiment: Experiment { states: 30, seed: 7, ..Default::default() },
+///     holdout: 10,
+///     comment: "30 random states, 10 held out".into(),
+/// };
+/// // 30 identification states and 10 more for validation; 5 um point noise by default.
+/// assert_eq!(opt.experiment.states + opt.holdout, 40);
+/// assert_eq!(opt.experiment.point_noise, 0.005);
+/// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct SimulateOptions {
     /// The experiment (its `states` are the identification states).
@@ -27,6 +42,32 @@ pub struct SimulateOptions {
 }
 
 /// A simulated campaign on a true machine drawn around the nominal one.
+///
+/// # Examples
+///
+/// ```
+/// use pkm::analysis::identification::{simulate_measurements, sized_experiment, SimulateOptions};
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/hexapod-seed001.toml"
+/// ))
+/// .unwrap();
+/// let mut experiment = sized_experiment(&machine).unwrap().experiment;
+/// experiment.states = 20;
+/// experiment.point_noise = 0.0; // noise-free, so the fit is exact
+/// experiment.length_noise = 0.0;
+/// let opt = SimulateOptions { experiment, holdout: 5, comment: "example".into() };
+/// let campaign = simulate_measurements(&machine, None, &opt).unwrap();
+/// // A state per reading set, every fixture point measured in each.
+/// assert_eq!(campaign.measurements.states.len(), 20);
+/// assert_eq!(campaign.validation.states.len(), 5);
+/// assert_eq!(campaign.true_poses.len(), 25);
+/// let points = campaign.measurements.fixture.len();
+/// assert!(campaign.measurements.states.iter().all(|s| s.points.len() == points));
+/// // Geometry then one zero reading per strut.
+/// assert_eq!(campaign.names.len(), campaign.true_parameters.len());
+/// assert_eq!(campaign.names.last().unwrap(), "zero(L6)");
+/// ```
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SimulatedCampaign {
     /// The identification states.
@@ -46,6 +87,31 @@ pub struct SimulatedCampaign {
 
 /// Simulates a campaign on `machine` (`source`: the text of its machine file, to write
 /// the true machine; `None` to skip that).
+///
+/// # Examples
+///
+/// The true machine file is the nominal one rewritten: it loads, and it differs from
+/// the nominal machine by the simulated deviations (up to 1 mm).
+///
+/// ```
+/// use pkm::analysis::identification::{simulate_measurements, sized_experiment, SimulateOptions};
+/// let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/machines/hexapod-seed001.toml");
+/// let text = std::fs::read_to_string(path).unwrap();
+/// let machine = pkm::Machine::from_toml_str(&text, path).unwrap();
+/// let mut experiment = sized_experiment(&machine).unwrap().experiment;
+/// experiment.states = 10;
+/// let opt = SimulateOptions { experiment, holdout: 0, comment: "example".into() };
+/// let campaign = simulate_measurements(&machine, Some(&text), &opt).unwrap();
+/// assert_eq!(campaign.measurements.states.len(), 10);
+/// assert!(campaign.validation.states.is_empty());
+/// let true_file = campaign.true_machine_file.unwrap();
+/// let truth = pkm::Machine::from_toml_str(&true_file, "true.toml").unwrap();
+/// let home = machine.mechanism().home();
+/// let (q0, q1) = (machine.mechanism().inverse(&home).unwrap(),
+///                 truth.mechanism().inverse(&home).unwrap());
+/// assert!(q0.iter().zip(&q1).any(|(a, b)| a != b));
+/// assert!(q0.iter().zip(&q1).all(|(a, b)| (a - b).abs() < 10.0));
+/// ```
 pub fn simulate_measurements(
     machine: &Machine,
     source: Option<&str>,
@@ -118,6 +184,22 @@ impl CalibratableVisitor for SimulateJob<'_> {
 /// The fixture a simulated campaign on `machine` measures, of size `size` (mm):
 /// [`Calibratable::fixture`] (a triangle on a strut machine's platform, points on a
 /// pentapod's tool axis).
+///
+/// # Examples
+///
+/// ```
+/// use pkm::analysis::identification::fixture;
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/hexapod-seed001.toml"
+/// ))
+/// .unwrap();
+/// // Seed 001's triangle: three points 100 mm from the platform centre.
+/// let f = fixture(&machine, 100.0).unwrap();
+/// assert_eq!(f.points.len(), 3);
+/// assert!(f.points.iter().all(|p| (p.norm() - 100.0).abs() < 1e-9));
+/// assert!(fixture(&machine, -1.0).is_err());
+/// ```
 pub fn fixture(machine: &Machine, size: f64) -> Result<Fixture> {
     if !(size > 0.0 && size <= crate::machine::MAX_MAGNITUDE) {
         return Err(Error::InvalidInput {
@@ -136,6 +218,23 @@ pub fn fixture(machine: &Machine, size: f64) -> Result<Fixture> {
 }
 
 /// [`Experiment::default`] fitted to `machine` ([`sized_experiment`]), with its fixture.
+///
+/// # Examples
+///
+/// ```
+/// use pkm::analysis::identification::sized_experiment;
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/hexapod-seed001.toml"
+/// ))
+/// .unwrap();
+/// let s = sized_experiment(&machine).unwrap();
+/// // The experiment's fixture is the one described, of the size given.
+/// assert_eq!(s.experiment.fixture.len(), 3);
+/// assert!(s.experiment.fixture.iter().all(|p| (p.norm() - s.fixture_size).abs() < 1e-9));
+/// assert!(s.fixture.contains("triangle"));
+/// assert!(s.sizing.share > 0.0 && s.sizing.share <= 1.0);
+/// ```
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SizedExperiment {
     /// The experiment (fixture points included).
@@ -158,6 +257,25 @@ pub struct SizedExperiment {
 /// ([`crate::identify::simulate::sized`]), the fixture, step and deviations with the
 /// translation span, so that a 15 mm micro-hexapod and a 6 m one get campaigns of their
 /// own size instead of a failed search or an unidentifiable one.
+///
+/// # Examples
+///
+/// ```
+/// use pkm::analysis::identification::sized_experiment;
+/// use pkm::identify::simulate::Experiment;
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/hexapod-seed001.toml"
+/// ))
+/// .unwrap();
+/// let s = sized_experiment(&machine).unwrap();
+/// // The spans scale by powers of two; the fixture and the deviations with them.
+/// let base = Experiment::default();
+/// assert_eq!(s.sizing.scale.log2().fract(), 0.0);
+/// assert!((s.experiment.translation - base.translation * s.sizing.scale).abs() < 1e-9);
+/// assert!((s.experiment.deviation - base.deviation * s.sizing.scale).abs() < 1e-9);
+/// assert!(s.sizing.home_length > 0.0); // mean strut length at home (mm)
+/// ```
 pub fn sized_experiment(machine: &Machine) -> Result<SizedExperiment> {
     struct Job;
     impl CalibratableVisitor for Job {
@@ -183,16 +301,81 @@ pub fn sized_experiment(machine: &Machine) -> Result<SizedExperiment> {
 }
 
 /// Reads a measurement CSV for `machine` (its actuators name the reading columns).
+///
+/// # Examples
+///
+/// ```
+/// use pkm::analysis::identification::{parse_measurements, write_measurements};
+/// use pkm::identify::{Measurements, State};
+/// use nalgebra::Vector3;
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/hexapod-seed001.toml"
+/// ))
+/// .unwrap();
+/// let m = Measurements {
+///     fixture: vec![Vector3::new(0.0, 200.0, 0.0)],
+///     states: vec![State {
+///         readings: vec![0.5, -0.25, 0.0, 1.0, 0.0, 2.0],
+///         points: vec![Vector3::new(1.0, 2.0, 3.0)],
+///     }],
+/// };
+/// let text = write_measurements(&machine, &m, "one state");
+/// assert_eq!(parse_measurements(&machine, &text, "m.csv").unwrap(), m);
+/// // Readings for six struts: five are refused with the file and line.
+/// let bad = text.replace("0.5,-0.25,0,1,0,2", "0.5,-0.25,0,1,0");
+/// assert!(bad != text && parse_measurements(&machine, &bad, "m.csv").is_err());
+/// ```
 pub fn parse_measurements(machine: &Machine, text: &str, file: &str) -> Result<Measurements> {
     identify::csv::parse(text, file, machine.mechanism().actuators())
 }
 
 /// Writes measurements as the CSV [`parse_measurements`] reads.
+///
+/// # Examples
+///
+/// ```
+/// use pkm::analysis::identification::{
+///     parse_measurements, simulate_measurements, sized_experiment, write_measurements,
+///     SimulateOptions,
+/// };
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/hexapod-seed001.toml"
+/// ))
+/// .unwrap();
+/// let mut experiment = sized_experiment(&machine).unwrap().experiment;
+/// experiment.states = 5;
+/// let opt = SimulateOptions { experiment, holdout: 0, comment: String::new() };
+/// let m = simulate_measurements(&machine, None, &opt).unwrap().measurements;
+/// let text = write_measurements(&machine, &m, "five simulated states");
+/// assert!(text.starts_with('#')); // the comment heads the file
+/// let back = parse_measurements(&machine, &text, "m.csv").unwrap();
+/// assert_eq!(back.states.len(), 5);
+/// for (a, b) in back.states.iter().zip(&m.states) {
+///     assert!(a.readings.iter().zip(&b.readings).all(|(x, y)| (x - y).abs() < 1e-9));
+///     assert!(a.points.iter().zip(&b.points).all(|(x, y)| (x - y).norm() < 1e-9));
+/// }
+/// ```
 pub fn write_measurements(machine: &Machine, m: &Measurements, comment: &str) -> String {
     identify::csv::write(m, machine.mechanism().actuators(), comment)
 }
 
 /// Settings of [`calibrate`].
+///
+/// # Examples
+///
+/// ```
+/// use pkm::analysis::identification::CalibrateOptions;
+/// use pkm::identify::MeasurementModel;
+/// // By default: pose equations, nothing held, Levenberg-Marquardt's solution.
+/// let opt = CalibrateOptions::default();
+/// assert_eq!(opt.model, MeasurementModel::Pose);
+/// assert!(opt.fix.is_empty() && !opt.seed_procedure);
+/// // Hold every coordinate of base joint A1 and platform joint C's height.
+/// let opt = CalibrateOptions { fix: vec!["A1.*".into(), "C.z".into()], ..opt };
+/// assert_eq!(opt.fix.len(), 2);
+/// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct CalibrateOptions {
     /// Measurement equations.
@@ -227,6 +410,33 @@ pub struct Validation {
 }
 
 /// What [`calibrate`] found.
+///
+/// # Examples
+///
+/// See [`calibrate`]; the parts of the result:
+///
+/// ```
+/// use pkm::analysis::identification::{
+///     calibrate, simulate_measurements, sized_experiment, CalibrateOptions, SimulateOptions,
+/// };
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/hexapod-seed001.toml"
+/// ))
+/// .unwrap();
+/// let mut experiment = sized_experiment(&machine).unwrap().experiment;
+/// experiment.states = 20;
+/// experiment.point_noise = 0.0; // noise-free, so the fit is exact
+/// experiment.length_noise = 0.0;
+/// let opt = SimulateOptions { experiment, holdout: 5, comment: "example".into() };
+/// let campaign = simulate_measurements(&machine, None, &opt).unwrap();
+/// let c = calibrate(&machine, &campaign.measurements, None, &CalibrateOptions::default())
+///     .unwrap();
+/// // One value per parameter (geometry, then zero readings), as the simulation's truth.
+/// assert_eq!(c.values.len(), campaign.true_parameters.len());
+/// assert_eq!(c.identification.names, campaign.names);
+/// assert!(c.seed_procedure.is_none() && c.validation.is_none());
+/// ```
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Calibration {
     /// Levenberg-Marquardt's identification (residuals, standard errors,
@@ -265,6 +475,40 @@ fn glob(pattern: &str, name: &str) -> bool {
 
 /// Identifies `machine`'s parameters from `measurements`, validates on `validation`
 /// when given.
+///
+/// # Examples
+///
+/// A noise-free simulated campaign: the identified machine fits the measurements and
+/// predicts the held-out states, which the nominal machine misses by its deviations.
+///
+/// ```
+/// use pkm::analysis::identification::{
+///     calibrate, simulate_measurements, sized_experiment, CalibrateOptions, SimulateOptions,
+/// };
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/hexapod-seed001.toml"
+/// ))
+/// .unwrap();
+/// let mut experiment = sized_experiment(&machine).unwrap().experiment;
+/// experiment.states = 20;
+/// experiment.point_noise = 0.0; // noise-free, so the fit is exact
+/// experiment.length_noise = 0.0;
+/// let opt = SimulateOptions { experiment, holdout: 5, comment: "example".into() };
+/// let campaign = simulate_measurements(&machine, None, &opt).unwrap();
+/// let c = calibrate(
+///     &machine,
+///     &campaign.measurements,
+///     Some(&campaign.validation),
+///     &CalibrateOptions::default(),
+/// )
+/// .unwrap();
+/// let id = &c.identification;
+/// assert!(id.rms_before > 1e-2 && id.rms_after < 1e-6);
+/// let v = c.validation.unwrap();
+/// assert_eq!(v.states, 5);
+/// assert!(v.identified.rms < 1e-5 && v.nominal.rms > 1e-2);
+/// ```
 pub fn calibrate(
     machine: &Machine,
     measurements: &Measurements,
@@ -280,6 +524,34 @@ pub fn calibrate(
 
 /// The identified machine of `c` as a machine file: `source` (the nominal machine's
 /// file text) with the identified joints and zero lengths, headed by `comment`.
+///
+/// # Examples
+///
+/// The identified machine, written and read back, fits the measurements it was
+/// identified from.
+///
+/// ```
+/// use pkm::analysis::identification::{
+///     calibrate, identified_machine_file, simulate_measurements, sized_experiment,
+///     CalibrateOptions, SimulateOptions,
+/// };
+/// let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/machines/hexapod-seed001.toml");
+/// let text = std::fs::read_to_string(path).unwrap();
+/// let machine = pkm::Machine::from_toml_str(&text, path).unwrap();
+/// let mut experiment = sized_experiment(&machine).unwrap().experiment;
+/// experiment.states = 20;
+/// experiment.point_noise = 0.0; // noise-free, so the fit is exact
+/// experiment.length_noise = 0.0;
+/// let opt = SimulateOptions { experiment, holdout: 5, comment: "example".into() };
+/// let campaign = simulate_measurements(&machine, None, &opt).unwrap();
+/// let c = calibrate(&machine, &campaign.measurements, None, &CalibrateOptions::default())
+///     .unwrap();
+/// let file = identified_machine_file(&machine, &text, &c, "identified from 20 states").unwrap();
+/// let identified = pkm::Machine::from_toml_str(&file, "identified.toml").unwrap();
+/// let again = calibrate(&identified, &campaign.measurements, None, &CalibrateOptions::default())
+///     .unwrap();
+/// assert!(again.identification.rms_before < 1e-5);
+/// ```
 pub fn identified_machine_file(
     machine: &Machine,
     source: &str,
@@ -386,6 +658,16 @@ impl CalibratableVisitor for CalibrateJob<'_> {
 }
 
 /// Parses the design names of [`Design`] (`random`, `one-strut`).
+///
+/// # Examples
+///
+/// ```
+/// use pkm::analysis::identification::parse_design;
+/// use pkm::identify::simulate::Design;
+/// assert_eq!(parse_design("random").unwrap(), Design::Random);
+/// assert_eq!(parse_design("one-strut").unwrap(), Design::OneActuator);
+/// assert!(parse_design("grid").unwrap_err().to_string().contains("one-strut"));
+/// ```
 pub fn parse_design(s: &str) -> Result<Design> {
     match s {
         "random" => Ok(Design::Random),
@@ -434,6 +716,26 @@ pub struct CalibrationStudy {
 
 /// Runs [`CalibrationStudy`] with experiment `e` and `holdout` held-out states (seed
 /// `e.seed + 1`).
+///
+/// # Examples
+///
+/// ```
+/// use pkm::analysis::identification::{calibration_study, sized_experiment};
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/hexapod-seed001.toml"
+/// ))
+/// .unwrap();
+/// let mut e = sized_experiment(&machine).unwrap().experiment;
+/// e.states = 20;
+/// let study = calibration_study(&machine, &e, 5).unwrap();
+/// assert_eq!((study.experiment_states, study.holdout), (20, 5));
+/// // The identified model predicts the held-out poses better than the nominal one.
+/// assert!(study.identified.position_rms < study.nominal.position_rms / 10.0);
+/// assert_eq!(study.identified_failed, 0);
+/// // A hexapod has seed 001's one-strut design.
+/// assert!(study.one_strut_note.is_none());
+/// ```
 pub fn calibration_study(
     machine: &Machine,
     e: &Experiment,

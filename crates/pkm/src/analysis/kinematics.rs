@@ -10,6 +10,22 @@ use crate::limits::Violation;
 use crate::machine::{Analysable, Machine, Visitor};
 
 /// An inverse solution with its limit check.
+///
+/// # Examples
+///
+/// ```
+/// use pkm::analysis::kinematics::inverse;
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/hexapod-linuxcnc.toml"
+/// ))
+/// .unwrap();
+/// let s = inverse(&machine, &machine.mechanism().home()).unwrap();
+/// // The pose asked for, one value per actuator, and no violated limit at home.
+/// assert_eq!(s.pose, machine.mechanism().home());
+/// assert_eq!(s.actuators.len(), 6);
+/// assert!(s.violations.is_empty());
+/// ```
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct InverseSolution {
     /// Pose coordinates (internal units).
@@ -21,6 +37,27 @@ pub struct InverseSolution {
 }
 
 /// Inverse kinematics of pose `x` (internal units) with every limit checked.
+///
+/// # Examples
+///
+/// The LinuxCNC hexapod at home (platform 508 mm above the base, level): every strut
+/// 755.56 mm long, as genhexkins says; 400 mm higher the struts leave their stroke.
+///
+/// ```
+/// use pkm::analysis::kinematics::inverse;
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/hexapod-linuxcnc.toml"
+/// ))
+/// .unwrap();
+/// let s = inverse(&machine, &[0.0, 0.0, 508.0, 0.0, 0.0, 0.0]).unwrap();
+/// assert!(s.actuators.iter().all(|l| (l - 755.56).abs() < 0.01));
+/// assert!(s.violations.is_empty());
+///
+/// let high = inverse(&machine, &[0.0, 0.0, 908.0, 0.0, 0.0, 0.0]).unwrap();
+/// assert!(high.actuators.iter().all(|l| *l > 1000.0));
+/// assert!(high.violations.iter().any(|v| v.bound == 1000.0 && v.unit == "mm"));
+/// ```
 pub fn inverse(machine: &Machine, x: &[f64]) -> Result<InverseSolution> {
     let m = machine.mechanism();
     let q = m.inverse(x)?;
@@ -38,6 +75,26 @@ pub fn inverse(machine: &Machine, x: &[f64]) -> Result<InverseSolution> {
 /// where [`inverse`] takes each pose's solution nearest home. Mechanisms with one
 /// solution per pose give [`inverse`]'s. [`crate::analysis::batch::inverse_path`] does
 /// the same for a whole array of poses.
+///
+/// # Examples
+///
+/// ```
+/// use pkm::analysis::kinematics::{inverse, InverseStream};
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/hexapod-linuxcnc.toml"
+/// ))
+/// .unwrap();
+/// let home = machine.mechanism().home();
+/// let mut stream = InverseStream::new(&machine);
+/// for k in 0..5 {
+///     let mut x = home.clone();
+///     x[0] += 10.0 * k as f64; // 10 mm steps along X
+///     let s = stream.next(&x).unwrap();
+///     // A hexapod has one inverse solution: the stream gives `inverse`'s.
+///     assert_eq!(s.actuators, inverse(&machine, &x).unwrap().actuators);
+/// }
+/// ```
 pub struct InverseStream<'a> {
     machine: &'a Machine,
     last: Option<Vec<f64>>,
@@ -70,6 +127,21 @@ impl<'a> InverseStream<'a> {
 
 /// The inverse kinematics for a tool tip and a tool axis vector: every branch of the
 /// rotary axes with its limit check.
+///
+/// # Examples
+///
+/// ```
+/// use pkm::analysis::kinematics::inverse_for_tool_axis;
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/mc300.toml"
+/// ))
+/// .unwrap();
+/// let s = inverse_for_tool_axis(&machine, [0.0; 3], [0.0, 0.0, 1.0], None).unwrap();
+/// // Along the C axis: B = 0, C is free and held, the axis is singular.
+/// assert!(s.singular && s.singular_distance < 1e-12);
+/// assert!(s.branches[s.chosen].pose[3].abs() < 1e-12);
+/// ```
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ToolAxisSolution {
     /// Every branch (pose coordinates with the rotary angles, actuators, violations).
@@ -89,6 +161,31 @@ pub struct ToolAxisSolution {
 /// `near`: the previous pose coordinates (internal units) for the continuity rule.
 /// Machines whose pose takes a tool axis ([`crate::mechanism::ToolAxis::poses_for_tool_axis`]);
 /// the others answer [`Error::Unsupported`].
+///
+/// # Examples
+///
+/// The MC-300-like machining centre (tool tip X, Y, Z in the part frame, then B, C):
+/// a tool tilted 30 degrees from the part's Z axis has two branches, B = +-30 degrees;
+/// the one chosen is within the ranges and nearest home.
+///
+/// ```
+/// use pkm::analysis::kinematics::inverse_for_tool_axis;
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/mc300.toml"
+/// ))
+/// .unwrap();
+/// let t = 30f64.to_radians();
+/// let s = inverse_for_tool_axis(&machine, [10.0, 0.0, 5.0], [t.sin(), 0.0, t.cos()], None)
+///     .unwrap();
+/// assert_eq!(s.branches.len(), 2);
+/// for b in &s.branches {
+///     assert!((b.pose[3].abs() - t).abs() < 1e-9); // |B| = 30 deg
+///     assert_eq!(&b.pose[..3], &[10.0, 0.0, 5.0]); // the tip asked for
+/// }
+/// assert!(!s.singular && (s.singular_distance - t).abs() < 1e-9);
+/// assert!(s.branches[s.chosen].violations.is_empty());
+/// ```
 pub fn inverse_for_tool_axis(
     machine: &Machine,
     tip: [f64; 3],
@@ -145,6 +242,24 @@ pub use super::batch::{inverse_batch, BatchInverse, BatchReason, Causes, MAX_BAT
 pub const NEAR_SINGULAR_CONDITION: f64 = 1e3;
 
 /// A forward solution with its limit check and how well the actuators determine it.
+///
+/// # Examples
+///
+/// ```
+/// use pkm::analysis::kinematics::forward;
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/hexapod-linuxcnc.toml"
+/// ))
+/// .unwrap();
+/// let home = machine.mechanism().home();
+/// // Every strut 755.6 mm (genhexkins' home is 755.56): the platform near Z = 508 mm.
+/// let f = forward(&machine, &[755.6; 6], &home).unwrap();
+/// // An iterative solver for a hexapod, converged, well conditioned there.
+/// assert!(!f.closed_form && f.residual < 1e-9);
+/// assert!(!f.near_singular && f.condition.is_some_and(|c| c < 1e3));
+/// assert!((f.pose[2] - 508.0).abs() < 0.1 && f.pose[2] > 508.0);
+/// ```
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ForwardSolution {
     /// Pose coordinates (internal units).
@@ -170,6 +285,25 @@ pub struct ForwardSolution {
 /// limit checked and the conditioning of the solution: near a forward singularity (the
 /// P3RP head near its configuration Q) a pose is found but small actuator errors move
 /// it a lot, which [`ForwardSolution::near_singular`] says.
+///
+/// # Examples
+///
+/// A round trip: the struts of a pose moved off home give that pose back.
+///
+/// ```
+/// use pkm::analysis::kinematics::{forward, inverse};
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/hexapod-linuxcnc.toml"
+/// ))
+/// .unwrap();
+/// let home = machine.mechanism().home();
+/// let x = [20.0, -10.0, 540.0, 0.02, -0.01, 0.03];
+/// let q = inverse(&machine, &x).unwrap().actuators;
+/// let f = forward(&machine, &q, &home).unwrap();
+/// assert!(f.pose.iter().zip(&x).all(|(a, b)| (a - b).abs() < 1e-9));
+/// assert!(f.violations.is_empty() && !f.near_singular);
+/// ```
 pub fn forward(machine: &Machine, q: &[f64], start: &[f64]) -> Result<ForwardSolution> {
     let m = machine.mechanism();
     let f = m.forward(q, start)?;
@@ -190,6 +324,32 @@ pub fn forward(machine: &Machine, q: &[f64], start: &[f64]) -> Result<ForwardSol
 /// Every inverse solution found for pose `x` ([`crate::machine::Analysis::InverseSolutions`]: six-axis
 /// robots, Newton from home and `starts - 1` spread starts, deduplicated, nearest home
 /// first), each with its limit status.
+///
+/// # Examples
+///
+/// A six-axis robot has several postures (shoulder, elbow, wrist) for one tool pose:
+/// each gives the same tool pose; the first is the one nearest home.
+///
+/// ```
+/// use pkm::analysis::kinematics::{inverse, inverse_solutions};
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/kr30-dh.toml"
+/// ))
+/// .unwrap();
+/// let m = machine.mechanism();
+/// let x = m.home();
+/// let sols = inverse_solutions(&machine, &x, 16).unwrap();
+/// assert!(sols.len() >= 2);
+/// let p = m.tool_pose(&x).unwrap();
+/// for s in &sols {
+///     let f = m.forward(&s.actuators, &x).unwrap();
+///     let d = m.tool_pose(&f.pose).unwrap().translation.vector - p.translation.vector;
+///     assert!(d.norm() < 1e-6);
+/// }
+/// let nearest = inverse(&machine, &x).unwrap().actuators;
+/// assert!(sols[0].actuators.iter().zip(&nearest).all(|(a, b)| (a - b).abs() < 1e-6));
+/// ```
 pub fn inverse_solutions(
     machine: &Machine,
     x: &[f64],
@@ -214,6 +374,26 @@ pub fn inverse_solutions(
 /// Forward kinematics along a stream of actuator sets, each solved from the previous
 /// solution (a machine moving through its states). Hexapods use the tracking solver
 /// ([`crate::hexapod::FkTracker`]: predicted start, kept factorisation).
+///
+/// # Examples
+///
+/// ```
+/// use pkm::analysis::kinematics::ForwardStream;
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/hexapod-linuxcnc.toml"
+/// ))
+/// .unwrap();
+/// let m = machine.mechanism();
+/// let home = m.home();
+/// let mut stream = ForwardStream::new(&machine, &home).unwrap();
+/// for k in 1..=4 {
+///     let mut x = home.clone();
+///     x[2] += 5.0 * k as f64; // the platform rising in 5 mm steps
+///     let (f, violations) = stream.next(&m.inverse(&x).unwrap()).unwrap();
+///     assert!((f.pose[2] - x[2]).abs() < 1e-8 && violations.is_empty());
+/// }
+/// ```
 pub struct ForwardStream<'a> {
     machine: &'a Machine,
     last: Vec<f64>,
@@ -266,6 +446,22 @@ impl<'a> ForwardStream<'a> {
 
 /// Velocity and force transmission and the distance to singularity at pose `x`
 /// ([`crate::transmission::transmission`]).
+///
+/// # Examples
+///
+/// ```
+/// use pkm::analysis::kinematics::transmission;
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/hexapod-linuxcnc.toml"
+/// ))
+/// .unwrap();
+/// let t = transmission(&machine, &machine.mechanism().home()).unwrap();
+/// // Regular at home: a condition number of at least one, away from singularity.
+/// assert!(t.condition >= 1.0 && t.condition < 1e3);
+/// assert!(t.distance_to_singularity > 0.0);
+/// assert!(t.velocity.is_some_and(|v| v > 0.0));
+/// ```
 pub fn transmission(machine: &Machine, x: &[f64]) -> Result<crate::transmission::Transmission> {
     struct Job<'a>(&'a [f64]);
     impl crate::machine::Visitor for Job<'_> {

@@ -74,6 +74,29 @@ pub trait Visitor {
 }
 
 /// A machine loaded from a file.
+///
+/// Every analysis takes one ([`crate::analysis`]); [`Machine::mechanism`] is its
+/// kinematics with run-time sizes, [`Machine::visit`] runs code generic over
+/// [`Mechanism`] on its concrete type.
+///
+/// # Examples
+///
+/// ```
+/// use pkm::machine::Model;
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/hexapod-linuxcnc.toml"
+/// ))
+/// .unwrap();
+/// assert_eq!(machine.name.as_deref(), Some("LinuxCNC genhexkins default hexapod (mm)"));
+/// assert!(matches!(machine.model, Model::Hexapod(_)));
+/// assert_eq!(machine.kind(), "hexapod");
+/// // The file's reference pose: every strut 755.56 mm at home.
+/// let r = &machine.references[0];
+/// assert_eq!(r.pose, machine.mechanism().home());
+/// // No `[motion]` rapid rate, no `[[clearance]]` entries in this file.
+/// assert!(machine.rapid.is_none() && machine.clearances.is_empty());
+/// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct Machine {
     /// Where it was read from (file name, or `<string>`).
@@ -96,6 +119,28 @@ pub struct Machine {
 
 impl Machine {
     /// Reads and validates a machine file.
+    ///
+    /// # Examples
+    ///
+    /// ```
+    /// let machine = pkm::Machine::from_path(concat!(
+    ///     env!("CARGO_MANIFEST_DIR"),
+    ///     "/../../examples/machines/hexapod-linuxcnc.toml"
+    /// ))
+    /// .unwrap();
+    /// let m = machine.mechanism();
+    /// assert_eq!((m.coordinates().len(), m.actuators().len()), (6, 6));
+    /// assert!(machine.source.ends_with("hexapod-linuxcnc.toml"));
+    /// // A `.urdf` file is read as a robot.
+    /// let robot = pkm::Machine::from_path(concat!(
+    ///     env!("CARGO_MANIFEST_DIR"),
+    ///     "/../../examples/robots/ur5-like.urdf"
+    /// ))
+    /// .unwrap();
+    /// assert_eq!(robot.mechanism().actuators().len(), 6);
+    /// let e = pkm::Machine::from_path("no/such/machine.toml").unwrap_err();
+    /// assert!(e.to_string().contains("cannot read"));
+    /// ```
     pub fn from_path(path: impl AsRef<Path>) -> Result<Machine> {
         let path = path.as_ref();
         let name = path.display().to_string();
@@ -118,6 +163,21 @@ impl Machine {
     /// `path` as written in this machine's file (a `[report]` program): relative
     /// paths are taken from the machine file's directory, as a reader of the file
     /// expects; absolute ones as they are.
+    ///
+    /// # Examples
+    ///
+    /// ```
+    /// let machine = pkm::Machine::from_path(concat!(
+    ///     env!("CARGO_MANIFEST_DIR"),
+    ///     "/../../examples/machines/tripod-seed000.toml"
+    /// ))
+    /// .unwrap();
+    /// // The file's `[report] gcode = "../paths/seed000-arc.ngc"`, from the file's folder.
+    /// let program = machine.resolve(machine.report.gcode.as_deref().unwrap());
+    /// assert!(program.ends_with("examples/machines/../paths/seed000-arc.ngc"));
+    /// assert!(program.exists());
+    /// assert_eq!(machine.resolve("/abs/p.ngc"), std::path::PathBuf::from("/abs/p.ngc"));
+    /// ```
     pub fn resolve(&self, path: &str) -> std::path::PathBuf {
         let p = Path::new(path);
         if p.is_absolute() {
@@ -131,6 +191,16 @@ impl Machine {
 
     /// Reads a robot from URDF text: the serial chain from the root link to the
     /// deepest leaf, in millimetres (see `docs/serial.md`).
+    ///
+    /// # Examples
+    ///
+    /// ```
+    /// let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/robots/ur5-like.urdf");
+    /// let text = std::fs::read_to_string(path).unwrap();
+    /// let robot = pkm::Machine::from_urdf_str(&text, "ur5-like.urdf").unwrap();
+    /// assert_eq!(robot.kind(), pkm::Machine::from_path(path).unwrap().kind());
+    /// assert_eq!(robot.mechanism().actuators().len(), 6);
+    /// ```
     pub fn from_urdf_str(text: &str, file: &str) -> Result<Machine> {
         let parts = urdf_file::build(text, file)?;
         Ok(Machine {
@@ -146,6 +216,23 @@ impl Machine {
     }
 
     /// Parses and validates a machine description; `file` names it in errors.
+    ///
+    /// # Examples
+    ///
+    /// ```
+    /// let text = std::fs::read_to_string(concat!(
+    ///     env!("CARGO_MANIFEST_DIR"),
+    ///     "/../../examples/machines/tripod-seed000.toml"
+    /// ))
+    /// .unwrap();
+    /// let machine = pkm::Machine::from_toml_str(&text, "tripod-seed000.toml").unwrap();
+    /// assert_eq!(machine.kind(), "tripod/translational");
+    /// assert_eq!(machine.rapid, Some(100.0)); // `[motion] rapid = 6000.0` mm/min, in mm/s
+    /// // Errors name the file and the field.
+    /// let e = pkm::Machine::from_toml_str("type = \"crane\"\n", "crane.toml").unwrap_err();
+    /// let e = e.to_string();
+    /// assert!(e.contains("crane.toml") && e.contains("unknown machine type `crane`"), "{e}");
+    /// ```
     pub fn from_toml_str(text: &str, file: &str) -> Result<Machine> {
         let src = source::Source::parse(file, text)?;
         src.check_numbers()?;
@@ -256,6 +343,20 @@ impl Machine {
 
     /// The passive joints whose centres are parameters of the machine (those a
     /// clearance can be given for).
+    ///
+    /// # Examples
+    ///
+    /// ```
+    /// let machine = pkm::Machine::from_path(concat!(
+    ///     env!("CARGO_MANIFEST_DIR"),
+    ///     "/../../examples/machines/hexapod-linuxcnc.toml"
+    /// ))
+    /// .unwrap();
+    /// // Three base joints shared by two struts each, six platform joints.
+    /// let joints = machine.passive_joints();
+    /// assert_eq!(joints.iter().filter(|j| j.body == "base").count(), 3);
+    /// assert_eq!(joints.iter().filter(|j| j.body == "platform").count(), 6);
+    /// ```
     pub fn passive_joints(&self) -> Vec<crate::accuracy::clearance::PassiveJoint> {
         struct Joints;
         impl Visitor for Joints {
@@ -271,6 +372,23 @@ impl Machine {
     }
 
     /// The machine's geometric parameters (the accuracy engine's list).
+    ///
+    /// # Examples
+    ///
+    /// ```
+    /// let machine = pkm::Machine::from_path(concat!(
+    ///     env!("CARGO_MANIFEST_DIR"),
+    ///     "/../../examples/machines/hexapod-linuxcnc.toml"
+    /// ))
+    /// .unwrap();
+    /// let p = machine.parameters();
+    /// // Seed 001's 42: each strut's base joint centre, the platform joint centres, the
+    /// // six zero lengths.
+    /// assert_eq!(p.len(), 42);
+    /// assert_eq!(p[0].name, "B1[0].x"); // base joint B1 as strut 0 uses it
+    /// assert_eq!(p[18].name, "P1.x");
+    /// assert_eq!(p[41].name, "zero(5)");
+    /// ```
     pub fn parameters(&self) -> Vec<crate::accuracy::Parameter> {
         struct Params;
         impl Visitor for Params {

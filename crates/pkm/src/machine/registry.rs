@@ -197,11 +197,59 @@ impl Analysis {
 
 impl Machine {
     /// The mechanism behind a dynamic (run-time sized) interface.
+    ///
+    /// # Examples
+    ///
+    /// ```
+    /// let machine = pkm::Machine::from_path(concat!(
+    ///     env!("CARGO_MANIFEST_DIR"),
+    ///     "/../../examples/machines/hexapod-linuxcnc.toml"
+    /// ))
+    /// .unwrap();
+    /// let m = machine.mechanism();
+    /// let home = m.home();
+    /// let q = m.inverse(&home).unwrap();
+    /// let f = m.forward(&q, &home).unwrap();
+    /// assert!(f.pose.iter().zip(&home).all(|(a, b)| (a - b).abs() < 1e-9));
+    /// assert!(m.check_limits(&home, &q).unwrap().is_empty());
+    /// assert_eq!(m.actuators()[0].name, "0");
+    /// ```
     pub fn mechanism(&self) -> &dyn crate::dynamic::DynMechanism {
         dispatch!(&self.model, m => m)
     }
 
     /// Runs generic code on the concrete mechanism.
+    ///
+    /// # Examples
+    ///
+    /// Code written once against [`crate::Mechanism`] with its compile-time sizes, run on
+    /// a machine whose type is read from a file.
+    ///
+    /// ```
+    /// use pkm::machine::{Analysable, Visitor};
+    /// use pkm::Mechanism;
+    /// struct HomeActuators;
+    /// impl Visitor for HomeActuators {
+    ///     type Output = (usize, usize, Vec<f64>);
+    ///     fn visit<M, const P: usize, const A: usize>(self, m: &M) -> Self::Output
+    ///     where
+    ///         M: Analysable<P, A>,
+    ///     {
+    ///         let q = m.inverse(&m.info().home()).unwrap();
+    ///         (P, A, q.as_slice().to_vec())
+    ///     }
+    /// }
+    /// let machine = pkm::Machine::from_path(concat!(
+    ///     env!("CARGO_MANIFEST_DIR"),
+    ///     "/../../examples/machines/pentapod-linuxcnc.toml"
+    /// ))
+    /// .unwrap();
+    /// let (p, a, q) = machine.visit(HomeActuators);
+    /// assert_eq!((p, a), (6, 5)); // pose X..C, five struts
+    /// // pentakins' strut lengths at the axis home.
+    /// let want = [614.847, 625.522, 615.710, 635.227, 624.308];
+    /// assert!(q.iter().zip(want).all(|(l, w)| (l - w).abs() < 1e-3));
+    /// ```
     pub fn visit<V: Visitor>(&self, v: V) -> V::Output {
         dispatch!(&self.model, m => v.visit(m))
     }
@@ -219,6 +267,20 @@ impl Machine {
 
     /// Whether the machine can run `analysis`: `Ok`, or [`Error::Unsupported`] saying
     /// why not.
+    ///
+    /// # Examples
+    ///
+    /// ```
+    /// use pkm::machine::Analysis;
+    /// let machine = pkm::Machine::from_path(concat!(
+    ///     env!("CARGO_MANIFEST_DIR"),
+    ///     "/../../examples/machines/hexapod-linuxcnc.toml"
+    /// ))
+    /// .unwrap();
+    /// assert!(machine.supports(Analysis::Identification).is_ok());
+    /// let e = machine.supports(Analysis::Seed004).unwrap_err();
+    /// assert!(matches!(e, pkm::Error::Unsupported { .. }));
+    /// ```
     pub fn supports(&self, analysis: Analysis) -> Result<()> {
         let ok = match analysis {
             Analysis::Identification => matches!(
@@ -238,6 +300,21 @@ impl Machine {
     }
 
     /// The analyses of [`Analysis::ALL`] this machine runs.
+    ///
+    /// # Examples
+    ///
+    /// ```
+    /// use pkm::machine::Analysis;
+    /// let machine = pkm::Machine::from_path(concat!(
+    ///     env!("CARGO_MANIFEST_DIR"),
+    ///     "/../../examples/machines/kr30-dh.toml"
+    /// ))
+    /// .unwrap();
+    /// // A six-axis robot: every posture of a pose, no identification.
+    /// let caps = machine.capabilities();
+    /// assert!(caps.contains(&Analysis::InverseSolutions));
+    /// assert!(!caps.contains(&Analysis::Identification));
+    /// ```
     pub fn capabilities(&self) -> Vec<Analysis> {
         Analysis::ALL
             .into_iter()

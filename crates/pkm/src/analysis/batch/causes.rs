@@ -10,6 +10,25 @@ use crate::limits::{LimitCode, LimitKind, LimitName, Side, Violation};
 
 /// A cause shared by every row of a batch that fails for it (a million rows need no
 /// million strings).
+///
+/// # Examples
+///
+/// ```
+/// use pkm::analysis::batch::inverse_batch;
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/hexapod-linuxcnc.toml"
+/// ))
+/// .unwrap();
+/// // Three poses, two of them beyond the strokes for the same reason.
+/// let mut poses = vec![0.0, 0.0, 508.0, 0.0, 0.0, 0.0];
+/// poses.extend([0.0, 0.0, 908.0, 0.0, 0.0, 0.0, 0.0, 0.0, 950.0, 0.0, 0.0, 0.0]);
+/// let c = inverse_batch(&machine, &poses).unwrap().causes;
+/// assert_eq!(c.reasons.len(), 1); // one shared cause
+/// assert_eq!((c.reason[1], c.reason[2]), (0, 0));
+/// assert_eq!(c.reasons[0].unit, "mm");
+/// assert!(c.reasons[0].text.contains("length"));
+/// ```
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct BatchReason {
     /// The violated limit's name (`strut L2 length`), or the kind of solver failure
@@ -23,6 +42,30 @@ pub struct BatchReason {
 }
 
 /// Why each row of a batch failed, in columns.
+///
+/// # Examples
+///
+/// ```
+/// use pkm::analysis::batch::inverse_batch;
+/// use pkm::analysis::kinematics::inverse;
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/hexapod-linuxcnc.toml"
+/// ))
+/// .unwrap();
+/// let high = [0.0, 0.0, 908.0, 0.0, 0.0, 0.0];
+/// let mut poses = vec![0.0, 0.0, 508.0, 0.0, 0.0, 0.0];
+/// poses.extend(high);
+/// let c = inverse_batch(&machine, &poses).unwrap().causes;
+/// // Row 0 is fine: no reason, value or bound.
+/// assert_eq!(c.reason[0], -1);
+/// assert!(c.value[0].is_nan() && c.violation(0).is_none() && c.message(0).is_none());
+/// // Row 1 as the single call reports it: its first violated limit.
+/// let v = c.violation(1).unwrap();
+/// assert_eq!(v, inverse(&machine, &high).unwrap().violations[0]);
+/// assert!((c.excess(1) - (c.value[1] - c.bound[1]).abs()).abs() < 1e-12);
+/// assert_eq!(c.message(1).unwrap(), v.to_string());
+/// ```
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Causes {
     /// Per row: index into [`Causes::reasons`] of its first violated limit or of why

@@ -9,6 +9,21 @@ use crate::mechanism::PoseSpace;
 
 /// A circle for a machine's motion study: centre (pose coordinates, internal units)
 /// and radius (mm), in the XY plane through the centre.
+///
+/// # Examples
+///
+/// ```
+/// use pkm::analysis::motion::StudyCircle;
+/// let c = StudyCircle {
+///     centre: vec![0.0, 0.0, -290.0],
+///     radius: 25.0,
+///     largest: 61.2,
+///     moved: false,
+/// };
+/// assert_eq!(c.start(), [25.0, 0.0, -290.0]);
+/// // One counter-clockwise turn back to the start, centre 25 mm in -X from it.
+/// assert_eq!(c.program(600.0), "G17 G21 G90 G91.1\nG3 X25 Y0 I-25 J0 F600\n");
+/// ```
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct StudyCircle {
     /// Centre pose (its orientation is held along the circle).
@@ -60,6 +75,23 @@ const CIRCLE_POINTS: usize = 72;
 /// reachable points of a 9-point-per-axis map of the reach that takes the largest
 /// circle. Machines whose pose is X, Y, Z[, A, B, C] only; fails with
 /// [`Error::NotAttainable`] when no circle of 1 mm fits anywhere.
+///
+/// # Examples
+///
+/// ```
+/// use pkm::analysis::motion::study_circle;
+/// let machine = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/hexapod-linuxcnc.toml"
+/// ))
+/// .unwrap();
+/// let home = machine.mechanism().home();
+/// let c = study_circle(&machine, &home, 0.5).unwrap();
+/// // Around home, half the largest circle, rounded down to three digits.
+/// assert!(!c.moved && c.centre == home);
+/// assert!(c.radius > 1.0 && c.radius <= 0.5 * c.largest);
+/// assert!(c.radius >= 0.99 * 0.5 * c.largest);
+/// ```
 pub fn study_circle(machine: &Machine, centre: &[f64], fraction: f64) -> Result<StudyCircle> {
     struct Job<'a>(&'a [f64], f64);
     impl Visitor for Job<'_> {
