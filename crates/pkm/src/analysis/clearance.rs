@@ -6,13 +6,14 @@
 use nalgebra::SVector;
 use serde::Serialize;
 
-use super::clearance_class::{per_class, ClassClearance};
+use super::clearance_class::ClassClearance;
 use super::clearance_path::{
     path_points, path_samples, path_worst, PathReport, PathRequest, PathSample,
 };
-use super::clearance_surface::{surface_report, worst_of};
+use super::clearance_study::{overall_largest, Largest, Study};
+use super::clearance_surface::surface_report;
 pub use super::clearance_surface::{SurfaceReport, SurfaceRequest};
-use crate::accuracy::clearance::surface::{hemisphere_sweep, Hemisphere};
+use crate::accuracy::clearance::surface::Hemisphere;
 use crate::accuracy::clearance::{
     self, ClearanceBounds, ClearanceMonteCarlo, ClearanceOptions, JointClearance, PassiveJoint,
     Region,
@@ -346,7 +347,76 @@ where
     M: Analysable<P, A>,
 {
     let (joints, clearances) = (&prepared.joints, &prepared.clearances);
-    // Sizes and values refused before any work.
+    check_request(req)?;
+    let regions = clearance::regions(joints, clearances)?;
+    let uniform = clearances
+        .first()
+        .map(|c| c.diametral)
+        .filter(|c| clearances.iter().all(|o| o.diametral == *c));
+    let study = Study {
+        m,
+        x,
+        req,
+        prepared,
+        regions,
+        uniform,
+    };
+    let bounds = clearance::bounds(m, x, &study.regions, &req.options)?;
+    let direction = nalgebra::Vector3::from(bounds.direction);
+    let monte_carlo = match req.monte_carlo {
+        Some(n) => Some(clearance::clearance_monte_carlo(
+            m,
+            x,
+            &study.regions,
+            &direction,
+            n,
+            req.seed,
+        )?),
+        None => None,
+    };
+    let at_pose = match req.tolerance {
+        None => Largest::NONE,
+        Some(t) => study.largest_at_pose(t, &bounds)?,
+    };
+    let surface = match &req.surface {
+        None => None,
+        Some(sr) => Some(surface_report(m, &study.regions, req, sr, uniform)?),
+    };
+    let series = study.series()?;
+    let path = match &prepared.path {
+        None => None,
+        Some((samples, total)) => Some(path_report(
+            m,
+            &study.regions,
+            req,
+            samples,
+            *total,
+            uniform,
+        )?),
+    };
+    let overall = overall_largest(at_pose, surface.as_ref(), path.as_ref());
+    // Per class of joints: over the surface and the path when given, else at the pose.
+    let largest_per_class = match req.tolerance {
+        None => Vec::new(),
+        Some(t) => study.largest_per_class(t, &bounds, surface.as_ref(), path.as_ref())?,
+    };
+    Ok(ClearanceReport {
+        largest_per_class,
+        clearances: clearances.to_vec(),
+        bounds,
+        monte_carlo,
+        tolerance: req.tolerance,
+        largest_clearance_scale: overall.scale,
+        largest_clearance_mm: overall.mm,
+        largest_clearance_at_pose_mm: at_pose.mm,
+        surface,
+        series,
+        path,
+    })
+}
+
+/// Refuses sizes and values of `req` before any work.
+fn check_request(req: &ClearanceRequest) -> Result<()> {
     if let Some(n) = req.monte_carlo {
         if n > 100_000_000 {
             return Err(Error::InvalidInput {
@@ -376,138 +446,7 @@ where
             message: format!("expected a tolerance > 0 mm, found {t}"),
         });
     }
-    let regions = clearance::regions(joints, clearances)?;
-    let uniform = clearances
-        .first()
-        .map(|c| c.diametral)
-        .filter(|c| clearances.iter().all(|o| o.diametral == *c));
-    let bounds = clearance::bounds(m, x, &regions, &req.options)?;
-    let direction = nalgebra::Vector3::from(bounds.direction);
-    let monte_carlo = match req.monte_carlo {
-        Some(n) => Some(clearance::clearance_monte_carlo(
-            m, x, &regions, &direction, n, req.seed,
-        )?),
-        None => None,
-    };
-    let (scale, mm) = match req.tolerance {
-        None => (None, None),
-        Some(t) => {
-            let w1 = bounds.upper.max(-bounds.lower);
-            if !(w1 > 0.0) {
-                return Err(Error::InvalidInput {
-                    what: "clearance tolerance".into(),
-                    message: "the clearances cause no error along the direction at this pose: \
-                              any clearance keeps it within the tolerance"
-                        .into(),
-                });
-            }
-            let s = fit_scale(t, w1, |s| {
-                let (_, u, l) = clearance::bounds_along(m, x, &scaled(&regions, s)?, &req.options)?;
-                Ok(u.max(-l))
-            })?;
-            (Some(s), uniform.map(|c| c * s))
-        }
-    };
-    let surface = match &req.surface {
-        None => None,
-        Some(sr) => Some(surface_report(m, &regions, req, sr, uniform)?),
-    };
-    let series = req
-        .series
-        .iter()
-        .map(|&c| {
-            let r: Vec<Region> = regions
-                .iter()
-                .map(|r| Region::new(r.joint.clone(), r.clearance.with_diametral(c)))
-                .collect::<Result<_>>()?;
-            let (_, upper, lower) = clearance::bounds_along(m, x, &r, &req.options)?;
-            Ok(SeriesPoint {
-                clearance_mm: c,
-                upper,
-                lower,
-            })
-        })
-        .collect::<Result<Vec<_>>>()?;
-    let path = match &prepared.path {
-        None => None,
-        Some((samples, total)) => Some(path_report(m, &regions, req, samples, *total, uniform)?),
-    };
-    // Over the surface and the path, when given, the designer's answer is theirs (the
-    // smaller of the two).
-    let wholes: Vec<(Option<f64>, Option<f64>)> = surface
-        .iter()
-        .map(|s| (s.largest_clearance_scale, s.largest_clearance_mm))
-        .chain(
-            path.iter()
-                .map(|p| (p.largest_clearance_scale, p.largest_clearance_mm)),
-        )
-        .collect();
-    let (overall_scale, overall_mm) = if wholes.is_empty() {
-        (scale, mm)
-    } else {
-        wholes
-            .into_iter()
-            .min_by(|a, b| {
-                a.0.unwrap_or(f64::INFINITY)
-                    .total_cmp(&b.0.unwrap_or(f64::INFINITY))
-            })
-            .unwrap_or((None, None))
-    };
-    // Per class of joints: over the surface and the path when given, else at the pose.
-    let largest_per_class = match req.tolerance {
-        None => Vec::new(),
-        Some(t) => {
-            // The worst error with the clearances as given is known already: over the
-            // surface and the path when given, else at the pose.
-            let sweep = surface
-                .as_ref()
-                .zip(req.surface.as_ref())
-                .map(|(s, sr)| (s.hemisphere, sr.heights));
-            let along_path = path
-                .as_ref()
-                .and_then(|p| p.worst.map(|i| p.points[i].upper.max(-p.points[i].lower)));
-            let given = match (&sweep, &prepared.path) {
-                (None, None) => bounds.upper.max(-bounds.lower),
-                _ => surface
-                    .as_ref()
-                    .and_then(|s| s.worst)
-                    .unwrap_or(0.0)
-                    .max(along_path.unwrap_or(0.0)),
-            };
-            per_class(&regions, t, given, |r: &[Region]| {
-                let mut w = None::<f64>;
-                if let Some((h, n)) = &sweep {
-                    let points = hemisphere_sweep(m, h, r, &req.options, *n)?;
-                    w = Some(worst_of(&points).map_or(0.0, |v| v.1));
-                }
-                if let Some((samples, _)) = &prepared.path {
-                    let pts = path_points(m, samples, r, &req.options)?;
-                    let p = path_worst(&pts).map_or(0.0, |v| v.1);
-                    w = Some(w.map_or(p, |w| w.max(p)));
-                }
-                match w {
-                    Some(w) => Ok(w),
-                    None => {
-                        let (_, u, l) = clearance::bounds_along(m, x, r, &req.options)?;
-                        Ok(u.max(-l))
-                    }
-                }
-            })?
-        }
-    };
-    Ok(ClearanceReport {
-        largest_per_class,
-        clearances: clearances.to_vec(),
-        bounds,
-        monte_carlo,
-        tolerance: req.tolerance,
-        largest_clearance_scale: overall_scale,
-        largest_clearance_mm: overall_mm,
-        largest_clearance_at_pose_mm: mm,
-        surface,
-        series,
-        path,
-    })
+    Ok(())
 }
 
 /// The bounds at each path sample (rayon), and with a tolerance the factor on the

@@ -11,6 +11,7 @@ pub mod batch_table;
 pub mod clearance;
 pub mod clearance_class;
 pub mod clearance_path;
+mod clearance_study;
 pub mod clearance_surface;
 pub mod identification;
 pub mod kinematics;

@@ -2,7 +2,7 @@
 //! refusal of results the data cannot determine.
 
 use levenberg_marquardt::LevenbergMarquardt;
-use nalgebra::{DVector, SVector};
+use nalgebra::{DMatrix, DVector, SVector};
 
 use super::identifiability::analyse;
 use super::problem::Problem;
@@ -31,28 +31,12 @@ pub fn identify<M: Identifiable<P, A>, const P: usize, const A: usize>(
         MeasurementModel::Pose => measured_poses(nominal, meas)?,
         MeasurementModel::Points => Vec::new(),
     };
-    // Warm starts of the point model: the nominal machine's forward kinematics from
-    // home.
-    let fk = match o.model {
-        MeasurementModel::Points => meas
-            .states
-            .iter()
-            .map(|st| {
-                let q = SVector::<f64, A>::from_fn(|j, _| zero[j] + st.readings[j]);
-                nominal
-                    .forward(&q, &nominal.info().home())
-                    .map(|f| f.pose)
-                    .unwrap_or_else(|_| nominal.info().home())
-            })
-            .collect(),
-        MeasurementModel::Pose => Vec::new(),
-    };
     let mut problem = Problem {
         nominal,
         meas,
         model: o.model,
         poses,
-        fk,
+        fk: warm_starts(nominal, zero, meas, o.model),
         theta: theta.clone(),
         free: free.clone(),
         eval: None,
@@ -65,33 +49,11 @@ pub fn identify<M: Identifiable<P, A>, const P: usize, const A: usize>(
         });
     };
     let per_state = problem.rows_per_state();
-    let state_rms = |r: &DVector<f64>| -> Vec<f64> {
-        r.as_slice()
-            .chunks(per_state)
-            .map(|c| (c.iter().map(|v| v * v).sum::<f64>() / c.len() as f64).sqrt())
-            .collect()
-    };
-    let rms = |r: &DVector<f64>| (r.norm_squared() / r.len().max(1) as f64).sqrt();
     // Identifiability at the start: a rank-deficient problem is reported, not solved.
     let jf0 = problem.free_jacobian(&j0);
     let explain = |t: &[(usize, f64)]| nominal.explain(t);
-    let (sv0, weak0) = analyse(&jf0, &free, &names, &explain);
-    let null: Vec<&Combination> = weak0
-        .iter()
-        .filter(|w| w.relative_singular_value < o.rank_tolerance)
-        .collect();
-    if let Some(w) = null.first() {
-        let more = if null.len() > 1 {
-            format!(" (and {} more such combinations)", null.len() - 1)
-        } else {
-            String::new()
-        };
-        return Err(Error::NotIdentifiable {
-            combination: format!("{}{more}", w.description),
-            relative_singular_value: w.relative_singular_value,
-        });
-    }
-    let _ = sv0;
+    let (_, weak0) = analyse(&jf0, &free, &names, &explain);
+    refuse_null(&weak0, o.rank_tolerance)?;
     let lm = LevenbergMarquardt::new()
         .with_ftol(1e-15)
         .with_xtol(1e-15)
@@ -107,10 +69,92 @@ pub fn identify<M: Identifiable<P, A>, const P: usize, const A: usize>(
     };
     let jf = problem.free_jacobian(&j1);
     let (sv, weak) = analyse(&jf, &free, &names, &explain);
-    // Standard errors: s^2 (J^T J)^-1, s^2 = |r|^2 / (m - n).
-    let dof = (r1.len() as f64 - free.len() as f64).max(1.0);
-    let s2 = r1.norm_squared() / dof;
-    let jtj = jf.transpose() * &jf;
+    let se = standard_errors(&jf, &r1, &free, n);
+    let condition = sv.first().copied().unwrap_or(0.0) / sv.last().copied().unwrap_or(0.0);
+    refuse_poorly_determined(&se, &sv, &weak, &names, o.max_standard_error)?;
+    Ok(Identification {
+        standard_errors_note: held_note(&names, &free, n),
+        free: (0..n).map(|i| free.contains(&i)).collect(),
+        names,
+        start: theta,
+        values: problem.theta.clone(),
+        standard_errors: se,
+        rms_before: rms(&r0),
+        rms_after: rms(&r1),
+        state_rms_before: state_rms(&r0, per_state),
+        state_rms_after: state_rms(&r1, per_state),
+        singular_values: sv,
+        condition,
+        weak,
+        evaluations: report.number_of_evaluations,
+        equations: r1.len(),
+    })
+}
+
+/// Warm starts of the point model: the nominal machine's forward kinematics from home
+/// at each state's readings (home where it fails); none for the pose model.
+fn warm_starts<M: Identifiable<P, A>, const P: usize, const A: usize>(
+    nominal: &M,
+    zero: &SVector<f64, A>,
+    meas: &Measurements,
+    model: MeasurementModel,
+) -> Vec<SVector<f64, P>> {
+    match model {
+        MeasurementModel::Points => meas
+            .states
+            .iter()
+            .map(|st| {
+                let q = SVector::<f64, A>::from_fn(|j, _| zero[j] + st.readings[j]);
+                nominal
+                    .forward(&q, &nominal.info().home())
+                    .map(|f| f.pose)
+                    .unwrap_or_else(|_| nominal.info().home())
+            })
+            .collect(),
+        MeasurementModel::Pose => Vec::new(),
+    }
+}
+
+/// The RMS of residuals `r`.
+fn rms(r: &DVector<f64>) -> f64 {
+    (r.norm_squared() / r.len().max(1) as f64).sqrt()
+}
+
+/// The RMS of residuals `r` per state (`per_state` rows each).
+fn state_rms(r: &DVector<f64>, per_state: usize) -> Vec<f64> {
+    r.as_slice()
+        .chunks(per_state)
+        .map(|c| (c.iter().map(|v| v * v).sum::<f64>() / c.len() as f64).sqrt())
+        .collect()
+}
+
+/// Refuses a rank-deficient problem: the first combination in `weak` whose relative
+/// singular value is below `tolerance`, and how many more there are.
+fn refuse_null(weak: &[Combination], tolerance: f64) -> Result<()> {
+    let null: Vec<&Combination> = weak
+        .iter()
+        .filter(|w| w.relative_singular_value < tolerance)
+        .collect();
+    let Some(w) = null.first() else {
+        return Ok(());
+    };
+    let more = if null.len() > 1 {
+        format!(" (and {} more such combinations)", null.len() - 1)
+    } else {
+        String::new()
+    };
+    Err(Error::NotIdentifiable {
+        combination: format!("{}{more}", w.description),
+        relative_singular_value: w.relative_singular_value,
+    })
+}
+
+/// Standard errors of the `n` parameters (0 for the held ones) from the free
+/// parameters' Jacobian `jf` and residuals `r`: `s^2 (J^T J)^-1`, `s^2 = |r|^2 / (m - n)`.
+fn standard_errors(jf: &DMatrix<f64>, r: &DVector<f64>, free: &[usize], n: usize) -> Vec<f64> {
+    let dof = (r.len() as f64 - free.len() as f64).max(1.0);
+    let s2 = r.norm_squared() / dof;
+    let jtj = jf.transpose() * jf;
     let cov = jtj
         .clone()
         .try_inverse()
@@ -121,32 +165,51 @@ pub fn identify<M: Identifiable<P, A>, const P: usize, const A: usize>(
             se[i] = (s2 * c[(k, k)].max(0.0)).sqrt();
         }
     }
-    let condition = sv.first().copied().unwrap_or(0.0) / sv.last().copied().unwrap_or(0.0);
-    let (worst, worst_se) =
-        se.iter()
-            .enumerate()
-            .fold((0, 0.0), |a, (i, v)| if *v > a.1 { (i, *v) } else { a });
-    if worst_se > o.max_standard_error {
-        let (what, rel) = match weak.first() {
-            Some(w) => (w.description.clone(), w.relative_singular_value),
-            None => (
-                format!("`{}` is poorly determined by these states", names[worst]),
-                sv.last().copied().unwrap_or(0.0) / sv.first().copied().unwrap_or(1.0),
-            ),
-        };
-        return Err(Error::NotIdentifiable {
-            combination: format!(
-                "{what}; with this data the standard error of `{}` is {worst_se:.3} (limit {})",
-                names[worst], o.max_standard_error
-            ),
-            relative_singular_value: rel,
-        });
+    se
+}
+
+/// Refuses a result whose largest standard error `se` is beyond `max`, naming the
+/// weakest combination (`weak`, singular values `sv`) or the parameter.
+fn refuse_poorly_determined(
+    se: &[f64],
+    sv: &[f64],
+    weak: &[Combination],
+    names: &[String],
+    max: f64,
+) -> Result<()> {
+    let (mut worst, mut worst_se) = (0, 0.0);
+    for (i, &v) in se.iter().enumerate() {
+        if v > worst_se {
+            (worst, worst_se) = (i, v);
+        }
     }
+    if !(worst_se > max) {
+        return Ok(());
+    }
+    let (what, rel) = match weak.first() {
+        Some(w) => (w.description.clone(), w.relative_singular_value),
+        None => (
+            format!("`{}` is poorly determined by these states", names[worst]),
+            sv.last().copied().unwrap_or(0.0) / sv.first().copied().unwrap_or(1.0),
+        ),
+    };
+    Err(Error::NotIdentifiable {
+        combination: format!(
+            "{what}; with this data the standard error of `{}` is {worst_se:.3} (limit {max})",
+            names[worst]
+        ),
+        relative_singular_value: rel,
+    })
+}
+
+/// The note that the standard errors hold only if the held parameters (all but
+/// `free` of the `n`) are exact, when any is held.
+fn held_note(names: &[String], free: &[usize], n: usize) -> Option<String> {
     let held: Vec<&str> = (0..n)
         .filter(|i| !free.contains(i))
         .map(|i| names[i].as_str())
         .collect();
-    let standard_errors_note = (!held.is_empty()).then(|| {
+    (!held.is_empty()).then(|| {
         let list = if held.len() <= 6 {
             held.join(", ")
         } else {
@@ -157,26 +220,12 @@ pub fn identify<M: Identifiable<P, A>, const P: usize, const A: usize>(
              exactly their nominal values: an error in a held value moves the identified \
              parameters without showing in their standard errors"
         )
-    });
-    Ok(Identification {
-        standard_errors_note,
-        free: (0..n).map(|i| free.contains(&i)).collect(),
-        names,
-        start: theta,
-        values: problem.theta.clone(),
-        standard_errors: se,
-        rms_before: rms(&r0),
-        rms_after: rms(&r1),
-        state_rms_before: state_rms(&r0),
-        state_rms_after: state_rms(&r1),
-        singular_values: sv,
-        condition,
-        weak,
-        evaluations: report.number_of_evaluations,
-        equations: r1.len(),
     })
 }
 
+/// Refuses options and measurements that cannot be identified from: a held
+/// parameter that does not exist, too few fixture points, states of the wrong size,
+/// fewer equations than free parameters.
 fn validate<M: Identifiable<P, A>, const P: usize, const A: usize>(
     m: &M,
     meas: &Measurements,

@@ -236,32 +236,7 @@ impl Machine {
     pub fn from_toml_str(text: &str, file: &str) -> Result<Machine> {
         let src = source::Source::parse(file, text)?;
         src.check_numbers()?;
-        let kind = src
-            .root()
-            .iter()
-            .find(|(k, _)| k.get_ref().as_ref() == "type")
-            .map(|(_, v)| v.get_ref().as_str().map(str::to_string));
-        let kind = match kind {
-            None => {
-                return Err(Error::MachineFile {
-                    file: file.into(),
-                    line: None,
-                    column: None,
-                    field: "type".into(),
-                    message: format!(
-                        "missing field `type`, expected one of: {}",
-                        registry::type_names()
-                    ),
-                })
-            }
-            Some(None) => {
-                return Err(src.error(
-                    &[source::Seg::Key("type".into())],
-                    "expected a string naming the machine type",
-                ))
-            }
-            Some(Some(k)) => k,
-        };
+        let kind = machine_type(&src, file)?;
         let parts = match registry::file_type(&kind) {
             Some(t) => (t.load)(&src)?,
             None => {
@@ -285,8 +260,14 @@ impl Machine {
             report: report_file::report_settings(&src)?,
         };
         machine.clearances = clearance_file::clearances(&src, &machine.passive_joints())?;
-        // A reference pose has the values a pose takes on this machine, no more.
-        let m = machine.mechanism();
+        machine.check_pose_lengths(&src)?;
+        Ok(machine)
+    }
+
+    /// Checks that the poses of the file's `[report]` table and references have the
+    /// values a pose takes on this machine, no more.
+    fn check_pose_lengths(&self, src: &source::Source) -> Result<()> {
+        let m = self.mechanism();
         let counts: Vec<usize> = match m.pose_space() {
             crate::mechanism::PoseSpace::Own => vec![m.coordinates().len()],
             _ => vec![3, 6],
@@ -295,7 +276,7 @@ impl Machine {
             crate::mechanism::PoseSpace::Own => m.coordinates().len().min(3),
             _ => 3,
         };
-        let r = &machine.report;
+        let r = &self.report;
         let report_arrays = [
             ("pose", r.pose.as_ref().map(|v| v.len()), counts.clone()),
             ("from", r.from.as_ref().map(|v| v.len()), counts.clone()),
@@ -308,17 +289,11 @@ impl Machine {
                         source::Seg::Key("report".into()),
                         source::Seg::Key(key.into()),
                     ],
-                    format!(
-                        "expected {} values, found {n}",
-                        want.iter()
-                            .map(|c| c.to_string())
-                            .collect::<Vec<_>>()
-                            .join(" or ")
-                    ),
+                    format!("expected {} values, found {n}", one_of(&want)),
                 ));
             }
         }
-        for (i, r) in machine.references.iter().enumerate() {
+        for (i, r) in self.references.iter().enumerate() {
             if !counts.contains(&r.pose.len()) {
                 return Err(src.error(
                     &[
@@ -328,17 +303,13 @@ impl Machine {
                     ],
                     format!(
                         "expected {} values, found {}",
-                        counts
-                            .iter()
-                            .map(|c| c.to_string())
-                            .collect::<Vec<_>>()
-                            .join(" or "),
+                        one_of(&counts),
                         r.pose.len()
                     ),
                 ));
             }
         }
-        Ok(machine)
+        Ok(())
     }
 
     /// The passive joints whose centres are parameters of the machine (those a
@@ -407,4 +378,39 @@ impl Machine {
     pub fn kind(&self) -> &'static str {
         self.mechanism().kind()
     }
+}
+
+/// The machine type the file's `type` names (`file` names it in errors).
+fn machine_type(src: &source::Source, file: &str) -> Result<String> {
+    let kind = src
+        .root()
+        .iter()
+        .find(|(k, _)| k.get_ref().as_ref() == "type")
+        .map(|(_, v)| v.get_ref().as_str().map(str::to_string));
+    match kind {
+        None => Err(Error::MachineFile {
+            file: file.into(),
+            line: None,
+            column: None,
+            field: "type".into(),
+            message: format!(
+                "missing field `type`, expected one of: {}",
+                registry::type_names()
+            ),
+        }),
+        Some(None) => Err(src.error(
+            &[source::Seg::Key("type".into())],
+            "expected a string naming the machine type",
+        )),
+        Some(Some(k)) => Ok(k),
+    }
+}
+
+/// Counts as `3 or 6`.
+fn one_of(counts: &[usize]) -> String {
+    counts
+        .iter()
+        .map(|c| c.to_string())
+        .collect::<Vec<_>>()
+        .join(" or ")
 }

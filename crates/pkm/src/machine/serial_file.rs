@@ -1,7 +1,7 @@
 //! The `type = "serial"` machine file: a tool chain and an optional workpiece chain of
 //! links with seed 003's two frames per link, and tolerances of primary deviations.
 
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::Matrix3;
 use serde::Deserialize;
 
 use super::reference::Reference;
@@ -257,7 +257,53 @@ fn chain(
     })
 }
 
+/// The machine parts of a serial machine file `f` (`src`: its text, for errors).
 pub(super) fn build(src: &Source, f: SerialFile) -> Result<super::Parts, Error> {
+    let machine = machine(src, &f)?;
+    let kinds: Vec<JointKind> = machine
+        .tool
+        .joints()
+        .chain(machine.workpiece.iter().flat_map(|w| w.joints()))
+        .map(|j| j.kind)
+        .collect();
+    let home = home_joints(src, f.home.as_ref(), &kinds)?;
+    if kinds.is_empty() || kinds.len() > 8 {
+        return Err(src.error(
+            &[key("tool_chain")],
+            format!(
+                "a serial machine needs 1 to 8 joints, found {}",
+                kinds.len()
+            ),
+        ));
+    }
+    let tolerances = super::tolerance_file::tolerances(
+        src,
+        &crate::accuracy::serial_parameters(&machine),
+        &f.tolerance,
+    )?;
+    // Each toleranced deviation must mean something: refused with the reason when it
+    // cannot be given (an angle between aligned axes, a fourth angle of a link, ...).
+    let given: Vec<usize> = tolerances.iter().map(|t| t.parameter).collect();
+    crate::accuracy::serial_completions(&machine, &given)
+        .map_err(|e| src.error(&[key("tolerance")], e.to_string()))?;
+    let mechanism = mechanism(src, f.pose.as_deref(), machine, &home)?;
+    super::check_references(src, &f.reference)?;
+    let rapid = super::check_motion(src, f.motion.as_ref())?;
+    Ok(super::Parts {
+        model: Model::Serial(Box::new(crate::serial::SerialModel {
+            mechanism,
+            tolerances,
+        })),
+        name: f.name,
+        description: f.description,
+        references: f.reference,
+        rapid,
+    })
+}
+
+/// The chains of file `f`: the tool chain from `tool_chain` links or `dh` rows (one
+/// of the two), and the workpiece chain when given.
+fn machine(src: &Source, f: &SerialFile) -> Result<SerialMachine, Error> {
     if !f.dh.is_empty() && !f.tool_chain.is_empty() {
         return Err(src.error(
             &[key("dh")],
@@ -290,61 +336,53 @@ pub(super) fn build(src: &Source, f: SerialFile) -> Result<super::Parts, Error> 
             0,
         )?)
     };
-    let machine = SerialMachine {
+    Ok(SerialMachine {
         name: f.name.clone().unwrap_or_else(|| "serial machine".into()),
         tool,
         workpiece,
+    })
+}
+
+/// The home joint values (mm, rad) of `[home] joints` (mm, deg), one per joint of
+/// `kinds`; zero when not given.
+fn home_joints(
+    src: &Source,
+    home: Option<&HomeFile>,
+    kinds: &[JointKind],
+) -> Result<Vec<f64>, Error> {
+    let Some(h) = home else {
+        return Ok(vec![0.0; kinds.len()]);
     };
-    let kinds: Vec<JointKind> = machine
-        .tool
-        .joints()
-        .chain(machine.workpiece.iter().flat_map(|w| w.joints()))
-        .map(|j| j.kind)
-        .collect();
-    let home: Vec<f64> = match &f.home {
-        None => vec![0.0; kinds.len()],
-        Some(h) => {
-            if h.joints.len() != kinds.len() {
-                return Err(src.error(
-                    &[key("home"), key("joints")],
-                    format!(
-                        "expected {} joint values (mm, deg), found {}",
-                        kinds.len(),
-                        h.joints.len()
-                    ),
-                ));
-            }
-            h.joints
-                .iter()
-                .zip(&kinds)
-                .map(|(v, k)| match k {
-                    JointKind::Revolute => v.to_radians(),
-                    JointKind::Prismatic => *v,
-                })
-                .collect()
-        }
-    };
-    if kinds.is_empty() || kinds.len() > 8 {
+    if h.joints.len() != kinds.len() {
         return Err(src.error(
-            &[key("tool_chain")],
+            &[key("home"), key("joints")],
             format!(
-                "a serial machine needs 1 to 8 joints, found {}",
-                kinds.len()
+                "expected {} joint values (mm, deg), found {}",
+                kinds.len(),
+                h.joints.len()
             ),
         ));
     }
-    let tolerances = super::tolerance_file::tolerances(
-        src,
-        &crate::accuracy::serial_parameters(&machine),
-        &f.tolerance,
-    )?;
-    // Each toleranced deviation must mean something: refused with the reason when it
-    // cannot be given (an angle between aligned axes, a fourth angle of a link, ...).
-    let given: Vec<usize> = tolerances.iter().map(|t| t.parameter).collect();
-    crate::accuracy::serial_completions(&machine, &given)
-        .map_err(|e| src.error(&[key("tolerance")], e.to_string()))?;
-    let tcp = f.pose.as_deref() == Some("tcp");
-    let spatial = match f.pose.as_deref() {
+    Ok(h.joints
+        .iter()
+        .zip(kinds)
+        .map(|(v, k)| match k {
+            JointKind::Revolute => v.to_radians(),
+            JointKind::Prismatic => *v,
+        })
+        .collect())
+}
+
+/// The mechanism of `machine` at `home` in the coordinates `pose` names: `tool` (six
+/// tool-chain joints), `tcp`, `joints`, or by default `tool` where it can be.
+fn mechanism(
+    src: &Source,
+    pose: Option<&str>,
+    machine: SerialMachine,
+    home: &[f64],
+) -> Result<SerialAny, Error> {
+    let tcp = pose == Some("tcp");
+    let spatial = match pose {
         None => SerialAny::can_be_spatial(&machine),
         Some("tcp") => false,
         Some("tool") => {
@@ -365,24 +403,11 @@ pub(super) fn build(src: &Source, f: SerialFile) -> Result<super::Parts, Error> 
             ))
         }
     };
-    let mechanism = if tcp {
-        SerialAny::tcp(machine, &home).map_err(|e| src.error(&[key("pose")], e.to_string()))?
+    if tcp {
+        SerialAny::tcp(machine, home).map_err(|e| src.error(&[key("pose")], e.to_string()))
     } else if spatial {
-        SerialAny::spatial(machine, &home).map_err(|e| src.error(&[key("home")], e.to_string()))?
+        SerialAny::spatial(machine, home).map_err(|e| src.error(&[key("home")], e.to_string()))
     } else {
-        SerialAny::new(machine, &home).map_err(|e| src.error(&[key("home")], e.to_string()))?
-    };
-    super::check_references(src, &f.reference)?;
-    let rapid = super::check_motion(src, f.motion.as_ref())?;
-    let _ = Vector3::<f64>::zeros();
-    Ok(super::Parts {
-        model: Model::Serial(Box::new(crate::serial::SerialModel {
-            mechanism,
-            tolerances,
-        })),
-        name: f.name,
-        description: f.description,
-        references: f.reference,
-        rapid,
-    })
+        SerialAny::new(machine, home).map_err(|e| src.error(&[key("home")], e.to_string()))
+    }
 }

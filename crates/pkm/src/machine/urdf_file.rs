@@ -16,6 +16,7 @@ use crate::serial::machine::SerialMachine;
 use crate::serial::mechanism::SerialAny;
 use crate::serial::{Chain, Joint, JointKind, Link, SerialModel};
 
+/// A machine-file error of `file` with `message`.
 fn err(file: &str, message: String) -> Error {
     Error::MachineFile {
         file: file.into(),
@@ -26,6 +27,7 @@ fn err(file: &str, message: String) -> Error {
     }
 }
 
+/// The transform of a URDF origin (metres to millimetres).
 fn origin(o: &urdf_rs::Pose) -> Matrix4<f64> {
     let r = crate::rotation::rpy_matrix(o.rpy[0], o.rpy[1], o.rpy[2]);
     let mut m = Matrix4::identity();
@@ -45,6 +47,7 @@ fn align_z(a: &Vector3<f64>) -> Matrix3<f64> {
         .into_inner()
 }
 
+/// A chain link named `name`, moved by `joint`, with the fixed transform `t`.
 fn link(name: &str, joint: Option<Joint>, t: &Matrix4<f64>) -> Link {
     Link {
         name: name.into(),
@@ -58,152 +61,17 @@ fn link(name: &str, joint: Option<Joint>, t: &Matrix4<f64>) -> Link {
 pub(super) fn build(text: &str, file: &str) -> Result<super::Parts, Error> {
     let robot = urdf_rs::read_from_string(text)
         .map_err(|e| err(file, format!("not a readable URDF: {e}")))?;
-    let children: std::collections::BTreeSet<&str> =
-        robot.joints.iter().map(|j| j.child.link.as_str()).collect();
-    let roots: Vec<&str> = robot
-        .links
-        .iter()
-        .map(|l| l.name.as_str())
-        .filter(|n| !children.contains(n))
-        .collect();
-    let [root] = roots.as_slice() else {
-        return Err(err(
-            file,
-            format!("expected one root link, found {}: {:?}", roots.len(), roots),
-        ));
-    };
-    let movable = |j: &urdf_rs::Joint| {
-        matches!(
-            j.joint_type,
-            urdf_rs::JointType::Revolute
-                | urdf_rs::JointType::Continuous
-                | urdf_rs::JointType::Prismatic
-        )
-    };
-    // Longest branch (movable joints) below each link, by depth-first search.
-    fn depth<'a>(
-        robot: &'a urdf_rs::Robot,
-        link: &str,
-        movable: &dyn Fn(&urdf_rs::Joint) -> bool,
-        seen: usize,
-    ) -> (usize, Vec<&'a urdf_rs::Joint>) {
-        if seen > robot.joints.len() {
-            return (0, Vec::new());
-        }
-        let mut best = (0, Vec::new());
-        for j in robot.joints.iter().filter(|j| j.parent.link == link) {
-            let (d, mut path) = depth(robot, &j.child.link, movable, seen + 1);
-            let d = d + movable(j) as usize;
-            if d > best.0 || best.1.is_empty() {
-                path.insert(0, j);
-                best = (d, path);
-            }
-        }
-        best
-    }
-    let (n, path) = depth(&robot, root, &movable, 0);
+    let root = root_link(&robot, file)?;
+    let Branch { movable: n, joints } = longest_branch(&robot, root, 0);
     if n == 0 || n > 8 {
         return Err(err(
             file,
             format!("expected a chain of 1 to 8 movable joints from `{root}`, found {n}"),
         ));
     }
-    for j in &path {
-        if matches!(
-            j.joint_type,
-            urdf_rs::JointType::Floating
-                | urdf_rs::JointType::Planar
-                | urdf_rs::JointType::Spherical
-        ) {
-            return Err(err(file, format!("joint `{}`: only revolute, continuous, prismatic and fixed joints form a serial chain", j.name)));
-        }
-    }
-    // The same sane magnitudes as machine files (metres and radians here: 1e3 m, 1e4
-    // rad), before any of them is computed with.
-    for j in &path {
-        let values = [
-            ("origin xyz", &j.origin.xyz[..], 1e3),
-            ("origin rpy", &j.origin.rpy[..], 1e4),
-            ("axis", &j.axis.xyz[..], 1e6),
-            ("limit", &[j.limit.lower, j.limit.upper][..], 1e4),
-        ];
-        for (what, v, max) in values {
-            if let Some(x) = v.iter().find(|x| !(x.abs() <= max)) {
-                return Err(err(
-                    file,
-                    format!(
-                        "joint `{}`: {what} value {x:e} is beyond +-{max:e}, the largest \
-                         pkm takes (no robot has it)",
-                        j.name
-                    ),
-                ));
-            }
-        }
-    }
-    let mut links = Vec::new();
-    let mut acc = Matrix4::identity();
-    let mut pending: Option<(String, Option<Joint>)> = Some((root.to_string(), None));
-    for j in &path {
-        acc *= origin(&j.origin);
-        if !movable(j) {
-            continue;
-        }
-        let a = Vector3::new(j.axis.xyz[0], j.axis.xyz[1], j.axis.xyz[2]);
-        if !(a.norm() > 1e-12) {
-            return Err(err(file, format!("joint `{}`: zero axis", j.name)));
-        }
-        let ra = align_z(&a.normalize());
-        let mut r4 = Matrix4::identity();
-        r4.fixed_view_mut::<3, 3>(0, 0).copy_from(&ra);
-        acc *= r4;
-        let (name, joint) = pending.take().expect("a pending link");
-        links.push(link(&name, joint, &acc));
-        acc = r4.transpose();
-        let (kind, range) = match j.joint_type {
-            urdf_rs::JointType::Prismatic => (
-                JointKind::Prismatic,
-                Range {
-                    min: 1000.0 * j.limit.lower,
-                    max: 1000.0 * j.limit.upper,
-                },
-            ),
-            urdf_rs::JointType::Continuous => (
-                JointKind::Revolute,
-                Range {
-                    min: -2.0 * std::f64::consts::PI,
-                    max: 2.0 * std::f64::consts::PI,
-                },
-            ),
-            _ => (
-                JointKind::Revolute,
-                Range {
-                    min: j.limit.lower,
-                    max: j.limit.upper,
-                },
-            ),
-        };
-        if !(range.min < range.max) {
-            return Err(err(
-                file,
-                format!(
-                    "joint `{}`: limits lower {} >= upper {}",
-                    j.name, j.limit.lower, j.limit.upper
-                ),
-            ));
-        }
-        pending = Some((
-            j.child.link.clone(),
-            Some(Joint {
-                name: j.name.clone(),
-                kind,
-                range,
-                max_velocity: None,
-                max_acceleration: None,
-            }),
-        ));
-    }
-    let (name, joint) = pending.take().expect("a pending link");
-    links.push(link(&name, joint, &acc));
+    check_joint_kinds(&joints, file)?;
+    check_magnitudes(&joints, file)?;
+    let links = chain_links(root, &joints, file)?;
     let machine = SerialMachine {
         name: if robot.name.is_empty() {
             "URDF robot".into()
@@ -240,5 +108,193 @@ pub(super) fn build(text: &str, file: &str) -> Result<super::Parts, Error> {
         )),
         references: Vec::new(),
         rapid: None,
+    })
+}
+
+/// The robot's one root link: the one no joint has as its child.
+fn root_link<'a>(robot: &'a urdf_rs::Robot, file: &str) -> Result<&'a str, Error> {
+    let children: std::collections::BTreeSet<&str> =
+        robot.joints.iter().map(|j| j.child.link.as_str()).collect();
+    let roots: Vec<&str> = robot
+        .links
+        .iter()
+        .map(|l| l.name.as_str())
+        .filter(|n| !children.contains(n))
+        .collect();
+    let [root] = roots.as_slice() else {
+        return Err(err(
+            file,
+            format!("expected one root link, found {}: {:?}", roots.len(), roots),
+        ));
+    };
+    Ok(root)
+}
+
+/// Whether joint `j` moves (revolute, continuous or prismatic).
+fn movable(j: &urdf_rs::Joint) -> bool {
+    matches!(
+        j.joint_type,
+        urdf_rs::JointType::Revolute
+            | urdf_rs::JointType::Continuous
+            | urdf_rs::JointType::Prismatic
+    )
+}
+
+/// A branch of joints below a link: how many of them move, and the joints in order.
+struct Branch<'a> {
+    /// Movable joints.
+    movable: usize,
+    /// The joints from the link down.
+    joints: Vec<&'a urdf_rs::Joint>,
+}
+
+/// The longest branch (most movable joints; the first of equals) below `link`, by
+/// depth-first search; `seen` joints above it (a cycle ends past all of them).
+fn longest_branch<'a>(robot: &'a urdf_rs::Robot, link: &str, seen: usize) -> Branch<'a> {
+    let mut best = Branch {
+        movable: 0,
+        joints: Vec::new(),
+    };
+    if seen > robot.joints.len() {
+        return best;
+    }
+    for j in robot.joints.iter().filter(|j| j.parent.link == link) {
+        let mut below = longest_branch(robot, &j.child.link, seen + 1);
+        let d = below.movable + movable(j) as usize;
+        if d > best.movable || best.joints.is_empty() {
+            below.joints.insert(0, j);
+            best = Branch {
+                movable: d,
+                joints: below.joints,
+            };
+        }
+    }
+    best
+}
+
+/// Refuses joints that do not form a serial chain (floating, planar, spherical).
+fn check_joint_kinds(joints: &[&urdf_rs::Joint], file: &str) -> Result<(), Error> {
+    for j in joints {
+        if matches!(
+            j.joint_type,
+            urdf_rs::JointType::Floating
+                | urdf_rs::JointType::Planar
+                | urdf_rs::JointType::Spherical
+        ) {
+            return Err(err(file, format!("joint `{}`: only revolute, continuous, prismatic and fixed joints form a serial chain", j.name)));
+        }
+    }
+    Ok(())
+}
+
+/// The same sane magnitudes as machine files (metres and radians here: 1e3 m, 1e4
+/// rad), before any of them is computed with.
+fn check_magnitudes(joints: &[&urdf_rs::Joint], file: &str) -> Result<(), Error> {
+    for j in joints {
+        let values = [
+            ("origin xyz", &j.origin.xyz[..], 1e3),
+            ("origin rpy", &j.origin.rpy[..], 1e4),
+            ("axis", &j.axis.xyz[..], 1e6),
+            ("limit", &[j.limit.lower, j.limit.upper][..], 1e4),
+        ];
+        for (what, v, max) in values {
+            if let Some(x) = v.iter().find(|x| !(x.abs() <= max)) {
+                return Err(err(
+                    file,
+                    format!(
+                        "joint `{}`: {what} value {x:e} is beyond +-{max:e}, the largest \
+                         pkm takes (no robot has it)",
+                        j.name
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A link whose fixed transform is still being accumulated: its name and the joint
+/// that moves it (none for the root).
+struct PendingLink {
+    /// Link name.
+    name: String,
+    /// Its joint.
+    joint: Option<Joint>,
+}
+
+/// The links of the chain from `root` through `joints`: each movable joint's motion
+/// about its link's Z, the fixed joints and origins folded into the transforms.
+fn chain_links(root: &str, joints: &[&urdf_rs::Joint], file: &str) -> Result<Vec<Link>, Error> {
+    let mut links = Vec::new();
+    let mut acc = Matrix4::identity();
+    let mut pending = PendingLink {
+        name: root.to_string(),
+        joint: None,
+    };
+    for j in joints {
+        acc *= origin(&j.origin);
+        if !movable(j) {
+            continue;
+        }
+        let a = Vector3::new(j.axis.xyz[0], j.axis.xyz[1], j.axis.xyz[2]);
+        if !(a.norm() > 1e-12) {
+            return Err(err(file, format!("joint `{}`: zero axis", j.name)));
+        }
+        let ra = align_z(&a.normalize());
+        let mut r4 = Matrix4::identity();
+        r4.fixed_view_mut::<3, 3>(0, 0).copy_from(&ra);
+        acc *= r4;
+        links.push(link(&pending.name, pending.joint.take(), &acc));
+        acc = r4.transpose();
+        pending = PendingLink {
+            name: j.child.link.clone(),
+            joint: Some(chain_joint(j, file)?),
+        };
+    }
+    links.push(link(&pending.name, pending.joint, &acc));
+    Ok(links)
+}
+
+/// The chain joint of movable URDF joint `j`: its kind and range (mm or rad; a
+/// continuous joint turns two turns either way).
+fn chain_joint(j: &urdf_rs::Joint, file: &str) -> Result<Joint, Error> {
+    let (kind, range) = match j.joint_type {
+        urdf_rs::JointType::Prismatic => (
+            JointKind::Prismatic,
+            Range {
+                min: 1000.0 * j.limit.lower,
+                max: 1000.0 * j.limit.upper,
+            },
+        ),
+        urdf_rs::JointType::Continuous => (
+            JointKind::Revolute,
+            Range {
+                min: -2.0 * std::f64::consts::PI,
+                max: 2.0 * std::f64::consts::PI,
+            },
+        ),
+        _ => (
+            JointKind::Revolute,
+            Range {
+                min: j.limit.lower,
+                max: j.limit.upper,
+            },
+        ),
+    };
+    if !(range.min < range.max) {
+        return Err(err(
+            file,
+            format!(
+                "joint `{}`: limits lower {} >= upper {}",
+                j.name, j.limit.lower, j.limit.upper
+            ),
+        ));
+    }
+    Ok(Joint {
+        name: j.name.clone(),
+        kind,
+        range,
+        max_velocity: None,
+        max_acceleration: None,
     })
 }

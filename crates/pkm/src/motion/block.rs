@@ -117,111 +117,140 @@ fn compute_range<M: Mechanism<P, A>, const P: usize, const A: usize>(
     out: &mut [Sample<P, A>],
 ) -> (Vec<(u32, Violation)>, Option<(usize, Error)>) {
     let mut violations = Vec::new();
-    let mut buf = Vec::new();
     let n = out.len();
     ROWS.with_borrow_mut(|rows| {
+        rows.grow::<P, A>(n);
         let Rows {
             x,
             q,
             clear,
             computed,
         } = rows;
-        // Grown, never cleared: every row up to n is written here (x) or, where a
-        // kernel clears or computes it, by the kernel (q).
-        for v in x.iter_mut() {
-            if v.len() < P * n {
-                v.resize(P * n, 0.0);
-            }
-        }
-        for v in q.iter_mut() {
-            if v.len() < A * n {
-                v.resize(A * n, 0.0);
-            }
-        }
-        // Each pose written from registers into its sample and into the kernel's
-        // rows, whole rows of P at once (not stored, then loaded back for a copy).
         let [x0, x1, x2] = x;
-        let (x0, x1, x2) = (&mut x0[..P * n], &mut x1[..P * n], &mut x2[..P * n]);
-        for ((&(mi, tl), out), ((r0, r1), r2)) in plan.iter().zip(out.iter_mut()).zip(
-            x0.chunks_exact_mut(P)
-                .zip(x1.chunks_exact_mut(P))
-                .zip(x2.chunks_exact_mut(P)),
-        ) {
-            let (mv, t0, _) = &moves[mi as usize];
-            let (s, sd, sdd) = mv.profile.eval(tl);
-            let (x, xs, xss) = mv.segment.eval(s);
-            let (xd, xdd) = (xs * sd, xss * (sd * sd) + xs * sdd);
-            out.t = t0 + tl;
-            out.line = mv.line;
-            (out.x, out.xd, out.xdd) = (x, xd, xdd);
-            r0.copy_from_slice(x.as_slice());
-            r1.copy_from_slice(xd.as_slice());
-            r2.copy_from_slice(xdd.as_slice());
-        }
+        let x = [&mut x0[..P * n], &mut x1[..P * n], &mut x2[..P * n]];
+        write_poses(moves, plan, out, x);
+        let x = [&x0[..P * n], &x1[..P * n], &x2[..P * n]];
         if clear.len() < n {
             clear.resize(n, false);
             computed.resize(n, false);
         }
         let (clear, computed) = (&mut clear[..n], &mut computed[..n]);
         let [q0, q1, q2] = q;
-        let (q0, q1, q2) = (&mut q0[..A * n], &mut q1[..A * n], &mut q2[..A * n]);
-        // The motion kernel where the type has one, else the inverse's screen.
-        let kernel = abilities::motion_screened(
-            m,
-            [&*x0, &*x1, &*x2],
-            [&mut *q0, &mut *q1, &mut *q2],
-            clear,
-            computed,
-        );
-        if !kernel {
-            computed.fill(false);
-            if !abilities::inverse_screened(m, x0, q0, clear, true) {
-                clear.fill(false);
-            }
-        }
-        let rows = q0
-            .chunks_exact(A)
-            .zip(q1.chunks_exact(A))
-            .zip(q2.chunks_exact(A));
-        for (j, ((s, (&clear, &computed)), ((q0, q1), q2))) in out
-            .iter_mut()
-            .zip(clear.iter().zip(computed.iter()))
-            .zip(rows)
-            .enumerate()
-        {
-            if computed {
-                // In place, whole rows: a 144-byte `ActuatorMotion` moved through a
-                // `Result` is two `memcpy` calls per sample.
-                s.act.q.as_mut_slice().copy_from_slice(q0);
-                s.act.qd.as_mut_slice().copy_from_slice(q1);
-                s.act.qdd.as_mut_slice().copy_from_slice(q2);
-                if !clear {
-                    // Beyond a limit, or near one: its limits checked with the motion
-                    // the kernel wrote (not computed a second time).
-                    buf.clear();
-                    m.check_limits(&s.x, &s.act.q, &mut buf);
-                    let k = j as u32;
-                    violations.extend(buf.drain(..).map(|v| (k, v)));
-                }
-                continue;
-            }
-            buf.clear();
-            let act = if clear {
-                m.actuator_motion(&s.x, &s.xd, &s.xdd)
-            } else {
-                m.actuator_motion_checked(&s.x, &s.xd, &s.xdd, &mut buf)
-            };
-            match act {
-                Ok(act) => {
-                    s.act = act;
-                    let k = j as u32;
-                    violations.extend(buf.drain(..).map(|v| (k, v)));
-                }
-                Err(e) => return (violations, Some((j, at_sample(e, s.line, s.t)))),
-            }
-        }
-        (violations, None)
+        let mut q = [&mut q0[..A * n], &mut q1[..A * n], &mut q2[..A * n]];
+        kernel_or_screen(m, x, &mut q, clear, computed);
+        let failed = actuator_motion(m, out, clear, computed, q, &mut violations);
+        (violations, failed)
     })
+}
+
+/// Each pose of `plan` (on `moves`) written from registers into its sample of `out`
+/// and into the kernel's rows `x` (poses, rates, accelerations), whole rows of `P` at
+/// once (not stored, then loaded back for a copy).
+#[inline]
+fn write_poses<const P: usize, const A: usize>(
+    moves: &[(Move<P>, f64, u64)],
+    plan: &[(u32, f64)],
+    out: &mut [Sample<P, A>],
+    x: [&mut [f64]; 3],
+) {
+    let [x0, x1, x2] = x;
+    for ((&(mi, tl), out), ((r0, r1), r2)) in plan.iter().zip(out.iter_mut()).zip(
+        x0.chunks_exact_mut(P)
+            .zip(x1.chunks_exact_mut(P))
+            .zip(x2.chunks_exact_mut(P)),
+    ) {
+        let (mv, t0, _) = &moves[mi as usize];
+        let (s, sd, sdd) = mv.profile.eval(tl);
+        let (x, xs, xss) = mv.segment.eval(s);
+        let (xd, xdd) = (xs * sd, xss * (sd * sd) + xs * sdd);
+        out.t = t0 + tl;
+        out.line = mv.line;
+        (out.x, out.xd, out.xdd) = (x, xd, xdd);
+        r0.copy_from_slice(x.as_slice());
+        r1.copy_from_slice(xd.as_slice());
+        r2.copy_from_slice(xdd.as_slice());
+    }
+}
+
+/// The motion kernel on rows `x` into rows `q` where the type has one (`computed`
+/// marks its samples, `clear` those clear of every limit), else the inverse's screen
+/// (`clear`: poses whose motion needs no limit check), else neither.
+#[inline]
+fn kernel_or_screen<M: Mechanism<P, A>, const P: usize, const A: usize>(
+    m: &M,
+    x: [&[f64]; 3],
+    q: &mut [&mut [f64]; 3],
+    clear: &mut [bool],
+    computed: &mut [bool],
+) {
+    let [q0, q1, q2] = q;
+    let kernel =
+        abilities::motion_screened(m, x, [&mut **q0, &mut **q1, &mut **q2], clear, computed);
+    if !kernel {
+        computed.fill(false);
+        if !abilities::inverse_screened(m, x[0], q0, clear, true) {
+            clear.fill(false);
+        }
+    }
+}
+
+/// The actuator motion of every sample of `out`: copied from the kernel's rows `q`
+/// where it `computed` it (its limits checked unless `clear`), else computed (checked
+/// unless `clear`); violations into `violations`. The first sample that fails, and
+/// why.
+#[inline]
+fn actuator_motion<M: Mechanism<P, A>, const P: usize, const A: usize>(
+    m: &M,
+    out: &mut [Sample<P, A>],
+    clear: &[bool],
+    computed: &[bool],
+    q: [&mut [f64]; 3],
+    violations: &mut Vec<(u32, Violation)>,
+) -> Option<(usize, Error)> {
+    let mut buf = Vec::new();
+    let [q0, q1, q2] = q;
+    let rows = q0
+        .chunks_exact(A)
+        .zip(q1.chunks_exact(A))
+        .zip(q2.chunks_exact(A));
+    for (j, ((s, (&clear, &computed)), ((q0, q1), q2))) in out
+        .iter_mut()
+        .zip(clear.iter().zip(computed.iter()))
+        .zip(rows)
+        .enumerate()
+    {
+        if computed {
+            // In place, whole rows: a 144-byte `ActuatorMotion` moved through a
+            // `Result` is two `memcpy` calls per sample.
+            s.act.q.as_mut_slice().copy_from_slice(q0);
+            s.act.qd.as_mut_slice().copy_from_slice(q1);
+            s.act.qdd.as_mut_slice().copy_from_slice(q2);
+            if !clear {
+                // Beyond a limit, or near one: its limits checked with the motion
+                // the kernel wrote (not computed a second time).
+                buf.clear();
+                m.check_limits(&s.x, &s.act.q, &mut buf);
+                let k = j as u32;
+                violations.extend(buf.drain(..).map(|v| (k, v)));
+            }
+            continue;
+        }
+        buf.clear();
+        let act = if clear {
+            m.actuator_motion(&s.x, &s.xd, &s.xdd)
+        } else {
+            m.actuator_motion_checked(&s.x, &s.xd, &s.xdd, &mut buf)
+        };
+        match act {
+            Ok(act) => {
+                s.act = act;
+                let k = j as u32;
+                violations.extend(buf.drain(..).map(|v| (k, v)));
+            }
+            Err(e) => return Some((j, at_sample(e, s.line, s.t))),
+        }
+    }
+    None
 }
 
 /// Per-thread rows of [`compute_range`]: the samples' poses, rates and accelerations,
@@ -231,10 +260,32 @@ fn compute_range<M: Mechanism<P, A>, const P: usize, const A: usize>(
 /// borrow them again and panic); the mechanism calls it makes are plain per-pose code.
 #[derive(Default)]
 struct Rows {
+    /// Poses, rates, accelerations: `P` per sample.
     x: [Vec<f64>; 3],
+    /// Actuator positions, rates, accelerations: `A` per sample.
     q: [Vec<f64>; 3],
+    /// Per sample, clear of every limit.
     clear: Vec<bool>,
+    /// Per sample, computed by the motion kernel.
     computed: Vec<bool>,
+}
+
+impl Rows {
+    /// Grows the pose and actuator rows to `n` samples, never shrinking or clearing
+    /// them: every row up to `n` is written by [`compute_range`] (x) or, where a kernel
+    /// clears or computes it, by the kernel (q).
+    fn grow<const P: usize, const A: usize>(&mut self, n: usize) {
+        for v in self.x.iter_mut() {
+            if v.len() < P * n {
+                v.resize(P * n, 0.0);
+            }
+        }
+        for v in self.q.iter_mut() {
+            if v.len() < A * n {
+                v.resize(A * n, 0.0);
+            }
+        }
+    }
 }
 
 thread_local! {

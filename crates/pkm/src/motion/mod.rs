@@ -20,5 +20,6 @@ mod words;
 pub use path::{Segment, Shape, MIN_MOVE};
 pub use plan::Step;
 pub use profile::Profile;
+pub(crate) use recorder::RunSink;
 pub use run::{MotionSummary, Move, Runner, Sample, Sampling, ViolationRun};
 pub use stats::{AxisStats, Ratios};

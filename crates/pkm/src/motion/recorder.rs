@@ -15,6 +15,41 @@ use crate::units::Quantity;
 
 const MAX_RUNS: usize = 10_000;
 
+/// Where a run's samples go, and the tool lengths they are taken with: one owner for
+/// the state both need (the accuracy along a path follows the tool).
+pub(crate) trait RunSink<const P: usize, const A: usize> {
+    /// One sample, in order; an error stops the run.
+    fn sample(&mut self, s: &Sample<P, A>) -> Result<()>;
+    /// The samples from here on are taken with a tool `length` mm longer than the
+    /// machine file's.
+    fn tool_length(&mut self, length: f64) -> Result<()>;
+}
+
+/// A [`RunSink`] of two callbacks: `sample` for the samples, `tool` for the tool
+/// lengths.
+pub(super) struct Callbacks<'c, F, T> {
+    /// Called with every sample.
+    pub(super) sample: &'c mut F,
+    /// Called with every tool length.
+    pub(super) tool: &'c mut T,
+}
+
+impl<F, T, const P: usize, const A: usize> RunSink<P, A> for Callbacks<'_, F, T>
+where
+    F: FnMut(&Sample<P, A>) -> Result<()>,
+    T: FnMut(f64) -> Result<()>,
+{
+    #[inline]
+    fn sample(&mut self, s: &Sample<P, A>) -> Result<()> {
+        (self.sample)(s)
+    }
+
+    #[inline]
+    fn tool_length(&mut self, length: f64) -> Result<()> {
+        (self.tool)(length)
+    }
+}
+
 /// What the samples add up to, taken in order.
 pub(super) struct Recorder<'m, M, const P: usize, const A: usize> {
     pub(super) m: &'m M,
@@ -103,18 +138,13 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'m, M, P, 
 impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
     /// Records the samples of block `b` in order, after passing its tool length on;
     /// raises the error the block ends on, if any, after the samples before it.
-    pub(super) fn record<F, T>(
+    pub(super) fn record<S: RunSink<P, A>>(
         &mut self,
         b: &mut Block<M, P, A>,
-        sink: &mut F,
-        tool: &mut T,
-    ) -> Result<()>
-    where
-        F: FnMut(&Sample<P, A>) -> Result<()>,
-        T: FnMut(f64) -> Result<()>,
-    {
+        sink: &mut S,
+    ) -> Result<()> {
         if let Some(length) = b.tool {
-            tool(length)?;
+            sink.tool_length(length)?;
         }
         // Each sample continues the one before (a robot's posture and turns).
         follow_block(self.m, b, &mut self.last);
@@ -156,16 +186,13 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
     /// Records sample `s` of a move (a rapid when `rapid`) with `found`, the
     /// violations of the mechanism's own limits found with it (by sample index); the
     /// rate limits are checked here.
-    fn record_sample<F>(
+    fn record_sample<S: RunSink<P, A>>(
         &mut self,
         s: &Sample<P, A>,
         found: &[(u32, Violation)],
         rapid: bool,
-        sink: &mut F,
-    ) -> Result<()>
-    where
-        F: FnMut(&Sample<P, A>) -> Result<()>,
-    {
+        sink: &mut S,
+    ) -> Result<()> {
         let (t, act, x) = (s.t, &s.act, &s.x);
         self.buf.clear();
         // Rate limits (infinite where none is given): a violation is rare. One pass over
@@ -200,7 +227,7 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
                 self.singular.add(t, s.line, d, act.qd.as_slice());
             }
         }
-        sink(s)
+        sink.sample(s)
     }
 
     /// The violation of actuator `i`'s velocity (`order` 1) or acceleration (2) limit

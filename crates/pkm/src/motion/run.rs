@@ -8,7 +8,7 @@ use super::block::Block;
 use super::path::Segment;
 use super::plan::{drive, run_inline, Planner, Step};
 use super::profile::Profile;
-use super::recorder::Recorder;
+use super::recorder::{Callbacks, Recorder, RunSink};
 use super::singular::{SingularReport, SingularTracker};
 use super::stats::{AxisStats, Ratios};
 use crate::error::{Error, Result};
@@ -189,8 +189,12 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
     {
         let Runner { plan, rec, spare } = self;
         let step = Ok(Step::Move { mv: *mv, last });
+        let mut to = Callbacks {
+            sample: sink,
+            tool: &mut |_| Ok(()),
+        };
         run_inline(plan, [step], spare, &mut |b: &mut Block<M, P, A>| {
-            rec.record(b, sink, &mut |_| Ok(()))
+            rec.record(b, &mut to)
         })
     }
 
@@ -205,9 +209,18 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Runner<'m, M, P, A>
         F: FnMut(&Sample<P, A>) -> Result<()>,
         T: FnMut(f64) -> Result<()>,
     {
+        self.run_steps_into(steps, &mut Callbacks { sample: sink, tool })
+    }
+
+    /// [`Runner::run_steps`] into one sink of the samples and the tool lengths.
+    pub(crate) fn run_steps_into<I, S>(&mut self, steps: I, sink: &mut S) -> Result<()>
+    where
+        I: IntoIterator<Item = Result<Step<P>>>,
+        S: RunSink<P, A>,
+    {
         let Runner { plan, rec, .. } = self;
         drive(plan, steps, &mut |b: &mut Block<M, P, A>| {
-            rec.record(b, sink, tool)
+            rec.record(b, sink)
         })
     }
 

@@ -7,27 +7,24 @@
 pub mod atlas;
 mod connected;
 pub mod forward;
+mod mapping;
 mod reach;
 mod summary;
 mod verdict;
 
+pub use mapping::map;
 pub use reach::{
     default_grid, default_span, map_reach, reach_grid, reachable_tilt, tilt_orientations, ReachGrid,
 };
 pub use summary::WorkspaceSummary;
 
-use connected::{keep_connected, nearest_index, neighbours};
-use verdict::{admit, conditioned, fold_conditions, Tally};
 pub(crate) use verdict::{evaluate, reach};
 
 use nalgebra::SVector;
-use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::error::{Error, Result};
-use crate::limits::{LimitName, Violation};
-use crate::mechanism::Mechanism;
-use crate::rotation::Convention;
+use crate::limits::LimitName;
 
 /// One axis of a grid: a pose coordinate swept from `min` to `max` by `step`
 /// (internal units).
@@ -185,6 +182,8 @@ pub struct WorkspaceMap {
     /// Per axis, whether its `[min, max]` faces are bounds of the machine's reach (the
     /// type's [`Mechanism::position_bound`]): reachable points on them do not mean the
     /// region goes on beyond the grid.
+    ///
+    /// [`Mechanism::position_bound`]: crate::mechanism::Mechanism::position_bound
     pub closed: Vec<[bool; 2]>,
 }
 
@@ -248,198 +247,3 @@ pub(crate) fn check_axes(axes: &[GridAxis], n: usize) -> Result<()> {
 
 /// The largest number of points a grid may have (5e7: seconds to a minute of work).
 pub const MAX_GRID_POINTS: usize = 50_000_000;
-
-/// Maps a grid of poses: for each point the base pose with the axis coordinates set,
-/// then, for spatial machines, each orientation of `orientations` (A, B, C in rad,
-/// composed with the base orientation) — a point is reachable when every one is.
-/// `progress` is called with the number of points done (from several threads).
-pub fn map<M, const P: usize, const A: usize>(
-    m: &M,
-    base: &SVector<f64, P>,
-    axes: &[GridAxis],
-    orientations: &[[f64; 3]],
-    progress: &(dyn Fn(u64) + Sync),
-) -> Result<WorkspaceMap>
-where
-    M: Mechanism<P, A>,
-{
-    check_axes(axes, P)?;
-    if !orientations.is_empty() && P != 6 {
-        return Err(Error::InvalidInput {
-            what: "orientation set".into(),
-            message: "orientation sets need a machine with X, Y, Z, A, B, C".into(),
-        });
-    }
-    let counts: Vec<usize> = axes.iter().map(|a| a.count()).collect();
-    let total: usize = counts.iter().product();
-    let base_r = if P == 6 {
-        Convention::Rpy.to_matrix([base[3], base[4], base[5]])
-    } else {
-        nalgebra::Matrix3::identity()
-    };
-    let rots: Vec<[f64; 3]> = orientations
-        .iter()
-        .map(|o| Convention::Rpy.from_matrix(&(Convention::Rpy.to_matrix(*o) * base_r)))
-        .collect();
-    let chunk = 4096;
-    // Inverse kinematics (from `seed`, else home) and limits at `x` in each orientation
-    // of the set: the poses within every limit, in orientation order, go to `pend`; the
-    // result of the first one that is not, if any.
-    let admit_all = |x: &SVector<f64, P>,
-                     v: &mut Vec<Violation>,
-                     seed: Option<&SVector<f64, A>>,
-                     pend: &mut dyn FnMut(SVector<f64, P>, SVector<f64, A>)|
-     -> Option<PointResult> {
-        let solve = |x: &SVector<f64, P>| match seed {
-            Some(q) => m.inverse_near(x, q),
-            None => m.inverse(x),
-        };
-        if rots.is_empty() {
-            return match admit(m, x, solve(x), v) {
-                Ok(q) => {
-                    pend(*x, q);
-                    None
-                }
-                Err(r) => Some(r),
-            };
-        }
-        let mut x = *x;
-        for o in &rots {
-            for (i, val) in o.iter().enumerate() {
-                x[3 + i] = *val;
-            }
-            match admit(m, &x, solve(&x), v) {
-                Ok(q) => pend(x, q),
-                Err(r) => return Some(r),
-            }
-        }
-        None
-    };
-    // One point alone (the retries from a neighbour's solution): `v` is left with the
-    // violations of a point beyond a limit.
-    let evaluate_all =
-        |x: &SVector<f64, P>, v: &mut Vec<Violation>, seed: Option<&SVector<f64, A>>| {
-            let (mut xs, mut qs) = (Vec::new(), Vec::new());
-            let r = admit_all(x, v, seed, &mut |x, q| {
-                xs.push(x);
-                qs.push(q);
-            });
-            let mut cs = vec![0.0; xs.len()];
-            crate::mechanism::abilities::conditions(m, &xs, &qs, &mut cs);
-            let mut point = [r.unwrap_or_else(|| conditioned(0.0))];
-            fold_conditions(
-                &mut point,
-                &vec![0; cs.len()],
-                &cs,
-                Vec::new(),
-                &mut Tally::default(),
-            );
-            let [point] = point;
-            point
-        };
-    // Chunks in parallel, each with its own tally of every violated limit (merged in
-    // order afterwards: no locks, and the points keep their grid order). In a chunk,
-    // inverse kinematics and limits point by point, then the condition numbers of
-    // every pose within the limits in one call (`abilities::conditions`: the
-    // hexapod's runs eight poses across SIMD lanes), folded as `evaluate_all` does:
-    // the worst over the orientations; singular at the first that is not finite, also
-    // before an orientation beyond a limit.
-    let chunks: Vec<(Vec<PointResult>, Tally)> = (0..total.div_ceil(chunk))
-        .into_par_iter()
-        .map_init(Vec::new, |v, c| {
-            let range = c * chunk..((c + 1) * chunk).min(total);
-            let mut tally = Tally::default();
-            let mut points: Vec<PointResult> = Vec::with_capacity(range.len());
-            let (mut xs, mut qs, mut owner) = (Vec::new(), Vec::new(), Vec::new());
-            // Points beyond a limit after orientations whose conditions are pending:
-            // their violations, tallied unless one of those is singular.
-            let mut deferred: Vec<(usize, Vec<Violation>)> = Vec::new();
-            for k in range.clone() {
-                let i = points.len();
-                let before = xs.len();
-                let mut pend = |x, q| {
-                    xs.push(x);
-                    qs.push(q);
-                    owner.push(i);
-                };
-                match admit_all(&grid_point(base, axes, &counts, k), v, None, &mut pend) {
-                    Some(r) => {
-                        if r.status == PointStatus::Limits {
-                            if xs.len() > before {
-                                deferred.push((i, v.clone()));
-                            } else {
-                                tally.add(v);
-                            }
-                        }
-                        points.push(r);
-                    }
-                    None => points.push(conditioned(0.0)),
-                }
-            }
-            let mut cs = vec![0.0; xs.len()];
-            crate::mechanism::abilities::conditions(m, &xs, &qs, &mut cs);
-            fold_conditions(&mut points, &owner, &cs, deferred, &mut tally);
-            progress(range.len() as u64);
-            (points, tally)
-        })
-        .collect();
-    let mut tally = Tally::default();
-    let mut points = Vec::with_capacity(total);
-    for (p, t) in chunks {
-        points.extend(p);
-        tally.merge(t);
-    }
-    // A point the solver failed on is tried again from the solutions of its reachable
-    // neighbours (continuation), a few sweeps so that solved points seed the next.
-    for _ in 0..3 {
-        let failed: Vec<usize> = (0..total)
-            .filter(|&k| points[k].status == PointStatus::SolverFailed)
-            .collect();
-        if failed.is_empty() {
-            break;
-        }
-        let retried: Vec<(usize, PointResult, Tally)> = failed
-            .par_iter()
-            .filter_map(|&k| {
-                let mut v = Vec::new();
-                let x = grid_point(base, axes, &counts, k);
-                for nb in neighbours(&counts, k) {
-                    if !matches!(
-                        points[nb].status,
-                        PointStatus::Reachable | PointStatus::Limits
-                    ) {
-                        continue;
-                    }
-                    let Ok(seed) = m.inverse(&grid_point(base, axes, &counts, nb)) else {
-                        continue;
-                    };
-                    let r = evaluate_all(&x, &mut v, Some(&seed));
-                    if r.status != PointStatus::SolverFailed {
-                        let mut t = Tally::default();
-                        if r.status == PointStatus::Limits {
-                            t.add(&v);
-                        }
-                        return Some((k, r, t));
-                    }
-                }
-                None
-            })
-            .collect();
-        if retried.is_empty() {
-            break;
-        }
-        for (k, r, t) in retried {
-            points[k] = r;
-            tally.merge(t);
-        }
-    }
-    keep_connected(&mut points, &counts, &nearest_index(base, axes, &counts));
-    Ok(WorkspaceMap {
-        axes: axes.to_vec(),
-        base: base.as_slice().to_vec(),
-        orientations: orientations.len(),
-        points,
-        violated: tally.sorted(),
-        closed: vec![[false; 2]; axes.len()],
-    })
-}

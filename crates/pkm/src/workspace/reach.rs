@@ -227,7 +227,6 @@ pub fn reach_grid<M: Mechanism<P, A>, const P: usize, const A: usize>(
             })
             .collect(),
     };
-    let turn = std::f64::consts::TAU;
     let mut method = match bound {
         Some(_) => "the type's bound on the tool position".to_string(),
         None => "the default span".to_string(),
@@ -241,44 +240,11 @@ pub fn reach_grid<M: Mechanism<P, A>, const P: usize, const A: usize>(
             method.push_str(" (no reachable point found by a probing grid: kept whole)");
             break;
         };
-        let mut grew = false;
-        if bound.is_none() && round < 8 {
-            for (i, a) in probe.iter().enumerate() {
-                let k = a.coordinate;
-                if a.covers_turn(q(k)) {
-                    continue;
-                }
-                let (lo, hi) = ranges[i];
-                let half = 0.5 * (hi - lo);
-                // Angles grow up to half a turn either side of the base.
-                let cap = |v: f64| match q(k) {
-                    Quantity::Angle => v.clamp(base[k] - 0.5 * turn, base[k] + 0.5 * turn),
-                    Quantity::Length => v,
-                };
-                if ext[i][0] == 0 {
-                    ranges[i].0 = cap(lo - half);
-                }
-                if ext[i][1] + 1 == a.count() {
-                    ranges[i].1 = cap(hi + half);
-                }
-                grew |= ranges[i] != (lo, hi);
-            }
-        }
-        if grew {
+        if bound.is_none() && round < 8 && grow_faces(m, base, &probe, &ext, &mut ranges) {
             grown += 1;
             continue;
         }
-        for (i, a) in probe.iter().enumerate() {
-            if a.covers_turn(q(a.coordinate)) {
-                continue;
-            }
-            // A face moved in is no longer the type's bound.
-            closed[i][0] &= ext[i][0] == 0;
-            closed[i][1] &= ext[i][1] + 1 == a.count();
-            let lo = a.value(ext[i][0].saturating_sub(1));
-            let hi = a.value((ext[i][1] + 1).min(a.count() - 1));
-            ranges[i] = (lo, hi.max(lo + a.step));
-        }
+        shrink_to_reach(m, &probe, &ext, &mut ranges, &mut closed);
         if grown > 0 {
             method.push_str(&format!(", grown {grown} times"));
         }
@@ -296,6 +262,66 @@ pub fn reach_grid<M: Mechanism<P, A>, const P: usize, const A: usize>(
         method,
         closed,
     })
+}
+
+/// Moves out by half the box every face of `ranges` (one per axis of the grid
+/// `probe`) that reachable points lie on (`ext`: their first and last index per axis),
+/// angles up to half a turn either side of `base`; whether any moved.
+fn grow_faces<M: Mechanism<P, A>, const P: usize, const A: usize>(
+    m: &M,
+    base: &SVector<f64, P>,
+    probe: &[GridAxis],
+    ext: &[[usize; 2]],
+    ranges: &mut [(f64, f64)],
+) -> bool {
+    let turn = std::f64::consts::TAU;
+    let mut grew = false;
+    for (i, a) in probe.iter().enumerate() {
+        let k = a.coordinate;
+        let quantity = m.info().coordinates()[k].quantity;
+        if a.covers_turn(quantity) {
+            continue;
+        }
+        let (lo, hi) = ranges[i];
+        let half = 0.5 * (hi - lo);
+        // Angles grow up to half a turn either side of the base.
+        let cap = |v: f64| match quantity {
+            Quantity::Angle => v.clamp(base[k] - 0.5 * turn, base[k] + 0.5 * turn),
+            Quantity::Length => v,
+        };
+        let new_lo = if ext[i][0] == 0 { cap(lo - half) } else { lo };
+        let new_hi = if ext[i][1] + 1 == a.count() {
+            cap(hi + half)
+        } else {
+            hi
+        };
+        ranges[i] = (new_lo, new_hi);
+        grew |= ranges[i] != (lo, hi);
+    }
+    grew
+}
+
+/// Shrinks `ranges` to the reachable points of the grid `probe` (`ext`: their first
+/// and last index per axis) plus one probing cell, except on axes that go round a
+/// turn; a face moved in is no longer `closed` (the type's bound).
+fn shrink_to_reach<M: Mechanism<P, A>, const P: usize, const A: usize>(
+    m: &M,
+    probe: &[GridAxis],
+    ext: &[[usize; 2]],
+    ranges: &mut [(f64, f64)],
+    closed: &mut [[bool; 2]],
+) {
+    for (i, a) in probe.iter().enumerate() {
+        if a.covers_turn(m.info().coordinates()[a.coordinate].quantity) {
+            continue;
+        }
+        // A face moved in is no longer the type's bound.
+        closed[i][0] &= ext[i][0] == 0;
+        closed[i][1] &= ext[i][1] + 1 == a.count();
+        let lo = a.value(ext[i][0].saturating_sub(1));
+        let hi = a.value((ext[i][1] + 1).min(a.count() - 1));
+        ranges[i] = (lo, hi.max(lo + a.step));
+    }
 }
 
 /// Grid axes over coordinates `idx` and their `ranges`, the step of each from

@@ -17,6 +17,7 @@
 
 use nalgebra::{Matrix3, Vector3};
 
+use super::writer::Param;
 use super::{fmt_num, Imported, Kinematics, Writer};
 use crate::error::Result;
 
@@ -30,10 +31,12 @@ fn frame(z: Vector3<f64>) -> Matrix3<f64> {
     Matrix3::from_columns(&[x, z.cross(&x), z])
 }
 
+/// A vector as a TOML array.
 fn row3(v: &Vector3<f64>) -> String {
     format!("[{}, {}, {}]", fmt_num(v.x), fmt_num(v.y), fmt_num(v.z))
 }
 
+/// A matrix as a TOML array of rows.
 fn block(m: &Matrix3<f64>) -> String {
     let rows: Vec<String> = (0..3)
         .map(|r| row3(&m.row(r).transpose().into_owned()))
@@ -41,34 +44,83 @@ fn block(m: &Matrix3<f64>) -> String {
     format!("[{}]", rows.join(", "))
 }
 
+/// The geometry of a trt module, from its parameters (mm): where the table turns
+/// and tilts, and the directions of its joints.
+struct Trt {
+    /// The tilt axis' letter (`A` or `B`).
+    tilt: char,
+    /// The world axis of the tilt's offset (0: X for XYZBC, 1: Y for XYZAC).
+    offset_axis: usize,
+    /// The joints' letters, in joint order.
+    letters: [char; 5],
+    /// `x/y/z-rot-point`.
+    rot: [Param; 3],
+    /// The name of the tilt's offset parameter (`x-offset` or `y-offset`).
+    off_name: &'static str,
+    /// The tilt's offset.
+    off: Param,
+    /// `z-offset`.
+    zoff: Param,
+    /// `tool-offset`.
+    tool: Param,
+    /// `conventional-directions`.
+    conv: Param,
+    /// The rotation point `r` (mm).
+    r: Vector3<f64>,
+    /// The offsets `d` from it to the tilt axis (mm).
+    d: Vector3<f64>,
+    /// The tilt joint's axis.
+    tilt_axis: Vector3<f64>,
+    /// The rotary joint's axis.
+    rotary_axis: Vector3<f64>,
+}
+
 impl Writer<'_> {
     /// The TCP machine of a trt module.
     pub(super) fn trt(&mut self) -> Result<()> {
-        let module = self.kins.module();
         let (tilt, offset_axis) = match self.kins {
             Kinematics::XyzacTrt => ('A', 1),
             _ => ('B', 0),
         };
         let letters = ['X', 'Y', 'Z', tilt, 'C'];
-        if let Some(e) = self.ini.get("TRAJ", "COORDINATES") {
-            let given: String = e
-                .value
-                .chars()
-                .filter(|c| !c.is_whitespace())
-                .collect::<String>()
-                .to_ascii_uppercase();
-            if given != letters.iter().collect::<String>() {
-                return Err(self.ini.error(
-                    e,
-                    format!(
-                        "pkm maps {module}'s joints 0-4 to {}: COORDINATES `{}` (other orders \
-                         or doubled letters) are not imported",
-                        letters.iter().collect::<String>(),
-                        e.value
-                    ),
-                ));
-            }
+        self.check_coordinates(&letters)?;
+        let t = self.trt_geometry(tilt, offset_axis, letters)?;
+        self.warn_identity_first();
+        self.trt_comments(&t);
+        self.trt_tool_chain(&t)?;
+        self.trt_workpiece_chain(&t)?;
+        self.trt_home(&letters)
+    }
+
+    /// Refuses `[TRAJ] COORDINATES` other than `letters` in order.
+    fn check_coordinates(&self, letters: &[char; 5]) -> Result<()> {
+        let module = self.kins.module();
+        let Some(e) = self.ini.get("TRAJ", "COORDINATES") else {
+            return Ok(());
+        };
+        let given: String = e
+            .value
+            .chars()
+            .filter(|c| !c.is_whitespace())
+            .collect::<String>()
+            .to_ascii_uppercase();
+        if given != letters.iter().collect::<String>() {
+            return Err(self.ini.error(
+                e,
+                format!(
+                    "pkm maps {module}'s joints 0-4 to {}: COORDINATES `{}` (other orders \
+                     or doubled letters) are not imported",
+                    letters.iter().collect::<String>(),
+                    e.value
+                ),
+            ));
         }
+        Ok(())
+    }
+
+    /// The module's parameters and the geometry they give.
+    fn trt_geometry(&mut self, tilt: char, offset_axis: usize, letters: [char; 5]) -> Result<Trt> {
+        let module = self.kins.module();
         let k = self.units.mm;
         let p = |s: &mut Self, name: &str| s.param(&format!("{module}.{name}"), 0.0);
         let rot = [
@@ -94,6 +146,26 @@ impl Writer<'_> {
         let mut tilt_axis = Vector3::zeros();
         tilt_axis[1 - offset_axis] = sign;
         let rotary_axis = Vector3::new(0.0, 0.0, sign);
+        Ok(Trt {
+            tilt,
+            offset_axis,
+            letters,
+            rot,
+            off_name,
+            off,
+            zoff,
+            tool,
+            conv,
+            r,
+            d,
+            tilt_axis,
+            rotary_axis,
+        })
+    }
+
+    /// Warns when the configuration starts in identity kinematics.
+    fn warn_identity_first(&mut self) {
+        let module = self.kins.module();
         if let Some(e) = self.ini.get("KINS", "KINEMATICS") {
             if e.value.contains("identityfirst") {
                 self.warnings.push(format!(
@@ -104,6 +176,11 @@ impl Writer<'_> {
                 ));
             }
         }
+    }
+
+    /// The pose line and the comments on the module's geometry and its parameters.
+    fn trt_comments(&mut self, t: &Trt) {
+        let module = self.kins.module();
         self.line(
             "pose = \"tcp\"  # X, Y, Z of the tool tip in the part frame, then the rotary axes",
         );
@@ -112,10 +189,11 @@ impl Writer<'_> {
             "# {module}: table rotary axis C about the vertical through the rotation point,"
         ));
         self.line(format!(
-            "# tilt axis {tilt} about a line along {} through rotation point + offsets.",
-            if offset_axis == 0 { "Y" } else { "X" }
+            "# tilt axis {} about a line along {} through rotation point + offsets.",
+            t.tilt,
+            if t.offset_axis == 0 { "Y" } else { "X" }
         ));
-        for (c, prm) in ["x", "y", "z"].iter().zip(&rot) {
+        for (c, prm) in ["x", "y", "z"].iter().zip(&t.rot) {
             self.line(format!(
                 "#   {c}-rot-point = {} {}: {}",
                 fmt_num(prm.value),
@@ -124,9 +202,9 @@ impl Writer<'_> {
             ));
         }
         for (n, prm) in [
-            (off_name, &off),
-            ("z-offset", &zoff),
-            ("tool-offset", &tool),
+            (t.off_name, &t.off),
+            ("z-offset", &t.zoff),
+            ("tool-offset", &t.tool),
         ] {
             self.line(format!(
                 "#   {n} = {} {}: {}",
@@ -137,12 +215,16 @@ impl Writer<'_> {
         }
         self.line(format!(
             "#   conventional-directions = {}: {} (table joints turn the table about {} and {})",
-            fmt_num(conv.value),
-            conv.origin,
-            row3(&tilt_axis),
-            row3(&rotary_axis)
+            fmt_num(t.conv.value),
+            t.conv.origin,
+            row3(&t.tilt_axis),
+            row3(&t.rotary_axis)
         ));
-        // Tool chain: X, Y, Z slides; the tool tip tool-offset below the gauge point.
+    }
+
+    /// The tool chain: X, Y, Z slides; the tool tip tool-offset below the gauge point.
+    fn trt_tool_chain(&mut self, t: &Trt) -> Result<()> {
+        let k = self.units.mm;
         let world = Matrix3::identity();
         let slides = [Vector3::x(), Vector3::y(), Vector3::z()].map(frame);
         let mut prev = world;
@@ -153,20 +235,25 @@ impl Writer<'_> {
             self.line("[[tool_chain]]");
             self.line(format!("name = \"{name}\""));
             if i > 0 {
-                self.joint_line(i - 1, letters[i - 1], "prismatic")?;
+                self.joint_line(i - 1, t.letters[i - 1], "prismatic")?;
             }
             if i == 3 {
-                let t = prev.transpose() * Vector3::new(0.0, 0.0, -tool.value * k);
+                let tip = prev.transpose() * Vector3::new(0.0, 0.0, -t.tool.value * k);
                 self.line(format!(
                     "translation = {}  # the tool tip tool-offset below the gauge point",
-                    row3(&t)
+                    row3(&tip)
                 ));
             }
             self.line(format!("rotation = {}", block(&(prev.transpose() * next))));
             prev = next;
         }
-        // Workpiece chain: mount at r + d, tilt, rotary at r, part frame.
-        let (ft, fc) = (frame(tilt_axis), frame(rotary_axis));
+        Ok(())
+    }
+
+    /// The workpiece chain: mount at `r + d`, tilt, rotary at `r`, part frame.
+    fn trt_workpiece_chain(&mut self, t: &Trt) -> Result<()> {
+        let (r, d) = (t.r, t.d);
+        let (ft, fc) = (frame(t.tilt_axis), frame(t.rotary_axis));
         self.line("");
         self.line("[[workpiece_chain]]");
         self.line("name = \"table mount\"");
@@ -178,7 +265,7 @@ impl Writer<'_> {
         self.line("");
         self.line("[[workpiece_chain]]");
         self.line("name = \"tilting table\"");
-        self.joint_line(3, tilt, "revolute")?;
+        self.joint_line(3, t.tilt, "revolute")?;
         self.line(format!(
             "translation = {}  # from the tilt axis to the rotary axis' point",
             row3(&(ft.transpose() * -d))
@@ -193,7 +280,7 @@ impl Writer<'_> {
             row3(&(fc.transpose() * -r))
         ));
         self.line(format!("rotation = {}", block(&fc.transpose())));
-        self.trt_home(&letters)
+        Ok(())
     }
 
     /// One `joint = {...}` line from `[JOINT_i]`.
