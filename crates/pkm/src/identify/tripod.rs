@@ -9,7 +9,7 @@ use nalgebra::Vector3;
 use super::struts::StrutMachine;
 use crate::machine::StrutGeometry;
 use crate::mechanism::Mechanism;
-use crate::tripod::{TranslationalTripod, TripodGeometry};
+use crate::tripod::TranslationalTripod;
 
 impl StrutMachine<3> for TranslationalTripod {
     fn struts(&self) -> [StrutGeometry; 3] {
@@ -36,15 +36,7 @@ impl StrutMachine<3> for TranslationalTripod {
             st.base = g.base;
             st.platform = g.platform;
         }
-        let mut geometry = TripodGeometry::new(
-            old.name().to_string(),
-            s,
-            old.tool(),
-            old.max_tilt,
-            old.min_strut_spindle_angle,
-        );
-        geometry.zero_lengths = old.zero_lengths;
-        geometry.axes = old.axes.clone();
+        let geometry = old.with_struts(s);
         TranslationalTripod::new(geometry, self.info().home())
     }
 

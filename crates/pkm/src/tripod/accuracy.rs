@@ -4,7 +4,7 @@
 
 use nalgebra::Vector3;
 
-use super::{CentreLegTripod, TripodGeometry};
+use super::CentreLegTripod;
 use crate::accuracy::clearance::PassiveJoint;
 use crate::accuracy::rebuild::{parametric_by_rebuild, strut_joints, strut_rebuild};
 use crate::accuracy::{Parameter, ParameterKind, Rebuild};
@@ -51,15 +51,7 @@ impl Rebuild<3, 3> for CentreLegTripod {
             st.base = Vector3::from_column_slice(&v[3 * j..3 * j + 3]);
             st.platform = Vector3::from_column_slice(&v[9 + 3 * j..9 + 3 * j + 3]);
         }
-        let mut geometry = TripodGeometry::new(
-            old.name().to_string(),
-            s,
-            old.tool(),
-            old.max_tilt,
-            old.min_strut_spindle_angle,
-        );
-        geometry.zero_lengths = old.zero_lengths;
-        geometry.axes = old.axes.clone();
+        let geometry = old.with_struts(s);
         let mut leg = self.leg().clone();
         leg.base = Vector3::from_column_slice(&v[18..21]);
         Ok(CentreLegTripod::new(geometry, leg, self.info().home()))

@@ -81,6 +81,21 @@ impl TripodGeometry {
         }
     }
 
+    /// The same geometry with other struts: name, tool, tilt and collision limits, zero
+    /// lengths and travel kept, what derives from the struts built anew.
+    pub fn with_struts(&self, struts: [Strut; 3]) -> Self {
+        let mut g = TripodGeometry::new(
+            self.name.clone(),
+            struts,
+            self.tool,
+            self.max_tilt,
+            self.min_strut_spindle_angle,
+        );
+        g.zero_lengths = self.zero_lengths;
+        g.axes = self.axes.clone();
+        g
+    }
+
     /// Machine name.
     pub fn name(&self) -> &str {
         &self.name
