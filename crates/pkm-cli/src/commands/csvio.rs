@@ -23,6 +23,18 @@ pub fn read_table(path: &Path, accepted: &[Vec<String>]) -> Result<InputTable> {
     )?)
 }
 
+/// The output's copy of the input's columns: doubles, or doubles or nothing when a
+/// row has no values (an earlier batch's row without a solution).
+pub fn input_columns(table: &InputTable) -> Vec<(String, Kind)> {
+    let empty = table.rows.iter().any(|(_, v)| v.is_empty());
+    let kind = if empty { Kind::OptF64 } else { Kind::F64 };
+    table.header.iter().map(|h| (h.clone(), kind)).collect()
+}
+
+/// Why a row without values has no result.
+pub const NO_VALUES: &str =
+    "no values (the row's cells are empty: an earlier batch's row without a solution)";
+
 /// A batch's result table being written: CSV (numbers in full precision, the
 /// shortest form that reads back to the same double; texts quoted where needed), or
 /// Parquet (typed columns: nulls where the CSV has empty fields) when the output's
@@ -104,6 +116,16 @@ impl BatchTable {
                 Some(v) => t.f64(c, v),
                 None => t.opt_f64(c, None),
             },
+        }
+    }
+
+    /// The row's copy of the input's `width` values: `vals`, or empty cells for a row
+    /// without values.
+    pub fn input(&mut self, width: usize, vals: &[f64]) {
+        if vals.is_empty() {
+            (0..width).for_each(|_| self.num(None));
+        } else {
+            vals.iter().for_each(|v| self.num(Some(*v)));
         }
     }
 

@@ -12,7 +12,7 @@ use pkm::pose::rotation_matrix;
 use pkm::{Convention, DynMechanism, PoseSpace};
 use serde_json::json;
 
-use super::csvio::{read_table, BatchTable};
+use super::csvio::{input_columns, read_table, BatchTable, NO_VALUES};
 use super::load;
 use crate::columnar::{machine_metadata, Kind};
 use crate::poses::{
@@ -41,7 +41,8 @@ pub struct FkArgs {
     /// around home (and mirrored through the base plane) and list every distinct pose.
     #[arg(long, conflicts_with = "input")]
     pub assembly_modes: Option<usize>,
-    /// CSV of many actuator sets (header row naming the actuators).
+    /// CSV of many actuator sets (header row naming the actuators; other columns, such
+    /// as the rest of a `pkm ik --output` table, are left unread).
     #[arg(long, requires = "output")]
     pub input: Option<PathBuf>,
     /// File to write the batch results to: CSV, or Parquet when its name ends in
@@ -268,11 +269,7 @@ fn batch(
     let conv = a.opts.rotation;
     let names: Vec<String> = m.actuators().iter().map(|a| a.name.clone()).collect();
     let table = read_table(input, &[names])?;
-    let mut columns: Vec<(String, Kind)> = table
-        .header
-        .iter()
-        .map(|h| (h.clone(), Kind::F64))
-        .collect();
+    let mut columns = input_columns(&table);
     let cols = BatchColumns::new(m, conv, &mut columns);
     let meta = machine_metadata(
         m,
@@ -287,11 +284,13 @@ fn batch(
     let mut failed = 0usize;
     let mut text = String::new();
     for (line, vals) in &table.rows {
-        for v in vals {
-            out.num(Some(*v));
-        }
-        let res = actuators_from_user(m, vals).and_then(|q| Ok(stream.next(&q)?));
+        out.input(table.header.len(), vals);
         text.clear();
+        let res = if vals.is_empty() {
+            Err(anyhow::anyhow!(NO_VALUES))
+        } else {
+            actuators_from_user(m, vals).and_then(|q| Ok(stream.next(&q)?))
+        };
         let ok = match res {
             Ok((f, v)) => write_solution(&mut out, m, conv, &cols, &f, &v, &mut text),
             Err(e) => {

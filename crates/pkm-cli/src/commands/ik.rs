@@ -13,7 +13,7 @@ use pkm::analysis::kinematics::{
 use pkm::{DynMechanism, Machine, PoseSpace};
 use serde_json::{json, Map, Value};
 
-use super::csvio::{read_table, BatchTable};
+use super::csvio::{input_columns, read_table, BatchTable, NO_VALUES};
 use super::load;
 use crate::columnar::{machine_metadata, Kind};
 use crate::poses::{
@@ -35,7 +35,8 @@ pub struct IkArgs {
         conflicts_with = "input"
     )]
     pub pose: Option<String>,
-    /// CSV of many poses (header row naming the values).
+    /// CSV of many poses (header row naming the values; other columns, such as the
+    /// rest of a `pkm fk --output` table, are left unread).
     #[arg(long, requires = "output")]
     pub input: Option<PathBuf>,
     /// File to write the batch results to: CSV, or Parquet when its name ends in
@@ -307,14 +308,23 @@ fn batch(
         "pkm ik batch: the input poses, the actuator values (null without a solution), \
          whether every limit holds, the violated limits",
     );
-    let columns = batch_columns(m, &table.header);
+    let columns = batch_columns(m, input_columns(&table));
     let mut out = BatchTable::create(output, &[input, &a.machine], &columns, meta)?;
     let mut tally = Tally::default();
     let mut text = String::new();
     let mut stream = a.continuous.then(|| InverseStream::new(machine));
     for (line, vals) in &table.rows {
-        for v in vals {
-            out.num(Some(*v));
+        out.input(table.header.len(), vals);
+        if vals.is_empty() {
+            unsolved_row(
+                &mut out,
+                m,
+                &mut tally,
+                "no values",
+                &format!("line {line}: {NO_VALUES}"),
+            );
+            out.end_row()?;
+            continue;
         }
         let res = pose_from_user(m, vals, conv)
             .map_err(anyhow::Error::from)
@@ -326,14 +336,8 @@ fn batch(
         match res {
             Ok(r) => write_solution(&mut out, m, &r, &mut tally, &mut text),
             Err(e) => {
-                tally.unreachable += 1;
-                *tally.counts.entry("no solution".into()).or_default() += 1;
-                for _ in m.actuators() {
-                    out.num(None);
-                }
-                out.bool(false);
                 let _ = write!(text, "line {line}: {e}");
-                out.text(Some(&text));
+                unsolved_row(&mut out, m, &mut tally, "no solution", &text);
             }
         }
         out.end_row()?;
@@ -346,8 +350,7 @@ fn batch(
 }
 
 /// The batch's columns: the input's, the actuators, `reachable`, `violations`.
-fn batch_columns(m: &dyn DynMechanism, header: &[String]) -> Vec<(String, Kind)> {
-    let mut columns: Vec<(String, Kind)> = header.iter().map(|h| (h.clone(), Kind::F64)).collect();
+fn batch_columns(m: &dyn DynMechanism, mut columns: Vec<(String, Kind)>) -> Vec<(String, Kind)> {
     columns.extend(
         m.actuators()
             .iter()
@@ -364,6 +367,24 @@ fn batch_columns(m: &dyn DynMechanism, header: &[String]) -> Vec<(String, Kind)>
 struct Tally {
     unreachable: usize,
     counts: BTreeMap<String, usize>,
+}
+
+/// The cells of a row without a solution (`key` counted in the tally, `status` its
+/// text): empty actuators, not reachable.
+fn unsolved_row(
+    out: &mut BatchTable,
+    m: &dyn DynMechanism,
+    tally: &mut Tally,
+    key: &str,
+    status: &str,
+) {
+    tally.unreachable += 1;
+    *tally.counts.entry(key.into()).or_default() += 1;
+    for _ in m.actuators() {
+        out.num(None);
+    }
+    out.bool(false);
+    out.text(Some(status));
 }
 
 /// The cells of a solved row: actuators, reachable, the violated limits (`text`, the

@@ -723,3 +723,98 @@ fn ik_keeps_long_actuator_names_in_one_column() {
     assert_eq!(columns.len(), 6, "{text}");
     assert!(columns.iter().all(|c| *c == columns[0]), "{text}");
 }
+
+/// Runs `pkm CMD MACHINE --input INPUT --output OUTPUT`; its exit code and stderr.
+fn batch_run(
+    cmd: &str,
+    machine: &str,
+    input: &std::path::Path,
+    output: &std::path::Path,
+) -> (i32, String) {
+    let out = pkm()
+        .args([cmd, machine, "--input"])
+        .arg(input)
+        .arg("--output")
+        .arg(output)
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn batches_chain_each_command_reads_what_the_other_writes() {
+    use crate::common::{assert_parquet_is_csv, csv_rows, Cell};
+    let dir = tempfile::tempdir().unwrap();
+    let m = root()
+        .join("examples/machines/kr30-dh.toml")
+        .display()
+        .to_string();
+    let poses = dir.path().join("poses.csv");
+    // A reachable pose, one beyond the links' reach (no solution: empty joints).
+    std::fs::write(
+        &poses,
+        "X,Y,Z,A,B,C\n1200,100,1400,180,0,0\n9000,0,0,0,0,0\n",
+    )
+    .unwrap();
+    let joints = dir.path().join("joints.csv");
+    let (code, err) = batch_run("ik", &m, &poses, &joints);
+    assert_eq!(code, 3, "{err}");
+    assert!(
+        err.contains("wrote 2 rows") && err.contains("1 reachable, 1 not"),
+        "{err}"
+    );
+    // pkm fk reads the joints pkm ik wrote (A1_deg..A6_deg among the other columns);
+    // the row without a solution stays a row, without values.
+    let back = dir.path().join("back.csv");
+    let (code, err) = batch_run("fk", &m, &joints, &back);
+    assert_eq!(code, 3, "{err}");
+    assert!(err.contains("1 solved within limits, 1 not"), "{err}");
+    let (names, rows) = csv_rows(&back);
+    assert_eq!(
+        names[..7],
+        ["A1_deg", "A2_deg", "A3_deg", "A4_deg", "A5_deg", "A6_deg", "X_mm"]
+    );
+    assert_eq!(rows.len(), 2);
+    let x = names.iter().position(|n| n == "X_mm").unwrap();
+    let status = names.iter().position(|n| n == "status").unwrap();
+    for (k, want) in [1200.0, 100.0, 1400.0].into_iter().enumerate() {
+        match rows[0][x + k] {
+            Cell::Num(v) => assert!((v - want).abs() < 1e-9, "{v} vs {want}"),
+            ref c => panic!("{c:?}"),
+        }
+    }
+    assert!(
+        rows[1][..status - 1].iter().all(|c| *c == Cell::Null),
+        "{:?}",
+        rows[1]
+    );
+    match &rows[1][status] {
+        Cell::Text(t) => assert!(t.starts_with("line 3: no values"), "{t}"),
+        c => panic!("{c:?}"),
+    }
+    // And pkm ik reads what pkm fk wrote (X_mm..C_deg among the other columns), as
+    // CSV and as Parquet (the empty row's input cells nulls).
+    let again = dir.path().join("again.csv");
+    let (code, err) = batch_run("ik", &m, &back, &again);
+    assert_eq!(code, 3, "{err}");
+    let (names, rows) = csv_rows(&again);
+    assert_eq!(
+        names[..6],
+        ["X_mm", "Y_mm", "Z_mm", "A_deg", "B_deg", "C_deg"]
+    );
+    assert_eq!(rows[0][names.len() - 2], Cell::Text("true".into()));
+    let pq = dir.path().join("again.parquet");
+    assert_eq!(batch_run("ik", &m, &back, &pq).0, 3);
+    assert_parquet_is_csv(&pq, &again, 0.0);
+    // A misspelt column is refused, not read as another list of values.
+    std::fs::write(&poses, "X,Y,Z,A,B,CC\n1200,100,1400,180,0,0\n").unwrap();
+    let (code, err) = batch_run("ik", &m, &poses, &again);
+    assert_eq!(code, 1);
+    assert!(
+        err.contains("names `A,B` of `X,Y,Z,A,B,C` but not `C`"),
+        "{err}"
+    );
+}
