@@ -78,102 +78,13 @@ pub fn complete(
     nominal: &Matrix3<f64>,
     measured: &[((usize, usize), f64); 3],
 ) -> Result<Completion> {
-    let mut known = [[false; 3]; 3];
-    for ((r, c), _) in measured {
-        if *r > 2 || *c > 2 || known[*r][*c] {
-            return Err(Error::InvalidInput {
-                what: "measured angular deviations".into(),
-                message: "three distinct positions (row, column) in 0..3 are needed".into(),
-            });
-        }
-        known[*r][*c] = true;
-    }
-    let mut unknown = [(0, 0); 6];
-    let free = (0..9)
-        .map(|e| (e / 3, e % 3))
-        .filter(|&(r, c)| !known[r][c]);
-    for (slot, rc) in unknown.iter_mut().zip(free) {
-        *slot = rc;
-    }
+    let (known, unknown) = positions(measured)?;
     let phi = nominal.map(|c| c.clamp(-1.0, 1.0).acos());
     let mut m0 = *nominal;
     for ((r, c), a) in measured {
         m0[(*r, *c)] = (phi[(*r, *c)] + a).cos();
     }
-    let solve = |start: Matrix3<f64>| -> Option<Matrix3<f64>> {
-        let mut m = start;
-        let mut f = equations(&m);
-        for _ in 0..60 {
-            if f.amax() < 1e-15 {
-                return Some(m);
-            }
-            let j = jacobian(&m, &unknown);
-            // Levenberg-Marquardt damping: the Jacobian is singular at the nominal
-            // block when a measured axis pair is aligned.
-            let jt = j.transpose();
-            let mut a = jt * j;
-            let lambda = 1e-12 + 1e-3 * f.norm_squared();
-            for d in 0..6 {
-                a[(d, d)] += lambda;
-            }
-            let step = SmallLu::new(&a)?.solve(&(jt * f));
-            let mut t = 1.0;
-            let mut ok = false;
-            for _ in 0..20 {
-                let mut mn = m;
-                for (u, (r, c)) in unknown.iter().enumerate() {
-                    mn[(*r, *c)] = (m[(*r, *c)] - t * step[u]).clamp(-1.0, 1.0);
-                }
-                let fnew = equations(&mn);
-                if fnew.norm() < f.norm() {
-                    m = mn;
-                    f = fnew;
-                    ok = true;
-                    break;
-                }
-                t *= 0.5;
-            }
-            if !ok {
-                break;
-            }
-        }
-        (f.amax() < 1e-13).then_some(m)
-    };
-    // Starts: the nominal block with the measured cosines, nudged both ways on every
-    // unknown (a root can sit on either side of a nominal zero).
-    let mut roots: Vec<Matrix3<f64>> = Vec::new();
-    let nudge = (1.0 - m0.iter().fold(1.0f64, |a, v| a.min(v.abs().max(1e-300)))).max(1e-6);
-    let size = measured
-        .iter()
-        .map(|(_, a)| a.abs())
-        .fold(1e-6, f64::max)
-        .max(nudge.min(1e-3));
-    for pattern in 0..(1u32 << 6) {
-        let mut s = m0;
-        for (u, (r, c)) in unknown.iter().enumerate() {
-            let sign = if pattern >> u & 1 == 1 { -1.0 } else { 1.0 };
-            s[(*r, *c)] = (s[(*r, *c)] + sign * size).clamp(-1.0, 1.0);
-        }
-        if let Some(m) = solve(s) {
-            // M^T M = I also has reflections: keep proper rotations only.
-            if m.determinant() > 0.0 && !roots.iter().any(|x| (x - m).amax() < 1e-9) {
-                roots.push(m);
-            }
-        }
-    }
-    let alpha_of = |m: &Matrix3<f64>| {
-        Matrix3::from_fn(|r, c| {
-            if known[r][c] {
-                measured
-                    .iter()
-                    .find(|((a, b), _)| *a == r && *b == c)
-                    .map(|x| x.1)
-                    .unwrap_or(0.0)
-            } else {
-                m[(r, c)].clamp(-1.0, 1.0).acos() - phi[(r, c)]
-            }
-        })
-    };
+    let mut roots = roots(&m0, measured, &unknown);
     let dist = |m: &Matrix3<f64>| (m - nominal).norm_squared();
     roots.sort_by(|a, b| {
         dist(a).total_cmp(&dist(b)).then_with(|| {
@@ -200,10 +111,133 @@ pub fn complete(
         .is_some_and(|m| (dist(m) - dist(&best)).abs() <= 1e-12 * (1.0 + dist(&best)));
     let residual = (best.transpose() * best - Matrix3::identity()).amax();
     Ok(Completion {
-        alpha: alpha_of(&best),
+        alpha: alpha_of(&best, &known, measured, &phi),
         block: best,
         residual,
         ambiguous,
+    })
+}
+
+/// Which of the nine entries are measured.
+type Known = [[bool; 3]; 3];
+
+/// The six entries not measured, row-major.
+type Unknown = [(usize, usize); 6];
+
+/// Checks the measured positions are distinct and in range; returns which entries are
+/// known and the six unknown ones in row-major order.
+fn positions(measured: &[((usize, usize), f64); 3]) -> Result<(Known, Unknown)> {
+    let mut known = [[false; 3]; 3];
+    for ((r, c), _) in measured {
+        if *r > 2 || *c > 2 || known[*r][*c] {
+            return Err(Error::InvalidInput {
+                what: "measured angular deviations".into(),
+                message: "three distinct positions (row, column) in 0..3 are needed".into(),
+            });
+        }
+        known[*r][*c] = true;
+    }
+    let mut unknown = [(0, 0); 6];
+    let free = (0..9)
+        .map(|e| (e / 3, e % 3))
+        .filter(|&(r, c)| !known[r][c]);
+    for (slot, rc) in unknown.iter_mut().zip(free) {
+        *slot = rc;
+    }
+    Ok((known, unknown))
+}
+
+/// Damped Newton on the `unknown` entries from `start` to an orthonormal block.
+fn solve_block(start: Matrix3<f64>, unknown: &Unknown) -> Option<Matrix3<f64>> {
+    let mut m = start;
+    let mut f = equations(&m);
+    for _ in 0..60 {
+        if f.amax() < 1e-15 {
+            return Some(m);
+        }
+        let j = jacobian(&m, unknown);
+        // Levenberg-Marquardt damping: the Jacobian is singular at the nominal
+        // block when a measured axis pair is aligned.
+        let jt = j.transpose();
+        let mut a = jt * j;
+        let lambda = 1e-12 + 1e-3 * f.norm_squared();
+        for d in 0..6 {
+            a[(d, d)] += lambda;
+        }
+        let step = SmallLu::new(&a)?.solve(&(jt * f));
+        let mut t = 1.0;
+        let mut ok = false;
+        for _ in 0..20 {
+            let mut mn = m;
+            for (u, (r, c)) in unknown.iter().enumerate() {
+                mn[(*r, *c)] = (m[(*r, *c)] - t * step[u]).clamp(-1.0, 1.0);
+            }
+            let fnew = equations(&mn);
+            if fnew.norm() < f.norm() {
+                m = mn;
+                f = fnew;
+                ok = true;
+                break;
+            }
+            t *= 0.5;
+        }
+        if !ok {
+            break;
+        }
+    }
+    (f.amax() < 1e-13).then_some(m)
+}
+
+/// Every distinct proper-rotation root found from starts around `m0`, the nominal block
+/// with the measured cosines.
+fn roots(
+    m0: &Matrix3<f64>,
+    measured: &[((usize, usize), f64); 3],
+    unknown: &Unknown,
+) -> Vec<Matrix3<f64>> {
+    // Starts: the nominal block with the measured cosines, nudged both ways on every
+    // unknown (a root can sit on either side of a nominal zero).
+    let mut roots: Vec<Matrix3<f64>> = Vec::new();
+    let nudge = (1.0 - m0.iter().fold(1.0f64, |a, v| a.min(v.abs().max(1e-300)))).max(1e-6);
+    let size = measured
+        .iter()
+        .map(|(_, a)| a.abs())
+        .fold(1e-6, f64::max)
+        .max(nudge.min(1e-3));
+    for pattern in 0..(1u32 << 6) {
+        let mut s = *m0;
+        for (u, (r, c)) in unknown.iter().enumerate() {
+            let sign = if pattern >> u & 1 == 1 { -1.0 } else { 1.0 };
+            s[(*r, *c)] = (s[(*r, *c)] + sign * size).clamp(-1.0, 1.0);
+        }
+        if let Some(m) = solve_block(s, unknown) {
+            // M^T M = I also has reflections: keep proper rotations only.
+            if m.determinant() > 0.0 && !roots.iter().any(|x| (x - m).amax() < 1e-9) {
+                roots.push(m);
+            }
+        }
+    }
+    roots
+}
+
+/// The nine angular deviations of block `m`: the measured ones as given, the others
+/// `acos(m) - phi`.
+fn alpha_of(
+    m: &Matrix3<f64>,
+    known: &Known,
+    measured: &[((usize, usize), f64); 3],
+    phi: &Matrix3<f64>,
+) -> Matrix3<f64> {
+    Matrix3::from_fn(|r, c| {
+        if known[r][c] {
+            measured
+                .iter()
+                .find(|((a, b), _)| *a == r && *b == c)
+                .map(|x| x.1)
+                .unwrap_or(0.0)
+        } else {
+            m[(r, c)].clamp(-1.0, 1.0).acos() - phi[(r, c)]
+        }
     })
 }
 
