@@ -253,13 +253,5 @@ pub(super) fn build(src: &Source, f: P3rpFile) -> Result<super::Parts, Error> {
             Model::P3rpHybrid(Box::new(m))
         }
     };
-    super::check_references(src, &f.reference)?;
-    let rapid = super::check_motion(src, f.motion.as_ref())?;
-    Ok(super::Parts {
-        model,
-        name: f.name,
-        description: f.description,
-        references: f.reference,
-        rapid,
-    })
+    super::parts(src, model, f.name, f.description, f.reference, f.motion)
 }

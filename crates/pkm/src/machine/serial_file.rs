@@ -287,18 +287,11 @@ pub(super) fn build(src: &Source, f: SerialFile) -> Result<super::Parts, Error> 
     crate::accuracy::serial_completions(&machine, &given)
         .map_err(|e| src.error(&[key("tolerance")], e.to_string()))?;
     let mechanism = mechanism(src, f.pose.as_deref(), machine, &home)?;
-    super::check_references(src, &f.reference)?;
-    let rapid = super::check_motion(src, f.motion.as_ref())?;
-    Ok(super::Parts {
-        model: Model::Serial(Box::new(crate::serial::SerialModel {
-            mechanism,
-            tolerances,
-        })),
-        name: f.name,
-        description: f.description,
-        references: f.reference,
-        rapid,
-    })
+    let model = Model::Serial(Box::new(crate::serial::SerialModel {
+        mechanism,
+        tolerances,
+    }));
+    super::parts(src, model, f.name, f.description, f.reference, f.motion)
 }
 
 /// The chains of file `f`: the tool chain from `tool_chain` links or `dh` rows (one
