@@ -97,7 +97,6 @@ impl Machine {
         max_samples: usize,
         samples: bool,
     ) -> PyResult<Bound<'py, PyDict>> {
-        use pkm::analysis::motion::{MotionSource, ProgramSetup};
         let m = self.m();
         let (p, a) = (m.coordinates().len(), m.actuators().len());
         let mut opts = pkm::analysis::motion::feed_options(&self.inner);
@@ -113,45 +112,9 @@ impl Machine {
         }
         opts.feed = positive("feed", feed)?;
         opts.max_samples = max_samples as u64;
-        let sampling = match (positive("rate", rate)?, points) {
-            (Some(_), Some(_)) => return Err(invalid("rate", "give rate or points, not both")),
-            (_, Some(n)) if n < 2 => return Err(invalid("points", "expected at least 2")),
-            (_, Some(n)) => pkm::motion::Sampling::Points(n),
-            (Some(r), None) => pkm::motion::Sampling::Rate(r),
-            (None, None) => pkm::motion::Sampling::Rate(1000.0),
-        };
-        let from = match start {
-            Some(s) => {
-                let (x, one) = rows(s, p, "start")?;
-                if !one {
-                    return Err(invalid("start", "expected one pose"));
-                }
-                Some(x)
-            }
-            None => None,
-        };
-        // The program's text or the waypoints; the library's source is built on the
-        // worker side of `detach` (a boxed reader is not Send).
-        enum Src {
-            Program(String),
-            Waypoints(Vec<Vec<f64>>),
-        }
-        let src = match (gcode, path) {
-            (Some(g), None) => Src::Program(if let Ok(s) = g.extract::<String>() {
-                s
-            } else {
-                let f: std::path::PathBuf = g
-                    .extract()
-                    .map_err(|_| invalid("gcode", "expected the program's text or a path"))?;
-                std::fs::read_to_string(&f)
-                    .map_err(|e| invalid("gcode", format!("cannot read {}: {e}", f.display())))?
-            }),
-            (None, Some(w)) => {
-                let (v, _) = rows(w, p, "path")?;
-                Src::Waypoints(v.chunks_exact(p).map(<[f64]>::to_vec).collect())
-            }
-            _ => return Err(invalid("motion", "give either gcode or path")),
-        };
+        let sampling = sampling(rate, points)?;
+        let from = convert::one_pose(start, p, "start")?;
+        let src = Src::of(gcode, path, p)?;
         let mut cols = Columns {
             keep: samples,
             ..Default::default()
@@ -159,17 +122,7 @@ impl Machine {
         let inner = self.inner.clone();
         let run = py
             .detach(|| {
-                let source = match src {
-                    Src::Program(text) => MotionSource::Gcode {
-                        reader: Box::new(std::io::Cursor::new(text.into_bytes())),
-                        from,
-                        setup: Box::new(ProgramSetup {
-                            tool_length,
-                            ..Default::default()
-                        }),
-                    },
-                    Src::Waypoints(points) => MotionSource::Polyline { points },
-                };
+                let source = src.into_source(from, tool_length);
                 pkm::analysis::motion::run_motion(&inner, source, &opts, sampling, &mut cols)
             })
             .map_err(to_py)?;
@@ -193,20 +146,90 @@ impl Machine {
                     .collect::<Vec<_>>(),
             ),
         )?;
-        // Per-axis statistics as {name: stats}, as `pkm motion` writes them.
-        let summary = convert::to_py(py, &run.summary)?.cast_into::<PyDict>()?;
-        for key in ["actuators", "serial"] {
-            if let Some(list) = summary.get_item(key)? {
-                let named = PyDict::new(py);
-                for item in list.try_iter()? {
-                    let item = item?;
-                    named.set_item(item.get_item(0)?, item.get_item(1)?)?;
-                }
-                summary.set_item(key, named)?;
-            }
-        }
-        d.set_item("summary", summary)?;
+        d.set_item("summary", summary(py, &run.summary)?)?;
         d.set_item("notes", run.notes)?;
         Ok(d)
     }
+}
+
+/// The sampling asked for: `rate` (Hz) or `points` per move, 1000 Hz by default.
+fn sampling(rate: Option<f64>, points: Option<usize>) -> PyResult<pkm::motion::Sampling> {
+    Ok(match (positive("rate", rate)?, points) {
+        (Some(_), Some(_)) => return Err(invalid("rate", "give rate or points, not both")),
+        (_, Some(n)) if n < 2 => return Err(invalid("points", "expected at least 2")),
+        (_, Some(n)) => pkm::motion::Sampling::Points(n),
+        (Some(r), None) => pkm::motion::Sampling::Rate(r),
+        (None, None) => pkm::motion::Sampling::Rate(1000.0),
+    })
+}
+
+/// The program's text or the waypoints; the library's source is built on the worker
+/// side of `detach` (a boxed reader is not Send).
+enum Src {
+    Program(String),
+    Waypoints(Vec<Vec<f64>>),
+}
+
+impl Src {
+    /// The program of `gcode` (its text, or a path to it) or the waypoints of `path`
+    /// (rows of `p` coordinates): exactly one of them.
+    fn of(
+        gcode: Option<&Bound<'_, PyAny>>,
+        path: Option<&Bound<'_, PyAny>>,
+        p: usize,
+    ) -> PyResult<Src> {
+        Ok(match (gcode, path) {
+            (Some(g), None) => Src::Program(if let Ok(s) = g.extract::<String>() {
+                s
+            } else {
+                let f: std::path::PathBuf = g
+                    .extract()
+                    .map_err(|_| invalid("gcode", "expected the program's text or a path"))?;
+                std::fs::read_to_string(&f)
+                    .map_err(|e| invalid("gcode", format!("cannot read {}: {e}", f.display())))?
+            }),
+            (None, Some(w)) => {
+                let (v, _) = rows(w, p, "path")?;
+                Src::Waypoints(v.chunks_exact(p).map(<[f64]>::to_vec).collect())
+            }
+            _ => return Err(invalid("motion", "give either gcode or path")),
+        })
+    }
+
+    /// The library's motion source, a program starting at `from` with `tool_length`.
+    fn into_source(
+        self,
+        from: Option<Vec<f64>>,
+        tool_length: Option<f64>,
+    ) -> pkm::analysis::motion::MotionSource<'static> {
+        use pkm::analysis::motion::{MotionSource, ProgramSetup};
+        match self {
+            Src::Program(text) => MotionSource::Gcode {
+                reader: Box::new(std::io::Cursor::new(text.into_bytes())),
+                from,
+                setup: Box::new(ProgramSetup {
+                    tool_length,
+                    ..Default::default()
+                }),
+            },
+            Src::Waypoints(points) => MotionSource::Polyline { points },
+        }
+    }
+}
+
+/// The run's summary as a dict, its per-axis statistics as {name: stats}, as `pkm
+/// motion` writes them.
+fn summary<'py>(py: Python<'py>, run: &pkm::motion::MotionSummary) -> PyResult<Bound<'py, PyDict>> {
+    let summary = convert::to_py(py, run)?.cast_into::<PyDict>()?;
+    for key in ["actuators", "serial"] {
+        if let Some(list) = summary.get_item(key)? {
+            let named = PyDict::new(py);
+            for item in list.try_iter()? {
+                let item = item?;
+                named.set_item(item.get_item(0)?, item.get_item(1)?)?;
+            }
+            summary.set_item(key, named)?;
+        }
+    }
+    Ok(summary)
 }
