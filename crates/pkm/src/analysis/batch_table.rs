@@ -87,29 +87,7 @@ pub fn parse_batch_table(text: &str, file: &str, accepted: &[Vec<String>]) -> Re
     // Lines by byte offset: the reader's own line count skips comment lines.
     let mut lines = LineCounter::new(text);
     let header_line = lines.clone().at(0);
-    let got: Vec<String> = header.iter().map(|h| canonical(h)).collect();
-    let ok = accepted.iter().any(|a| {
-        a.len() == got.len()
-            && a.iter()
-                .zip(&got)
-                .all(|(x, y)| x.to_ascii_lowercase() == *y)
-    });
-    if !ok {
-        let expected = accepted
-            .iter()
-            .map(|a| format!("`{}`", a.join(",")))
-            .collect::<Vec<_>>()
-            .join(" or ");
-        return Err(error(
-            file,
-            header_line,
-            "",
-            format!(
-                "header `{}` does not name the expected columns; expected {expected}",
-                header.join(",")
-            ),
-        ));
-    }
+    check_header(&header, accepted, file, header_line)?;
     let mut rows = Vec::new();
     for rec in rdr.records() {
         let rec = rec.map_err(|e| {
@@ -137,23 +115,67 @@ pub fn parse_batch_table(text: &str, file: &str, accepted: &[Vec<String>]) -> Re
                 format!("expected {} values, found {}", header.len(), rec.len()),
             ));
         }
-        let mut vals = Vec::with_capacity(rec.len());
-        for (i, cell) in rec.iter().enumerate() {
-            match cell.parse::<f64>() {
-                Ok(v) if v.is_finite() => vals.push(v),
-                _ => {
-                    return Err(error(
-                        file,
-                        line,
-                        &header[i],
-                        format!("expected a finite number, found `{cell}`"),
-                    ))
-                }
-            }
-        }
+        let vals = row_values(&rec, &header, file, line)?;
         rows.push((line, vals));
     }
     Ok(BatchTable { header, rows })
+}
+
+/// Checks `header` names the columns of one of the `accepted` headers.
+fn check_header(
+    header: &[String],
+    accepted: &[Vec<String>],
+    file: &str,
+    header_line: u64,
+) -> Result<()> {
+    let got: Vec<String> = header.iter().map(|h| canonical(h)).collect();
+    let ok = accepted.iter().any(|a| {
+        a.len() == got.len()
+            && a.iter()
+                .zip(&got)
+                .all(|(x, y)| x.to_ascii_lowercase() == *y)
+    });
+    if !ok {
+        let expected = accepted
+            .iter()
+            .map(|a| format!("`{}`", a.join(",")))
+            .collect::<Vec<_>>()
+            .join(" or ");
+        return Err(error(
+            file,
+            header_line,
+            "",
+            format!(
+                "header `{}` does not name the expected columns; expected {expected}",
+                header.join(",")
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// The values of record `rec` at `line`, each a finite number.
+fn row_values(
+    rec: &csv::StringRecord,
+    header: &[String],
+    file: &str,
+    line: u64,
+) -> Result<Vec<f64>> {
+    let mut vals = Vec::with_capacity(rec.len());
+    for (i, cell) in rec.iter().enumerate() {
+        match cell.parse::<f64>() {
+            Ok(v) if v.is_finite() => vals.push(v),
+            _ => {
+                return Err(error(
+                    file,
+                    line,
+                    &header[i],
+                    format!("expected a finite number, found `{cell}`"),
+                ))
+            }
+        }
+    }
+    Ok(vals)
 }
 
 /// The 1-based lines of records by the byte offsets the reader reports, asked in
