@@ -17,7 +17,7 @@
 //!   at the same distance from nominal): the root with the larger cosines first, in
 //!   row-major order, is chosen, and [`Completion::ambiguous`] says so.
 
-use nalgebra::{Matrix3, SMatrix, SVector};
+use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
 use crate::error::{Error, Result};
 use crate::linalg::SmallLu;
@@ -349,66 +349,8 @@ impl TripleCompletion {
             let (r, c) = self.positions[i];
             (self.phi[(r, c)] + measured[i]).cos()
         });
-        let residual = |w: &nalgebra::Vector3<f64>| {
-            let (a, b) = rodrigues_coefficients(w);
-            let diag = 1.0 - b * w.norm_squared();
-            nalgebra::Vector3::from_fn(|i, _| {
-                let (r, c) = self.positions[i];
-                // Column c of exp([w]x) = diag e_c + a (w x e_c) + b w_c w.
-                let e = nalgebra::Vector3::from_fn(|k, _| {
-                    let cross = match (c, k) {
-                        (0, 1) => w.z,
-                        (0, 2) => -w.y,
-                        (1, 0) => -w.z,
-                        (1, 2) => w.x,
-                        (2, 0) => w.y,
-                        (2, 1) => -w.x,
-                        _ => 0.0,
-                    };
-                    let d = if k == c { diag } else { 0.0 };
-                    d + a * cross + b * w[c] * w[k]
-                });
-                self.nominal.row(r).transpose().dot(&e) - target[i]
-            })
-        };
-        // At w = 0 the block is the nominal one: the first residual needs no exponential.
-        let mut w = nalgebra::Vector3::zeros();
-        let mut f = nalgebra::Vector3::from_fn(|i, _| {
-            let (r, c) = self.positions[i];
-            self.nominal[(r, c)] - target[i]
-        });
-        // Chord steps with the nominal Jacobian: the error shrinks by about |w| a step.
-        for _ in 0..8 {
-            if f.amax() < 1e-15 {
-                break;
-            }
-            let wn = w - self.j0_inv * f;
-            let fn_ = residual(&wn);
-            if fn_.amax() >= f.amax() {
-                break; // rounding level reached, or too large for the chord
-            }
-            (w, f) = (wn, fn_);
-        }
-        // Newton with a difference Jacobian for large deviations.
-        let mut it = 0;
-        while f.amax() >= 1e-14 && it < 30 {
-            let h = 1e-7;
-            let mut j = Matrix3::zeros();
-            for k in 0..3 {
-                let mut wp = w;
-                wp[k] += h;
-                let col = (residual(&wp) - f) / h;
-                j.set_column(k, &col);
-            }
-            let Some(inv) = j.try_inverse() else { break };
-            let wn = w - inv * f;
-            let fn_ = residual(&wn);
-            if fn_.amax() >= f.amax() {
-                break;
-            }
-            (w, f) = (wn, fn_);
-            it += 1;
-        }
+        let (w, f) = self.chord_steps(&target);
+        let (w, f) = self.newton_steps(&target, w, f);
         if !(f.amax() < 1e-12) {
             return Err(Error::NotAttainable {
                 reason: format!(
@@ -425,6 +367,86 @@ impl TripleCompletion {
         let k = w.cross_matrix();
         let r = Matrix3::identity() + k * a + k * k * b;
         Ok(self.nominal * r)
+    }
+
+    /// The entries at the positions of `N exp([w]x)` less their `target`s.
+    #[inline]
+    fn residual(&self, w: &Vector3<f64>, target: &Vector3<f64>) -> Vector3<f64> {
+        let (a, b) = rodrigues_coefficients(w);
+        let diag = 1.0 - b * w.norm_squared();
+        Vector3::from_fn(|i, _| {
+            let (r, c) = self.positions[i];
+            // Column c of exp([w]x) = diag e_c + a (w x e_c) + b w_c w.
+            let e = Vector3::from_fn(|k, _| {
+                let cross = match (c, k) {
+                    (0, 1) => w.z,
+                    (0, 2) => -w.y,
+                    (1, 0) => -w.z,
+                    (1, 2) => w.x,
+                    (2, 0) => w.y,
+                    (2, 1) => -w.x,
+                    _ => 0.0,
+                };
+                let d = if k == c { diag } else { 0.0 };
+                d + a * cross + b * w[c] * w[k]
+            });
+            self.nominal.row(r).transpose().dot(&e) - target[i]
+        })
+    }
+
+    /// Chord steps from `w = 0` with the nominal Jacobian (the error shrinks by about
+    /// `|w|` a step): the turn and its residual.
+    #[inline]
+    fn chord_steps(&self, target: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
+        // At w = 0 the block is the nominal one: the first residual needs no exponential.
+        let mut w = Vector3::zeros();
+        let mut f = Vector3::from_fn(|i, _| {
+            let (r, c) = self.positions[i];
+            self.nominal[(r, c)] - target[i]
+        });
+        for _ in 0..8 {
+            if f.amax() < 1e-15 {
+                break;
+            }
+            let wn = w - self.j0_inv * f;
+            let fn_ = self.residual(&wn, target);
+            if fn_.amax() >= f.amax() {
+                break; // rounding level reached, or too large for the chord
+            }
+            (w, f) = (wn, fn_);
+        }
+        (w, f)
+    }
+
+    /// Newton with a difference Jacobian from turn `w` (residual `f`), for large
+    /// deviations: the turn and its residual.
+    #[inline]
+    fn newton_steps(
+        &self,
+        target: &Vector3<f64>,
+        mut w: Vector3<f64>,
+        mut f: Vector3<f64>,
+    ) -> (Vector3<f64>, Vector3<f64>) {
+        let mut it = 0;
+        while f.amax() >= 1e-14 && it < 30 {
+            let h = 1e-7;
+            let mut j = Matrix3::zeros();
+            for k in 0..3 {
+                let mut wp = w;
+                wp[k] += h;
+                let col = (self.residual(&wp, target) - f) / h;
+                j.set_column(k, &col);
+            }
+            let Some(inv) = j.try_inverse() else { break };
+            let wn = w - inv * f;
+            let fn_ = self.residual(&wn, target);
+            if fn_.amax() >= f.amax() {
+                break;
+            }
+            (w, f) = (wn, fn_);
+            it += 1;
+        }
+        (w, f)
     }
 }
 
