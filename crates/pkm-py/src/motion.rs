@@ -98,7 +98,7 @@ impl Machine {
         samples: bool,
     ) -> PyResult<Bound<'py, PyDict>> {
         let m = self.m();
-        let (p, a) = (m.coordinates().len(), m.actuators().len());
+        let p = m.coordinates().len();
         let mut opts = pkm::analysis::motion::feed_options(&self.inner);
         opts.profile = profile_kind(profile)?;
         if let Some(x) = positive("acceleration", acceleration)? {
@@ -126,30 +126,42 @@ impl Machine {
                 pkm::analysis::motion::run_motion(&inner, source, &opts, sampling, &mut cols)
             })
             .map_err(to_py)?;
-        let d = PyDict::new(py);
-        d.set_item("t", vec1(py, cols.t))?;
-        d.set_item("line", vec1(py, cols.line))?;
-        d.set_item("x", vec2(py, cols.x, p)?)?;
-        d.set_item("q", vec2(py, cols.q, a)?)?;
-        d.set_item("qd", vec2(py, cols.qd, a)?)?;
-        d.set_item("qdd", vec2(py, cols.qdd, a)?)?;
-        d.set_item(
-            "columns",
-            (
-                m.coordinates()
-                    .iter()
-                    .map(|c| c.name.clone())
-                    .collect::<Vec<_>>(),
-                m.actuators()
-                    .iter()
-                    .map(|c| c.name.clone())
-                    .collect::<Vec<_>>(),
-            ),
-        )?;
-        d.set_item("summary", summary(py, &run.summary)?)?;
-        d.set_item("notes", run.notes)?;
-        Ok(d)
+        run_dict(py, m, cols, run)
     }
+}
+
+/// A run as `Machine.motion` returns it: the sample columns, their names, the
+/// summary and the notes.
+fn run_dict<'py>(
+    py: Python<'py>,
+    m: &dyn pkm::DynMechanism,
+    cols: Columns,
+    run: pkm::analysis::motion::MotionRun,
+) -> PyResult<Bound<'py, PyDict>> {
+    let (p, a) = (m.coordinates().len(), m.actuators().len());
+    let d = PyDict::new(py);
+    d.set_item("t", vec1(py, cols.t))?;
+    d.set_item("line", vec1(py, cols.line))?;
+    d.set_item("x", vec2(py, cols.x, p)?)?;
+    d.set_item("q", vec2(py, cols.q, a)?)?;
+    d.set_item("qd", vec2(py, cols.qd, a)?)?;
+    d.set_item("qdd", vec2(py, cols.qdd, a)?)?;
+    d.set_item(
+        "columns",
+        (
+            m.coordinates()
+                .iter()
+                .map(|c| c.name.clone())
+                .collect::<Vec<_>>(),
+            m.actuators()
+                .iter()
+                .map(|c| c.name.clone())
+                .collect::<Vec<_>>(),
+        ),
+    )?;
+    d.set_item("summary", summary(py, &run.summary)?)?;
+    d.set_item("notes", run.notes)?;
+    Ok(d)
 }
 
 /// The sampling asked for: `rate` (Hz) or `points` per move, 1000 Hz by default.
