@@ -145,17 +145,22 @@ pub(super) fn build(src: &Source, f: HexapodFile) -> Result<super::Parts, Error>
         &crate::mechanism::spatial_coordinates(),
     )?);
     if let Some(c) = &f.calibration {
-        if c.zero_lengths.iter().any(|l| !(l.is_finite() && *l > 0.0)) {
-            return Err(src.error(
-                &[key("calibration"), key("zero_lengths")],
-                "expected six positive strut lengths (mm)",
-            ));
-        }
-        h.set_zero_lengths(Some(Vector6::from(c.zero_lengths)));
+        h.set_zero_lengths(Some(zero_lengths(src, c)?));
     }
     check_regular_at_home(src, &h)?;
     let model = Model::Hexapod(Box::new(h));
     super::parts(src, model, f.name, f.description, f.reference, f.motion)
+}
+
+/// Reads the identified zero lengths of `[calibration]`, which must be positive.
+fn zero_lengths(src: &Source, c: &CalibrationFile) -> Result<Vector6<f64>, Error> {
+    if c.zero_lengths.iter().any(|l| !(l.is_finite() && *l > 0.0)) {
+        return Err(src.error(
+            &[key("calibration"), key("zero_lengths")],
+            "expected six positive strut lengths (mm)",
+        ));
+    }
+    Ok(Vector6::from(c.zero_lengths))
 }
 
 /// The joint cones on one side: the common one and the per-joint overrides.
