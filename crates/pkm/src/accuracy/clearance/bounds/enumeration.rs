@@ -18,20 +18,7 @@ pub(super) fn along<E: Evaluate + Clone + Send + Sync>(
 ) -> Result<Along> {
     let size = enumeration_size(regions);
     if size > MAX_ENUMERATION {
-        return Err(Error::InvalidInput {
-            what: "clearance enumeration".into(),
-            message: format!(
-                "the extreme states of {} joints make {} combinations, each one \
-                 solve of the mechanism (more than the {MAX_ENUMERATION} pkm runs): \
-                 use the first-order bound, which scales",
-                regions.len(),
-                if size == u64::MAX {
-                    "over 1.8e19".to_string()
-                } else {
-                    size.to_string()
-                }
-            ),
-        });
+        return Err(too_many(regions.len(), size));
     }
     let extremes: Vec<Vec<JointState>> = regions.iter().map(Region::extremes).collect();
     let states_of = |mut i: u64, out: &mut Vec<JointState>| {
@@ -74,4 +61,23 @@ pub(super) fn along<E: Evaluate + Clone + Send + Sync>(
         refined: false,
         solves: size,
     })
+}
+
+/// The refusal of an enumeration of `size` combinations of the extreme states of
+/// `joints` joints.
+fn too_many(joints: usize, size: u64) -> Error {
+    Error::InvalidInput {
+        what: "clearance enumeration".into(),
+        message: format!(
+            "the extreme states of {} joints make {} combinations, each one \
+             solve of the mechanism (more than the {MAX_ENUMERATION} pkm runs): \
+             use the first-order bound, which scales",
+            joints,
+            if size == u64::MAX {
+                "over 1.8e19".to_string()
+            } else {
+                size.to_string()
+            }
+        ),
+    }
 }
