@@ -333,48 +333,59 @@ pub fn check_references(machine: &crate::Machine) -> Vec<ReferenceCheck> {
                     let sk = m.skeleton(&x)?;
                     Ok((q, sk))
                 });
-            let (q, sk) = match solved {
-                Ok(v) => v,
-                Err(e) => {
-                    out.error = Some(e.to_string());
-                    return out;
+            match solved {
+                Ok((q, sk)) => {
+                    out.items = reference_items(m, r, &q, &sk);
+                    out.pass = out.items.iter().all(|i| i.pass);
                 }
-            };
-            for (name, e) in &r.joints {
-                let got = sk
-                    .points
-                    .iter()
-                    .find(|p| &p.name == name)
-                    .map(|p| p.position);
-                let dev = got.map(|g| (0..3).map(|k| (g[k] - e[k]).abs()).fold(0.0, f64::max));
-                out.items.push(ReferenceItem {
-                    name: name.clone(),
-                    what: "joint",
-                    expected: e.to_vec(),
-                    computed: got.map(|g| g.to_vec()),
-                    deviation: dev,
-                    unit: "mm",
-                    pass: dev.is_some_and(|d| d <= r.tolerance),
-                    published: None,
-                });
+                Err(e) => out.error = Some(e.to_string()),
             }
-            for (name, e) in &r.actuators {
-                let idx = m.actuators().iter().position(|a| &a.name == name);
-                let got = idx.map(|i| m.actuators()[i].quantity.to_user(q[i]));
-                let dev = got.map(|g| (g - e).abs());
-                out.items.push(ReferenceItem {
-                    name: name.clone(),
-                    what: "actuator",
-                    expected: vec![*e],
-                    computed: got.map(|g| vec![g]),
-                    deviation: dev,
-                    unit: idx.map(|i| m.actuators()[i].quantity.unit()).unwrap_or(""),
-                    pass: dev.is_some_and(|d| d <= r.tolerance),
-                    published: r.published_actuators.get(name).map(|v| vec![*v]),
-                });
-            }
-            out.pass = out.items.iter().all(|i| i.pass);
             out
         })
         .collect()
+}
+
+/// The expected joint positions and actuator values of reference `r` against those
+/// computed at its pose (actuators `q`, joints in `sk`).
+fn reference_items(
+    m: &dyn crate::DynMechanism,
+    r: &crate::machine::Reference,
+    q: &[f64],
+    sk: &crate::Skeleton,
+) -> Vec<ReferenceItem> {
+    let mut items = Vec::new();
+    for (name, e) in &r.joints {
+        let got = sk
+            .points
+            .iter()
+            .find(|p| &p.name == name)
+            .map(|p| p.position);
+        let dev = got.map(|g| (0..3).map(|k| (g[k] - e[k]).abs()).fold(0.0, f64::max));
+        items.push(ReferenceItem {
+            name: name.clone(),
+            what: "joint",
+            expected: e.to_vec(),
+            computed: got.map(|g| g.to_vec()),
+            deviation: dev,
+            unit: "mm",
+            pass: dev.is_some_and(|d| d <= r.tolerance),
+            published: None,
+        });
+    }
+    for (name, e) in &r.actuators {
+        let idx = m.actuators().iter().position(|a| &a.name == name);
+        let got = idx.map(|i| m.actuators()[i].quantity.to_user(q[i]));
+        let dev = got.map(|g| (g - e).abs());
+        items.push(ReferenceItem {
+            name: name.clone(),
+            what: "actuator",
+            expected: vec![*e],
+            computed: got.map(|g| vec![g]),
+            deviation: dev,
+            unit: idx.map(|i| m.actuators()[i].quantity.unit()).unwrap_or(""),
+            pass: dev.is_some_and(|d| d <= r.tolerance),
+            published: r.published_actuators.get(name).map(|v| vec![*v]),
+        });
+    }
+    items
 }
