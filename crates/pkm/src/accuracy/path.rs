@@ -143,6 +143,20 @@ pub struct PathAccuracy {
     pub monte_carlo: Option<MachineSpread>,
 }
 
+/// The band's machines' deviations, parameter-major (`draws[k * machines + j]` is
+/// machine `j`'s deviation of tolerance `k`), drawn with `o.seed`.
+fn draw_machines(o: &PathOptions) -> Vec<f64> {
+    let mut rng = super::streamed::chunk_rng(o.seed, 0);
+    let normal = Normal::new(0.0, 1.0).expect("unit normal");
+    let mut draws = vec![0.0; o.tolerances.len() * o.machines];
+    for j in 0..o.machines {
+        for (i, t) in o.tolerances.iter().enumerate() {
+            draws[i * o.machines + j] = draw(t, &mut rng, &normal);
+        }
+    }
+    draws
+}
+
 /// The errors of one sample (mm): worst case, RSS, and their parts along the surface
 /// normal, with the largest contribution (parameter index, mm).
 struct SampleErrors {
@@ -188,16 +202,7 @@ where
     /// [`Parametric::with_given`]) with options `o`.
     pub fn new(m: &'m M, o: &PathOptions) -> Result<Self> {
         let params: Vec<Parameter> = m.parameters();
-        if let Some(t) = o.tolerances.iter().find(|t| t.parameter >= params.len()) {
-            return Err(Error::InvalidInput {
-                what: "tolerance".into(),
-                message: format!(
-                    "parameter index {} beyond the machine's {} parameters",
-                    t.parameter,
-                    params.len()
-                ),
-            });
-        }
+        super::monte_carlo::check_tolerance_indices(params.len(), &o.tolerances)?;
         if o.machines > MAX_PATH_MACHINES {
             return Err(Error::InvalidInput {
                 what: "path Monte Carlo".into(),
@@ -215,14 +220,7 @@ where
         }
         let which: Vec<usize> = o.tolerances.iter().map(|t| t.parameter).collect();
         let n = which.len();
-        let mut rng = super::streamed::chunk_rng(o.seed, 0);
-        let normal = Normal::new(0.0, 1.0).expect("unit normal");
-        let mut draws = vec![0.0; n * o.machines];
-        for j in 0..o.machines {
-            for (i, t) in o.tolerances.iter().enumerate() {
-                draws[i * o.machines + j] = draw(t, &mut rng, &normal);
-            }
-        }
+        let draws = draw_machines(o);
         Ok(PathTracker {
             m,
             tooled: None,
