@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::convert::{self, rows, vec1, vec2};
+use crate::convert::{self, vec1, vec2};
 use crate::errors::{invalid, to_py};
 use crate::machine::{internal_unit, Machine};
 
@@ -108,61 +108,14 @@ impl Machine {
         tilt: Option<f64>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let m = self.m();
-        let base = match orientation {
-            Some(o) => {
-                let (x, one) = rows(o, m.coordinates().len(), "orientation")?;
-                if !one {
-                    return Err(invalid("orientation", "expected one pose"));
-                }
-                x
-            }
+        let base = match convert::one_pose(orientation, m.coordinates().len(), "orientation")? {
+            Some(x) => x,
             None => m.home(),
         };
         // The grid's axes, to convert bounds and step to the library's user units.
         let axes = pkm::workspace::default_grid(m, &base, None, None).map_err(to_py)?;
-        let quantity = |i: usize| m.coordinates()[axes[i].coordinate].quantity;
-        let bounds = match bounds {
-            Some(b) => {
-                let (v, _) = convert::array(b, "bounds")?;
-                let max = pkm::machine::MAX_MAGNITUDE;
-                if v.len() != 2 * axes.len() || v.iter().any(|x| !(x.abs() <= max)) {
-                    return Err(invalid(
-                        "bounds",
-                        format!(
-                            "expected {} [min, max] pairs of finite numbers up to {max:.0e} \
-                             (axes {}), got {} values",
-                            axes.len(),
-                            axes.iter()
-                                .map(|a| m.coordinates()[a.coordinate].name.as_str())
-                                .collect::<Vec<_>>()
-                                .join(", "),
-                            v.len()
-                        ),
-                    ));
-                }
-                Some(
-                    v.iter()
-                        .enumerate()
-                        .map(|(k, x)| quantity(k / 2).to_user(*x))
-                        .collect::<Vec<_>>(),
-                )
-            }
-            None => None,
-        };
-        let step = match positive("step", step)? {
-            Some(s) => {
-                let q0 = quantity(0);
-                if (1..axes.len()).any(|i| quantity(i) != q0) {
-                    return Err(invalid(
-                        "step",
-                        "one step for axes of different units (mm and rad): leave it out \
-                         (1/40 of each range)",
-                    ));
-                }
-                Some(q0.to_user(s))
-            }
-            None => None,
-        };
+        let bounds = grid_bounds(m, &axes, bounds)?;
+        let step = grid_step(m, &axes, step)?;
         let orientations = match positive("tilt", tilt)? {
             Some(t) => pkm::workspace::tilt_orientations(t),
             None => Vec::new(),
@@ -184,22 +137,7 @@ impl Machine {
             .map_err(to_py)?;
         let summary = wm.summary_of(m.coordinates());
         let d = PyDict::new(py);
-        let axes_list = wm
-            .axes
-            .iter()
-            .map(|a| {
-                let c = &m.coordinates()[a.coordinate];
-                let e = PyDict::new(py);
-                e.set_item("name", &c.name)?;
-                e.set_item("unit", internal_unit(c.quantity))?;
-                e.set_item("min", a.min)?;
-                e.set_item("max", a.max)?;
-                e.set_item("step", a.step)?;
-                e.set_item("count", a.count())?;
-                Ok(e)
-            })
-            .collect::<PyResult<Vec<_>>>()?;
-        d.set_item("axes", axes_list)?;
+        d.set_item("axes", grid_axes(py, m, &wm)?)?;
         d.set_item("points", vec2(py, cols.points, wm.axes.len())?)?;
         d.set_item("reachable", vec1(py, cols.reachable))?;
         d.set_item("condition", vec1(py, cols.condition))?;
@@ -238,18 +176,9 @@ impl Machine {
         monte_carlo: Option<usize>,
         seed: u64,
     ) -> PyResult<Bound<'py, PyAny>> {
-        use pkm::analysis::accuracy::{AccuracyOptions, KindTolerances, Tolerances};
+        use pkm::analysis::accuracy::{AccuracyOptions, Tolerances};
         let m = self.m();
-        let pose = match pose {
-            Some(x) => {
-                let (x, one) = rows(x, m.coordinates().len(), "pose")?;
-                if !one {
-                    return Err(invalid("pose", "expected one pose"));
-                }
-                Some(x)
-            }
-            None => None,
-        };
+        let pose = convert::one_pose(pose, m.coordinates().len(), "pose")?;
         let params = self.inner.parameters();
         let tolerances = match tolerances {
             None => Tolerances::Default,
@@ -259,61 +188,9 @@ impl Machine {
                     pkm::machine::read_tolerances(&params, &text, "<tolerances>").map_err(to_py)?,
                 )
             }
-            Some(t) => {
-                let d: BTreeMap<String, Bound<'py, PyAny>> = t.extract().map_err(|_| {
-                    invalid(
-                        "tolerances",
-                        "expected a dict of kinds or a tolerances file's text",
-                    )
-                })?;
-                let mut k = KindTolerances::default();
-                for (key, v) in d {
-                    let num = || -> PyResult<f64> {
-                        v.extract::<f64>()
-                            .map_err(|_| invalid(&format!("tolerances.{key}"), "expected a number"))
-                    };
-                    match key.as_str() {
-                        "joint" => k.joint = num()?,
-                        "length" => k.length = num()?,
-                        "zero" => k.zero = num()?,
-                        "angle" => k.angle = num()?,
-                        "distribution" => {
-                            let s: String = v.extract()?;
-                            k.distribution = s.parse().map_err(to_py)?;
-                        }
-                        other => {
-                            return Err(invalid(
-                                "tolerances",
-                                format!(
-                                    "unknown kind `{other}` (expected joint, length, zero, angle, \
-                                     distribution)"
-                                ),
-                            ))
-                        }
-                    }
-                }
-                Tolerances::ByKind(k)
-            }
+            Some(t) => Tolerances::ByKind(kind_tolerances(t)?),
         };
-        let deviations = deviations
-            .unwrap_or_default()
-            .into_iter()
-            .map(|(name, v)| {
-                let i = params.iter().position(|p| p.name == name).ok_or_else(|| {
-                    invalid(
-                        "deviations",
-                        format!("`{name}` is not a parameter of {}", m.name()),
-                    )
-                })?;
-                if !v.is_finite() {
-                    return Err(invalid(
-                        &format!("deviations.{name}"),
-                        "not a finite number",
-                    ));
-                }
-                Ok((i, v))
-            })
-            .collect::<PyResult<Vec<_>>>()?;
+        let deviations = deviations_of(&params, m.name(), deviations)?;
         let opt = AccuracyOptions {
             pose,
             deviations,
@@ -335,4 +212,156 @@ impl Machine {
     fn parameters<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         convert::to_py(py, &self.inner.parameters())
     }
+}
+
+/// The grid bounds given (`[[min, max], ...]` per grid axis, internal units) in the
+/// library's user units.
+fn grid_bounds(
+    m: &dyn pkm::DynMechanism,
+    axes: &[pkm::workspace::GridAxis],
+    bounds: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Option<Vec<f64>>> {
+    let Some(b) = bounds else {
+        return Ok(None);
+    };
+    let (v, _) = convert::array(b, "bounds")?;
+    let max = pkm::machine::MAX_MAGNITUDE;
+    if v.len() != 2 * axes.len() || v.iter().any(|x| !(x.abs() <= max)) {
+        return Err(invalid(
+            "bounds",
+            format!(
+                "expected {} [min, max] pairs of finite numbers up to {max:.0e} \
+                 (axes {}), got {} values",
+                axes.len(),
+                axes.iter()
+                    .map(|a| m.coordinates()[a.coordinate].name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                v.len()
+            ),
+        ));
+    }
+    Ok(Some(
+        v.iter()
+            .enumerate()
+            .map(|(k, x)| axis_quantity(m, axes, k / 2).to_user(*x))
+            .collect::<Vec<_>>(),
+    ))
+}
+
+/// The grid step given (internal units) in the library's user units: one step for
+/// axes of one unit only.
+fn grid_step(
+    m: &dyn pkm::DynMechanism,
+    axes: &[pkm::workspace::GridAxis],
+    step: Option<f64>,
+) -> PyResult<Option<f64>> {
+    let Some(s) = positive("step", step)? else {
+        return Ok(None);
+    };
+    let q0 = axis_quantity(m, axes, 0);
+    if (1..axes.len()).any(|i| axis_quantity(m, axes, i) != q0) {
+        return Err(invalid(
+            "step",
+            "one step for axes of different units (mm and rad): leave it out \
+             (1/40 of each range)",
+        ));
+    }
+    Ok(Some(q0.to_user(s)))
+}
+
+/// The quantity of grid axis `i`.
+fn axis_quantity(
+    m: &dyn pkm::DynMechanism,
+    axes: &[pkm::workspace::GridAxis],
+    i: usize,
+) -> pkm::units::Quantity {
+    m.coordinates()[axes[i].coordinate].quantity
+}
+
+/// The workspace map's axes as dicts: name, unit, min, max, step, count.
+fn grid_axes<'py>(
+    py: Python<'py>,
+    m: &dyn pkm::DynMechanism,
+    wm: &pkm::workspace::WorkspaceMap,
+) -> PyResult<Vec<Bound<'py, PyDict>>> {
+    wm.axes
+        .iter()
+        .map(|a| {
+            let c = &m.coordinates()[a.coordinate];
+            let e = PyDict::new(py);
+            e.set_item("name", &c.name)?;
+            e.set_item("unit", internal_unit(c.quantity))?;
+            e.set_item("min", a.min)?;
+            e.set_item("max", a.max)?;
+            e.set_item("step", a.step)?;
+            e.set_item("count", a.count())?;
+            Ok(e)
+        })
+        .collect()
+}
+
+/// The tolerances of `errors(tolerances={kind: value})`.
+fn kind_tolerances(t: &Bound<'_, PyAny>) -> PyResult<pkm::analysis::accuracy::KindTolerances> {
+    let d: BTreeMap<String, Bound<'_, PyAny>> = t.extract().map_err(|_| {
+        invalid(
+            "tolerances",
+            "expected a dict of kinds or a tolerances file's text",
+        )
+    })?;
+    let mut k = pkm::analysis::accuracy::KindTolerances::default();
+    for (key, v) in d {
+        let num = || -> PyResult<f64> {
+            v.extract::<f64>()
+                .map_err(|_| invalid(&format!("tolerances.{key}"), "expected a number"))
+        };
+        match key.as_str() {
+            "joint" => k.joint = num()?,
+            "length" => k.length = num()?,
+            "zero" => k.zero = num()?,
+            "angle" => k.angle = num()?,
+            "distribution" => {
+                let s: String = v.extract()?;
+                k.distribution = s.parse().map_err(to_py)?;
+            }
+            other => {
+                return Err(invalid(
+                    "tolerances",
+                    format!(
+                        "unknown kind `{other}` (expected joint, length, zero, angle, \
+                         distribution)"
+                    ),
+                ))
+            }
+        }
+    }
+    Ok(k)
+}
+
+/// The deviations of `errors(deviations={name: value})` as (parameter index, value) of
+/// machine `machine`'s `params`.
+fn deviations_of(
+    params: &[pkm::accuracy::Parameter],
+    machine: &str,
+    deviations: Option<BTreeMap<String, f64>>,
+) -> PyResult<Vec<(usize, f64)>> {
+    deviations
+        .unwrap_or_default()
+        .into_iter()
+        .map(|(name, v)| {
+            let i = params.iter().position(|p| p.name == name).ok_or_else(|| {
+                invalid(
+                    "deviations",
+                    format!("`{name}` is not a parameter of {machine}"),
+                )
+            })?;
+            if !v.is_finite() {
+                return Err(invalid(
+                    &format!("deviations.{name}"),
+                    "not a finite number",
+                ));
+            }
+            Ok((i, v))
+        })
+        .collect()
 }

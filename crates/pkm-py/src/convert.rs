@@ -233,6 +233,22 @@ pub fn rows(v: &Bound<'_, PyAny>, width: usize, what: &str) -> PyResult<(Vec<f64
     Ok((data, single))
 }
 
+/// The one pose of `width` coordinates `v` holds, if given: a single row of [`rows`].
+pub fn one_pose(
+    v: Option<&Bound<'_, PyAny>>,
+    width: usize,
+    what: &str,
+) -> PyResult<Option<Vec<f64>>> {
+    v.map(|v| {
+        let (x, one) = rows(v, width, what)?;
+        if !one {
+            return Err(invalid(what, "expected one pose"));
+        }
+        Ok(x)
+    })
+    .transpose()
+}
+
 /// A vector as a 1-D numpy array (no copy).
 pub fn vec1<'py, T: numpy::Element>(py: Python<'py>, v: Vec<T>) -> Bound<'py, PyArray1<T>> {
     PyArray1::from_vec(py, v)

@@ -69,21 +69,12 @@ pub fn simulate_measurements<'py>(
     let mut e = pkm::analysis::identification::sized_experiment(&machine.inner)
         .map_err(to_py)?
         .experiment;
-    let set = |dst: &mut f64, v: Option<f64>, what: &str| -> PyResult<()> {
-        if let Some(x) = v {
-            if !(x >= 0.0 && x.is_finite()) {
-                return Err(invalid(what, format!("expected a number >= 0, got {x}")));
-            }
-            *dst = x;
-        }
-        Ok(())
-    };
-    set(&mut e.deviation, deviation, "deviation")?;
-    set(&mut e.point_noise, point_noise, "point_noise")?;
-    set(&mut e.length_noise, length_noise, "length_noise")?;
-    set(&mut e.translation, translation, "translation")?;
-    set(&mut e.rotation, rotation, "rotation")?;
-    set(&mut e.step, step, "step")?;
+    set_non_negative(&mut e.deviation, deviation, "deviation")?;
+    set_non_negative(&mut e.point_noise, point_noise, "point_noise")?;
+    set_non_negative(&mut e.length_noise, length_noise, "length_noise")?;
+    set_non_negative(&mut e.translation, translation, "translation")?;
+    set_non_negative(&mut e.rotation, rotation, "rotation")?;
+    set_non_negative(&mut e.step, step, "step")?;
     // Checked (>= 1, inf allowed) by the library.
     if let Some(r) = condition_ratio {
         e.condition_ratio = r;
@@ -111,8 +102,30 @@ pub fn simulate_measurements<'py>(
             pkm::analysis::identification::simulate_measurements(&inner, text.as_deref(), &opt)
         })
         .map_err(to_py)?;
+    simulation_dict(py, &inner, s, &opt.comment)
+}
+
+/// `*dst = v` when given, a number `>= 0`.
+fn set_non_negative(dst: &mut f64, v: Option<f64>, what: &str) -> PyResult<()> {
+    if let Some(x) = v {
+        if !(x >= 0.0 && x.is_finite()) {
+            return Err(invalid(what, format!("expected a number >= 0, got {x}")));
+        }
+        *dst = x;
+    }
+    Ok(())
+}
+
+/// The simulated campaign `s` on `inner` as `simulate_measurements` returns it, its
+/// CSV texts headed by `comment`.
+fn simulation_dict<'py>(
+    py: Python<'py>,
+    inner: &pkm::Machine,
+    s: pkm::analysis::identification::SimulatedCampaign,
+    comment: &str,
+) -> PyResult<Bound<'py, PyDict>> {
     let write = |m: &pkm::identify::Measurements| {
-        pkm::analysis::identification::write_measurements(&inner, m, &opt.comment)
+        pkm::analysis::identification::write_measurements(inner, m, comment)
     };
     let d = PyDict::new(py);
     d.set_item("measurements", write(&s.measurements))?;

@@ -271,16 +271,7 @@ impl Machine {
         let p = self.m().coordinates().len();
         let a = self.m().actuators().len();
         let (q, single) = rows(q, a, "q")?;
-        let start = match start {
-            Some(s) => {
-                let (s, one) = rows(s, p, "start")?;
-                if !one {
-                    return Err(crate::errors::invalid("start", "expected one pose"));
-                }
-                Some(s)
-            }
-            None => None,
-        };
+        let start = convert::one_pose(start, p, "start")?;
         if single {
             // The solve and the limit check (the condition number is `condition`'s:
             // a robot's takes an inverse kinematics solve, 30 times the forward one).

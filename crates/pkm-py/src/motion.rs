@@ -97,9 +97,8 @@ impl Machine {
         max_samples: usize,
         samples: bool,
     ) -> PyResult<Bound<'py, PyDict>> {
-        use pkm::analysis::motion::{MotionSource, ProgramSetup};
         let m = self.m();
-        let (p, a) = (m.coordinates().len(), m.actuators().len());
+        let p = m.coordinates().len();
         let mut opts = pkm::analysis::motion::feed_options(&self.inner);
         opts.profile = profile_kind(profile)?;
         if let Some(x) = positive("acceleration", acceleration)? {
@@ -113,30 +112,85 @@ impl Machine {
         }
         opts.feed = positive("feed", feed)?;
         opts.max_samples = max_samples as u64;
-        let sampling = match (positive("rate", rate)?, points) {
-            (Some(_), Some(_)) => return Err(invalid("rate", "give rate or points, not both")),
-            (_, Some(n)) if n < 2 => return Err(invalid("points", "expected at least 2")),
-            (_, Some(n)) => pkm::motion::Sampling::Points(n),
-            (Some(r), None) => pkm::motion::Sampling::Rate(r),
-            (None, None) => pkm::motion::Sampling::Rate(1000.0),
+        let sampling = sampling(rate, points)?;
+        let from = convert::one_pose(start, p, "start")?;
+        let src = Src::of(gcode, path, p)?;
+        let mut cols = Columns {
+            keep: samples,
+            ..Default::default()
         };
-        let from = match start {
-            Some(s) => {
-                let (x, one) = rows(s, p, "start")?;
-                if !one {
-                    return Err(invalid("start", "expected one pose"));
-                }
-                Some(x)
-            }
-            None => None,
-        };
-        // The program's text or the waypoints; the library's source is built on the
-        // worker side of `detach` (a boxed reader is not Send).
-        enum Src {
-            Program(String),
-            Waypoints(Vec<Vec<f64>>),
-        }
-        let src = match (gcode, path) {
+        let inner = self.inner.clone();
+        let run = py
+            .detach(|| {
+                let source = src.into_source(from, tool_length);
+                pkm::analysis::motion::run_motion(&inner, source, &opts, sampling, &mut cols)
+            })
+            .map_err(to_py)?;
+        run_dict(py, m, cols, run)
+    }
+}
+
+/// A run as `Machine.motion` returns it: the sample columns, their names, the
+/// summary and the notes.
+fn run_dict<'py>(
+    py: Python<'py>,
+    m: &dyn pkm::DynMechanism,
+    cols: Columns,
+    run: pkm::analysis::motion::MotionRun,
+) -> PyResult<Bound<'py, PyDict>> {
+    let (p, a) = (m.coordinates().len(), m.actuators().len());
+    let d = PyDict::new(py);
+    d.set_item("t", vec1(py, cols.t))?;
+    d.set_item("line", vec1(py, cols.line))?;
+    d.set_item("x", vec2(py, cols.x, p)?)?;
+    d.set_item("q", vec2(py, cols.q, a)?)?;
+    d.set_item("qd", vec2(py, cols.qd, a)?)?;
+    d.set_item("qdd", vec2(py, cols.qdd, a)?)?;
+    d.set_item(
+        "columns",
+        (
+            m.coordinates()
+                .iter()
+                .map(|c| c.name.clone())
+                .collect::<Vec<_>>(),
+            m.actuators()
+                .iter()
+                .map(|c| c.name.clone())
+                .collect::<Vec<_>>(),
+        ),
+    )?;
+    d.set_item("summary", summary(py, &run.summary)?)?;
+    d.set_item("notes", run.notes)?;
+    Ok(d)
+}
+
+/// The sampling asked for: `rate` (Hz) or `points` per move, 1000 Hz by default.
+fn sampling(rate: Option<f64>, points: Option<usize>) -> PyResult<pkm::motion::Sampling> {
+    Ok(match (positive("rate", rate)?, points) {
+        (Some(_), Some(_)) => return Err(invalid("rate", "give rate or points, not both")),
+        (_, Some(n)) if n < 2 => return Err(invalid("points", "expected at least 2")),
+        (_, Some(n)) => pkm::motion::Sampling::Points(n),
+        (Some(r), None) => pkm::motion::Sampling::Rate(r),
+        (None, None) => pkm::motion::Sampling::Rate(1000.0),
+    })
+}
+
+/// The program's text or the waypoints; the library's source is built on the worker
+/// side of `detach` (a boxed reader is not Send).
+enum Src {
+    Program(String),
+    Waypoints(Vec<Vec<f64>>),
+}
+
+impl Src {
+    /// The program of `gcode` (its text, or a path to it) or the waypoints of `path`
+    /// (rows of `p` coordinates): exactly one of them.
+    fn of(
+        gcode: Option<&Bound<'_, PyAny>>,
+        path: Option<&Bound<'_, PyAny>>,
+        p: usize,
+    ) -> PyResult<Src> {
+        Ok(match (gcode, path) {
             (Some(g), None) => Src::Program(if let Ok(s) = g.extract::<String>() {
                 s
             } else {
@@ -151,62 +205,43 @@ impl Machine {
                 Src::Waypoints(v.chunks_exact(p).map(<[f64]>::to_vec).collect())
             }
             _ => return Err(invalid("motion", "give either gcode or path")),
-        };
-        let mut cols = Columns {
-            keep: samples,
-            ..Default::default()
-        };
-        let inner = self.inner.clone();
-        let run = py
-            .detach(|| {
-                let source = match src {
-                    Src::Program(text) => MotionSource::Gcode {
-                        reader: Box::new(std::io::Cursor::new(text.into_bytes())),
-                        from,
-                        setup: Box::new(ProgramSetup {
-                            tool_length,
-                            ..Default::default()
-                        }),
-                    },
-                    Src::Waypoints(points) => MotionSource::Polyline { points },
-                };
-                pkm::analysis::motion::run_motion(&inner, source, &opts, sampling, &mut cols)
-            })
-            .map_err(to_py)?;
-        let d = PyDict::new(py);
-        d.set_item("t", vec1(py, cols.t))?;
-        d.set_item("line", vec1(py, cols.line))?;
-        d.set_item("x", vec2(py, cols.x, p)?)?;
-        d.set_item("q", vec2(py, cols.q, a)?)?;
-        d.set_item("qd", vec2(py, cols.qd, a)?)?;
-        d.set_item("qdd", vec2(py, cols.qdd, a)?)?;
-        d.set_item(
-            "columns",
-            (
-                m.coordinates()
-                    .iter()
-                    .map(|c| c.name.clone())
-                    .collect::<Vec<_>>(),
-                m.actuators()
-                    .iter()
-                    .map(|c| c.name.clone())
-                    .collect::<Vec<_>>(),
-            ),
-        )?;
-        // Per-axis statistics as {name: stats}, as `pkm motion` writes them.
-        let summary = convert::to_py(py, &run.summary)?.cast_into::<PyDict>()?;
-        for key in ["actuators", "serial"] {
-            if let Some(list) = summary.get_item(key)? {
-                let named = PyDict::new(py);
-                for item in list.try_iter()? {
-                    let item = item?;
-                    named.set_item(item.get_item(0)?, item.get_item(1)?)?;
-                }
-                summary.set_item(key, named)?;
-            }
-        }
-        d.set_item("summary", summary)?;
-        d.set_item("notes", run.notes)?;
-        Ok(d)
+        })
     }
+
+    /// The library's motion source, a program starting at `from` with `tool_length`.
+    fn into_source(
+        self,
+        from: Option<Vec<f64>>,
+        tool_length: Option<f64>,
+    ) -> pkm::analysis::motion::MotionSource<'static> {
+        use pkm::analysis::motion::{MotionSource, ProgramSetup};
+        match self {
+            Src::Program(text) => MotionSource::Gcode {
+                reader: Box::new(std::io::Cursor::new(text.into_bytes())),
+                from,
+                setup: Box::new(ProgramSetup {
+                    tool_length,
+                    ..Default::default()
+                }),
+            },
+            Src::Waypoints(points) => MotionSource::Polyline { points },
+        }
+    }
+}
+
+/// The run's summary as a dict, its per-axis statistics as {name: stats}, as `pkm
+/// motion` writes them.
+fn summary<'py>(py: Python<'py>, run: &pkm::motion::MotionSummary) -> PyResult<Bound<'py, PyDict>> {
+    let summary = convert::to_py(py, run)?.cast_into::<PyDict>()?;
+    for key in ["actuators", "serial"] {
+        if let Some(list) = summary.get_item(key)? {
+            let named = PyDict::new(py);
+            for item in list.try_iter()? {
+                let item = item?;
+                named.set_item(item.get_item(0)?, item.get_item(1)?)?;
+            }
+            summary.set_item(key, named)?;
+        }
+    }
+    Ok(summary)
 }

@@ -211,51 +211,7 @@ pub fn pose_names(m: &dyn DynMechanism, conv: Convention) -> Vec<String> {
 /// (mm, rad). Spatial machines take X, Y, Z and optionally three angles in `conv`.
 pub fn pose_from_user(m: &dyn DynMechanism, vals: &[f64], conv: Convention) -> Result<Vec<f64>> {
     match m.pose_space() {
-        PoseSpace::Spatial | PoseSpace::Position => {
-            let names = pose_names(m, conv);
-            // A machine that drives X, Y, Z, A, B and holds C (a pentapod: LinuxCNC's
-            // X, Y, Z, A, B) takes five values in its own RPY angles, C its held value.
-            let holds_c = m.pose_space() == PoseSpace::Spatial && m.driven() == [0, 1, 2, 3, 4];
-            if holds_c && vals.len() == 5 && conv == Convention::Rpy {
-                let h = m.home();
-                return Ok(vec![
-                    vals[0],
-                    vals[1],
-                    vals[2],
-                    vals[3].to_radians(),
-                    vals[4].to_radians(),
-                    h[5],
-                ]);
-            }
-            if holds_c && vals.len() != 3 && vals.len() != 6 {
-                return Err(Error::InvalidInput {
-                    what: "pose".into(),
-                    message: format!(
-                        "expected 3, 5 (X,Y,Z,A,B; rpy angles, C held) or 6 values ({}), got {}",
-                        names.join(","),
-                        vals.len()
-                    ),
-                });
-            }
-            if vals.len() != 3 && vals.len() != 6 {
-                return Err(Error::InvalidInput {
-                    what: "pose".into(),
-                    message: format!(
-                        "expected 3 or 6 values ({}), got {}",
-                        names.join(","),
-                        vals.len()
-                    ),
-                });
-            }
-            let given = vals.len() == 6;
-            let angles = if given {
-                [vals[3], vals[4], vals[5]].map(f64::to_radians)
-            } else {
-                [0.0; 3]
-            };
-            let pose = pose_from_angles(Vector3::new(vals[0], vals[1], vals[2]), angles, conv);
-            m.coords_from_pose(&pose, given)
-        }
+        PoseSpace::Spatial | PoseSpace::Position => spatial_pose_from_user(m, vals, conv),
         PoseSpace::Tcp | PoseSpace::Own => {
             let c = m.coordinates();
             if vals.len() != c.len() {
@@ -279,4 +235,56 @@ pub fn pose_from_user(m: &dyn DynMechanism, vals: &[f64], conv: Convention) -> R
                 .collect())
         }
     }
+}
+
+/// [`pose_from_user`] for a spatial machine: X, Y, Z and optionally three angles in
+/// `conv` (five with RPY angles for a machine that holds C).
+fn spatial_pose_from_user(
+    m: &dyn DynMechanism,
+    vals: &[f64],
+    conv: Convention,
+) -> Result<Vec<f64>> {
+    let names = pose_names(m, conv);
+    // A machine that drives X, Y, Z, A, B and holds C (a pentapod: LinuxCNC's
+    // X, Y, Z, A, B) takes five values in its own RPY angles, C its held value.
+    let holds_c = m.pose_space() == PoseSpace::Spatial && m.driven() == [0, 1, 2, 3, 4];
+    if holds_c && vals.len() == 5 && conv == Convention::Rpy {
+        let h = m.home();
+        return Ok(vec![
+            vals[0],
+            vals[1],
+            vals[2],
+            vals[3].to_radians(),
+            vals[4].to_radians(),
+            h[5],
+        ]);
+    }
+    if holds_c && vals.len() != 3 && vals.len() != 6 {
+        return Err(Error::InvalidInput {
+            what: "pose".into(),
+            message: format!(
+                "expected 3, 5 (X,Y,Z,A,B; rpy angles, C held) or 6 values ({}), got {}",
+                names.join(","),
+                vals.len()
+            ),
+        });
+    }
+    if vals.len() != 3 && vals.len() != 6 {
+        return Err(Error::InvalidInput {
+            what: "pose".into(),
+            message: format!(
+                "expected 3 or 6 values ({}), got {}",
+                names.join(","),
+                vals.len()
+            ),
+        });
+    }
+    let given = vals.len() == 6;
+    let angles = if given {
+        [vals[3], vals[4], vals[5]].map(f64::to_radians)
+    } else {
+        [0.0; 3]
+    };
+    let pose = pose_from_angles(Vector3::new(vals[0], vals[1], vals[2]), angles, conv);
+    m.coords_from_pose(&pose, given)
 }

@@ -137,6 +137,22 @@ pub fn check_table<M, const P: usize, const A: usize>(
 where
     M: Mechanism<P, A> + ?Sized,
 {
+    check_poses(m, step_len, step_ang)
+        .into_iter()
+        .map(|(label, x)| check_row(m, label, &x))
+        .collect()
+}
+
+/// The poses of [`check_table`], labelled: home, each driven coordinate moved both
+/// ways, each held one moved up.
+fn check_poses<M, const P: usize, const A: usize>(
+    m: &M,
+    step_len: f64,
+    step_ang: f64,
+) -> Vec<(String, SVector<f64, P>)>
+where
+    M: Mechanism<P, A> + ?Sized,
+{
     let home = m.info().home();
     let driven = m.info().driven();
     let mut poses = vec![("home".to_string(), home)];
@@ -168,60 +184,69 @@ where
         }
     }
     poses
-        .into_iter()
-        .map(|(label, x)| {
-            let pose = (0..P)
-                .map(|k| m.info().coordinates()[k].quantity.to_user(x[k]))
-                .collect();
-            let mut row = CheckRow {
-                label,
-                pose,
-                actuators: None,
-                round_trip: None,
-                jacobian_error: None,
-                condition: None,
-                violations: Vec::new(),
-                error: None,
-            };
-            let q = match m.inverse(&x) {
-                Ok(q) => q,
-                Err(e) => {
-                    row.error = Some(e.to_string());
-                    return row;
-                }
-            };
-            row.actuators = Some(
-                (0..A)
-                    .map(|i| m.info().actuators()[i].quantity.to_user(q[i]))
-                    .collect(),
-            );
-            m.check_limits(&x, &q, &mut row.violations);
-            // Start FK from home, with the held coordinates of this pose.
-            let mut start = home;
-            for k in 0..P {
-                if !driven.contains(&k) {
-                    start[k] = x[k];
-                }
-            }
-            let mut errors = Vec::new();
-            match round_trip(m, &x, &start) {
-                Ok(r) => row.round_trip = Some(r),
-                Err(e) => errors.push(format!("FK: {e}")),
-            }
-            match jacobian_error(m, &x) {
-                Ok(e) => row.jacobian_error = Some(e),
-                Err(e) => errors.push(format!("Jacobian: {e}")),
-            }
-            match driven_condition(m, &x) {
-                Ok(c) => row.condition = Some(c),
-                Err(e) => errors.push(format!("conditioning: {e}")),
-            }
-            if !errors.is_empty() {
-                row.error = Some(errors.join("; "));
-            }
-            row
-        })
-        .collect()
+}
+
+/// The checks of [`check_table`] at pose `x`: IK, limits, FK round trip from home,
+/// the Jacobian against finite differences, and the conditioning.
+fn check_row<M, const P: usize, const A: usize>(
+    m: &M,
+    label: String,
+    x: &SVector<f64, P>,
+) -> CheckRow
+where
+    M: Mechanism<P, A> + ?Sized,
+{
+    let pose = (0..P)
+        .map(|k| m.info().coordinates()[k].quantity.to_user(x[k]))
+        .collect();
+    let mut row = CheckRow {
+        label,
+        pose,
+        actuators: None,
+        round_trip: None,
+        jacobian_error: None,
+        condition: None,
+        violations: Vec::new(),
+        error: None,
+    };
+    let q = match m.inverse(x) {
+        Ok(q) => q,
+        Err(e) => {
+            row.error = Some(e.to_string());
+            return row;
+        }
+    };
+    row.actuators = Some(
+        (0..A)
+            .map(|i| m.info().actuators()[i].quantity.to_user(q[i]))
+            .collect(),
+    );
+    m.check_limits(x, &q, &mut row.violations);
+    // Start FK from home, with the held coordinates of this pose.
+    let driven = m.info().driven();
+    let mut start = m.info().home();
+    for k in 0..P {
+        if !driven.contains(&k) {
+            start[k] = x[k];
+        }
+    }
+    let mut errors = Vec::new();
+    match round_trip(m, x, &start) {
+        Ok(r) => row.round_trip = Some(r),
+        Err(e) => errors.push(format!("FK: {e}")),
+    }
+    match jacobian_error(m, x) {
+        Ok(e) => row.jacobian_error = Some(e),
+        Err(e) => errors.push(format!("Jacobian: {e}")),
+    }
+    match driven_condition(m, x) {
+        Ok(c) => row.condition = Some(c),
+        Err(e) => errors.push(format!("conditioning: {e}")),
+    }
+    if !errors.is_empty() {
+        row.error = Some(errors.join("; "));
+    }
+    row
 }
 
 /// [`check_table`] on a loaded machine.
@@ -308,48 +333,59 @@ pub fn check_references(machine: &crate::Machine) -> Vec<ReferenceCheck> {
                     let sk = m.skeleton(&x)?;
                     Ok((q, sk))
                 });
-            let (q, sk) = match solved {
-                Ok(v) => v,
-                Err(e) => {
-                    out.error = Some(e.to_string());
-                    return out;
+            match solved {
+                Ok((q, sk)) => {
+                    out.items = reference_items(m, r, &q, &sk);
+                    out.pass = out.items.iter().all(|i| i.pass);
                 }
-            };
-            for (name, e) in &r.joints {
-                let got = sk
-                    .points
-                    .iter()
-                    .find(|p| &p.name == name)
-                    .map(|p| p.position);
-                let dev = got.map(|g| (0..3).map(|k| (g[k] - e[k]).abs()).fold(0.0, f64::max));
-                out.items.push(ReferenceItem {
-                    name: name.clone(),
-                    what: "joint",
-                    expected: e.to_vec(),
-                    computed: got.map(|g| g.to_vec()),
-                    deviation: dev,
-                    unit: "mm",
-                    pass: dev.is_some_and(|d| d <= r.tolerance),
-                    published: None,
-                });
+                Err(e) => out.error = Some(e.to_string()),
             }
-            for (name, e) in &r.actuators {
-                let idx = m.actuators().iter().position(|a| &a.name == name);
-                let got = idx.map(|i| m.actuators()[i].quantity.to_user(q[i]));
-                let dev = got.map(|g| (g - e).abs());
-                out.items.push(ReferenceItem {
-                    name: name.clone(),
-                    what: "actuator",
-                    expected: vec![*e],
-                    computed: got.map(|g| vec![g]),
-                    deviation: dev,
-                    unit: idx.map(|i| m.actuators()[i].quantity.unit()).unwrap_or(""),
-                    pass: dev.is_some_and(|d| d <= r.tolerance),
-                    published: r.published_actuators.get(name).map(|v| vec![*v]),
-                });
-            }
-            out.pass = out.items.iter().all(|i| i.pass);
             out
         })
         .collect()
+}
+
+/// The expected joint positions and actuator values of reference `r` against those
+/// computed at its pose (actuators `q`, joints in `sk`).
+fn reference_items(
+    m: &dyn crate::DynMechanism,
+    r: &crate::machine::Reference,
+    q: &[f64],
+    sk: &crate::Skeleton,
+) -> Vec<ReferenceItem> {
+    let mut items = Vec::new();
+    for (name, e) in &r.joints {
+        let got = sk
+            .points
+            .iter()
+            .find(|p| &p.name == name)
+            .map(|p| p.position);
+        let dev = got.map(|g| (0..3).map(|k| (g[k] - e[k]).abs()).fold(0.0, f64::max));
+        items.push(ReferenceItem {
+            name: name.clone(),
+            what: "joint",
+            expected: e.to_vec(),
+            computed: got.map(|g| g.to_vec()),
+            deviation: dev,
+            unit: "mm",
+            pass: dev.is_some_and(|d| d <= r.tolerance),
+            published: None,
+        });
+    }
+    for (name, e) in &r.actuators {
+        let idx = m.actuators().iter().position(|a| &a.name == name);
+        let got = idx.map(|i| m.actuators()[i].quantity.to_user(q[i]));
+        let dev = got.map(|g| (g - e).abs());
+        items.push(ReferenceItem {
+            name: name.clone(),
+            what: "actuator",
+            expected: vec![*e],
+            computed: got.map(|g| vec![g]),
+            deviation: dev,
+            unit: idx.map(|i| m.actuators()[i].quantity.unit()).unwrap_or(""),
+            pass: dev.is_some_and(|d| d <= r.tolerance),
+            published: r.published_actuators.get(name).map(|v| vec![*v]),
+        });
+    }
+    items
 }

@@ -67,6 +67,33 @@ where
     monte_carlo_with_progress(m, x, tol, n, seed, &|_| {})
 }
 
+/// Checks every tolerance of `tol` is on one of a machine's `np` parameters.
+pub(crate) fn check_tolerance_indices(np: usize, tol: &[Tolerance]) -> Result<()> {
+    if let Some(t) = tol.iter().find(|t| t.parameter >= np) {
+        return Err(Error::InvalidInput {
+            what: "tolerance".into(),
+            message: format!(
+                "parameter index {} beyond the machine's {np} parameters",
+                t.parameter
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// Checks a Monte Carlo of `n` machines over tolerances `tol` of a machine with `np`
+/// parameters before any work.
+fn check_request(np: usize, tol: &[Tolerance], n: usize) -> Result<()> {
+    check_tolerance_indices(np, tol)?;
+    if n == 0 || n > MAX_MONTE_CARLO {
+        return Err(Error::InvalidInput {
+            what: "Monte Carlo".into(),
+            message: format!("expected 1 to {MAX_MONTE_CARLO:.0e} samples, got {n}"),
+        });
+    }
+    Ok(())
+}
+
 /// [`monte_carlo`], telling `progress` of the machines done (every 4 096).
 pub fn monte_carlo_with_progress<M, const P: usize, const A: usize>(
     m: &M,
@@ -79,22 +106,7 @@ pub fn monte_carlo_with_progress<M, const P: usize, const A: usize>(
 where
     M: Parametric<P, A>,
 {
-    let np = m.parameters().len();
-    if let Some(t) = tol.iter().find(|t| t.parameter >= np) {
-        return Err(Error::InvalidInput {
-            what: "tolerance".into(),
-            message: format!(
-                "parameter index {} beyond the machine's {np} parameters",
-                t.parameter
-            ),
-        });
-    }
-    if n == 0 || n > MAX_MONTE_CARLO {
-        return Err(Error::InvalidInput {
-            what: "Monte Carlo".into(),
-            message: format!("expected 1 to {MAX_MONTE_CARLO:.0e} samples, got {n}"),
-        });
-    }
+    check_request(m.parameters().len(), tol, n)?;
     // Prepared once (a failure here is the nominal machine's, reported as such).
     let mut base = m.evaluator(x)?;
     base.pose_error(&[])?;

@@ -143,6 +143,30 @@ pub struct PathAccuracy {
     pub monte_carlo: Option<MachineSpread>,
 }
 
+/// The band's machines' deviations, parameter-major (`draws[k * machines + j]` is
+/// machine `j`'s deviation of tolerance `k`), drawn with `o.seed`.
+fn draw_machines(o: &PathOptions) -> Vec<f64> {
+    let mut rng = super::streamed::chunk_rng(o.seed, 0);
+    let normal = Normal::new(0.0, 1.0).expect("unit normal");
+    let mut draws = vec![0.0; o.tolerances.len() * o.machines];
+    for j in 0..o.machines {
+        for (i, t) in o.tolerances.iter().enumerate() {
+            draws[i * o.machines + j] = draw(t, &mut rng, &normal);
+        }
+    }
+    draws
+}
+
+/// The errors of one sample (mm): worst case, RSS, and their parts along the surface
+/// normal, with the largest contribution (parameter index, mm).
+struct SampleErrors {
+    worst_case: f64,
+    rss: f64,
+    surface_worst_case: f64,
+    surface_rss: f64,
+    top: (usize, f64),
+}
+
 /// Follows a path sample by sample (flat memory apart from the per-line rows).
 pub struct PathTracker<'m, M, const P: usize, const A: usize> {
     m: &'m M,
@@ -178,16 +202,7 @@ where
     /// [`Parametric::with_given`]) with options `o`.
     pub fn new(m: &'m M, o: &PathOptions) -> Result<Self> {
         let params: Vec<Parameter> = m.parameters();
-        if let Some(t) = o.tolerances.iter().find(|t| t.parameter >= params.len()) {
-            return Err(Error::InvalidInput {
-                what: "tolerance".into(),
-                message: format!(
-                    "parameter index {} beyond the machine's {} parameters",
-                    t.parameter,
-                    params.len()
-                ),
-            });
-        }
+        super::monte_carlo::check_tolerance_indices(params.len(), &o.tolerances)?;
         if o.machines > MAX_PATH_MACHINES {
             return Err(Error::InvalidInput {
                 what: "path Monte Carlo".into(),
@@ -205,14 +220,7 @@ where
         }
         let which: Vec<usize> = o.tolerances.iter().map(|t| t.parameter).collect();
         let n = which.len();
-        let mut rng = super::streamed::chunk_rng(o.seed, 0);
-        let normal = Normal::new(0.0, 1.0).expect("unit normal");
-        let mut draws = vec![0.0; n * o.machines];
-        for j in 0..o.machines {
-            for (i, t) in o.tolerances.iter().enumerate() {
-                draws[i * o.machines + j] = draw(t, &mut rng, &normal);
-            }
-        }
+        let draws = draw_machines(o);
         Ok(PathTracker {
             m,
             tooled: None,
@@ -268,20 +276,8 @@ where
     ) -> Result<()> {
         let m: &M = self.tooled.as_ref().unwrap_or(self.m);
         let n = m.sensitivities_into(x, q, &self.which, &mut self.scratch, &mut self.sens)?;
-        let (mut wc, mut ss, mut swc, mut sss) = (0.0, 0.0, 0.0, 0.0);
-        let mut top = (0, 0.0);
-        for (k, (s, v)) in self.sens.iter().zip(&self.values).enumerate() {
-            let a = s.position.norm() * v;
-            let b = n.dot(&s.position) * v;
-            wc += a;
-            ss += a * a;
-            swc += b.abs();
-            sss += b * b;
-            if a > top.1 {
-                top = (k, a);
-            }
-        }
-        let (rss, surface_rss) = (ss.sqrt(), sss.sqrt());
+        let e = self.sample_errors(&n);
+        let (wc, rss, swc) = (e.worst_case, e.rss, e.surface_worst_case);
         let band = if self.machines > 0 && self.samples.is_multiple_of(self.every as u64) {
             Some(self.band(&n))
         } else {
@@ -306,6 +302,44 @@ where
             surface_worst_case: swc,
             band,
         });
+        self.add_to_segment(t, line, &e, band);
+        Ok(())
+    }
+
+    /// The errors of the sample whose sensitivities are in `self.sens`, `n` the
+    /// surface normal.
+    fn sample_errors(&self, n: &Vector3<f64>) -> SampleErrors {
+        let (mut wc, mut ss, mut swc, mut sss) = (0.0, 0.0, 0.0, 0.0);
+        let mut top = (0, 0.0);
+        for (k, (s, v)) in self.sens.iter().zip(&self.values).enumerate() {
+            let a = s.position.norm() * v;
+            let b = n.dot(&s.position) * v;
+            wc += a;
+            ss += a * a;
+            swc += b.abs();
+            sss += b * b;
+            if a > top.1 {
+                top = (k, a);
+            }
+        }
+        SampleErrors {
+            worst_case: wc,
+            rss: ss.sqrt(),
+            surface_worst_case: swc,
+            surface_rss: sss.sqrt(),
+            top,
+        }
+    }
+
+    /// Adds a sample at time `t` of G-code line `line` to its line's segment (closing
+    /// the one before on a new line).
+    fn add_to_segment(
+        &mut self,
+        t: f64,
+        line: Option<u64>,
+        e: &SampleErrors,
+        band: Option<[f64; 5]>,
+    ) {
         if self.open.as_ref().is_some_and(|s| s.line != line) {
             self.close();
         }
@@ -323,20 +357,22 @@ where
         });
         seg.end_s = t;
         seg.samples += 1;
-        if wc >= seg.worst_case {
-            seg.worst_case = wc;
-            seg.top = (self.names.get(top.0).cloned().unwrap_or_default(), top.1);
+        if e.worst_case >= seg.worst_case {
+            seg.worst_case = e.worst_case;
+            seg.top = (
+                self.names.get(e.top.0).cloned().unwrap_or_default(),
+                e.top.1,
+            );
         }
-        seg.rss = seg.rss.max(rss);
-        seg.surface_worst_case = seg.surface_worst_case.max(swc);
-        seg.surface_rss = seg.surface_rss.max(surface_rss);
+        seg.rss = seg.rss.max(e.rss);
+        seg.surface_worst_case = seg.surface_worst_case.max(e.surface_worst_case);
+        seg.surface_rss = seg.surface_rss.max(e.surface_rss);
         if let Some(b) = band {
             seg.band = Some(match seg.band {
                 Some((lo, hi)) => (lo.min(b[3]), hi.max(b[4])),
                 None => (b[3], b[4]),
             });
         }
-        Ok(())
     }
 
     /// The machines' errors at this sample: `E = S D`; returns the percentiles of the

@@ -517,30 +517,11 @@ impl Visitor for AccuracyJob<'_> {
             self.opt
                 .tolerances
                 .resolve(&params, &m.tolerable(), self.file)?;
-        // Deviations in range of their kind, whichever front end gave them (the file
-        // reader checks its own with file and line).
-        for (k, v) in &self.opt.deviations {
-            let p = params.get(*k).ok_or_else(|| Error::InvalidInput {
-                what: "deviations".into(),
-                message: format!("no parameter {k}: the machine has {}", params.len()),
-            })?;
-            accuracy::check_tolerance_magnitude(p.quantity, *v).map_err(|message| {
-                Error::InvalidInput {
-                    what: format!("deviation of {}", p.name),
-                    message,
-                }
-            })?;
-        }
+        check_deviations(&params, &self.opt.deviations)?;
         // The machine prepared for what is given (a serial machine completes the
         // angular deviations of a link from the ones given, and refuses what means
         // nothing alone).
-        let mut given: Vec<usize> = tolerances
-            .iter()
-            .map(|t| t.parameter)
-            .chain(self.opt.deviations.iter().map(|d| d.0))
-            .collect();
-        given.sort_unstable();
-        given.dedup();
+        let given = given_parameters(&tolerances, &self.opt.deviations);
         let prepared = m.with_given(&given)?;
         let m = prepared.as_ref().unwrap_or(m);
         let q = m.inverse(&x)?;
@@ -596,4 +577,35 @@ impl Visitor for AccuracyJob<'_> {
             clearance,
         })
     }
+}
+
+/// Checks the `deviations` (parameter index, value) name parameters of `params` and
+/// are in range of their kind, whichever front end gave them (the file reader checks
+/// its own with file and line).
+fn check_deviations(params: &[Parameter], deviations: &[(usize, f64)]) -> Result<()> {
+    for (k, v) in deviations {
+        let p = params.get(*k).ok_or_else(|| Error::InvalidInput {
+            what: "deviations".into(),
+            message: format!("no parameter {k}: the machine has {}", params.len()),
+        })?;
+        accuracy::check_tolerance_magnitude(p.quantity, *v).map_err(|message| {
+            Error::InvalidInput {
+                what: format!("deviation of {}", p.name),
+                message,
+            }
+        })?;
+    }
+    Ok(())
+}
+
+/// The parameters given a tolerance or a deviation, sorted, each once.
+fn given_parameters(tolerances: &[Tolerance], deviations: &[(usize, f64)]) -> Vec<usize> {
+    let mut given: Vec<usize> = tolerances
+        .iter()
+        .map(|t| t.parameter)
+        .chain(deviations.iter().map(|d| d.0))
+        .collect();
+    given.sort_unstable();
+    given.dedup();
+    given
 }

@@ -220,7 +220,12 @@ fn chunked<E, F>(
             each_chunk!(par_chunks, par_chunks_mut)
         }
     };
-    // One table for the batch: the chunks' codes renumbered into it.
+    merge_causes(tables, causes, n);
+}
+
+/// One cause table for a batch of `n` rows from the chunks' `tables`: their codes
+/// renumbered into it, their solver messages by batch row.
+fn merge_causes(tables: Vec<ChunkCauses>, causes: &mut Causes, n: usize) {
     let mut all = Interner::default();
     for (c, (reasons, errors)) in tables.into_iter().enumerate() {
         if reasons.is_empty() {

@@ -283,23 +283,74 @@ pub(super) mod avx512 {
         r: &[__m512d; 9],
         d: &[[__m512d; 3]; 6],
         len: &[__m512d; 6],
+        ok: u8,
+    ) -> u8 {
+        let ok = strut_limits(s, x, r, d, len, ok);
+        if ok == 0 || s.pairs.is_empty() {
+            return ok;
+        }
+        pair_limits(s, d, len, ok)
+    }
+
+    /// `v` in every lane.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn c(v: f64) -> __m512d {
+        _mm512_set1_pd(v)
+    }
+
+    /// Lane-wise operations of two registers, each one AVX-512 instruction.
+    macro_rules! lane_ops {
+        ($($(#[doc = $doc:literal])* fn $name:ident -> $out:ty = $op:expr;)*) => {
+            $(
+                $(#[doc = $doc])*
+                #[target_feature(enable = "avx512f")]
+                #[inline]
+                fn $name(a: __m512d, b: __m512d) -> $out {
+                    $op(a, b)
+                }
+            )*
+        };
+    }
+
+    lane_ops! {
+        /// `a + b` by lane.
+        fn add -> __m512d = _mm512_add_pd;
+        /// `a - b` by lane.
+        fn sub -> __m512d = _mm512_sub_pd;
+        /// `a * b` by lane.
+        fn mul -> __m512d = _mm512_mul_pd;
+        /// The lanes where `a >= b` (false where either is NaN).
+        fn ge -> u8 = _mm512_cmp_pd_mask::<_CMP_GE_OQ>;
+        /// The lanes where `a <= b` (false where either is NaN).
+        fn le -> u8 = _mm512_cmp_pd_mask::<_CMP_LE_OQ>;
+    }
+
+    /// `u . w` by lane.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn dot(u: &[__m512d; 3], w: [__m512d; 3]) -> __m512d {
+        add(add(mul(u[0], w[0]), mul(u[1], w[1])), mul(u[2], w[2]))
+    }
+
+    /// Narrows `ok` by the limits of each coordinate and strut alone: axis travel,
+    /// strut length, base and platform cones.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn strut_limits(
+        s: &Screen,
+        x: &[__m512d; 6],
+        r: &[__m512d; 9],
+        d: &[[__m512d; 3]; 6],
+        len: &[__m512d; 6],
         mut ok: u8,
     ) -> u8 {
-        let c = |v: f64| _mm512_set1_pd(v);
-        let add = |a: __m512d, b: __m512d| _mm512_add_pd(a, b);
-        let sub = |a: __m512d, b: __m512d| _mm512_sub_pd(a, b);
-        let mul = |a: __m512d, b: __m512d| _mm512_mul_pd(a, b);
-        let ge = |a: __m512d, b: __m512d| _mm512_cmp_pd_mask::<_CMP_GE_OQ>(a, b);
-        let le = |a: __m512d, b: __m512d| _mm512_cmp_pd_mask::<_CMP_LE_OQ>(a, b);
         for (k, v) in x.iter().enumerate() {
             let (lo, hi) = s.axis[k];
             if lo.is_finite() || hi.is_finite() {
                 ok &= ge(*v, c(lo)) & le(*v, c(hi));
             }
         }
-        let dot = |u: &[__m512d; 3], w: [__m512d; 3]| {
-            add(add(mul(u[0], w[0]), mul(u[1], w[1])), mul(u[2], w[2]))
-        };
         for i in 0..6 {
             let q = len[i];
             let m = mul(c(MARGIN), q);
@@ -325,9 +376,14 @@ pub(super) mod avx512 {
                 ok &= ge(along, add(mul(c(cos_max), q), m));
             }
         }
-        if ok == 0 || s.pairs.is_empty() {
-            return ok;
-        }
+        ok
+    }
+
+    /// Narrows `ok` by the interference of the screen's strut pairs: bounding boxes
+    /// apart, else the lines' distance, else the segments' distance.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn pair_limits(s: &Screen, d: &[[__m512d; 3]; 6], len: &[__m512d; 6], mut ok: u8) -> u8 {
         let need = s.diameter * (1.0 + MARGIN);
         let need2 = c(need * need);
         let one = c(1.0);

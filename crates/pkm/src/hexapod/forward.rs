@@ -13,7 +13,7 @@
 //! digits, and it saves the factorisation that dominates a step's cost. A kept step
 //! that does not reduce the residual tenfold triggers a fresh Jacobian.
 
-use nalgebra::{Matrix3, Vector3, Vector6};
+use nalgebra::{Matrix3, SMatrix, Vector3, Vector6};
 
 use super::Hexapod;
 use crate::error::{Error, Result};
@@ -186,21 +186,17 @@ fn solve_from(
     lu: &mut Option<(SmallLu<6>, f64)>,
     o: &FkOptions,
 ) -> Result<FkReport> {
-    let singular = |p: &Vector3<f64>, rc: f64| Error::Singular {
-        what: format!(
-            "hexapod forward kinematics: the Jacobian is singular near X={:.3} Y={:.3} Z={:.3} mm",
-            p.x, p.y, p.z
-        ),
-        rcond: rc,
-    };
-    let mut p = *p0;
-    let mut r = *r0;
     let lc = h.info.characteristic_length();
     let inv_lc = 1.0 / lc;
     let soa = h.soa();
-    let (l0, mut j) = soa.lengths_and_jacobian(&p, &r, lc);
-    let mut res_v = l0 - q;
-    let mut res = max_abs(&res_v);
+    let (l0, mut j) = soa.lengths_and_jacobian(p0, r0, lc);
+    let res_v = l0 - q;
+    let mut x = Iterate {
+        p: *p0,
+        r: *r0,
+        res: max_abs(&res_v),
+        res_v,
+    };
     // j is the Jacobian at the current pose.
     let mut fresh = true;
     // Smallest LU pivot of the factorisation in use: the pose uncertainty is about
@@ -209,87 +205,25 @@ fn solve_from(
     // A kept factorisation that converged slowly: not worth keeping for the next solve.
     let mut stale = false;
     for it in 0..o.max_iterations {
-        if res <= o.tolerance {
-            let tol = o.tolerance.max(res);
-            let cheap_ok = it > 0 && 6.0 * tol / min_pivot <= o.max_pose_uncertainty;
-            let inv_norm = if cheap_ok {
-                0.0
-            } else {
-                let j = h.scaled_twist_jacobian(&p, &r);
-                SmallLu::new(&j)
-                    .map(|lu| norm1(&lu.inverse()))
-                    .unwrap_or(f64::INFINITY)
-            };
-            // Refuse a (near-)singular solution: the lengths do not determine it.
-            if !(inv_norm * tol <= o.max_pose_uncertainty) {
-                let j = h.scaled_twist_jacobian(&p, &r);
-                return Err(Error::Singular {
-                    what: format!(
-                        "hexapod forward kinematics: the strut lengths do not determine the pose near \
-                         X={:.3} Y={:.3} Z={:.3} mm (singular configuration)",
-                        p.x, p.y, p.z
-                    ),
-                    rcond: rcond1(&j),
-                });
-            }
+        if x.res <= o.tolerance {
+            check_determined(h, &x, it, min_pivot, o)?;
             keep(lu, !stale, min_pivot);
-            return Ok(FkReport {
-                position: p,
-                rotation: r,
-                iterations: it,
-                residual: res,
-            });
+            return Ok(x.report(it));
         }
         let chord = lu.is_some(); // the factorisation is kept from an earlier pose
         if lu.is_none() {
             if !fresh {
-                j = soa.lengths_and_jacobian(&p, &r, lc).1;
+                j = soa.lengths_and_jacobian(&x.p, &x.r, lc).1;
             }
-            let f = SmallLu::new(&j);
-            let (lo, hi) = f.map(|l| l.pivot_range()).unwrap_or((0.0, 1.0));
-            let rc = if hi > 0.0 { lo / hi } else { 0.0 };
-            match f {
-                Some(f) if rc >= o.min_rcond => {
-                    *lu = Some((f, lo));
-                    min_pivot = lo;
-                }
-                _ => return Err(singular(&p, rc)),
-            }
+            let f = factorise(&j, &x.p, o)?;
+            min_pivot = f.1;
+            *lu = Some(f);
         }
-        let d = lu.as_ref().map(|f| f.0.solve(&res_v)).unwrap_or_default();
-        let dv = Vector3::new(d[0], d[1], d[2]);
-        let dw = Vector3::new(d[3], d[4], d[5]) * inv_lc;
-        let mut t = 1.0;
-        let mut accepted = false;
-        let res_before = res;
-        for _ in 0..30 {
-            let pn = p - dv * t;
-            let rn = exp_so3(&(-dw * t)) * r;
-            let vn = h.lengths(&pn, &rn) - q;
-            let resn = max_abs(&vn);
-            if resn < res || resn <= o.tolerance {
-                // A kept Jacobian must still pay: otherwise refresh it and retry.
-                if chord && t == 1.0 && resn > 0.1 * res && resn > o.tolerance {
-                    break;
-                }
-                if chord && resn > 1e-3 * res && resn > o.tolerance {
-                    // Still converging, but the kept Jacobian is getting old.
-                    stale = true;
-                }
-                p = pn;
-                r = rn;
-                res_v = vn;
-                res = resn;
-                accepted = true;
-                break;
-            }
-            if chord {
-                break;
-            }
-            t *= 0.5;
-        }
+        let d = lu.as_ref().map(|f| f.0.solve(&x.res_v)).unwrap_or_default();
+        let res_before = x.res;
+        let step = line_search(h, q, &mut x, &d, inv_lc, chord, o);
         fresh = false;
-        if !accepted {
+        let Some((t, aged)) = step else {
             if chord {
                 // Retry this iteration with a fresh Jacobian.
                 *lu = None;
@@ -298,28 +232,145 @@ fn solve_from(
             return Err(Error::NotConverged {
                 solver: "hexapod forward kinematics",
                 iterations: it + 1,
-                residual: res,
+                residual: x.res,
             });
-        }
+        };
+        stale |= aged;
         // Keep the factorisation only after a small full step that cut the residual
         // tenfold (Newton's quadratic regime), or after a chord step that did.
-        if !(t == 1.0 && d.norm() <= o.chord_step && res <= 0.1 * res_before) {
+        if !(t == 1.0 && d.norm() <= o.chord_step && x.res <= 0.1 * res_before) {
             *lu = None;
         }
     }
-    if res <= o.tolerance {
+    if x.res <= o.tolerance {
         keep(lu, true, min_pivot);
-        Ok(FkReport {
-            position: p,
-            rotation: r,
-            iterations: o.max_iterations,
-            residual: res,
-        })
+        Ok(x.report(o.max_iterations))
     } else {
         Err(Error::NotConverged {
             solver: "hexapod forward kinematics",
             iterations: o.max_iterations,
-            residual: res,
+            residual: x.res,
         })
     }
+}
+
+/// The Newton iterate: the pose and its strut length residual.
+struct Iterate {
+    p: Vector3<f64>,
+    r: Matrix3<f64>,
+    res_v: Vector6<f64>,
+    /// Largest entry of `res_v`.
+    res: f64,
+}
+
+impl Iterate {
+    /// The solution this iterate is, after `iterations` linear solves.
+    #[inline(always)]
+    fn report(&self, iterations: usize) -> FkReport {
+        FkReport {
+            position: self.p,
+            rotation: self.r,
+            iterations,
+            residual: self.res,
+        }
+    }
+}
+
+/// Refuses a converged pose that the strut lengths do not determine (a (near-)singular
+/// configuration): its uncertainty, residual times `|J^-1|`, must be small.
+#[inline]
+fn check_determined(
+    h: &Hexapod,
+    x: &Iterate,
+    it: usize,
+    min_pivot: f64,
+    o: &FkOptions,
+) -> Result<()> {
+    let (p, r) = (&x.p, &x.r);
+    let tol = o.tolerance.max(x.res);
+    let cheap_ok = it > 0 && 6.0 * tol / min_pivot <= o.max_pose_uncertainty;
+    let inv_norm = if cheap_ok {
+        0.0
+    } else {
+        let j = h.scaled_twist_jacobian(p, r);
+        SmallLu::new(&j)
+            .map(|lu| norm1(&lu.inverse()))
+            .unwrap_or(f64::INFINITY)
+    };
+    // Refuse a (near-)singular solution: the lengths do not determine it.
+    if !(inv_norm * tol <= o.max_pose_uncertainty) {
+        let j = h.scaled_twist_jacobian(p, r);
+        return Err(Error::Singular {
+            what: format!(
+                "hexapod forward kinematics: the strut lengths do not determine the pose near \
+                 X={:.3} Y={:.3} Z={:.3} mm (singular configuration)",
+                p.x, p.y, p.z
+            ),
+            rcond: rcond1(&j),
+        });
+    }
+    Ok(())
+}
+
+/// Factorises the Jacobian `j` at `p`, with its smallest pivot, refusing a singular one.
+#[inline(always)]
+fn factorise(j: &SMatrix<f64, 6, 6>, p: &Vector3<f64>, o: &FkOptions) -> Result<(SmallLu<6>, f64)> {
+    let f = SmallLu::new(j);
+    let (lo, hi) = f.map(|l| l.pivot_range()).unwrap_or((0.0, 1.0));
+    let rc = if hi > 0.0 { lo / hi } else { 0.0 };
+    match f {
+        Some(f) if rc >= o.min_rcond => Ok((f, lo)),
+        _ => Err(Error::Singular {
+            what: format!(
+                "hexapod forward kinematics: the Jacobian is singular near X={:.3} Y={:.3} Z={:.3} mm",
+                p.x, p.y, p.z
+            ),
+            rcond: rc,
+        }),
+    }
+}
+
+/// Moves `x` along the Newton step `d` (rotation part scaled by `inv_lc`), halving
+/// the step until the residual decreases (a kept Jacobian, `chord`, gets the full
+/// step only). Returns the step length taken and whether a kept Jacobian is getting
+/// old, or `None` when no step was accepted.
+#[inline(always)]
+fn line_search(
+    h: &Hexapod,
+    q: &Vector6<f64>,
+    x: &mut Iterate,
+    d: &Vector6<f64>,
+    inv_lc: f64,
+    chord: bool,
+    o: &FkOptions,
+) -> Option<(f64, bool)> {
+    let dv = Vector3::new(d[0], d[1], d[2]);
+    let dw = Vector3::new(d[3], d[4], d[5]) * inv_lc;
+    let mut t = 1.0;
+    for _ in 0..30 {
+        let pn = x.p - dv * t;
+        let rn = exp_so3(&(-dw * t)) * x.r;
+        let vn = h.lengths(&pn, &rn) - q;
+        let resn = max_abs(&vn);
+        if resn < x.res || resn <= o.tolerance {
+            // A kept Jacobian must still pay: otherwise refresh it and retry.
+            if chord && t == 1.0 && resn > 0.1 * x.res && resn > o.tolerance {
+                return None;
+            }
+            // Still converging, but the kept Jacobian is getting old.
+            let aged = chord && resn > 1e-3 * x.res && resn > o.tolerance;
+            *x = Iterate {
+                p: pn,
+                r: rn,
+                res_v: vn,
+                res: resn,
+            };
+            return Some((t, aged));
+        }
+        if chord {
+            return None;
+        }
+        t *= 0.5;
+    }
+    None
 }

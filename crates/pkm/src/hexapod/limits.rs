@@ -123,59 +123,12 @@ impl Hexapod {
         r: &Matrix3<f64>,
         mut found: impl FnMut(LimitCode) -> bool,
     ) {
-        for (k, range) in &self.axes.ranges {
-            if let Some((side, bound)) = range.crossed(x[*k]) {
-                let quantity = self.info.coordinates()[*k].quantity;
-                let (id, value) = (*k as u32, x[*k]);
-                if found(LimitCode {
-                    id,
-                    side,
-                    quantity,
-                    value,
-                    bound,
-                }) {
-                    return;
-                }
-            }
+        if self.scan_axes(x, &mut found) {
+            return;
         }
         let joints = self.set.platform_joints(p, r);
-        let cone = |id: usize, c: &JointCone, cos: f64| {
-            (cos < c.cos_max()).then(|| LimitCode {
-                id: id as u32,
-                side: Side::Max,
-                quantity: Quantity::Angle,
-                value: cos.clamp(-1.0, 1.0).acos(),
-                bound: c.max_angle,
-            })
-        };
-        for i in 0..6 {
-            let s = &self.struts[i];
-            if let Some((side, bound)) = s.actuator.range.crossed(q[i]) {
-                if found(LimitCode {
-                    id: (RANGE + i) as u32,
-                    side,
-                    quantity: Quantity::Length,
-                    value: q[i],
-                    bound,
-                }) {
-                    return;
-                }
-            }
-            let n = (joints[i] - s.base) / q[i];
-            if let Some(c) = &s.base_cone {
-                if let Some(code) = cone(BASE_CONE + i, c, n.dot(&c.axis)) {
-                    if found(code) {
-                        return;
-                    }
-                }
-            }
-            if let Some(c) = &s.platform_cone {
-                if let Some(code) = cone(PLATFORM_CONE + i, c, (-n).dot(&(r * c.axis))) {
-                    if found(code) {
-                        return;
-                    }
-                }
-            }
+        if self.scan_struts(q, r, &joints, &mut found) {
+            return;
         }
         if let Some(dia) = self.strut_diameter {
             let base: [Vector3<f64>; 6] = std::array::from_fn(|i| self.struts[i].base);
@@ -195,6 +148,78 @@ impl Hexapod {
                 },
             );
         }
+    }
+
+    /// [`Hexapod::scan`]'s axis travel at pose `x`; whether `found` stopped it.
+    #[inline(always)]
+    fn scan_axes(&self, x: &Vector6<f64>, found: &mut impl FnMut(LimitCode) -> bool) -> bool {
+        for (k, range) in &self.axes.ranges {
+            if let Some((side, bound)) = range.crossed(x[*k]) {
+                let quantity = self.info.coordinates()[*k].quantity;
+                let (id, value) = (*k as u32, x[*k]);
+                if found(LimitCode {
+                    id,
+                    side,
+                    quantity,
+                    value,
+                    bound,
+                }) {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+
+    /// [`Hexapod::scan`]'s strut lengths `q` and joint cones (rotation `r`, platform
+    /// joints `joints`); whether `found` stopped it.
+    #[inline(always)]
+    fn scan_struts(
+        &self,
+        q: &Vector6<f64>,
+        r: &Matrix3<f64>,
+        joints: &[Vector3<f64>; 6],
+        found: &mut impl FnMut(LimitCode) -> bool,
+    ) -> bool {
+        let cone = |id: usize, c: &JointCone, cos: f64| {
+            (cos < c.cos_max()).then(|| LimitCode {
+                id: id as u32,
+                side: Side::Max,
+                quantity: Quantity::Angle,
+                value: cos.clamp(-1.0, 1.0).acos(),
+                bound: c.max_angle,
+            })
+        };
+        for i in 0..6 {
+            let s = &self.struts[i];
+            if let Some((side, bound)) = s.actuator.range.crossed(q[i]) {
+                if found(LimitCode {
+                    id: (RANGE + i) as u32,
+                    side,
+                    quantity: Quantity::Length,
+                    value: q[i],
+                    bound,
+                }) {
+                    return true;
+                }
+            }
+            let n = (joints[i] - s.base) / q[i];
+            if let Some(c) = &s.base_cone {
+                if let Some(code) = cone(BASE_CONE + i, c, n.dot(&c.axis)) {
+                    if found(code) {
+                        return true;
+                    }
+                }
+            }
+            if let Some(c) = &s.platform_cone {
+                if let Some(code) = cone(PLATFORM_CONE + i, c, (-n).dot(&(r * c.axis))) {
+                    if found(code) {
+                        return true;
+                    }
+                }
+            }
+        }
+        false
     }
 
     /// The violation a code of [`Hexapod::scan`] stands for, named as

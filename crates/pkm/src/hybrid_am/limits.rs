@@ -3,7 +3,7 @@
 
 use nalgebra::{SVector, Vector3, Vector6};
 
-use super::HybridAm;
+use super::{HybridAm, Placement};
 use crate::hexapod::segment_distance;
 use crate::limits::{LimitKind, Range, Side, Violation};
 use crate::units::Quantity;
@@ -32,7 +32,15 @@ pub(super) fn check(m: &HybridAm, x: &Vector6<f64>, q: &SVector<f64, 5>, out: &m
     }
     let s = m.struts(&pl, q);
     let c: [Vector3<f64>; 4] = std::array::from_fn(|i| m.carriage_joint(i, q[i]));
-    for (leg, si) in m.legs.iter().zip(&s) {
+    check_cones(m, &pl, &s, out);
+    if let Some(dia) = m.strut_diameter {
+        check_interference(m, &pl, &c, dia, out);
+    }
+}
+
+/// Pushes the violated joint cones of the struts `s` (platform placed at `pl`).
+fn check_cones(m: &HybridAm, pl: &Placement, s: &[Vector3<f64>; 4], out: &mut Vec<Violation>) {
+    for (leg, si) in m.legs.iter().zip(s) {
         let n = si / si.norm().max(1e-300);
         if let Some(cn) = &m.carriage_cone {
             cn.check(
@@ -59,23 +67,32 @@ pub(super) fn check(m: &HybridAm, x: &Vector6<f64>, q: &SVector<f64, 5>, out: &m
             );
         }
     }
-    if let Some(dia) = m.strut_diameter {
-        for i in 0..4 {
-            for k in i + 1..4 {
-                let d = segment_distance(&c[i], &pl.joints[i], &c[k], &pl.joints[k]);
-                if d < dia {
-                    out.push(Violation::new(
-                        format!(
-                            "struts {} and {} distance",
-                            m.legs[i].actuator.name, m.legs[k].actuator.name
-                        ),
-                        LimitKind::StrutInterference,
-                        Side::Min,
-                        Quantity::Length,
-                        d,
-                        dia,
-                    ));
-                }
+}
+
+/// Pushes every pair of struts (carriage joints `c` to the platform joints of `pl`)
+/// closer than the strut diameter `dia`.
+fn check_interference(
+    m: &HybridAm,
+    pl: &Placement,
+    c: &[Vector3<f64>; 4],
+    dia: f64,
+    out: &mut Vec<Violation>,
+) {
+    for i in 0..4 {
+        for k in i + 1..4 {
+            let d = segment_distance(&c[i], &pl.joints[i], &c[k], &pl.joints[k]);
+            if d < dia {
+                out.push(Violation::new(
+                    format!(
+                        "struts {} and {} distance",
+                        m.legs[i].actuator.name, m.legs[k].actuator.name
+                    ),
+                    LimitKind::StrutInterference,
+                    Side::Min,
+                    Quantity::Length,
+                    d,
+                    dia,
+                ));
             }
         }
     }

@@ -109,69 +109,14 @@ pub fn seed_procedure<M: StrutMachine<A>, const A: usize>(
     let names = nominal.struts();
     let t = nominal.tool();
     for j in 0..A {
-        let mut u = SVector::<f64, 7>::from_fn(|k, _| match k {
+        let u = SVector::<f64, 7>::from_fn(|k, _| match k {
             0..=2 => g[3 * j + k],
             3..=5 => g[3 * A + 3 * j + k - 3],
             _ => zero[j],
         });
-        let eval = |u: &SVector<f64, 7>| {
-            let a = Vector3::new(u[0], u[1], u[2]);
-            let b = Vector3::new(u[3], u[4], u[5]);
-            let mut f = SVector::<f64, 7>::zeros();
-            let mut jac = SMatrix::<f64, 7, 7>::zeros();
-            for (i, x) in poses.iter().enumerate() {
-                let (p, r) = split_pose(x);
-                let (l, da, db) = struts::strut_length(&p, &r, &a, &b, &t);
-                f[i] = l - u[6] - seven.states[i].readings[j];
-                for k in 0..3 {
-                    jac[(i, k)] = da[k];
-                    jac[(i, 3 + k)] = db[k];
-                }
-                jac[(i, 6)] = -1.0;
-            }
-            (f, jac)
-        };
-        let mut converged = false;
-        let mut it = 0;
-        while it < 50 {
-            let (f, jac) = eval(&u);
-            let scale = f.amax();
-            let lu = jac.lu();
-            let Some(step) = lu.solve(&f) else {
-                return Err(Error::Singular {
-                    what: format!(
-                        "seed 001 system of strut {} (the states do not separate its parameters)",
-                        names[j].name
-                    ),
-                    rcond: 0.0,
-                });
-            };
-            u -= step;
-            it += 1;
-            // Converged when the step is at rounding level, or the residual is: on a
-            // large, ill-conditioned system (condition ~1e5) rounding keeps the steps
-            // above 1e-12 of the parameters while the residual sits at 1e-13 mm.
-            let rounding = 1e-12 * (1.0 + u.amax());
-            if step.amax() < rounding || scale < rounding {
-                converged = true;
-                break;
-            }
-        }
-        let (f, jac) = eval(&u);
-        if !converged || f.amax() > 1e-8 {
-            return Err(Error::NotConverged {
-                solver: "seed 001 procedure (Newton, one strut)",
-                iterations: it,
-                residual: f.amax(),
-            });
-        }
-        let mut js = jac;
-        for c in 0..7 {
-            let nrm = js.column(c).norm();
-            js.column_mut(c).scale_mut(1.0 / nrm);
-        }
-        let sv = js.singular_values();
-        conditions[j] = sv.max() / sv.min();
+        let readings = std::array::from_fn(|i| seven.states[i].readings[j]);
+        let (u, it, condition) = solve_strut(&poses, &readings, &t, u, &names[j].name)?;
+        conditions[j] = condition;
         iterations[j] = it;
         for k in 0..3 {
             values[3 * j + k] = u[k];
@@ -184,4 +129,80 @@ pub fn seed_procedure<M: StrutMachine<A>, const A: usize>(
         conditions,
         iterations,
     })
+}
+
+/// One strut's system of seed 001 at its parameters `u` (`A_j`, `B'_j`, `L_j^(0)`): the
+/// lengths at the seven `poses` less the strut's `readings`, and their Jacobian.
+fn strut_system(
+    poses: &[Vector6<f64>],
+    readings: &[f64; 7],
+    t: &Vector3<f64>,
+    u: &SVector<f64, 7>,
+) -> (SVector<f64, 7>, SMatrix<f64, 7, 7>) {
+    let a = Vector3::new(u[0], u[1], u[2]);
+    let b = Vector3::new(u[3], u[4], u[5]);
+    let mut f = SVector::<f64, 7>::zeros();
+    let mut jac = SMatrix::<f64, 7, 7>::zeros();
+    for (i, x) in poses.iter().enumerate() {
+        let (p, r) = split_pose(x);
+        let (l, da, db) = struts::strut_length(&p, &r, &a, &b, t);
+        f[i] = l - u[6] - readings[i];
+        for k in 0..3 {
+            jac[(i, k)] = da[k];
+            jac[(i, 3 + k)] = db[k];
+        }
+        jac[(i, 6)] = -1.0;
+    }
+    (f, jac)
+}
+
+/// Newton on strut `name`'s system from `u`: its parameters, the iterations taken and
+/// the condition number of its column-scaled Jacobian.
+fn solve_strut(
+    poses: &[Vector6<f64>],
+    readings: &[f64; 7],
+    t: &Vector3<f64>,
+    mut u: SVector<f64, 7>,
+    name: &str,
+) -> Result<(SVector<f64, 7>, usize, f64)> {
+    let mut converged = false;
+    let mut it = 0;
+    while it < 50 {
+        let (f, jac) = strut_system(poses, readings, t, &u);
+        let scale = f.amax();
+        let lu = jac.lu();
+        let Some(step) = lu.solve(&f) else {
+            return Err(Error::Singular {
+                what: format!(
+                    "seed 001 system of strut {name} (the states do not separate its parameters)"
+                ),
+                rcond: 0.0,
+            });
+        };
+        u -= step;
+        it += 1;
+        // Converged when the step is at rounding level, or the residual is: on a
+        // large, ill-conditioned system (condition ~1e5) rounding keeps the steps
+        // above 1e-12 of the parameters while the residual sits at 1e-13 mm.
+        let rounding = 1e-12 * (1.0 + u.amax());
+        if step.amax() < rounding || scale < rounding {
+            converged = true;
+            break;
+        }
+    }
+    let (f, jac) = strut_system(poses, readings, t, &u);
+    if !converged || f.amax() > 1e-8 {
+        return Err(Error::NotConverged {
+            solver: "seed 001 procedure (Newton, one strut)",
+            iterations: it,
+            residual: f.amax(),
+        });
+    }
+    let mut js = jac;
+    for c in 0..7 {
+        let nrm = js.column(c).norm();
+        js.column_mut(c).scale_mut(1.0 / nrm);
+    }
+    let sv = js.singular_values();
+    Ok((u, it, sv.max() / sv.min()))
 }

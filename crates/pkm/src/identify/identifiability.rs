@@ -66,32 +66,42 @@ pub(super) fn analyse(
     }
     let out = dirs
         .into_iter()
-        .map(|(r, v)| {
-            let big = v.amax().max(1e-300);
-            let mut indexed: Vec<(usize, f64)> = v
-                .iter()
-                .enumerate()
-                .filter(|(_, c)| c.abs() >= 0.05 * big)
-                .map(|(c, x)| (free[c], x / big))
-                .collect();
-            indexed.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()));
-            // Sign convention: the largest term positive.
-            if indexed.first().is_some_and(|t| t.1 < 0.0) {
-                indexed.iter_mut().for_each(|t| t.1 = -t.1);
-            }
-            let terms: Vec<(String, f64)> = indexed
-                .iter()
-                .map(|(i, c)| (names[*i].clone(), *c))
-                .collect();
-            let description = describe(&terms, explain(&indexed), r);
-            Combination {
-                relative_singular_value: r,
-                terms,
-                description,
-            }
-        })
+        .map(|(r, v)| combination(r, &v, free, names, explain))
         .collect();
     (sv, out)
+}
+
+/// Direction `v` (physical units, relative singular value `r`) as a combination: its
+/// terms of at least 5 % of the largest, largest first and positive, named.
+fn combination(
+    r: f64,
+    v: &DVector<f64>,
+    free: &[usize],
+    names: &[String],
+    explain: &Explain,
+) -> Combination {
+    let big = v.amax().max(1e-300);
+    let mut indexed: Vec<(usize, f64)> = v
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| c.abs() >= 0.05 * big)
+        .map(|(c, x)| (free[c], x / big))
+        .collect();
+    indexed.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()));
+    // Sign convention: the largest term positive.
+    if indexed.first().is_some_and(|t| t.1 < 0.0) {
+        indexed.iter_mut().for_each(|t| t.1 = -t.1);
+    }
+    let terms: Vec<(String, f64)> = indexed
+        .iter()
+        .map(|(i, c)| (names[*i].clone(), *c))
+        .collect();
+    let description = describe(&terms, explain(&indexed), r);
+    Combination {
+        relative_singular_value: r,
+        terms,
+        description,
+    }
 }
 
 /// Reduced row echelon form of a set of directions (Gauss-Jordan with partial

@@ -280,76 +280,114 @@ pub fn explain<const N: usize>(
     if terms.iter().any(|(i, _)| strut_of(*i) != j) {
         return None;
     }
-    let mut da = Vector3::zeros();
-    let mut db = Vector3::zeros();
-    let mut dz = 0.0;
+    let mut t = StrutTerms::<N> {
+        j,
+        da: Vector3::zeros(),
+        db: Vector3::zeros(),
+        dz: 0.0,
+        strut: names
+            .get(6 * N + j)
+            .map(|s| s.trim_start_matches("zero(").trim_end_matches(')'))
+            .unwrap_or("?"),
+        names,
+    };
     for (i, c) in terms {
         match *i {
-            i if i < 3 * N => da[i % 3] += c,
-            i if i < 6 * N => db[(i - 3 * N) % 3] += c,
-            _ => dz += c,
+            i if i < 3 * N => t.da[i % 3] += c,
+            i if i < 6 * N => t.db[(i - 3 * N) % 3] += c,
+            _ => t.dz += c,
         }
     }
-    let n = dir_at_home[j];
-    let strut = names
-        .get(6 * N + j)
-        .map(|s| s.trim_start_matches("zero(").trim_end_matches(')'))
-        .unwrap_or("?");
-    let joint = |k: usize| {
-        names[k]
+    let reason = t.trade_off(&dir_at_home[j], &(rot_at_home * t.db), platform_turns);
+    Some(reason.unwrap_or_else(|| t.poorly_separated(platform_turns)))
+}
+
+/// The terms of a combination of one strut `j`'s parameters: its base joint's and
+/// platform joint's moves and its zero reading's, and the strut's name.
+struct StrutTerms<'a, const N: usize> {
+    j: usize,
+    da: Vector3<f64>,
+    db: Vector3<f64>,
+    dz: f64,
+    strut: &'a str,
+    names: &'a [String],
+}
+
+impl<const N: usize> StrutTerms<'_, N> {
+    /// The name of the joint whose first coordinate is parameter `k`.
+    fn joint(&self, k: usize) -> String {
+        self.names[k]
             .rsplit_once('.')
             .map(|x| x.0)
-            .unwrap_or(&names[k])
+            .unwrap_or(&self.names[k])
             .to_string()
-    };
-    let along = |d: &Vector3<f64>| d.norm() > 0.0 && (d.normalize().dot(&n)).abs() > 0.9;
-    let dbw = rot_at_home * db;
-    if dz.abs() > 0.0 && along(&da) && db.norm() < 0.2 * da.norm() {
-        return Some(format!(
-            "base joint {} moved along strut {strut} trades against zero({strut}): the strut's \
-             direction hardly changes over the measured states",
-            joint(3 * j)
-        ));
     }
-    if dz.abs() > 0.0 && along(&dbw) && da.norm() < 0.2 * db.norm() {
-        return Some(format!(
-            "platform joint {} moved along strut {strut} trades against zero({strut}): the \
-             strut's direction hardly changes over the measured states",
-            joint(3 * N + 3 * j)
-        ));
+
+    /// The known trade-offs (`n` the strut's direction at home, `dbw` the platform
+    /// joint's move in the base frame): a joint along the strut against the zero
+    /// reading, or both joints moved alike.
+    fn trade_off(
+        &self,
+        n: &Vector3<f64>,
+        dbw: &Vector3<f64>,
+        platform_turns: bool,
+    ) -> Option<String> {
+        let (j, da, db, dz, strut) = (self.j, &self.da, &self.db, self.dz, self.strut);
+        let along = |d: &Vector3<f64>| d.norm() > 0.0 && (d.normalize().dot(n)).abs() > 0.9;
+        if dz.abs() > 0.0 && along(da) && db.norm() < 0.2 * da.norm() {
+            return Some(format!(
+                "base joint {} moved along strut {strut} trades against zero({strut}): the strut's \
+                 direction hardly changes over the measured states",
+                self.joint(3 * j)
+            ));
+        }
+        if dz.abs() > 0.0 && along(dbw) && da.norm() < 0.2 * db.norm() {
+            return Some(format!(
+                "platform joint {} moved along strut {strut} trades against zero({strut}): the \
+                 strut's direction hardly changes over the measured states",
+                self.joint(3 * N + 3 * j)
+            ));
+        }
+        if dz.abs() < 0.05 && da.norm() > 0.0 && (da - dbw).norm() < 0.2 * da.norm() {
+            let why = if platform_turns {
+                "the platform hardly turns over the measured states"
+            } else {
+                "the platform never turns, so no measurement tells them apart"
+            };
+            return Some(format!(
+                "base joint {} and platform joint {} of strut {strut} moved alike (a translation of \
+                 the strut) change no length: {why}",
+                self.joint(3 * j),
+                self.joint(3 * N + 3 * j)
+            ));
+        }
+        None
     }
-    if dz.abs() < 0.05 && da.norm() > 0.0 && (da - dbw).norm() < 0.2 * da.norm() {
+
+    /// The reason for any other combination: the parameters it holds are poorly
+    /// separated.
+    fn poorly_separated(&self, platform_turns: bool) -> String {
+        let (j, strut) = (self.j, self.strut);
+        // Name only what the combination holds (a held parameter is not in it).
+        let mut parts = Vec::new();
+        if self.da.norm() > 0.0 {
+            parts.push(format!("base joint {}", self.joint(3 * j)));
+        }
+        if self.db.norm() > 0.0 {
+            parts.push(format!("platform joint {}", self.joint(3 * N + 3 * j)));
+        }
+        if self.dz != 0.0 {
+            parts.push(format!("the zero reading zero({strut})"));
+        }
         let why = if platform_turns {
-            "the platform hardly turns over the measured states"
+            "its direction and the platform's orientation vary too little over the measured states"
         } else {
-            "the platform never turns, so no measurement tells them apart"
+            "its direction varies too little over the measured states (the platform never turns)"
         };
-        return Some(format!(
-            "base joint {} and platform joint {} of strut {strut} moved alike (a translation of \
-             the strut) change no length: {why}",
-            joint(3 * j),
-            joint(3 * N + 3 * j)
-        ));
+        format!(
+            "{} of strut {strut} {} poorly separated: {why}",
+            parts.join(" and "),
+            if parts.len() > 1 { "are" } else { "is" }
+        )
     }
-    // Name only what the combination holds (a held parameter is not in it).
-    let mut parts = Vec::new();
-    if da.norm() > 0.0 {
-        parts.push(format!("base joint {}", joint(3 * j)));
-    }
-    if db.norm() > 0.0 {
-        parts.push(format!("platform joint {}", joint(3 * N + 3 * j)));
-    }
-    if dz != 0.0 {
-        parts.push(format!("the zero reading zero({strut})"));
-    }
-    let why = if platform_turns {
-        "its direction and the platform's orientation vary too little over the measured states"
-    } else {
-        "its direction varies too little over the measured states (the platform never turns)"
-    };
-    Some(format!(
-        "{} of strut {strut} {} poorly separated: {why}",
-        parts.join(" and "),
-        if parts.len() > 1 { "are" } else { "is" }
-    ))
 }

@@ -33,6 +33,27 @@ pub struct Hal {
     pub nets: BTreeMap<String, (String, String)>,
 }
 
+/// The number word `w` (or the INI entry it references) of line `line` of `file`.
+fn number(w: &str, ini: &Ini, file: &str, line: usize) -> Result<f64> {
+    let v = resolve(w, ini).ok_or_else(|| {
+        file_error(
+            file,
+            Some(line),
+            "",
+            format!("INI reference `{w}` names no entry of {}", short(&ini.file)),
+        )
+    })?;
+    match v.parse::<f64>() {
+        Ok(x) if x.is_finite() => Ok(x),
+        _ => Err(file_error(
+            file,
+            Some(line),
+            "",
+            format!("expected a finite number, found `{v}`"),
+        )),
+    }
+}
+
 impl Hal {
     /// Reads one HAL file (or the INI's `HALCMD` lines) into the collection; INI
     /// references resolve against `ini`.
@@ -51,63 +72,52 @@ impl Hal {
             if code.is_empty() {
                 continue;
             }
-            let words: Vec<&str> = code.split_whitespace().collect();
-            let value = |w: &str| -> Result<f64> {
-                let v = resolve(w, ini).ok_or_else(|| {
-                    file_error(
-                        file,
-                        Some(line),
-                        "",
-                        format!("INI reference `{w}` names no entry of {}", short(&ini.file)),
-                    )
-                })?;
-                match v.parse::<f64>() {
-                    Ok(x) if x.is_finite() => Ok(x),
-                    _ => Err(file_error(
-                        file,
-                        Some(line),
-                        "",
-                        format!("expected a finite number, found `{v}`"),
-                    )),
-                }
-            };
-            let record = |v: f64| HalValue {
-                value: v,
-                at: format!("{}:{line}", short(file)),
-                file: file.to_string(),
-                line,
-            };
-            match words.as_slice() {
-                ["setp", name, v] => {
-                    let x = value(v)?;
-                    self.setp.insert(name.to_string(), record(x));
-                }
-                [name, "=", v] => {
-                    let x = value(v)?;
-                    self.setp.insert(name.to_string(), record(x));
-                }
-                ["sets", signal, v] => {
-                    let x = value(v)?;
-                    self.sets.insert(signal.to_string(), record(x));
-                }
-                ["net", signal, pins @ ..] => {
-                    for p in pins.iter().filter(|p| !matches!(**p, "<=" | "=>" | "<=>")) {
-                        self.nets.insert(
-                            p.to_string(),
-                            (signal.to_string(), format!("{}:{line}", short(file))),
-                        );
-                    }
-                }
-                ["setp", ..] | ["sets", ..] => {
-                    return Err(file_error(
-                        file,
-                        Some(line),
-                        "",
-                        format!("expected `{} NAME VALUE`, found `{code}`", words[0]),
-                    ));
-                }
-                _ => {}
+            self.read_line(file, line, code, ini)?;
+        }
+        Ok(())
+    }
+
+    /// Reads the statement `code` of line `line` of `file`: `setp`, `NAME = VALUE`,
+    /// `sets` or `net`; other statements are skipped.
+    fn read_line(&mut self, file: &str, line: usize, code: &str, ini: &Ini) -> Result<()> {
+        let words: Vec<&str> = code.split_whitespace().collect();
+        let value = |w: &str| number(w, ini, file, line);
+        let record = |v: f64| HalValue {
+            value: v,
+            at: format!("{}:{line}", short(file)),
+            file: file.to_string(),
+            line,
+        };
+        match words.as_slice() {
+            ["setp", name, v] => {
+                let x = value(v)?;
+                self.setp.insert(name.to_string(), record(x));
             }
+            [name, "=", v] => {
+                let x = value(v)?;
+                self.setp.insert(name.to_string(), record(x));
+            }
+            ["sets", signal, v] => {
+                let x = value(v)?;
+                self.sets.insert(signal.to_string(), record(x));
+            }
+            ["net", signal, pins @ ..] => {
+                for p in pins.iter().filter(|p| !matches!(**p, "<=" | "=>" | "<=>")) {
+                    self.nets.insert(
+                        p.to_string(),
+                        (signal.to_string(), format!("{}:{line}", short(file))),
+                    );
+                }
+            }
+            ["setp", ..] | ["sets", ..] => {
+                return Err(file_error(
+                    file,
+                    Some(line),
+                    "",
+                    format!("expected `{} NAME VALUE`, found `{code}`", words[0]),
+                ));
+            }
+            _ => {}
         }
         Ok(())
     }

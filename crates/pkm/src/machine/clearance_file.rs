@@ -83,29 +83,7 @@ pub(crate) fn clearances(src: &Source, joints: &[PassiveJoint]) -> Result<Vec<Jo
                 ),
             ));
         }
-        let mut names: Vec<&str> = Vec::new();
-        for n in &e.joints {
-            let matched: Vec<&str> = joints
-                .iter()
-                .filter(|j| n == "all" || j.body == *n || j.name == *n)
-                .map(|j| j.name.as_str())
-                .collect();
-            if matched.is_empty() {
-                return Err(src.error(
-                    &at("joints"),
-                    format!(
-                        "unknown joint `{n}`, expected {}, all or one of {}",
-                        classes(joints).join(", "),
-                        joints
-                            .iter()
-                            .map(|j| j.name.as_str())
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    ),
-                ));
-            }
-            names.extend(matched);
-        }
+        let names = matched_joints(src, &at("joints"), &e.joints, joints)?;
         for name in names {
             if out.iter().any(|c| c.joint == name) {
                 return Err(src.error(
@@ -125,6 +103,40 @@ pub(crate) fn clearances(src: &Source, joints: &[PassiveJoint]) -> Result<Vec<Jo
                 .map_err(|(field, message)| src.error(&at(field), message))?;
             out.push(c);
         }
+    }
+    Ok(out)
+}
+
+/// The passive joints an entry's `names` select (`at` its field): by name, by class,
+/// or `all`; each name must select one at least.
+fn matched_joints<'a>(
+    src: &Source,
+    at: &[Seg],
+    names: &[String],
+    joints: &'a [PassiveJoint],
+) -> Result<Vec<&'a str>> {
+    let mut out: Vec<&str> = Vec::new();
+    for n in names {
+        let matched: Vec<&str> = joints
+            .iter()
+            .filter(|j| n == "all" || j.body == *n || j.name == *n)
+            .map(|j| j.name.as_str())
+            .collect();
+        if matched.is_empty() {
+            return Err(src.error(
+                at,
+                format!(
+                    "unknown joint `{n}`, expected {}, all or one of {}",
+                    classes(joints).join(", "),
+                    joints
+                        .iter()
+                        .map(|j| j.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            ));
+        }
+        out.extend(matched);
     }
     Ok(out)
 }

@@ -3,7 +3,7 @@
 //! `[[reference]]` entries, each error naming the file, line, column and field.
 
 use super::source::{self, Exact};
-use super::{MotionFile, Reference};
+use super::{Model, MotionFile, Parts, Reference};
 use crate::error::Result;
 
 pub(crate) fn v3(a: impl Into<[f64; 3]>) -> nalgebra::Vector3<f64> {
@@ -311,6 +311,27 @@ pub(crate) fn distinct_joint_names_in(
         ));
     }
     Ok(())
+}
+
+/// Joins a built `model` to its file's name, description, checked `[[reference]]`
+/// entries and `[motion]` rapid rate.
+pub(crate) fn parts(
+    src: &source::Source,
+    model: Model,
+    name: Option<String>,
+    description: Option<String>,
+    references: Vec<Reference>,
+    motion: Option<MotionFile>,
+) -> Result<Parts> {
+    check_references(src, &references)?;
+    let rapid = check_motion(src, motion.as_ref())?;
+    Ok(Parts {
+        model,
+        name,
+        description,
+        references,
+        rapid,
+    })
 }
 
 /// Checks `[motion]`; returns the rapid rate in mm/s.

@@ -161,60 +161,8 @@ fn legs(src: &Source, f: &HybridAmFile) -> Result<[Leg; 4], Error> {
         ));
     }
     let mut legs = Vec::with_capacity(4);
-    for (i, s) in f.struts.iter().enumerate() {
-        let p = |k: &str| vec![key("struts"), Seg::Index(i), key(k)];
-        if s.name.trim().is_empty() {
-            return Err(src.error(&p("name"), "expected a non-empty strut name"));
-        }
-        let earlier = &f.struts[..i];
-        if earlier.iter().any(|o| o.name == s.name) || s.name == f.table.name {
-            return Err(src.error(&p("name"), format!("drive name `{}` is used twice", s.name)));
-        }
-        let lookup = |joints: &BTreeMap<String, Exact<3>>, name: &str, field: &str| {
-            if earlier.iter().any(|o| match field {
-                "carriage" => o.carriage == name,
-                _ => o.platform == name,
-            }) {
-                return Err(src.error(
-                    &p(field),
-                    format!("{field} joint `{name}` is used by another strut already"),
-                ));
-            }
-            joints.get(name).map(|v| v3(*v)).ok_or_else(|| {
-                src.error(
-                    &p(field),
-                    format!(
-                        "unknown {field} joint `{name}`, expected one of {}",
-                        joints.keys().cloned().collect::<Vec<_>>().join(", ")
-                    ),
-                )
-            })
-        };
-        let guide = lookup(&f.carriage_joints, &s.carriage, "carriage")?;
-        let platform = lookup(&f.platform_joints, &s.platform, "platform")?;
-        if !(s.length > 0.0) {
-            return Err(src.error(
-                &p("length"),
-                format!("expected a strut length > 0 mm, found {}", s.length),
-            ));
-        }
-        let range = ordered(src, &p("stroke"), s.stroke, "mm")?;
-        super::positive_opt(src, &p("max_velocity"), s.max_velocity, "mm/s")?;
-        super::positive_opt(src, &p("max_acceleration"), s.max_acceleration, "mm/s^2")?;
-        legs.push(Leg {
-            actuator: Actuator {
-                name: s.name.clone(),
-                quantity: Quantity::Length,
-                range,
-                max_velocity: s.max_velocity,
-                max_acceleration: s.max_acceleration,
-            },
-            carriage_name: s.carriage.clone(),
-            platform_name: s.platform.clone(),
-            guide,
-            platform,
-            length: s.length,
-        });
+    for i in 0..f.struts.len() {
+        legs.push(leg(src, f, i)?);
     }
     for (table, joints) in [
         ("carriage_joints", &f.carriage_joints),
@@ -234,6 +182,65 @@ fn legs(src: &Source, f: &HybridAmFile) -> Result<[Leg; 4], Error> {
     Ok(legs.try_into().expect("four legs checked above"))
 }
 
+/// Reads strut `i`: its drive name, its two joints (each unused by earlier struts), its
+/// length and its stroke.
+fn leg(src: &Source, f: &HybridAmFile, i: usize) -> Result<Leg, Error> {
+    let s = &f.struts[i];
+    let p = |k: &str| vec![key("struts"), Seg::Index(i), key(k)];
+    if s.name.trim().is_empty() {
+        return Err(src.error(&p("name"), "expected a non-empty strut name"));
+    }
+    let earlier = &f.struts[..i];
+    if earlier.iter().any(|o| o.name == s.name) || s.name == f.table.name {
+        return Err(src.error(&p("name"), format!("drive name `{}` is used twice", s.name)));
+    }
+    let lookup = |joints: &BTreeMap<String, Exact<3>>, name: &str, field: &str| {
+        if earlier.iter().any(|o| match field {
+            "carriage" => o.carriage == name,
+            _ => o.platform == name,
+        }) {
+            return Err(src.error(
+                &p(field),
+                format!("{field} joint `{name}` is used by another strut already"),
+            ));
+        }
+        joints.get(name).map(|v| v3(*v)).ok_or_else(|| {
+            src.error(
+                &p(field),
+                format!(
+                    "unknown {field} joint `{name}`, expected one of {}",
+                    joints.keys().cloned().collect::<Vec<_>>().join(", ")
+                ),
+            )
+        })
+    };
+    let guide = lookup(&f.carriage_joints, &s.carriage, "carriage")?;
+    let platform = lookup(&f.platform_joints, &s.platform, "platform")?;
+    if !(s.length > 0.0) {
+        return Err(src.error(
+            &p("length"),
+            format!("expected a strut length > 0 mm, found {}", s.length),
+        ));
+    }
+    let range = ordered(src, &p("stroke"), s.stroke, "mm")?;
+    super::positive_opt(src, &p("max_velocity"), s.max_velocity, "mm/s")?;
+    super::positive_opt(src, &p("max_acceleration"), s.max_acceleration, "mm/s^2")?;
+    Ok(Leg {
+        actuator: Actuator {
+            name: s.name.clone(),
+            quantity: Quantity::Length,
+            range,
+            max_velocity: s.max_velocity,
+            max_acceleration: s.max_acceleration,
+        },
+        carriage_name: s.carriage.clone(),
+        platform_name: s.platform.clone(),
+        guide,
+        platform,
+        length: s.length,
+    })
+}
+
 pub(super) fn build(src: &Source, f: HybridAmFile) -> Result<super::Parts, Error> {
     super::distinct_joint_names_in(
         src,
@@ -242,24 +249,7 @@ pub(super) fn build(src: &Source, f: HybridAmFile) -> Result<super::Parts, Error
         &[],
     )?;
     let legs = legs(src, &f)?;
-    let t = &f.table;
-    let tp = |k: &str| vec![key("table"), key(k)];
-    if t.name.trim().is_empty() {
-        return Err(src.error(&tp("name"), "expected a non-empty drive name"));
-    }
-    let range = ordered(src, &tp("range"), t.range, "deg")?;
-    super::positive_opt(src, &tp("max_velocity"), t.max_velocity, "deg/s")?;
-    super::positive_opt(src, &tp("max_acceleration"), t.max_acceleration, "deg/s^2")?;
-    let table = Actuator {
-        name: t.name.clone(),
-        quantity: Quantity::Angle,
-        range: Range {
-            min: range.min.to_radians(),
-            max: range.max.to_radians(),
-        },
-        max_velocity: t.max_velocity.map(f64::to_radians),
-        max_acceleration: t.max_acceleration.map(f64::to_radians),
-    };
+    let table = table(src, &f.table)?;
     if !(f.tool.tilt.abs() <= 180.0) {
         return Err(src.error(
             &[key("tool"), key("tilt")],
@@ -269,7 +259,46 @@ pub(super) fn build(src: &Source, f: HybridAmFile) -> Result<super::Parts, Error
             ),
         ));
     }
-    let a = f.home.angles.unwrap_or_default();
+    let home = home(src, &f.home)?;
+    let mut m = HybridAm::new(
+        f.name.clone().unwrap_or_else(|| "hybrid AM machine".into()),
+        legs,
+        v3(f.tool.tip),
+        f.tool.tilt.to_radians(),
+        v3(f.table.centre),
+        table,
+        home,
+    );
+    set_limits(src, &f.limits, &mut m)?;
+    check_home(src, &m)?;
+    let model = Model::HybridAm(Box::new(m));
+    super::parts(src, model, f.name, f.description, f.reference, f.motion)
+}
+
+/// Reads the rotary table's drive (degrees in the file, radians in the model).
+fn table(src: &Source, t: &TableFile) -> Result<Actuator, Error> {
+    let tp = |k: &str| vec![key("table"), key(k)];
+    if t.name.trim().is_empty() {
+        return Err(src.error(&tp("name"), "expected a non-empty drive name"));
+    }
+    let range = ordered(src, &tp("range"), t.range, "deg")?;
+    super::positive_opt(src, &tp("max_velocity"), t.max_velocity, "deg/s")?;
+    super::positive_opt(src, &tp("max_acceleration"), t.max_acceleration, "deg/s^2")?;
+    Ok(Actuator {
+        name: t.name.clone(),
+        quantity: Quantity::Angle,
+        range: Range {
+            min: range.min.to_radians(),
+            max: range.max.to_radians(),
+        },
+        max_velocity: t.max_velocity.map(f64::to_radians),
+        max_acceleration: t.max_acceleration.map(f64::to_radians),
+    })
+}
+
+/// The home pose, whose A angle must be 0.
+fn home(src: &Source, h: &HomeFile) -> Result<Vector6<f64>, Error> {
+    let a = h.angles.unwrap_or_default();
     if a[0] != 0.0 {
         return Err(src.error(
             &[key("home"), key("angles")],
@@ -280,25 +309,19 @@ pub(super) fn build(src: &Source, f: HybridAmFile) -> Result<super::Parts, Error
             ),
         ));
     }
-    let hp = f.home.position;
-    let home = Vector6::new(
+    let hp = h.position;
+    Ok(Vector6::new(
         hp[0],
         hp[1],
         hp[2],
         0.0,
         a[1].to_radians(),
         a[2].to_radians(),
-    );
-    let mut m = HybridAm::new(
-        f.name.clone().unwrap_or_else(|| "hybrid AM machine".into()),
-        legs,
-        v3(f.tool.tip),
-        f.tool.tilt.to_radians(),
-        v3(t.centre),
-        table,
-        home,
-    );
-    let lim = &f.limits;
+    ))
+}
+
+/// Reads `[limits]` (tilt range, joint cones, strut diameter) into `m`.
+fn set_limits(src: &Source, lim: &LimitsFile, m: &mut HybridAm) -> Result<(), Error> {
     let tilt = match lim.tilt {
         Some(r) => {
             let r = ordered(src, &[key("limits"), key("tilt")], r, "deg")?;
@@ -325,7 +348,11 @@ pub(super) fn build(src: &Source, f: HybridAmFile) -> Result<super::Parts, Error
     )?;
     super::strut_diameter(src, lim.strut_diameter)?;
     m.set_limits(tilt, carriage_cone, platform_cone, lim.strut_diameter);
-    // The home pose must be an assembly, and not a singular one.
+    Ok(())
+}
+
+/// Checks the home pose is an assembly, and not a singular one.
+fn check_home(src: &Source, m: &HybridAm) -> Result<(), Error> {
     let home_err = |e: Error| src.error(&[key("home")], format!("not a pose of the machine: {e}"));
     m.inverse(&m.info().home()).map_err(home_err)?;
     let rc = 1.0 / m.condition(&m.info().home()).map_err(home_err)?;
@@ -339,13 +366,5 @@ pub(super) fn build(src: &Source, f: HybridAmFile) -> Result<super::Parts, Error
             ),
         ));
     }
-    super::check_references(src, &f.reference)?;
-    let rapid = super::check_motion(src, f.motion.as_ref())?;
-    Ok(super::Parts {
-        model: Model::HybridAm(Box::new(m)),
-        name: f.name,
-        description: f.description,
-        references: f.reference,
-        rapid,
-    })
+    Ok(())
 }

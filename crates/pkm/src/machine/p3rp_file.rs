@@ -170,43 +170,7 @@ fn angle_range(src: &Source, field: &str, r: Option<Exact<2>>) -> Result<Option<
 }
 
 pub(super) fn build(src: &Source, f: P3rpFile) -> Result<super::Parts, Error> {
-    let h = &f.head;
-    for (field, v) in [("l1", h.l1), ("l2", h.l2)] {
-        if !(v > 0.0) {
-            return Err(src.error(
-                &[key("head"), key(field)],
-                format!("expected a length > 0 mm, found {v}"),
-            ));
-        }
-    }
-    if h.tool_length < 0.0 {
-        return Err(src.error(
-            &[key("head"), key("tool_length")],
-            format!("expected a length >= 0 mm, found {}", h.tool_length),
-        ));
-    }
-    let lim = &f.limits;
-    let min_mu = match lim.min_transmission_angle {
-        Some(a) if !(0.0..90.0).contains(&a) => {
-            return Err(src.error(
-                &[key("limits"), key("min_transmission_angle")],
-                format!("expected an angle in [0, 90) deg, found {a}"),
-            ))
-        }
-        a => a.map(f64::to_radians),
-    };
-    let geometry = HeadGeometry {
-        l1: h.l1,
-        l2: h.l2,
-        e: h.e,
-        delta: h.delta.to_radians(),
-        tool_length: h.tool_length,
-        theta_range: angle_range(src, "theta", lim.theta)?,
-        rod_angle_range: angle_range(src, "rod_angle", lim.rod_angle)?,
-        min_transmission_angle: min_mu,
-        branch: h.branch.unwrap_or(Branch::Positive),
-        offsets: Default::default(),
-    };
+    let geometry = head_geometry(src, &f.head, &f.limits)?;
     let sliders = axes(src, "sliders", &f.sliders, ["U", "V"])?;
     let name = f.name.clone().unwrap_or_else(|| "P3RP head".into());
     let head_home = Vector2::new(f.home.z, f.home.theta.to_radians());
@@ -237,29 +201,65 @@ pub(super) fn build(src: &Source, f: P3rpFile) -> Result<super::Parts, Error> {
         }
         Some(t) => {
             let [x, y] = axes(src, "table", t, ["X", "Y"])?;
-            let l = geometry.tool_length;
-            let (s, c) = head_home[1].sin_cos();
-            let home = Vector6::new(
-                f.home.x.unwrap_or(0.0),
-                f.home.y.unwrap_or(0.0) + l * s,
-                head_home[0] - l * c,
-                head_home[1],
-                0.0,
-                0.0,
-            );
+            let home = hybrid_home(&f.home, geometry.tool_length, &head_home);
             let [u, v] = sliders;
             let m = HybridMachine::new(name, geometry, [x, y, u, v], home);
             m.inverse(&m.info().home()).map_err(home_err)?;
             Model::P3rpHybrid(Box::new(m))
         }
     };
-    super::check_references(src, &f.reference)?;
-    let rapid = super::check_motion(src, f.motion.as_ref())?;
-    Ok(super::Parts {
-        model,
-        name: f.name,
-        description: f.description,
-        references: f.reference,
-        rapid,
+    super::parts(src, model, f.name, f.description, f.reference, f.motion)
+}
+
+/// The head's geometry from `[head]` and `[limits]`, lengths and angles checked.
+fn head_geometry(src: &Source, h: &HeadFile, lim: &LimitsFile) -> Result<HeadGeometry, Error> {
+    for (field, v) in [("l1", h.l1), ("l2", h.l2)] {
+        if !(v > 0.0) {
+            return Err(src.error(
+                &[key("head"), key(field)],
+                format!("expected a length > 0 mm, found {v}"),
+            ));
+        }
+    }
+    if h.tool_length < 0.0 {
+        return Err(src.error(
+            &[key("head"), key("tool_length")],
+            format!("expected a length >= 0 mm, found {}", h.tool_length),
+        ));
+    }
+    let min_mu = match lim.min_transmission_angle {
+        Some(a) if !(0.0..90.0).contains(&a) => {
+            return Err(src.error(
+                &[key("limits"), key("min_transmission_angle")],
+                format!("expected an angle in [0, 90) deg, found {a}"),
+            ))
+        }
+        a => a.map(f64::to_radians),
+    };
+    Ok(HeadGeometry {
+        l1: h.l1,
+        l2: h.l2,
+        e: h.e,
+        delta: h.delta.to_radians(),
+        tool_length: h.tool_length,
+        theta_range: angle_range(src, "theta", lim.theta)?,
+        rod_angle_range: angle_range(src, "rod_angle", lim.rod_angle)?,
+        min_transmission_angle: min_mu,
+        branch: h.branch.unwrap_or(Branch::Positive),
+        offsets: Default::default(),
     })
+}
+
+/// The hybrid machine's home pose: the table's `x`, `y` and the tool tip of the head
+/// at `head_home` (slider height, tilt) with tool length `l`.
+fn hybrid_home(home: &HomeFile, l: f64, head_home: &Vector2<f64>) -> Vector6<f64> {
+    let (s, c) = head_home[1].sin_cos();
+    Vector6::new(
+        home.x.unwrap_or(0.0),
+        home.y.unwrap_or(0.0) + l * s,
+        head_home[0] - l * c,
+        head_home[1],
+        0.0,
+        0.0,
+    )
 }

@@ -9,6 +9,7 @@ use super::reference::Reference;
 use super::source::{Exact, Seg, Source};
 use super::{v3, Model};
 use crate::error::Error;
+use crate::hexapod::JointCone;
 use crate::mechanism::Mechanism;
 use crate::pentapod::{PentaStrut, Pentapod};
 
@@ -112,6 +113,42 @@ pub(super) fn build(src: &Source, f: PentapodFile) -> Result<super::Parts, Error
     )?;
     super::strut_diameter(src, lim.strut_diameter)?;
     let tip = f.tool.tip;
+    check_tip_on_axis(src, &tip)?;
+    let struts = struts(src, &f, base_cone)?;
+    let a = f.home.angles.unwrap_or_default().0.map(f64::to_radians);
+    let hp = f.home.position;
+    let coordinates = crate::mechanism::spatial_coordinates();
+    let axes = super::axis_limits(src, &lim.axes, &coordinates)?;
+    if axes.ranges.iter().any(|(k, _)| *k == 5) {
+        return Err(src.error(
+            &[key("limits"), key("axes"), key("C")],
+            "a pentapod holds C (the spin about the tool axis is free): limit X, Y, Z, A, B",
+        ));
+    }
+    let mut m = Pentapod::new(
+        f.name.clone().unwrap_or_else(|| "pentapod".into()),
+        struts,
+        tip[2],
+        lim.strut_diameter,
+        axes,
+        Vector6::new(hp[0], hp[1], hp[2], a[0], a[1], 0.0),
+    );
+    if let Some(c) = &f.calibration {
+        if c.zero_lengths.iter().any(|l| !(*l > 0.0)) {
+            return Err(src.error(
+                &[key("calibration"), key("zero_lengths")],
+                "expected five positive strut lengths (mm)",
+            ));
+        }
+        m.set_zero_lengths(Some(nalgebra::SVector::<f64, 5>::from(c.zero_lengths.0)));
+    }
+    check_regular_at_home(src, &m)?;
+    let model = Model::Pentapod(Box::new(m));
+    super::parts(src, model, f.name, f.description, f.reference, f.motion)
+}
+
+/// Checks the tool tip lies on the spindle axis.
+fn check_tip_on_axis(src: &Source, tip: &Exact<3>) -> Result<(), Error> {
     if tip[0] != 0.0 || tip[1] != 0.0 {
         return Err(src.error(
             &[key("tool"), key("tip")],
@@ -122,6 +159,15 @@ pub(super) fn build(src: &Source, f: PentapodFile) -> Result<super::Parts, Error
             ),
         ));
     }
+    Ok(())
+}
+
+/// Reads the five struts: name, base joint, platform ring and actuator of each.
+fn struts(
+    src: &Source,
+    f: &PentapodFile,
+    base_cone: Option<JointCone>,
+) -> Result<[PentaStrut; 5], Error> {
     let mut struts = Vec::with_capacity(5);
     for (i, s) in f.struts.iter().enumerate() {
         let at = |k: &str| [key("struts"), Seg::Index(i), key(k)];
@@ -164,36 +210,12 @@ pub(super) fn build(src: &Source, f: PentapodFile) -> Result<super::Parts, Error
             base_cone,
         });
     }
-    let struts: [PentaStrut; 5] = struts.try_into().expect("five struts checked above");
-    let a = f.home.angles.unwrap_or_default().0.map(f64::to_radians);
-    let hp = f.home.position;
-    let coordinates = crate::mechanism::spatial_coordinates();
-    let axes = super::axis_limits(src, &lim.axes, &coordinates)?;
-    if axes.ranges.iter().any(|(k, _)| *k == 5) {
-        return Err(src.error(
-            &[key("limits"), key("axes"), key("C")],
-            "a pentapod holds C (the spin about the tool axis is free): limit X, Y, Z, A, B",
-        ));
-    }
-    let mut m = Pentapod::new(
-        f.name.clone().unwrap_or_else(|| "pentapod".into()),
-        struts,
-        tip[2],
-        lim.strut_diameter,
-        axes,
-        Vector6::new(hp[0], hp[1], hp[2], a[0], a[1], 0.0),
-    );
-    if let Some(c) = &f.calibration {
-        if c.zero_lengths.iter().any(|l| !(*l > 0.0)) {
-            return Err(src.error(
-                &[key("calibration"), key("zero_lengths")],
-                "expected five positive strut lengths (mm)",
-            ));
-        }
-        m.set_zero_lengths(Some(nalgebra::SVector::<f64, 5>::from(c.zero_lengths.0)));
-    }
-    // The five struts must fix the tool axis: a regular driven Jacobian at home.
-    let rc = match crate::mechanism::scaled_driven_jacobian(&m, &m.info().home()) {
+    Ok(struts.try_into().expect("five struts checked above"))
+}
+
+/// Checks the five struts fix the tool axis: a regular driven Jacobian at home.
+fn check_regular_at_home(src: &Source, m: &Pentapod) -> Result<(), Error> {
+    let rc = match crate::mechanism::scaled_driven_jacobian(m, &m.info().home()) {
         Ok(j) => crate::linalg::rcond1(&j),
         Err(e) => return Err(src.error(&[key("home")], e.to_string())),
     };
@@ -206,13 +228,5 @@ pub(super) fn build(src: &Source, f: PentapodFile) -> Result<super::Parts, Error
             ),
         ));
     }
-    super::check_references(src, &f.reference)?;
-    let rapid = super::check_motion(src, f.motion.as_ref())?;
-    Ok(super::Parts {
-        model: Model::Pentapod(Box::new(m)),
-        name: f.name,
-        description: f.description,
-        references: f.reference,
-        rapid,
-    })
+    Ok(())
 }

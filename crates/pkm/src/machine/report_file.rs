@@ -100,7 +100,6 @@ struct ReportOnly {
 pub(crate) fn report_settings(src: &Source) -> Result<ReportSettings> {
     let f: ReportOnly = src.deserialize()?;
     let r = f.report.unwrap_or_default();
-    let at = |k: &str| vec![Seg::Key("report".into()), Seg::Key(k.into())];
     if let Some(s) = &r.sections {
         for (i, name) in s.iter().enumerate() {
             if !REPORT_SECTIONS.contains(&name.as_str()) {
@@ -116,6 +115,35 @@ pub(crate) fn report_settings(src: &Source) -> Result<ReportSettings> {
             }
         }
     }
+    check_numbers(src, &r)?;
+    for (i, c) in r.comparisons.iter().enumerate() {
+        if !REPORT_SECTIONS.contains(&c.section.as_str()) {
+            return Err(src.error(
+                &[
+                    Seg::Key("report".into()),
+                    Seg::Key("comparison".into()),
+                    Seg::Index(i),
+                    Seg::Key("section".into()),
+                ],
+                format!(
+                    "unknown section `{}`, expected one of: {}",
+                    c.section,
+                    REPORT_SECTIONS.join(", ")
+                ),
+            ));
+        }
+    }
+    Ok(r)
+}
+
+/// The path of field `k` of `[report]`.
+fn at(k: &str) -> Vec<Seg> {
+    vec![Seg::Key("report".into()), Seg::Key(k.into())]
+}
+
+/// Checks the numbers of `[report]`: finite, bounds as min < max pairs, feeds and a
+/// step > 0, 2 to 10^7 points.
+fn check_numbers(src: &Source, r: &ReportSettings) -> Result<()> {
     for (k, v) in [("pose", &r.pose), ("bounds", &r.bounds), ("from", &r.from)] {
         if let Some(v) = v {
             if let Some(i) = v.iter().position(|x| !x.is_finite()) {
@@ -150,22 +178,5 @@ pub(crate) fn report_settings(src: &Source) -> Result<ReportSettings> {
             format!("expected 2 to 10^7 samples, found {n}"),
         ));
     }
-    for (i, c) in r.comparisons.iter().enumerate() {
-        if !REPORT_SECTIONS.contains(&c.section.as_str()) {
-            return Err(src.error(
-                &[
-                    Seg::Key("report".into()),
-                    Seg::Key("comparison".into()),
-                    Seg::Index(i),
-                    Seg::Key("section".into()),
-                ],
-                format!(
-                    "unknown section `{}`, expected one of: {}",
-                    c.section,
-                    REPORT_SECTIONS.join(", ")
-                ),
-            ));
-        }
-    }
-    Ok(r)
+    Ok(())
 }

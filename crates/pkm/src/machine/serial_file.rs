@@ -169,79 +169,20 @@ fn chain(
         let at = |k: &str| vec![key(field), Seg::Index(i), key(k)];
         let rotation = match l.rotation {
             None => Matrix3::identity(),
-            Some(r) => {
-                let m = Matrix3::from_fn(|a, b| r[a][b]);
-                let err = (m.transpose() * m - Matrix3::identity()).amax();
-                if err > 1e-9 || m.determinant() < 0.0 {
-                    return Err(src.error(
-                        &at("rotation"),
-                        format!(
-                            "expected a proper rotation (direction cosines, rows: axes of S, columns: axes of S*); |R^T R - I| = {err:.2e}, det = {:.4}",
-                            m.determinant()
-                        ),
-                    ));
-                }
-                m
-            }
+            Some(r) => link_rotation(src, &at("rotation"), r)?,
         };
         let joint = match &l.joint {
             None => None,
             Some(j) => {
-                let kind = match j.kind.as_str() {
-                    "revolute" => JointKind::Revolute,
-                    "prismatic" => JointKind::Prismatic,
-                    other => {
-                        return Err(src.error(
-                            &[key(field), Seg::Index(i), key("joint"), key("type")],
-                            format!(
-                                "unknown joint type `{other}`, expected `revolute` or `prismatic`"
-                            ),
-                        ))
-                    }
-                };
                 if li == 0 {
+                    // The type is checked first.
+                    joint_kind(src, &[key(field), Seg::Index(i)], j)?;
                     return Err(src.error(
                         &at("joint"),
                         "the first link of a chain is fixed (the bed or the chain's mount): no joint",
                     ));
                 }
-                if names.contains(&j.name) {
-                    return Err(src.error(
-                        &[key(field), Seg::Index(i), key("joint"), key("name")],
-                        format!("joint name `{}` is used twice", j.name),
-                    ));
-                }
-                names.push(j.name.clone());
-                if !(j.range[0] < j.range[1]) {
-                    return Err(src.error(
-                        &[key(field), Seg::Index(i), key("joint"), key("range")],
-                        format!(
-                            "expected [min, max] with min < max, found [{}, {}]",
-                            j.range[0], j.range[1]
-                        ),
-                    ));
-                }
-                let conv = |v: f64| match kind {
-                    JointKind::Revolute => v.to_radians(),
-                    JointKind::Prismatic => v,
-                };
-                let rate = |v: Option<f64>, k: &str| match v {
-                    Some(r) if !(r > 0.0 && r <= super::MAX_MAGNITUDE) => Err(src.error(
-                        &[key(field), Seg::Index(i), key("joint"), key(k)],
-                        format!("expected a rate > 0 (mm or deg per s, per s^2), found {r}"),
-                    )),
-                    v => Ok(v.map(conv)),
-                };
-                Some(Joint {
-                    name: j.name.clone(),
-                    kind,
-                    range: Range {
-                        min: conv(j.range[0]),
-                        max: conv(j.range[1]),
-                    },
-                    max_velocity: rate(j.max_velocity, "max_velocity")?,
-                    max_acceleration: rate(j.max_acceleration, "max_acceleration")?,
-                })
+                Some(joint(src, &[key(field), Seg::Index(i)], j, names)?)
             }
         };
         out.push(Link {
@@ -254,6 +195,83 @@ fn chain(
     Ok(Chain {
         name: field.trim_end_matches("_chain").into(),
         links: out,
+    })
+}
+
+/// A link's `rotation` (direction cosines), which must be a proper rotation.
+fn link_rotation(src: &Source, at: &[Seg], r: Rotation) -> Result<Matrix3<f64>, Error> {
+    let m = Matrix3::from_fn(|a, b| r[a][b]);
+    let err = (m.transpose() * m - Matrix3::identity()).amax();
+    if err > 1e-9 || m.determinant() < 0.0 {
+        return Err(src.error(
+            at,
+            format!(
+                "expected a proper rotation (direction cosines, rows: axes of S, columns: axes of S*); |R^T R - I| = {err:.2e}, det = {:.4}",
+                m.determinant()
+            ),
+        ));
+    }
+    Ok(m)
+}
+
+/// The kind of joint `j` of the link at `link` (its path in the file).
+fn joint_kind(src: &Source, link: &[Seg], j: &JointFile) -> Result<JointKind, Error> {
+    match j.kind.as_str() {
+        "revolute" => Ok(JointKind::Revolute),
+        "prismatic" => Ok(JointKind::Prismatic),
+        other => Err(src.error(
+            &[link, &[key("joint"), key("type")]].concat(),
+            format!("unknown joint type `{other}`, expected `revolute` or `prismatic`"),
+        )),
+    }
+}
+
+/// Joint `j` of the link at `link` (its path in the file): a name not in `names`
+/// (added to it), an ordered range, rates > 0; mm and deg in the file, mm and rad out.
+fn joint(
+    src: &Source,
+    link: &[Seg],
+    j: &JointFile,
+    names: &mut Vec<String>,
+) -> Result<Joint, Error> {
+    let at = |k: &str| [link, &[key("joint"), key(k)]].concat();
+    let kind = joint_kind(src, link, j)?;
+    if names.contains(&j.name) {
+        return Err(src.error(
+            &at("name"),
+            format!("joint name `{}` is used twice", j.name),
+        ));
+    }
+    names.push(j.name.clone());
+    if !(j.range[0] < j.range[1]) {
+        return Err(src.error(
+            &at("range"),
+            format!(
+                "expected [min, max] with min < max, found [{}, {}]",
+                j.range[0], j.range[1]
+            ),
+        ));
+    }
+    let conv = |v: f64| match kind {
+        JointKind::Revolute => v.to_radians(),
+        JointKind::Prismatic => v,
+    };
+    let rate = |v: Option<f64>, k: &str| match v {
+        Some(r) if !(r > 0.0 && r <= super::MAX_MAGNITUDE) => Err(src.error(
+            &at(k),
+            format!("expected a rate > 0 (mm or deg per s, per s^2), found {r}"),
+        )),
+        v => Ok(v.map(conv)),
+    };
+    Ok(Joint {
+        name: j.name.clone(),
+        kind,
+        range: Range {
+            min: conv(j.range[0]),
+            max: conv(j.range[1]),
+        },
+        max_velocity: rate(j.max_velocity, "max_velocity")?,
+        max_acceleration: rate(j.max_acceleration, "max_acceleration")?,
     })
 }
 
@@ -287,18 +305,11 @@ pub(super) fn build(src: &Source, f: SerialFile) -> Result<super::Parts, Error> 
     crate::accuracy::serial_completions(&machine, &given)
         .map_err(|e| src.error(&[key("tolerance")], e.to_string()))?;
     let mechanism = mechanism(src, f.pose.as_deref(), machine, &home)?;
-    super::check_references(src, &f.reference)?;
-    let rapid = super::check_motion(src, f.motion.as_ref())?;
-    Ok(super::Parts {
-        model: Model::Serial(Box::new(crate::serial::SerialModel {
-            mechanism,
-            tolerances,
-        })),
-        name: f.name,
-        description: f.description,
-        references: f.reference,
-        rapid,
-    })
+    let model = Model::Serial(Box::new(crate::serial::SerialModel {
+        mechanism,
+        tolerances,
+    }));
+    super::parts(src, model, f.name, f.description, f.reference, f.motion)
 }
 
 /// The chains of file `f`: the tool chain from `tool_chain` links or `dh` rows (one

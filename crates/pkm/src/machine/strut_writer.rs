@@ -36,73 +36,92 @@ pub fn with_strut_geometry(
 ) -> Result<String, Error> {
     let src = Source::parse(file, text)?;
     let mut doc: toml::Table = toml::from_str(text).map_err(|e| src.error(&[], e.to_string()))?;
-    let xyz =
-        |v: &Vector3<f64>| toml::Value::Array(v.iter().map(|c| toml::Value::Float(*c)).collect());
     for (table, role, axes) in [
         ("base_joints", "base", "base_joint_axes"),
         ("platform_joints", "platform", "platform_joint_axes"),
     ] {
-        let names: Vec<&str> = struts
-            .iter()
-            .map(|s| {
-                if role == "base" {
-                    s.base_name.as_str()
-                } else {
-                    s.platform_name.as_str()
-                }
-            })
-            .collect();
-        let centre = |s: &StrutGeometry| if role == "base" { s.base } else { s.platform };
-        let mut joints = toml::Table::new();
-        let mut renamed: Vec<(String, String)> = Vec::new();
-        for (j, s) in struts.iter().enumerate() {
-            // A joint the struts share stays one where they still agree on its centre
-            // (held, or a point platform), and splits where identification moved it
-            // per strut.
-            let sharing = || (0..struts.len()).filter(|&k| names[k] == names[j]);
-            let shared =
-                sharing().count() > 1 && sharing().any(|k| centre(&struts[k]) != centre(s));
-            let name = if shared {
-                let n = format!("{}_{}", names[j], s.name);
-                renamed.push((names[j].to_string(), n.clone()));
-                n
+        let renamed = write_joints(&src, &mut doc, struts, table, role)?;
+        rename_joint_axes(&mut doc, axes, &renamed);
+    }
+    finish(&src, doc, zero_lengths, comment)
+}
+
+/// A vector as a TOML array.
+fn xyz(v: &Vector3<f64>) -> toml::Value {
+    toml::Value::Array(v.iter().map(|c| toml::Value::Float(*c)).collect())
+}
+
+/// Writes the `role` (`base` or `platform`) joints of `struts` as `table`: a joint
+/// the struts share stays one where they still agree on its centre (held, or a point
+/// platform), and splits where identification moved it per strut, the struts' entries
+/// renamed to theirs. Returns the joints split, `(old name, new name)`.
+fn write_joints(
+    src: &Source,
+    doc: &mut toml::Table,
+    struts: &[StrutGeometry],
+    table: &str,
+    role: &str,
+) -> Result<Vec<(String, String)>, Error> {
+    let names: Vec<&str> = struts
+        .iter()
+        .map(|s| {
+            if role == "base" {
+                s.base_name.as_str()
             } else {
-                names[j].to_string()
-            };
-            joints.insert(
-                name.clone(),
-                xyz(if role == "base" { &s.base } else { &s.platform }),
-            );
-            if shared {
-                let list = doc
-                    .get_mut("struts")
-                    .and_then(|v| v.as_array_mut())
-                    .ok_or_else(|| {
-                        src.error(&[Seg::Key("struts".into())], "expected an array of tables")
-                    })?;
-                if let Some(t) = list.get_mut(j).and_then(|v| v.as_table_mut()) {
-                    t.insert(role.into(), toml::Value::String(name));
-                }
+                s.platform_name.as_str()
             }
-        }
-        doc.insert(table.into(), toml::Value::Table(joints));
-        if let Some(ax) = doc
-            .get_mut("limits")
-            .and_then(|v| v.as_table_mut())
-            .and_then(|l| l.get_mut(axes))
-            .and_then(|v| v.as_table_mut())
-        {
-            for (old, new) in &renamed {
-                if let Some(v) = ax.get(old).cloned() {
-                    ax.insert(new.clone(), v);
-                }
-            }
-            for (old, _) in &renamed {
-                ax.remove(old);
+        })
+        .collect();
+    let centre = |s: &StrutGeometry| if role == "base" { s.base } else { s.platform };
+    let mut joints = toml::Table::new();
+    let mut renamed: Vec<(String, String)> = Vec::new();
+    for (j, s) in struts.iter().enumerate() {
+        let sharing = || (0..struts.len()).filter(|&k| names[k] == names[j]);
+        let shared = sharing().count() > 1 && sharing().any(|k| centre(&struts[k]) != centre(s));
+        let name = if shared {
+            let n = format!("{}_{}", names[j], s.name);
+            renamed.push((names[j].to_string(), n.clone()));
+            n
+        } else {
+            names[j].to_string()
+        };
+        joints.insert(
+            name.clone(),
+            xyz(if role == "base" { &s.base } else { &s.platform }),
+        );
+        if shared {
+            let list = doc
+                .get_mut("struts")
+                .and_then(|v| v.as_array_mut())
+                .ok_or_else(|| {
+                    src.error(&[Seg::Key("struts".into())], "expected an array of tables")
+                })?;
+            if let Some(t) = list.get_mut(j).and_then(|v| v.as_table_mut()) {
+                t.insert(role.into(), toml::Value::String(name));
             }
         }
     }
-    finish(&src, doc, zero_lengths, comment)
+    doc.insert(table.into(), toml::Value::Table(joints));
+    Ok(renamed)
+}
+
+/// The per-joint cone axes (`[limits]` table `axes`) following the joints `renamed`.
+fn rename_joint_axes(doc: &mut toml::Table, axes: &str, renamed: &[(String, String)]) {
+    if let Some(ax) = doc
+        .get_mut("limits")
+        .and_then(|v| v.as_table_mut())
+        .and_then(|l| l.get_mut(axes))
+        .and_then(|v| v.as_table_mut())
+    {
+        for (old, new) in renamed {
+            if let Some(v) = ax.get(old).cloned() {
+                ax.insert(new.clone(), v);
+            }
+        }
+        for (old, _) in renamed {
+            ax.remove(old);
+        }
+    }
 }
 
 /// `[calibration] zero_lengths`, the comment on top, the text.

@@ -144,6 +144,42 @@ pub(super) fn build(src: &Source, f: TripodFile) -> Result<super::Parts, Error> 
     super::distinct_joint_names(src, &f.base_joints, &f.platform_joints, reserved)?;
     let point_platform = f.constraint == Constraint::Translational
         && f.struts.iter().all(|s| s.platform == f.struts[0].platform);
+    let struts = struts(src, &f, point_platform)?;
+    check_triangle(
+        src,
+        &[key("base_joints")],
+        [0, 1, 2].map(|i| struts[i].base),
+        "base",
+    )?;
+    if !point_platform {
+        check_triangle(
+            src,
+            &[key("platform_joints")],
+            [0, 1, 2].map(|i| struts[i].platform),
+            "platform",
+        )?;
+    }
+    check_limits(src, &f.limits)?;
+    let lim = &f.limits;
+    let mut geometry = TripodGeometry::new(
+        f.name.clone().unwrap_or_else(|| "tripod".into()),
+        struts,
+        v3(f.tool.tip),
+        lim.max_tilt.map(f64::to_radians),
+        lim.min_strut_spindle_angle.map(f64::to_radians),
+    );
+    if let Some(c) = &f.calibration {
+        geometry.zero_lengths = Some(zero_lengths(src, c)?);
+    }
+    let model = match f.constraint {
+        Constraint::Translational => translational(src, &f, geometry)?,
+        Constraint::CentreLeg => centre_leg(src, &f, geometry)?,
+    };
+    super::parts(src, model, f.name, f.description, f.reference, f.motion)
+}
+
+/// Reads the three struts, refusing a joint that two struts share (but a point platform).
+fn struts(src: &Source, f: &TripodFile, point_platform: bool) -> Result<[Strut; 3], Error> {
     let mut struts = Vec::with_capacity(3);
     for (i, s) in f.struts.iter().enumerate() {
         let p = |k: &str| vec![key("struts"), Seg::Index(i), key(k)];
@@ -177,22 +213,11 @@ pub(super) fn build(src: &Source, f: TripodFile) -> Result<super::Parts, Error> 
             platform,
         });
     }
-    let struts: [Strut; 3] = struts.try_into().expect("three struts checked above");
-    check_triangle(
-        src,
-        &[key("base_joints")],
-        [0, 1, 2].map(|i| struts[i].base),
-        "base",
-    )?;
-    if !point_platform {
-        check_triangle(
-            src,
-            &[key("platform_joints")],
-            [0, 1, 2].map(|i| struts[i].platform),
-            "platform",
-        )?;
-    }
-    let lim = &f.limits;
+    Ok(struts.try_into().expect("three struts checked above"))
+}
+
+/// Checks the `[limits]` angles are in range.
+fn check_limits(src: &Source, lim: &LimitsFile) -> Result<(), Error> {
     if let Some(t) = lim.max_tilt {
         if !(t > 0.0 && t <= 180.0) {
             return Err(src.error(
@@ -209,86 +234,82 @@ pub(super) fn build(src: &Source, f: TripodFile) -> Result<super::Parts, Error> 
             ));
         }
     }
-    let mut geometry = TripodGeometry::new(
-        f.name.clone().unwrap_or_else(|| "tripod".into()),
-        struts,
-        v3(f.tool.tip),
-        lim.max_tilt.map(f64::to_radians),
-        lim.min_strut_spindle_angle.map(f64::to_radians),
-    );
-    if let Some(c) = &f.calibration {
-        if c.zero_lengths.iter().any(|l| !(l.is_finite() && *l > 0.0)) {
-            return Err(src.error(
-                &[key("calibration"), key("zero_lengths")],
-                "expected three positive strut lengths (mm)",
-            ));
-        }
-        geometry.zero_lengths = Some(nalgebra::Vector3::from(c.zero_lengths.0));
+    Ok(())
+}
+
+/// Reads the identified zero lengths of `[calibration]`, which must be positive.
+fn zero_lengths(src: &Source, c: &CalibrationFile) -> Result<Vector3<f64>, Error> {
+    if c.zero_lengths.iter().any(|l| !(l.is_finite() && *l > 0.0)) {
+        return Err(src.error(
+            &[key("calibration"), key("zero_lengths")],
+            "expected three positive strut lengths (mm)",
+        ));
     }
-    let model = match f.constraint {
-        Constraint::Translational => {
-            if f.centre_leg.is_some() {
-                return Err(src.error(
-                    &[key("centre_leg")],
-                    "a `translational` tripod has no centre leg; set constraint = \"centre-leg\" or remove this table",
-                ));
-            }
-            let a = f.home.angles.unwrap_or_default().0;
-            let a = a.map(f64::to_radians);
-            let p = f.home.position;
-            // Home angles are in the default convention; normalise through the matrix so
-            // that the stored angles are canonical.
-            let a = Convention::Rpy.from_matrix(&Convention::Rpy.to_matrix(a));
-            geometry.axes =
-                super::axis_limits(src, &lim.axes, &crate::mechanism::spatial_coordinates())?;
-            Model::TranslationalTripod(TranslationalTripod::new(
-                geometry,
-                Vector6::new(p[0], p[1], p[2], a[0], a[1], a[2]),
-            ))
-        }
-        Constraint::CentreLeg => {
-            let Some(leg) = &f.centre_leg else {
-                return Err(src.error(
-                    &[key("constraint")],
-                    "constraint = \"centre-leg\" needs a [centre_leg] table with `base` (and optionally `length`)",
-                ));
-            };
-            if f.home.angles.is_some() {
-                return Err(src.error(
-                    &[key("home"), key("angles")],
-                    "a centre-leg tripod's orientation follows from its position: give home.position only",
-                ));
-            }
-            let length = match leg.length {
-                Some(r) => Some(length_range(src, &[key("centre_leg"), key("length")], r)?),
-                None => None,
-            };
-            let mut t = CentreLegTripod::new(
-                geometry,
-                CentreLeg {
-                    base: v3(leg.base),
-                    length,
-                },
-                v3(f.home.position),
-            );
-            let axes = super::axis_limits(src, &lim.axes, t.info().coordinates())?;
-            t.set_axes(axes);
-            if let Err(e) = t.leg_state(&t.info().home()) {
-                return Err(src.error(
-                    &[key("home"), key("position")],
-                    format!("home is not attainable: {e}"),
-                ));
-            }
-            Model::CentreLegTripod(t)
-        }
+    Ok(nalgebra::Vector3::from(c.zero_lengths.0))
+}
+
+/// Builds a translational tripod: its home pose and axis limits.
+fn translational(
+    src: &Source,
+    f: &TripodFile,
+    mut geometry: TripodGeometry,
+) -> Result<Model, Error> {
+    if f.centre_leg.is_some() {
+        return Err(src.error(
+            &[key("centre_leg")],
+            "a `translational` tripod has no centre leg; set constraint = \"centre-leg\" or remove this table",
+        ));
+    }
+    let a = f.home.angles.unwrap_or_default().0;
+    let a = a.map(f64::to_radians);
+    let p = f.home.position;
+    // Home angles are in the default convention; normalise through the matrix so
+    // that the stored angles are canonical.
+    let a = Convention::Rpy.from_matrix(&Convention::Rpy.to_matrix(a));
+    geometry.axes = super::axis_limits(
+        src,
+        &f.limits.axes,
+        &crate::mechanism::spatial_coordinates(),
+    )?;
+    Ok(Model::TranslationalTripod(TranslationalTripod::new(
+        geometry,
+        Vector6::new(p[0], p[1], p[2], a[0], a[1], a[2]),
+    )))
+}
+
+/// Builds a centre-leg tripod: its leg, axis limits, and a check that home is attainable.
+fn centre_leg(src: &Source, f: &TripodFile, geometry: TripodGeometry) -> Result<Model, Error> {
+    let Some(leg) = &f.centre_leg else {
+        return Err(src.error(
+            &[key("constraint")],
+            "constraint = \"centre-leg\" needs a [centre_leg] table with `base` (and optionally `length`)",
+        ));
     };
-    super::check_references(src, &f.reference)?;
-    let rapid = super::check_motion(src, f.motion.as_ref())?;
-    Ok(super::Parts {
-        model,
-        name: f.name,
-        description: f.description,
-        references: f.reference,
-        rapid,
-    })
+    if f.home.angles.is_some() {
+        return Err(src.error(
+            &[key("home"), key("angles")],
+            "a centre-leg tripod's orientation follows from its position: give home.position only",
+        ));
+    }
+    let length = match leg.length {
+        Some(r) => Some(length_range(src, &[key("centre_leg"), key("length")], r)?),
+        None => None,
+    };
+    let mut t = CentreLegTripod::new(
+        geometry,
+        CentreLeg {
+            base: v3(leg.base),
+            length,
+        },
+        v3(f.home.position),
+    );
+    let axes = super::axis_limits(src, &f.limits.axes, t.info().coordinates())?;
+    t.set_axes(axes);
+    if let Err(e) = t.leg_state(&t.info().home()) {
+        return Err(src.error(
+            &[key("home"), key("position")],
+            format!("home is not attainable: {e}"),
+        ));
+    }
+    Ok(Model::CentreLegTripod(t))
 }

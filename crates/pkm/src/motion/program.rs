@@ -73,9 +73,37 @@ pub fn to_move<M: Mechanism<P, A>, const P: usize, const A: usize>(
     g: &GMove,
     o: &FeedOptions,
 ) -> Result<Move<P>> {
-    let space = m.info().pose_space();
     let start = from_spatial(m, &g.start)?;
     let end = from_spatial(m, &g.end)?;
+    check_axes(m, g)?;
+    let q = quantities(m);
+    let segment = match g.motion {
+        Motion::Line { .. } | Motion::Dwell { .. } => Segment::line(start, end, &q, true),
+        Motion::Arc {
+            centre,
+            plane,
+            sweep,
+        } => {
+            let (e1, e2) = plane_axes(plane);
+            Segment::arc(start, end, centre, e1, e2, sweep).map_err(|e| Error::InvalidInput {
+                what: format!("G-code line {}", g.line),
+                message: e.to_string(),
+            })?
+        }
+    };
+    let profile = move_profile(g, &segment, &q, &(end - start), o)?;
+    Ok(Move {
+        segment,
+        profile,
+        line: Some(g.line),
+        rapid: matches!(g.motion, Motion::Line { rapid: true }),
+    })
+}
+
+/// Refuses a move of a coordinate the machine does not have: orientation words for a
+/// machine whose orientation follows from its position, a rotary letter it lacks.
+fn check_axes<M: Mechanism<P, A>, const P: usize, const A: usize>(m: &M, g: &GMove) -> Result<()> {
+    let space = m.info().pose_space();
     if space == PoseSpace::Position && (3..6).any(|k| (g.end[k] - g.start[k]).abs() > 1e-12) {
         return Err(Error::InvalidInput {
             what: format!("G-code line {}", g.line),
@@ -94,22 +122,19 @@ pub fn to_move<M: Mechanism<P, A>, const P: usize, const A: usize>(
             });
         }
     }
-    let q = quantities(m);
-    let segment = match g.motion {
-        Motion::Line { .. } | Motion::Dwell { .. } => Segment::line(start, end, &q, true),
-        Motion::Arc {
-            centre,
-            plane,
-            sweep,
-        } => {
-            let (e1, e2) = plane_axes(plane);
-            Segment::arc(start, end, centre, e1, e2, sweep).map_err(|e| Error::InvalidInput {
-                what: format!("G-code line {}", g.line),
-                message: e.to_string(),
-            })?
-        }
-    };
-    let profile = match g.motion {
+    Ok(())
+}
+
+/// The time law of move `g` along `segment` (coordinates of quantities `q`, moved by
+/// `delta` from start to end): a dwell, a rapid, inverse time or the feed.
+fn move_profile<const P: usize>(
+    g: &GMove,
+    segment: &Segment<P>,
+    q: &[crate::units::Quantity; P],
+    delta: &nalgebra::SVector<f64, P>,
+    o: &FeedOptions,
+) -> Result<Profile> {
+    Ok(match g.motion {
         Motion::Dwell { seconds } => Profile::dwell(seconds),
         Motion::Line { rapid: true } => {
             // A rapid takes as long as its slowest part at the rapid rate: mm/min for
@@ -117,7 +142,7 @@ pub fn to_move<M: Mechanism<P, A>, const P: usize, const A: usize>(
             // the tip is not done in the tip's time).
             let turn = (0..P)
                 .filter(|&k| q[k] == crate::units::Quantity::Angle)
-                .map(|k| q[k].to_user(end[k] - start[k]).abs())
+                .map(|k| q[k].to_user(delta[k]).abs())
                 .fold(0.0, f64::max);
             let v = if turn > segment.length && segment.length > 0.0 {
                 o.rapid * segment.length / turn
@@ -141,11 +166,5 @@ pub fn to_move<M: Mechanism<P, A>, const P: usize, const A: usize>(
             })?;
             profile(o.profile, segment.length, v, o)?
         }
-    };
-    Ok(Move {
-        segment,
-        profile,
-        line: Some(g.line),
-        rapid: matches!(g.motion, Motion::Line { rapid: true }),
     })
 }

@@ -127,11 +127,34 @@ pub fn fig7_peaks(h: &P3rpHead) -> Result<[(f64, f64); 2]> {
 /// Every number seed 004 reports, beside the model's.
 pub fn reproduction(h: &P3rpHead) -> Result<Vec<Reproduced>> {
     let mut out = Vec::new();
-    let t157 = 1.57;
+    slider_ranges(h, &mut out)?;
+    fig7_rows(h, &mut out)?;
+    if let Some(q) = singular_theta(h, T157) {
+        out.push(Reproduced {
+            quantity: "singular configuration Q (A, B, C collinear) \"outside the working range\""
+                .into(),
+            paper: Vec::new(),
+            pkm: vec![q.to_degrees()],
+            unit: "deg",
+            deviation: 0.0,
+            note: Some(format!(
+                "theta_Q = {:.4} rad, beyond the design range [0, 1.57] rad",
+                q
+            )),
+        });
+    }
+    Ok(out)
+}
+
+/// The end of seed 004's design range of theta (rad).
+const T157: f64 = 1.57;
+
+/// The slider ranges of fig. 4 and the slider separations they give.
+fn slider_ranges(h: &P3rpHead, out: &mut Vec<Reproduced>) -> Result<()> {
     for (theta, label, d_paper, e_paper, note) in [
         (0.0, "theta = 0", [200.0, 518.5], [506.5, 825.0], None),
         (
-            t157,
+            T157,
             "theta = 1.57 rad",
             [200.0, 365.0],
             [600.0, 825.0],
@@ -161,7 +184,7 @@ pub fn reproduction(h: &P3rpHead) -> Result<Vec<Reproduced>> {
             note,
         ));
     }
-    for (theta, paper, label) in [(0.0, 306.5, "0"), (t157, 460.0, "1.57 rad")] {
+    for (theta, paper, label) in [(0.0, 306.5, "0"), (T157, 460.0, "1.57 rad")] {
         out.push(row(
             &format!("slider separation g({label}) = z2 - z1"),
             vec![paper],
@@ -170,6 +193,11 @@ pub fn reproduction(h: &P3rpHead) -> Result<Vec<Reproduced>> {
             Some("From the fig. 4 ranges (E - D at either end)."),
         ));
     }
+    Ok(())
+}
+
+/// The slider peaks of the fig. 7 move.
+fn fig7_rows(h: &P3rpHead, out: &mut Vec<Reproduced>) -> Result<()> {
     let [u, v] = fig7_peaks(h)?;
     out.push(row(
         "slider V peak velocity in the fig. 7 move",
@@ -194,19 +222,5 @@ pub fn reproduction(h: &P3rpHead) -> Result<Vec<Reproduced>> {
         deviation: 0.0,
         note: Some("Not printed. D follows z: 135 mm over 0.9 s of cruise-equivalent time is 150 mm/s, reached in 0.1 s: 1 500 mm/s^2.".into()),
     });
-    if let Some(q) = singular_theta(h, t157) {
-        out.push(Reproduced {
-            quantity: "singular configuration Q (A, B, C collinear) \"outside the working range\""
-                .into(),
-            paper: Vec::new(),
-            pkm: vec![q.to_degrees()],
-            unit: "deg",
-            deviation: 0.0,
-            note: Some(format!(
-                "theta_Q = {:.4} rad, beyond the design range [0, 1.57] rad",
-                q
-            )),
-        });
-    }
-    Ok(out)
+    Ok(())
 }

@@ -23,8 +23,7 @@ use super::PreparedChain;
 use crate::error::{Error, Result};
 use crate::limits::{PositionLimits, Violation};
 use crate::mechanism::{
-    spatial_coordinates, Actuator, ActuatorMotion, ConditionBatch, Follow, Forward, Mechanism,
-    MechanismInfo, PoseSpace, Skeleton,
+    ActuatorMotion, ConditionBatch, Follow, Forward, Mechanism, MechanismInfo, Skeleton,
 };
 use crate::pose::Pose;
 use crate::rotation::{rpy_angular_motion, rpy_rate_matrix, Convention};
@@ -61,100 +60,6 @@ pub struct SerialArm {
 }
 
 impl SerialArm {
-    /// Wraps a machine whose tool chain has six joints and whose workpiece chain (if
-    /// any) has none; `home` are the home joint values in internal units.
-    pub fn new(machine: SerialMachine, home: Vector6<f64>) -> Result<Self> {
-        let invalid = |message: String| Error::InvalidInput {
-            what: "serial robot".into(),
-            message,
-        };
-        if machine.tool.dof() != 6 {
-            return Err(invalid(format!(
-                "tool-pose coordinates need six tool-chain joints, found {}",
-                machine.tool.dof()
-            )));
-        }
-        let part = match &machine.workpiece {
-            Some(w) if w.dof() > 0 => {
-                return Err(invalid(format!(
-                    "tool-pose coordinates need a fixed workpiece; its chain has {} joints",
-                    w.dof()
-                )))
-            }
-            Some(w) => w.pose(&[], &[], &[])?,
-            None => Matrix4::identity(),
-        };
-        let part_inverse = part
-            .try_inverse()
-            .ok_or_else(|| invalid("the workpiece frame is not invertible".into()))?;
-        let joints: Vec<_> = machine.tool.joints().cloned().collect();
-        let actuators: [Actuator; 6] = std::array::from_fn(|i| joints[i].actuator());
-        let position_limits = PositionLimits::new("joint", &actuators);
-        let tool = PreparedChain::new(&machine.tool, &[], &[]);
-        let mut arm = SerialArm {
-            info: MechanismInfo::new(
-                machine.name.clone(),
-                "serial",
-                spatial_coordinates(),
-                actuators,
-                PoseSpace::Spatial,
-                Vector6::zeros(),
-            )
-            .with_forward_closed_form(),
-            machine,
-            home_joints: home,
-            tool,
-            part_inverse,
-            position_limits,
-            completions: Vec::new(),
-            base_origin: Vector3::zeros(),
-            reach: f64::INFINITY,
-            wrist: None,
-        };
-        arm.base_origin = Vector3::new(
-            part_inverse[(0, 3)],
-            part_inverse[(1, 3)],
-            part_inverse[(2, 3)],
-        );
-        arm.reach = arm
-            .machine
-            .tool
-            .links
-            .iter()
-            .map(|l| {
-                let travel = match &l.joint {
-                    Some(j) if j.kind == super::JointKind::Prismatic => {
-                        j.range.min.abs().max(j.range.max.abs())
-                    }
-                    _ => 0.0,
-                };
-                l.translation.norm() + travel
-            })
-            .sum::<f64>();
-        let home_pose = arm.coords_of_joints(&home);
-        arm.info.set_home(home_pose);
-        // The reach at home (distance of the tool from the first joint's axis origin)
-        // weighs a radian against millimetres.
-        let (t, _) = arm.pose_and_jacobian(&home);
-        let lc = Vector3::new(t[(0, 3)], t[(1, 3)], t[(2, 3)])
-            .norm()
-            .max(1.0);
-        arm.wrist = closed_form::ClosedForm::detect(&arm.tool, &part_inverse, lc);
-        arm.info = arm
-            .info
-            .with_characteristic_length(lc)
-            .with_inverse_method(match &arm.wrist {
-                Some(closed_form::ClosedForm::Spherical(_)) => {
-                    "closed form (spherical wrist, axes 2 and 3 parallel)"
-                }
-                Some(closed_form::ClosedForm::ParallelAxes(_)) => {
-                    "closed form (axes 2, 3, 4 parallel, axes 5 and 6 meeting)"
-                }
-                None => "numeric (Newton on SE(3) from the start, 32 spread restarts)",
-            });
-        Ok(arm)
-    }
-
     /// The chains and their geometry.
     pub fn machine(&self) -> &SerialMachine {
         &self.machine
@@ -452,6 +357,7 @@ impl SerialArm {
 mod closed_form;
 mod follow;
 mod numeric;
+mod setup;
 
 #[cfg(test)]
 mod tests;

@@ -17,7 +17,7 @@
 //!   at the same distance from nominal): the root with the larger cosines first, in
 //!   row-major order, is chosen, and [`Completion::ambiguous`] says so.
 
-use nalgebra::{Matrix3, SMatrix, SVector};
+use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
 use crate::error::{Error, Result};
 use crate::linalg::SmallLu;
@@ -78,102 +78,13 @@ pub fn complete(
     nominal: &Matrix3<f64>,
     measured: &[((usize, usize), f64); 3],
 ) -> Result<Completion> {
-    let mut known = [[false; 3]; 3];
-    for ((r, c), _) in measured {
-        if *r > 2 || *c > 2 || known[*r][*c] {
-            return Err(Error::InvalidInput {
-                what: "measured angular deviations".into(),
-                message: "three distinct positions (row, column) in 0..3 are needed".into(),
-            });
-        }
-        known[*r][*c] = true;
-    }
-    let mut unknown = [(0, 0); 6];
-    let free = (0..9)
-        .map(|e| (e / 3, e % 3))
-        .filter(|&(r, c)| !known[r][c]);
-    for (slot, rc) in unknown.iter_mut().zip(free) {
-        *slot = rc;
-    }
+    let (known, unknown) = positions(measured)?;
     let phi = nominal.map(|c| c.clamp(-1.0, 1.0).acos());
     let mut m0 = *nominal;
     for ((r, c), a) in measured {
         m0[(*r, *c)] = (phi[(*r, *c)] + a).cos();
     }
-    let solve = |start: Matrix3<f64>| -> Option<Matrix3<f64>> {
-        let mut m = start;
-        let mut f = equations(&m);
-        for _ in 0..60 {
-            if f.amax() < 1e-15 {
-                return Some(m);
-            }
-            let j = jacobian(&m, &unknown);
-            // Levenberg-Marquardt damping: the Jacobian is singular at the nominal
-            // block when a measured axis pair is aligned.
-            let jt = j.transpose();
-            let mut a = jt * j;
-            let lambda = 1e-12 + 1e-3 * f.norm_squared();
-            for d in 0..6 {
-                a[(d, d)] += lambda;
-            }
-            let step = SmallLu::new(&a)?.solve(&(jt * f));
-            let mut t = 1.0;
-            let mut ok = false;
-            for _ in 0..20 {
-                let mut mn = m;
-                for (u, (r, c)) in unknown.iter().enumerate() {
-                    mn[(*r, *c)] = (m[(*r, *c)] - t * step[u]).clamp(-1.0, 1.0);
-                }
-                let fnew = equations(&mn);
-                if fnew.norm() < f.norm() {
-                    m = mn;
-                    f = fnew;
-                    ok = true;
-                    break;
-                }
-                t *= 0.5;
-            }
-            if !ok {
-                break;
-            }
-        }
-        (f.amax() < 1e-13).then_some(m)
-    };
-    // Starts: the nominal block with the measured cosines, nudged both ways on every
-    // unknown (a root can sit on either side of a nominal zero).
-    let mut roots: Vec<Matrix3<f64>> = Vec::new();
-    let nudge = (1.0 - m0.iter().fold(1.0f64, |a, v| a.min(v.abs().max(1e-300)))).max(1e-6);
-    let size = measured
-        .iter()
-        .map(|(_, a)| a.abs())
-        .fold(1e-6, f64::max)
-        .max(nudge.min(1e-3));
-    for pattern in 0..(1u32 << 6) {
-        let mut s = m0;
-        for (u, (r, c)) in unknown.iter().enumerate() {
-            let sign = if pattern >> u & 1 == 1 { -1.0 } else { 1.0 };
-            s[(*r, *c)] = (s[(*r, *c)] + sign * size).clamp(-1.0, 1.0);
-        }
-        if let Some(m) = solve(s) {
-            // M^T M = I also has reflections: keep proper rotations only.
-            if m.determinant() > 0.0 && !roots.iter().any(|x| (x - m).amax() < 1e-9) {
-                roots.push(m);
-            }
-        }
-    }
-    let alpha_of = |m: &Matrix3<f64>| {
-        Matrix3::from_fn(|r, c| {
-            if known[r][c] {
-                measured
-                    .iter()
-                    .find(|((a, b), _)| *a == r && *b == c)
-                    .map(|x| x.1)
-                    .unwrap_or(0.0)
-            } else {
-                m[(r, c)].clamp(-1.0, 1.0).acos() - phi[(r, c)]
-            }
-        })
-    };
+    let mut roots = roots(&m0, measured, &unknown);
     let dist = |m: &Matrix3<f64>| (m - nominal).norm_squared();
     roots.sort_by(|a, b| {
         dist(a).total_cmp(&dist(b)).then_with(|| {
@@ -200,10 +111,133 @@ pub fn complete(
         .is_some_and(|m| (dist(m) - dist(&best)).abs() <= 1e-12 * (1.0 + dist(&best)));
     let residual = (best.transpose() * best - Matrix3::identity()).amax();
     Ok(Completion {
-        alpha: alpha_of(&best),
+        alpha: alpha_of(&best, &known, measured, &phi),
         block: best,
         residual,
         ambiguous,
+    })
+}
+
+/// Which of the nine entries are measured.
+type Known = [[bool; 3]; 3];
+
+/// The six entries not measured, row-major.
+type Unknown = [(usize, usize); 6];
+
+/// Checks the measured positions are distinct and in range; returns which entries are
+/// known and the six unknown ones in row-major order.
+fn positions(measured: &[((usize, usize), f64); 3]) -> Result<(Known, Unknown)> {
+    let mut known = [[false; 3]; 3];
+    for ((r, c), _) in measured {
+        if *r > 2 || *c > 2 || known[*r][*c] {
+            return Err(Error::InvalidInput {
+                what: "measured angular deviations".into(),
+                message: "three distinct positions (row, column) in 0..3 are needed".into(),
+            });
+        }
+        known[*r][*c] = true;
+    }
+    let mut unknown = [(0, 0); 6];
+    let free = (0..9)
+        .map(|e| (e / 3, e % 3))
+        .filter(|&(r, c)| !known[r][c]);
+    for (slot, rc) in unknown.iter_mut().zip(free) {
+        *slot = rc;
+    }
+    Ok((known, unknown))
+}
+
+/// Damped Newton on the `unknown` entries from `start` to an orthonormal block.
+fn solve_block(start: Matrix3<f64>, unknown: &Unknown) -> Option<Matrix3<f64>> {
+    let mut m = start;
+    let mut f = equations(&m);
+    for _ in 0..60 {
+        if f.amax() < 1e-15 {
+            return Some(m);
+        }
+        let j = jacobian(&m, unknown);
+        // Levenberg-Marquardt damping: the Jacobian is singular at the nominal
+        // block when a measured axis pair is aligned.
+        let jt = j.transpose();
+        let mut a = jt * j;
+        let lambda = 1e-12 + 1e-3 * f.norm_squared();
+        for d in 0..6 {
+            a[(d, d)] += lambda;
+        }
+        let step = SmallLu::new(&a)?.solve(&(jt * f));
+        let mut t = 1.0;
+        let mut ok = false;
+        for _ in 0..20 {
+            let mut mn = m;
+            for (u, (r, c)) in unknown.iter().enumerate() {
+                mn[(*r, *c)] = (m[(*r, *c)] - t * step[u]).clamp(-1.0, 1.0);
+            }
+            let fnew = equations(&mn);
+            if fnew.norm() < f.norm() {
+                m = mn;
+                f = fnew;
+                ok = true;
+                break;
+            }
+            t *= 0.5;
+        }
+        if !ok {
+            break;
+        }
+    }
+    (f.amax() < 1e-13).then_some(m)
+}
+
+/// Every distinct proper-rotation root found from starts around `m0`, the nominal block
+/// with the measured cosines.
+fn roots(
+    m0: &Matrix3<f64>,
+    measured: &[((usize, usize), f64); 3],
+    unknown: &Unknown,
+) -> Vec<Matrix3<f64>> {
+    // Starts: the nominal block with the measured cosines, nudged both ways on every
+    // unknown (a root can sit on either side of a nominal zero).
+    let mut roots: Vec<Matrix3<f64>> = Vec::new();
+    let nudge = (1.0 - m0.iter().fold(1.0f64, |a, v| a.min(v.abs().max(1e-300)))).max(1e-6);
+    let size = measured
+        .iter()
+        .map(|(_, a)| a.abs())
+        .fold(1e-6, f64::max)
+        .max(nudge.min(1e-3));
+    for pattern in 0..(1u32 << 6) {
+        let mut s = *m0;
+        for (u, (r, c)) in unknown.iter().enumerate() {
+            let sign = if pattern >> u & 1 == 1 { -1.0 } else { 1.0 };
+            s[(*r, *c)] = (s[(*r, *c)] + sign * size).clamp(-1.0, 1.0);
+        }
+        if let Some(m) = solve_block(s, unknown) {
+            // M^T M = I also has reflections: keep proper rotations only.
+            if m.determinant() > 0.0 && !roots.iter().any(|x| (x - m).amax() < 1e-9) {
+                roots.push(m);
+            }
+        }
+    }
+    roots
+}
+
+/// The nine angular deviations of block `m`: the measured ones as given, the others
+/// `acos(m) - phi`.
+fn alpha_of(
+    m: &Matrix3<f64>,
+    known: &Known,
+    measured: &[((usize, usize), f64); 3],
+    phi: &Matrix3<f64>,
+) -> Matrix3<f64> {
+    Matrix3::from_fn(|r, c| {
+        if known[r][c] {
+            measured
+                .iter()
+                .find(|((a, b), _)| *a == r && *b == c)
+                .map(|x| x.1)
+                .unwrap_or(0.0)
+        } else {
+            m[(r, c)].clamp(-1.0, 1.0).acos() - phi[(r, c)]
+        }
     })
 }
 
@@ -315,66 +349,8 @@ impl TripleCompletion {
             let (r, c) = self.positions[i];
             (self.phi[(r, c)] + measured[i]).cos()
         });
-        let residual = |w: &nalgebra::Vector3<f64>| {
-            let (a, b) = rodrigues_coefficients(w);
-            let diag = 1.0 - b * w.norm_squared();
-            nalgebra::Vector3::from_fn(|i, _| {
-                let (r, c) = self.positions[i];
-                // Column c of exp([w]x) = diag e_c + a (w x e_c) + b w_c w.
-                let e = nalgebra::Vector3::from_fn(|k, _| {
-                    let cross = match (c, k) {
-                        (0, 1) => w.z,
-                        (0, 2) => -w.y,
-                        (1, 0) => -w.z,
-                        (1, 2) => w.x,
-                        (2, 0) => w.y,
-                        (2, 1) => -w.x,
-                        _ => 0.0,
-                    };
-                    let d = if k == c { diag } else { 0.0 };
-                    d + a * cross + b * w[c] * w[k]
-                });
-                self.nominal.row(r).transpose().dot(&e) - target[i]
-            })
-        };
-        // At w = 0 the block is the nominal one: the first residual needs no exponential.
-        let mut w = nalgebra::Vector3::zeros();
-        let mut f = nalgebra::Vector3::from_fn(|i, _| {
-            let (r, c) = self.positions[i];
-            self.nominal[(r, c)] - target[i]
-        });
-        // Chord steps with the nominal Jacobian: the error shrinks by about |w| a step.
-        for _ in 0..8 {
-            if f.amax() < 1e-15 {
-                break;
-            }
-            let wn = w - self.j0_inv * f;
-            let fn_ = residual(&wn);
-            if fn_.amax() >= f.amax() {
-                break; // rounding level reached, or too large for the chord
-            }
-            (w, f) = (wn, fn_);
-        }
-        // Newton with a difference Jacobian for large deviations.
-        let mut it = 0;
-        while f.amax() >= 1e-14 && it < 30 {
-            let h = 1e-7;
-            let mut j = Matrix3::zeros();
-            for k in 0..3 {
-                let mut wp = w;
-                wp[k] += h;
-                let col = (residual(&wp) - f) / h;
-                j.set_column(k, &col);
-            }
-            let Some(inv) = j.try_inverse() else { break };
-            let wn = w - inv * f;
-            let fn_ = residual(&wn);
-            if fn_.amax() >= f.amax() {
-                break;
-            }
-            (w, f) = (wn, fn_);
-            it += 1;
-        }
+        let (w, f) = self.chord_steps(&target);
+        let (w, f) = self.newton_steps(&target, w, f);
         if !(f.amax() < 1e-12) {
             return Err(Error::NotAttainable {
                 reason: format!(
@@ -391,6 +367,86 @@ impl TripleCompletion {
         let k = w.cross_matrix();
         let r = Matrix3::identity() + k * a + k * k * b;
         Ok(self.nominal * r)
+    }
+
+    /// The entries at the positions of `N exp([w]x)` less their `target`s.
+    #[inline]
+    fn residual(&self, w: &Vector3<f64>, target: &Vector3<f64>) -> Vector3<f64> {
+        let (a, b) = rodrigues_coefficients(w);
+        let diag = 1.0 - b * w.norm_squared();
+        Vector3::from_fn(|i, _| {
+            let (r, c) = self.positions[i];
+            // Column c of exp([w]x) = diag e_c + a (w x e_c) + b w_c w.
+            let e = Vector3::from_fn(|k, _| {
+                let cross = match (c, k) {
+                    (0, 1) => w.z,
+                    (0, 2) => -w.y,
+                    (1, 0) => -w.z,
+                    (1, 2) => w.x,
+                    (2, 0) => w.y,
+                    (2, 1) => -w.x,
+                    _ => 0.0,
+                };
+                let d = if k == c { diag } else { 0.0 };
+                d + a * cross + b * w[c] * w[k]
+            });
+            self.nominal.row(r).transpose().dot(&e) - target[i]
+        })
+    }
+
+    /// Chord steps from `w = 0` with the nominal Jacobian (the error shrinks by about
+    /// `|w|` a step): the turn and its residual.
+    #[inline]
+    fn chord_steps(&self, target: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
+        // At w = 0 the block is the nominal one: the first residual needs no exponential.
+        let mut w = Vector3::zeros();
+        let mut f = Vector3::from_fn(|i, _| {
+            let (r, c) = self.positions[i];
+            self.nominal[(r, c)] - target[i]
+        });
+        for _ in 0..8 {
+            if f.amax() < 1e-15 {
+                break;
+            }
+            let wn = w - self.j0_inv * f;
+            let fn_ = self.residual(&wn, target);
+            if fn_.amax() >= f.amax() {
+                break; // rounding level reached, or too large for the chord
+            }
+            (w, f) = (wn, fn_);
+        }
+        (w, f)
+    }
+
+    /// Newton with a difference Jacobian from turn `w` (residual `f`), for large
+    /// deviations: the turn and its residual.
+    #[inline]
+    fn newton_steps(
+        &self,
+        target: &Vector3<f64>,
+        mut w: Vector3<f64>,
+        mut f: Vector3<f64>,
+    ) -> (Vector3<f64>, Vector3<f64>) {
+        let mut it = 0;
+        while f.amax() >= 1e-14 && it < 30 {
+            let h = 1e-7;
+            let mut j = Matrix3::zeros();
+            for k in 0..3 {
+                let mut wp = w;
+                wp[k] += h;
+                let col = (self.residual(&wp, target) - f) / h;
+                j.set_column(k, &col);
+            }
+            let Some(inv) = j.try_inverse() else { break };
+            let wn = w - inv * f;
+            let fn_ = self.residual(&wn, target);
+            if fn_.amax() >= f.amax() {
+                break;
+            }
+            (w, f) = (wn, fn_);
+            it += 1;
+        }
+        (w, f)
     }
 }
 

@@ -133,7 +133,6 @@ impl ParallelAxes {
         // T* T_0^-1: the turn and the point c where it takes axes 5 and 6.
         let turn = target_r * self.r0.transpose();
         let c_star = target_p + turn * (self.c - self.t0);
-        let w6_star = turn * w[5];
         // 1. Shoulder: n . E_1(q_1)^-1 c* = n . c.
         let q1s = shoulder(w, p, &self.c, &c_star, tol, start[0]).map_err(|(r, off)| {
             Unattainable::ShoulderOffset {
@@ -144,81 +143,34 @@ impl ParallelAxes {
         })?;
         let (w5, w6) = (&w[4], &w[5]);
         let c56 = w5.dot(w6);
-        let (a5, b5) = (n.dot(&(w6 - w5 * c56)), n.dot(&w5.cross(w6)));
-        let sigma3 = self.elbow.sigma;
-        let theta_start = start[1] + sigma3 * start[2] + self.sigma4 * start[3];
-        // Slot `4 i + 2 j + k` holds the solution of shoulder `i`, elbow `j`, wrist `k`.
-        let mut slots = [None::<Vector6<f64>>; 8];
-        let mut search = Search::new(nearest);
-        let mut elbow_miss = None;
-        let mut wrist_miss = false;
-        for i in search.order(0, &q1s) {
+        let mut s = Solving {
+            turn,
+            c_star,
+            w6_star: turn * w[5],
+            tol,
+            start,
+            wrist: (n.dot(&(w6 - w5 * c56)), n.dot(&w5.cross(w6)), c56),
+            theta_start: start[1] + self.elbow.sigma * start[2] + self.sigma4 * start[3],
+            slots: [None; 8],
+            search: Search::new(nearest),
+            elbow_miss: None,
+            wrist_miss: false,
+        };
+        for i in s.search.order(0, &q1s) {
             let q1 = q1s[i];
-            let d1 = search.term(0, q1);
-            if search.beyond(d1) {
+            let d1 = s.search.term(0, q1);
+            if s.search.beyond(d1) {
                 continue;
             }
-            let r1 = rot(&w[0], q1);
-            // 2. Wrist: n . Rot(w_5, q_5) w_6 = n . R_1^T w_6*.
-            let v = r1.transpose() * w6_star;
-            let Some(q5s) = cos_sin(a5, b5, n.dot(&v) - n.dot(w5) * c56) else {
-                wrist_miss = true;
-                continue;
-            };
-            for k in search.order(4, &q5s) {
-                let q5 = q5s[k];
-                let d15 = d1 + search.term(4, q5);
-                if search.beyond(d15) {
-                    continue;
-                }
-                let r5 = rot(w5, q5);
-                // 3. The parallel axes' turn.
-                let (u_n, v_n) = (normal(&(r5 * w6), &n), normal(&v, &n));
-                let theta = if u_n.norm() <= 1e-9 || v_n.norm() <= 1e-9 {
-                    theta_start
-                } else {
-                    angle_about(&n, &u_n, &v_n)
-                };
-                let r_theta = rot(&n, theta);
-                // 4. Elbow: axis 4's point, seen from before the shoulder's turn.
-                let p4 = c_star - r1 * r_theta * (self.c - p[3]);
-                let d = normal(&(p[0] + r1.transpose() * (p4 - p[0]) - p[1]), &n);
-                let q3s = match self.elbow.bend(&n, &d) {
-                    Ok(q3s) => q3s,
-                    Err((miss, r)) => {
-                        if elbow_miss.is_none_or(|(m, _)| miss < m) {
-                            elbow_miss = Some((miss, r));
-                        }
-                        continue;
-                    }
-                };
-                for j in search.order(2, &q3s) {
-                    let q3 = q3s[j];
-                    let d135 = d15 + search.term(2, q3);
-                    if search.beyond(d135) {
-                        continue;
-                    }
-                    let q2 = self.elbow.lift(&n, &rot(&w[2], q3), &d, tol, start[1]);
-                    let q4 = self.sigma4 * (theta - q2 - sigma3 * q3);
-                    let d12345 = d135 + search.term(1, q2) + search.term(3, q4);
-                    if search.beyond(d12345) {
-                        continue;
-                    }
-                    // 5. Flange.
-                    let k6 = (r1 * r_theta * r5).transpose() * turn;
-                    let q6 = angle_about(w6, &self.across6, &(k6 * self.across6));
-                    search.found(d12345 + search.term(5, q6));
-                    slots[4 * i + 2 * j + k] = Some(Vector6::new(q1, q2, q3, q4, q5, q6));
-                }
-            }
+            self.after_shoulder(&mut s, i, q1, d1);
         }
-        let count = gather(slots, out);
+        let count = gather(s.slots, out);
         if count > 0 {
             return Ok(count);
         }
-        Err(match elbow_miss {
+        Err(match s.elbow_miss {
             Some((_, r)) => self.elbow.miss("axis 4", r),
-            None if wrist_miss => {
+            None if s.wrist_miss => {
                 "the tool axis would need a tilt to axes 2 to 4 that axes 5 and 6 cannot \
                  make"
                     .into()
@@ -226,4 +178,114 @@ impl ParallelAxes {
             None => "no solution".into(),
         })
     }
+
+    /// Steps 2 to 4 after shoulder `i` at `q1` (partial distance `d1`): the wrist's
+    /// solutions, the parallel axes' turn and the elbow of each.
+    fn after_shoulder(&self, s: &mut Solving, i: usize, q1: f64, d1: f64) {
+        let (w, p, n) = (&self.w, &self.p, self.w[1]);
+        let (w5, w6) = (&w[4], &w[5]);
+        let (a5, b5, c56) = s.wrist;
+        let r1 = rot(&w[0], q1);
+        // 2. Wrist: n . Rot(w_5, q_5) w_6 = n . R_1^T w_6*.
+        let v = r1.transpose() * s.w6_star;
+        let Some(q5s) = cos_sin(a5, b5, n.dot(&v) - n.dot(w5) * c56) else {
+            s.wrist_miss = true;
+            return;
+        };
+        for k in s.search.order(4, &q5s) {
+            let q5 = q5s[k];
+            let d15 = d1 + s.search.term(4, q5);
+            if s.search.beyond(d15) {
+                continue;
+            }
+            let r5 = rot(w5, q5);
+            // 3. The parallel axes' turn.
+            let (u_n, v_n) = (normal(&(r5 * w6), &n), normal(&v, &n));
+            let theta = if u_n.norm() <= 1e-9 || v_n.norm() <= 1e-9 {
+                s.theta_start
+            } else {
+                angle_about(&n, &u_n, &v_n)
+            };
+            let r_theta = rot(&n, theta);
+            // 4. Elbow: axis 4's point, seen from before the shoulder's turn.
+            let p4 = s.c_star - r1 * r_theta * (self.c - p[3]);
+            let d = normal(&(p[0] + r1.transpose() * (p4 - p[0]) - p[1]), &n);
+            let q3s = match self.elbow.bend(&n, &d) {
+                Ok(q3s) => q3s,
+                Err((miss, r)) => {
+                    if s.elbow_miss.is_none_or(|(m, _)| miss < m) {
+                        s.elbow_miss = Some((miss, r));
+                    }
+                    continue;
+                }
+            };
+            let branch = WristBranch {
+                slot: 4 * i + k,
+                q1,
+                q5,
+                theta,
+                d15,
+                r15: r1 * r_theta * r5,
+            };
+            self.elbow_branches(s, &branch, &d, &q3s);
+        }
+    }
+
+    /// The elbow's solutions `q3s` (planar distance `d`) of a wrist branch, then `q_2`,
+    /// `q_4` and step 5, the flange, into their slots.
+    fn elbow_branches(&self, s: &mut Solving, b: &WristBranch, d: &Vector3<f64>, q3s: &[f64; 2]) {
+        let n = self.w[1];
+        for j in s.search.order(2, q3s) {
+            let q3 = q3s[j];
+            let d135 = b.d15 + s.search.term(2, q3);
+            if s.search.beyond(d135) {
+                continue;
+            }
+            let q2 = self
+                .elbow
+                .lift(&n, &rot(&self.w[2], q3), d, s.tol, s.start[1]);
+            let q4 = self.sigma4 * (b.theta - q2 - self.elbow.sigma * q3);
+            let d12345 = d135 + s.search.term(1, q2) + s.search.term(3, q4);
+            if s.search.beyond(d12345) {
+                continue;
+            }
+            // 5. Flange.
+            let k6 = b.r15.transpose() * s.turn;
+            let q6 = angle_about(&self.w[5], &self.across6, &(k6 * self.across6));
+            s.search.found(d12345 + s.search.term(5, q6));
+            s.slots[b.slot + 2 * j] = Some(Vector6::new(b.q1, q2, q3, q4, b.q5, q6));
+        }
+    }
+}
+
+/// One solve's state: the target seen by the closed form, the branch-and-bound, the
+/// solutions found by slot and why branches failed.
+struct Solving<'a> {
+    /// `T* T_0^-1`'s turn, and where it takes `c` and `w_6`.
+    turn: Matrix3<f64>,
+    c_star: Vector3<f64>,
+    w6_star: Vector3<f64>,
+    tol: f64,
+    start: &'a Vector6<f64>,
+    /// The wrist subproblem's coefficients `a_5`, `b_5` and `w_5 . w_6`.
+    wrist: (f64, f64, f64),
+    /// The parallel axes' turn at `start`.
+    theta_start: f64,
+    /// Slot `4 i + 2 j + k` holds the solution of shoulder `i`, elbow `j`, wrist `k`.
+    slots: [Option<Vector6<f64>>; 8],
+    search: Search<'a>,
+    /// The nearest elbow miss (how far, and the distance it reports).
+    elbow_miss: Option<(f64, f64)>,
+    wrist_miss: bool,
+}
+
+/// A branch through the shoulder and the wrist: its slot without the elbow's part,
+/// its joints, partial distance, and the turn `R_1 Rot(n, theta) R_5`.
+struct WristBranch {
+    slot: usize,
+    q1: f64,
+    q5: f64,
+    theta: f64,
+    d15: f64,
+    r15: Matrix3<f64>,
 }

@@ -30,6 +30,10 @@
 
 use nalgebra::{Matrix3, Matrix4, Rotation3, Unit, Vector3, Vector6};
 
+mod search;
+
+pub(super) use search::{Nearest, Search};
+
 use super::{JointKind, PreparedChain};
 use crate::error::Unattainable;
 
@@ -307,7 +311,7 @@ impl SphericalWrist {
         nearest: Option<&Nearest>,
         out: &mut [Vector6<f64>; 8],
     ) -> Result<usize, Unattainable> {
-        let (w, p, n) = (&self.w, &self.p, self.w[1]);
+        let (w, p) = (&self.w, &self.p);
         let tol = GEOMETRY_TOLERANCE * self.scale;
         let centre = target_p + target_r * self.centre_tool;
         // 1. Shoulder: n . E_1(q_1)^-1 centre = n . c.
@@ -318,162 +322,131 @@ impl SphericalWrist {
                 offset: off,
             }
         })?;
-        // Slot `4 i + 2 j + k` holds the solution of shoulder `i`, elbow `j`, wrist `k`.
-        let mut slots = [None::<Vector6<f64>>; 8];
-        let mut search = Search::new(nearest);
-        let mut elbow_miss = None;
-        let mut wrist_miss = false;
-        for i in search.order(0, &q1s) {
+        let mut s = Solving {
+            target_r,
+            centre,
+            tol,
+            start,
+            slots: [None; 8],
+            search: Search::new(nearest),
+            elbow_miss: None,
+            wrist_miss: false,
+        };
+        for i in s.search.order(0, &q1s) {
             let q1 = q1s[i];
-            let d1 = search.term(0, q1);
-            if search.beyond(d1) {
+            let d1 = s.search.term(0, q1);
+            if s.search.beyond(d1) {
                 continue;
             }
-            let r1 = rot(&w[0], q1);
-            // 2. Elbow: the planar distance from axis 2.
-            let v = p[0] + r1.transpose() * (centre - p[0]);
-            let d = normal(&(v - p[1]), &n);
-            let q3s = match self.elbow.bend(&n, &d) {
-                Ok(q3s) => q3s,
-                Err((miss, r)) => {
-                    // Of the shoulder's two solutions, report the nearer miss (the first
-                    // shoulder's on a tie, whatever the order they were tried in).
-                    if elbow_miss.is_none_or(|(m, _, k)| miss < m || (miss == m && i < k)) {
-                        elbow_miss = Some((miss, r, i));
-                    }
-                    continue;
-                }
-            };
-            for j in search.order(2, &q3s) {
-                let q3 = q3s[j];
-                let d13 = d1 + search.term(2, q3);
-                if search.beyond(d13) {
-                    continue;
-                }
-                let r3 = rot(&w[2], q3);
-                let q2 = self.elbow.lift(&n, &r3, &d, tol, start[1]);
-                let d123 = d13 + search.term(1, q2);
-                if search.beyond(d123) {
-                    continue;
-                }
-                let r123 = r1 * rot(&n, q2) * r3;
-                // 3. Wrist.
-                let m = r123.transpose() * target_r * self.r0.transpose();
-                let (w4, w5, w6) = (&w[3], &w[4], &w[5]);
-                let (c45, c56) = (w4.dot(w5), w5.dot(w6));
-                let a5 = w4.dot(w6) - c56 * c45;
-                let b5 = w4.dot(&w5.cross(w6));
-                let z = m * w6;
-                let Some(q5s) = cos_sin(a5, b5, w4.dot(&z) - c56 * c45) else {
-                    wrist_miss = true;
-                    continue;
-                };
-                for k in search.order(4, &q5s) {
-                    let q5 = q5s[k];
-                    let d1235 = d123 + search.term(4, q5);
-                    if search.beyond(d1235) {
-                        continue;
-                    }
-                    let r5 = rot(w5, q5);
-                    let y = r5 * w6;
-                    let (y_n, z_n) = (normal(&y, w4), normal(&z, w4));
-                    let q4 = if y_n.norm() <= 1e-9 {
-                        start[3]
-                    } else {
-                        angle_about(w4, &y_n, &z_n)
-                    };
-                    let d12345 = d1235 + search.term(3, q4);
-                    if search.beyond(d12345) {
-                        continue;
-                    }
-                    let k6 = r5.transpose() * rot(w4, q4).transpose() * m;
-                    let q6 = angle_about(w6, &self.across6, &(k6 * self.across6));
-                    search.found(d12345 + search.term(5, q6));
-                    slots[4 * i + 2 * j + k] = Some(Vector6::new(q1, q2, q3, q4, q5, q6));
-                }
-            }
+            self.after_shoulder(&mut s, i, q1, d1);
         }
-        let count = gather(slots, out);
+        let count = gather(s.slots, out);
         if count > 0 {
             return Ok(count);
         }
-        Err(match elbow_miss {
-            Some((_, r, _)) if !wrist_miss => self.elbow.miss("the wrist centre", r),
+        Err(match s.elbow_miss {
+            Some((_, r, _)) if !s.wrist_miss => self.elbow.miss("the wrist centre", r),
             _ => "the tool orientation needs a wrist bend the wrist's axes cannot make".into(),
         })
     }
-}
 
-/// The joint values whose nearest solution [`SphericalWrist::solve`] is asked for:
-/// nearest in `|wrap(q) - near|^2`, where `wrap` shifts the joints marked `wrapped` by
-/// whole turns to within half a turn of `near` (as [`super::arm::SerialArm`] ranks its
-/// solutions).
-pub(super) struct Nearest<'a> {
-    pub near: &'a Vector6<f64>,
-    pub wrapped: [bool; 6],
-}
-
-/// The branch-and-bound of [`SphericalWrist::solve`] toward [`Nearest`]: each branch
-/// (shoulder, then elbow, then wrist flip) is tried nearest first, and one whose
-/// joints known so far are already farther than a whole solution found is skipped.
-///
-/// The squared distance of a solution is a sum of one term per joint, each
-/// nonnegative, so a partial sum never exceeds the whole (rounding to nearest is
-/// monotone). A branch is skipped only when its partial sum exceeds the best whole
-/// sum by more than 1e-9 relative: far beyond the few ulps by which sums of the same
-/// terms in another order (the caller's ranking) can differ, so a skipped solution is
-/// strictly farther than one kept and never the nearest, nor tied with it.
-pub(super) struct Search<'a> {
-    nearest: Option<&'a Nearest<'a>>,
-    best: f64,
-}
-
-impl<'a> Search<'a> {
-    pub(super) fn new(nearest: Option<&'a Nearest<'a>>) -> Self {
-        Search {
-            nearest,
-            best: f64::INFINITY,
+    /// Step 2 after shoulder `i` at `q1` (partial distance `d1`): the elbow's
+    /// solutions, then the wrist of each.
+    fn after_shoulder(&self, s: &mut Solving, i: usize, q1: f64, d1: f64) {
+        let (w, p, n) = (&self.w, &self.p, self.w[1]);
+        let r1 = rot(&w[0], q1);
+        // 2. Elbow: the planar distance from axis 2.
+        let v = p[0] + r1.transpose() * (s.centre - p[0]);
+        let d = normal(&(v - p[1]), &n);
+        let q3s = match self.elbow.bend(&n, &d) {
+            Ok(q3s) => q3s,
+            Err((miss, r)) => {
+                // Of the shoulder's two solutions, report the nearer miss (the first
+                // shoulder's on a tie, whatever the order they were tried in).
+                if s.elbow_miss
+                    .is_none_or(|(m, _, k)| miss < m || (miss == m && i < k))
+                {
+                    s.elbow_miss = Some((miss, r, i));
+                }
+                return;
+            }
+        };
+        for j in s.search.order(2, &q3s) {
+            let q3 = q3s[j];
+            let d13 = d1 + s.search.term(2, q3);
+            if s.search.beyond(d13) {
+                continue;
+            }
+            let r3 = rot(&w[2], q3);
+            let q2 = self.elbow.lift(&n, &r3, &d, s.tol, s.start[1]);
+            let d123 = d13 + s.search.term(1, q2);
+            if s.search.beyond(d123) {
+                continue;
+            }
+            let r123 = r1 * rot(&n, q2) * r3;
+            self.wrist_branches(s, 4 * i + 2 * j, [q1, q2, q3], &r123, d123);
         }
     }
 
-    /// Joint `i`'s term `(wrap(q) - near_i)^2`; 0 without [`Nearest`].
-    pub(super) fn term(&self, i: usize, q: f64) -> f64 {
-        use std::f64::consts::TAU;
-        let Some(n) = self.nearest else {
-            return 0.0;
+    /// Step 3, the wrist, of an arm branch at joints `q123` (turn `r123`, partial
+    /// distance `d123`), its solutions into slots `slot` and `slot + 1`.
+    fn wrist_branches(
+        &self,
+        s: &mut Solving,
+        slot: usize,
+        [q1, q2, q3]: [f64; 3],
+        r123: &Matrix3<f64>,
+        d123: f64,
+    ) {
+        let w = &self.w;
+        let m = r123.transpose() * s.target_r * self.r0.transpose();
+        let (w4, w5, w6) = (&w[3], &w[4], &w[5]);
+        let (c45, c56) = (w4.dot(w5), w5.dot(w6));
+        let a5 = w4.dot(w6) - c56 * c45;
+        let b5 = w4.dot(&w5.cross(w6));
+        let z = m * w6;
+        let Some(q5s) = cos_sin(a5, b5, w4.dot(&z) - c56 * c45) else {
+            s.wrist_miss = true;
+            return;
         };
-        let near = n.near[i];
-        // `SerialArm::wrap`'s operations, so the same wrapped value.
-        let w = if n.wrapped[i] {
-            q - TAU * crate::rotation::whole_turns(q - near)
-        } else {
-            q
-        };
-        (w - near) * (w - near)
-    }
-
-    /// Whether a branch whose joints so far sum to `partial` cannot hold the nearest.
-    pub(super) fn beyond(&self, partial: f64) -> bool {
-        partial > self.best * (1.0 + 1e-9)
-    }
-
-    /// A whole solution at squared distance `whole` was found.
-    pub(super) fn found(&mut self, whole: f64) {
-        if whole < self.best {
-            self.best = whole;
+        for k in s.search.order(4, &q5s) {
+            let q5 = q5s[k];
+            let d1235 = d123 + s.search.term(4, q5);
+            if s.search.beyond(d1235) {
+                continue;
+            }
+            let r5 = rot(w5, q5);
+            let y = r5 * w6;
+            let (y_n, z_n) = (normal(&y, w4), normal(&z, w4));
+            let q4 = if y_n.norm() <= 1e-9 {
+                s.start[3]
+            } else {
+                angle_about(w4, &y_n, &z_n)
+            };
+            let d12345 = d1235 + s.search.term(3, q4);
+            if s.search.beyond(d12345) {
+                continue;
+            }
+            let k6 = r5.transpose() * rot(w4, q4).transpose() * m;
+            let q6 = angle_about(w6, &self.across6, &(k6 * self.across6));
+            s.search.found(d12345 + s.search.term(5, q6));
+            s.slots[slot + k] = Some(Vector6::new(q1, q2, q3, q4, q5, q6));
         }
     }
+}
 
-    /// The indices of a subproblem's two solutions `qs` of joint `i` (one when they are
-    /// equal), nearer first with [`Nearest`], else in order.
-    pub(super) fn order(&self, i: usize, qs: &[f64; 2]) -> impl Iterator<Item = usize> {
-        let order = if qs[1] == qs[0] {
-            [Some(0), None]
-        } else if self.nearest.is_some() && self.term(i, qs[1]) < self.term(i, qs[0]) {
-            [Some(1), Some(0)]
-        } else {
-            [Some(0), Some(1)]
-        };
-        order.into_iter().flatten()
-    }
+/// One solve's state: the target, the branch-and-bound, the solutions found by slot
+/// and why branches failed.
+struct Solving<'a> {
+    target_r: &'a Matrix3<f64>,
+    /// The wrist centre at the target.
+    centre: Vector3<f64>,
+    tol: f64,
+    start: &'a Vector6<f64>,
+    /// Slot `4 i + 2 j + k` holds the solution of shoulder `i`, elbow `j`, wrist `k`.
+    slots: [Option<Vector6<f64>>; 8],
+    search: Search<'a>,
+    /// The nearest elbow miss: how far, the distance it reports, its shoulder.
+    elbow_miss: Option<(f64, f64, usize)>,
+    wrist_miss: bool,
 }

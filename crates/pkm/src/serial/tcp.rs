@@ -68,6 +68,57 @@ impl<const N: usize> Relative<N> {
     }
 }
 
+/// An invalid machine for TCP coordinates.
+fn invalid(message: String) -> Error {
+    Error::InvalidInput {
+        what: "TCP coordinates".into(),
+        message,
+    }
+}
+
+/// The indices of the prismatic and of the revolute joints among `joints`: three
+/// linear axes and one or two rotary ones, each rotary one with a name of its own.
+fn linear_and_rotary<const N: usize>(joints: &[super::Joint]) -> Result<(Vec<usize>, Vec<usize>)> {
+    let prismatic: Vec<usize> = (0..joints.len())
+        .filter(|&i| joints[i].kind == JointKind::Prismatic)
+        .collect();
+    let revolute: Vec<usize> = (0..joints.len())
+        .filter(|&i| joints[i].kind == JointKind::Revolute)
+        .collect();
+    if joints.len() != N || prismatic.len() != 3 || !(1..=2).contains(&revolute.len()) {
+        return Err(invalid(format!(
+            "tool-centre-point coordinates need three linear axes and one or two \
+             rotary axes; this machine has {} linear and {} rotary",
+            prismatic.len(),
+            revolute.len()
+        )));
+    }
+    for (k, &j) in revolute.iter().enumerate() {
+        if ["X", "Y", "Z"].contains(&joints[j].name.as_str())
+            || revolute[..k]
+                .iter()
+                .any(|&i| joints[i].name == joints[j].name)
+        {
+            return Err(invalid(format!(
+                "the rotary axis `{}` needs a name of its own (X, Y, Z are the tool tip)",
+                joints[j].name
+            )));
+        }
+    }
+    Ok((prismatic, revolute))
+}
+
+/// The joints in the order of the chain read from the part to the tool (the
+/// workpiece joints last to first, then the `tool_joints` tool joints).
+fn part_to_tool_order<const N: usize>(tool_joints: usize) -> [usize; N] {
+    let mut order = [0; N];
+    let nw = N - tool_joints;
+    for (k, o) in order.iter_mut().enumerate() {
+        *o = if k < nw { N - 1 - k } else { k - nw };
+    }
+    order
+}
+
 /// A serial machine tool with TCP pose coordinates (`N` = 3 linear + rotary joints).
 #[derive(Debug, Clone, PartialEq)]
 pub struct TcpMachine<const N: usize> {
@@ -108,37 +159,8 @@ impl<const N: usize> TcpMachine<N> {
     /// Wraps a machine with three prismatic and `N - 3` revolute joints; `home` are the
     /// home joint values (internal units).
     pub fn new(machine: SerialMachine, home: SVector<f64, N>) -> Result<Self> {
-        let invalid = |message: String| Error::InvalidInput {
-            what: "TCP coordinates".into(),
-            message,
-        };
         let joints = machine.all_joints();
-        let prismatic: Vec<usize> = (0..joints.len())
-            .filter(|&i| joints[i].kind == JointKind::Prismatic)
-            .collect();
-        let revolute: Vec<usize> = (0..joints.len())
-            .filter(|&i| joints[i].kind == JointKind::Revolute)
-            .collect();
-        if joints.len() != N || prismatic.len() != 3 || !(1..=2).contains(&revolute.len()) {
-            return Err(invalid(format!(
-                "tool-centre-point coordinates need three linear axes and one or two \
-                 rotary axes; this machine has {} linear and {} rotary",
-                prismatic.len(),
-                revolute.len()
-            )));
-        }
-        for (k, &j) in revolute.iter().enumerate() {
-            if ["X", "Y", "Z"].contains(&joints[j].name.as_str())
-                || revolute[..k]
-                    .iter()
-                    .any(|&i| joints[i].name == joints[j].name)
-            {
-                return Err(invalid(format!(
-                    "the rotary axis `{}` needs a name of its own (X, Y, Z are the tool tip)",
-                    joints[j].name
-                )));
-            }
-        }
+        let (prismatic, revolute) = linear_and_rotary::<N>(&joints)?;
         let actuators: [Actuator; N] = std::array::from_fn(|i| joints[i].actuator());
         let position_limits = PositionLimits::new("axis", &actuators);
         let coordinates = std::array::from_fn(|i| match i {
@@ -148,11 +170,6 @@ impl<const N: usize> TcpMachine<N> {
             _ => Coordinate::angle(&joints[revolute[i - 3]].name),
         });
         let tool_joints = machine.tool.dof();
-        let mut order = [0; N];
-        let nw = N - tool_joints;
-        for (k, o) in order.iter_mut().enumerate() {
-            *o = if k < nw { N - 1 - k } else { k - nw };
-        }
         let tool_origin = machine
             .tool
             .links
@@ -183,7 +200,7 @@ impl<const N: usize> TcpMachine<N> {
             tool_joints,
             linear: [prismatic[0], prismatic[1], prismatic[2]],
             rotary: std::array::from_fn(|k| revolute.get(k).copied().unwrap_or(0)),
-            order,
+            order: part_to_tool_order(tool_joints),
             at_zero: Relative {
                 tip: Vector3::zeros(),
                 frame: Matrix3::identity(),
@@ -192,24 +209,31 @@ impl<const N: usize> TcpMachine<N> {
             },
             completions: Vec::new(),
         };
-        m.at_zero = m.relative(&SVector::zeros());
-        let rel = m.relative(&home);
-        let mcols = m.linear_matrix(&rel);
+        m.set_home_kinematics(&home)?;
+        Ok(m)
+    }
+
+    /// The relative kinematics at zero, and the home pose and characteristic length
+    /// from the kinematics at `home`, whose linear axes must be independent.
+    fn set_home_kinematics(&mut self, home: &SVector<f64, N>) -> Result<()> {
+        self.at_zero = self.relative(&SVector::zeros());
+        let rel = self.relative(home);
+        let mcols = self.linear_matrix(&rel);
         let rc = crate::linalg::rcond1(&mcols);
         if !(rc > 1e-9) {
             return Err(invalid(format!(
                 "the three linear axes are not independent at home (reciprocal condition {rc:.1e})"
             )));
         }
-        let home_pose = m.coords_of_joints(&home);
-        m.info.set_home(home_pose);
+        let home_pose = self.coords_of_joints(home);
+        self.info.set_home(home_pose);
         // A radian of a rotary axis counts as the tip's largest displacement per radian
         // at home: the lever of the rotary axes (at least 1 mm).
         let lever = (3..N)
-            .map(|k| rel.column(m.rotary[k - 3], JointKind::Revolute).norm())
+            .map(|k| rel.column(self.rotary[k - 3], JointKind::Revolute).norm())
             .fold(1.0, f64::max);
-        m.info.set_characteristic_length(lever);
-        Ok(m)
+        self.info.set_characteristic_length(lever);
+        Ok(())
     }
 
     /// The chains (the tool chain's last link lengthened by the tool length).

@@ -90,6 +90,86 @@ fn unwrap_near(t: f64, near: f64, lo: f64, hi: f64) -> f64 {
     best
 }
 
+/// The tool axis `axis` scaled to unit length, refusing a zero or non-finite one.
+fn unit_axis(axis: &Vector3<f64>) -> Result<Vector3<f64>> {
+    let n = axis.norm();
+    if !(n > 1e-12) || !n.is_finite() {
+        return Err(Error::InvalidInput {
+            what: "tool axis".into(),
+            message: format!(
+                "expected a finite non-zero vector, got ({}, {}, {})",
+                axis.x, axis.y, axis.z
+            ),
+        });
+    }
+    Ok(axis / n)
+}
+
+/// Subproblem 2 for a tool axis: the rotary axes `w1`, `w2`, the tool axis at zero
+/// `a0`, the `target`, and the spherical triangle's angles giving the intermediate
+/// direction `z`.
+struct Cones {
+    w1: Vector3<f64>,
+    w2: Vector3<f64>,
+    a0: Vector3<f64>,
+    target: Vector3<f64>,
+    /// Half-angle of the cone of `z` about `w1`.
+    f1: f64,
+    /// `w2`'s unit part normal to `w1`, and `w1 x u`.
+    u: Vector3<f64>,
+    v: Vector3<f64>,
+    /// The angle `A` at `w1` between `w2` and `z`.
+    cos_a: f64,
+    sin_a: f64,
+}
+
+impl Cones {
+    /// The triangle for axes `w1`, `w2` (`c` their cosine), or the angle (rad) by which
+    /// `target` is out of their reach.
+    fn new(
+        w1: Vector3<f64>,
+        w2: Vector3<f64>,
+        a0: Vector3<f64>,
+        target: Vector3<f64>,
+        c: f64,
+    ) -> std::result::Result<Self, f64> {
+        // Angles of the spherical triangle w1, w2, z, each from atan2 (no cosine near
+        // 1 to lose digits in): the cone of z about w1 has half-angle f1, about w2 f2.
+        let angle = |u: &Vector3<f64>, v: &Vector3<f64>| u.cross(v).norm().atan2(u.dot(v));
+        let (f1, f2, psi) = (angle(&w1, &target), angle(&w2, &a0), angle(&w1, &w2));
+        let u = (w2 - w1 * c).normalize();
+        let v = w1.cross(&u);
+        // Spherical law of cosines for the angle A at w1 between w2 and z.
+        let num = f2.cos() - psi.cos() * f1.cos();
+        let den = psi.sin() * f1.sin();
+        if num.abs() > den + 1e-12 {
+            return Err((f1 - (psi + f2)).max((psi - f2).abs() - f1).max(0.0));
+        }
+        let cos_a = if den > 0.0 {
+            (num / den).clamp(-1.0, 1.0)
+        } else {
+            0.0
+        };
+        let sin_a = (1.0 - cos_a * cos_a).sqrt();
+        Ok(Cones {
+            w1,
+            w2,
+            a0,
+            target,
+            f1,
+            u,
+            v,
+            cos_a,
+            sin_a,
+        })
+    }
+
+    /// The intermediate direction `z` of the branch with `sin A` of sign `sg`.
+    fn intermediate(&self, sg: f64) -> Vector3<f64> {
+        self.w1 * self.f1.cos() + (self.u * self.cos_a + self.v * (sg * self.sin_a)) * self.f1.sin()
+    }
+}
+
 impl<const N: usize> TcpMachine<N> {
     /// The rotary angles pointing the tool along `axis` (part frame, from the tip to the
     /// spindle; any length > 0), both branches, the one nearest `near` (rotary angles in
@@ -110,29 +190,8 @@ impl<const N: usize> TcpMachine<N> {
                 ),
             });
         }
-        let n = axis.norm();
-        if !(n > 1e-12) || !n.is_finite() {
-            return Err(Error::InvalidInput {
-                what: "tool axis".into(),
-                message: format!(
-                    "expected a finite non-zero vector, got ({}, {}, {})",
-                    axis.x, axis.y, axis.z
-                ),
-            });
-        }
-        let target = axis / n;
-        let home = self.info.home();
-        let near: [f64; 2] = match near {
-            Some(v) if v.len() == 2 && v.iter().all(|x| x.is_finite()) => [v[0], v[1]],
-            Some(v) => {
-                return Err(Error::InvalidInput {
-                    what: "tool axis".into(),
-                    message: format!("expected 2 previous rotary angles, got {}", v.len()),
-                })
-            }
-            None => [home[3], home[4]],
-        };
-        let rot = self.rotary_joints();
+        let target = unit_axis(axis)?;
+        let near = self.previous_rotary(near)?;
         let a0: Vector3<f64> = self.at_zero.frame.column(2).into_owned();
         let (k1, k2, w1, w2) = self.rotary_pair();
         let c = w1.dot(&w2);
@@ -143,46 +202,68 @@ impl<const N: usize> TcpMachine<N> {
                 message: "the two rotary axes are parallel: they cannot point the tool".into(),
             });
         }
-        // Angles of the spherical triangle w1, w2, z, each from atan2 (no cosine near
-        // 1 to lose digits in): the cone of z about w1 has half-angle f1, about w2 f2.
-        let angle = |u: &Vector3<f64>, v: &Vector3<f64>| u.cross(v).norm().atan2(u.dot(v));
-        let (f1, f2, psi) = (angle(&w1, &target), angle(&w2, &a0), angle(&w1, &w2));
-        let u = (w2 - w1 * c).normalize();
-        let v = w1.cross(&u);
-        // Spherical law of cosines for the angle A at w1 between w2 and z.
-        let num = f2.cos() - psi.cos() * f1.cos();
-        let den = psi.sin() * f1.sin();
-        if num.abs() > den + 1e-12 {
-            let gap = (f1 - (psi + f2)).max((psi - f2).abs() - f1).max(0.0);
-            return Err(Error::NotAttainable {
-                reason: format!(
-                    "the tool axis ({:.6}, {:.6}, {:.6}) is {:.4} deg beyond what the rotary \
-                     axes {} and {} can point",
-                    target.x,
-                    target.y,
-                    target.z,
-                    gap.to_degrees(),
-                    self.info.coordinates()[3 + k1].name,
-                    self.info.coordinates()[3 + k2].name
-                )
-                .into(),
-            });
-        }
-        let cos_a = if den > 0.0 {
-            (num / den).clamp(-1.0, 1.0)
-        } else {
-            0.0
-        };
-        let sin_a = (1.0 - cos_a * cos_a).sqrt();
-        let singular_distance = f1.min(std::f64::consts::PI - f1);
+        let cones = Cones::new(w1, w2, a0, target, c).map_err(|gap| Error::NotAttainable {
+            reason: format!(
+                "the tool axis ({:.6}, {:.6}, {:.6}) is {:.4} deg beyond what the rotary \
+                 axes {} and {} can point",
+                target.x,
+                target.y,
+                target.z,
+                gap.to_degrees(),
+                self.info.coordinates()[3 + k1].name,
+                self.info.coordinates()[3 + k2].name
+            )
+            .into(),
+        })?;
+        let singular_distance = cones.f1.min(std::f64::consts::PI - cones.f1);
         let singular = singular_distance < SINGULAR_ANGLE;
-        let signs: &[f64] = if sin_a > 0.0 { &[1.0, -1.0] } else { &[1.0] };
+        let branches = self.axis_branches(&cones, singular, &near, (k1, k2));
+        let chosen = self.nearest_branch(&branches, &near);
+        Ok(AxisSolution {
+            branches,
+            chosen,
+            singular,
+            singular_distance,
+        })
+    }
+
+    /// The previous rotary angles `near` checked, or home's when `None`.
+    fn previous_rotary(&self, near: Option<&[f64]>) -> Result<[f64; 2]> {
+        let home = self.info.home();
+        Ok(match near {
+            Some(v) if v.len() == 2 && v.iter().all(|x| x.is_finite()) => [v[0], v[1]],
+            Some(v) => {
+                return Err(Error::InvalidInput {
+                    what: "tool axis".into(),
+                    message: format!("expected 2 previous rotary angles, got {}", v.len()),
+                })
+            }
+            None => [home[3], home[4]],
+        })
+    }
+
+    /// The rotary angles of each branch of `cones` (`k1`, `k2` the pose coordinates of
+    /// `w1`, `w2`), each the equivalent within its range nearest `near`; the first
+    /// angle held at `near` when `singular`.
+    fn axis_branches(
+        &self,
+        cones: &Cones,
+        singular: bool,
+        near: &[f64; 2],
+        (k1, k2): (usize, usize),
+    ) -> Vec<Vec<f64>> {
+        let rot = self.rotary_joints();
         let range = |k: usize| self.info.actuators()[rot[k]].range;
+        let signs: &[f64] = if cones.sin_a > 0.0 {
+            &[1.0, -1.0]
+        } else {
+            &[1.0]
+        };
         let mut branches = Vec::new();
         for &sg in signs {
-            let z = w1 * f1.cos() + (u * cos_a + v * (sg * sin_a)) * f1.sin();
-            let t2 = turn_about(&w2, &a0, &z).unwrap_or(near[k2]);
-            let t1 = match turn_about(&w1, &z, &target) {
+            let z = cones.intermediate(sg);
+            let t2 = turn_about(&cones.w2, &cones.a0, &z).unwrap_or(near[k2]);
+            let t1 = match turn_about(&cones.w1, &z, &cones.target) {
                 Some(t) if !singular => t,
                 _ => near[k1],
             };
@@ -197,6 +278,13 @@ impl<const N: usize> TcpMachine<N> {
                 branches.push(v.to_vec());
             }
         }
+        branches
+    }
+
+    /// The branch within the ranges nearest `near` (the continuity rule).
+    fn nearest_branch(&self, branches: &[Vec<f64>], near: &[f64; 2]) -> usize {
+        let rot = self.rotary_joints();
+        let range = |k: usize| self.info.actuators()[rot[k]].range;
         let within = |b: &Vec<f64>| {
             (0..2).all(|k| {
                 let r = range(k);
@@ -204,19 +292,13 @@ impl<const N: usize> TcpMachine<N> {
             })
         };
         let dist = |b: &Vec<f64>| (b[0] - near[0]).powi(2) + (b[1] - near[1]).powi(2);
-        let chosen = (0..branches.len())
+        (0..branches.len())
             .min_by(|&a, &b| {
                 (!within(&branches[a]), dist(&branches[a]))
                     .partial_cmp(&(!within(&branches[b]), dist(&branches[b])))
                     .unwrap_or(std::cmp::Ordering::Equal)
             })
-            .unwrap_or(0);
-        Ok(AxisSolution {
-            branches,
-            chosen,
-            singular,
-            singular_distance,
-        })
+            .unwrap_or(0)
     }
 
     /// The two rotary axes as pose coordinates `k1` (the one nearer the part) and `k2`

@@ -177,6 +177,40 @@ pub struct ReachGrid {
 /// Points per axis of the probing grids of [`reach_grid`].
 const PROBE_POINTS: usize = 16;
 
+/// A bound on the tool position: `[min, max]` per axis X, Y, Z (mm).
+type PositionBound = [[f64; 2]; 3];
+
+/// [`reach_grid`]'s start box over the grid axes `idx`: the type's bound on the tool
+/// position when it gives one (returned too), else [`default_span`] per axis.
+fn start_box<M: Mechanism<P, A>, const P: usize, const A: usize>(
+    m: &M,
+    base: &SVector<f64, P>,
+    idx: &[usize],
+) -> (Option<PositionBound>, Vec<(f64, f64)>) {
+    let bound = if idx == [0, 1, 2] && m.info().pose_space() != PoseSpace::Own {
+        m.position_bound(base)
+    } else {
+        None
+    };
+    let ranges = match bound {
+        Some(b) => b.iter().map(|r| (r[0], r[1])).collect(),
+        None => idx
+            .iter()
+            .map(|&k| {
+                span_of(
+                    m.info().coordinates(),
+                    m.info().actuators(),
+                    m.info().pose_space(),
+                    m.info().characteristic_length(),
+                    base.as_slice(),
+                    k,
+                )
+            })
+            .collect(),
+    };
+    (bound, ranges)
+}
+
 /// A grid over the whole reach of the machine at `base`'s orientation (the held
 /// coordinates from `base`), `steps` cells per axis, or `step` (user units) when given.
 ///
@@ -206,27 +240,7 @@ pub fn reach_grid<M: Mechanism<P, A>, const P: usize, const A: usize>(
         _ => vec![0, 1, 2],
     };
     let q = |k: usize| m.info().coordinates()[k].quantity;
-    let bound = if idx == [0, 1, 2] && m.info().pose_space() != PoseSpace::Own {
-        m.position_bound(base)
-    } else {
-        None
-    };
-    let mut ranges: Vec<(f64, f64)> = match bound {
-        Some(b) => b.iter().map(|r| (r[0], r[1])).collect(),
-        None => idx
-            .iter()
-            .map(|&k| {
-                span_of(
-                    m.info().coordinates(),
-                    m.info().actuators(),
-                    m.info().pose_space(),
-                    m.info().characteristic_length(),
-                    base.as_slice(),
-                    k,
-                )
-            })
-            .collect(),
-    };
+    let (bound, mut ranges) = start_box(m, base, &idx);
     let mut method = match bound {
         Some(_) => "the type's bound on the tool position".to_string(),
         None => "the default span".to_string(),

@@ -4,8 +4,9 @@
 //! exactly.
 
 use nalgebra::{Matrix3, SVector, Vector3};
-use rayon::prelude::*;
 use serde::Serialize;
+
+mod enumeration;
 
 use super::{deviations_of, JointState, Region};
 use crate::accuracy::{sensitivities, Evaluate, Parametric};
@@ -309,108 +310,59 @@ fn along<E: Evaluate + Clone + Send + Sync>(
     n: &Vector3<f64>,
     opt: &ClearanceOptions,
 ) -> Result<Along> {
-    let mut buf = Vec::with_capacity(6 * regions.len());
-    let (fo, up_states) = first_order(regions, g, n);
+    let first = first_order(regions, g, n);
     match opt.method {
-        ClearanceMethod::FirstOrder => {
-            let (_, low_states) = first_order(regions, g, &-n);
-            let mut refined = false;
-            let mut solves = 0u64;
-            let mut side =
-                |sign: f64, mut states: Vec<JointState>| -> Result<(f64, Vec<JointState>)> {
-                    let mut v = sign * n.dot(&solve(ev, regions, &states, &mut buf)?);
-                    solves += 1;
-                    if (v - fo).abs() > opt.refine_above * fo {
-                        refined = true;
-                        // Re-linearise at the states and pick the maximiser again, while
-                        // that gains.
-                        for _ in 0..6 {
-                            let gj = centre_sensitivities_at(ev, regions, &states, &mut buf)?;
-                            solves += 6 * regions.len() as u64;
-                            let (_, next) = first_order(regions, &gj, &(n * sign));
-                            let w = sign * n.dot(&solve(ev, regions, &next, &mut buf)?);
-                            solves += 1;
-                            if w <= v + 1e-12 * (1.0 + v.abs()) {
-                                break;
-                            }
-                            (v, states) = (w, next);
-                        }
-                    }
-                    Ok((sign * v, states))
-                };
-            let (upper, up) = side(1.0, up_states)?;
-            let (lower, low) = side(-1.0, low_states)?;
-            Ok(Along {
-                upper,
-                lower,
-                up,
-                low,
-                first_order: fo,
-                refined,
-                solves,
-            })
-        }
-        ClearanceMethod::Enumeration => {
-            let size = enumeration_size(regions);
-            if size > MAX_ENUMERATION {
-                return Err(Error::InvalidInput {
-                    what: "clearance enumeration".into(),
-                    message: format!(
-                        "the extreme states of {} joints make {} combinations, each one \
-                         solve of the mechanism (more than the {MAX_ENUMERATION} pkm runs): \
-                         use the first-order bound, which scales",
-                        regions.len(),
-                        if size == u64::MAX {
-                            "over 1.8e19".to_string()
-                        } else {
-                            size.to_string()
-                        }
-                    ),
-                });
-            }
-            let extremes: Vec<Vec<JointState>> = regions.iter().map(Region::extremes).collect();
-            let states_of = |mut i: u64, out: &mut Vec<JointState>| {
-                out.clear();
-                out.extend(extremes.iter().map(|e| {
-                    let k = (i % e.len() as u64) as usize;
-                    i /= e.len() as u64;
-                    e[k]
-                }));
-            };
-            let base = ev.clone();
-            let (hi, lo) = (0..size)
-                .into_par_iter()
-                .map_init(
-                    || (base.clone(), Vec::new(), Vec::new()),
-                    |(ev, buf, states), i| {
-                        states_of(i, states);
-                        let v = solve(ev, regions, states, buf).map(|e| n.dot(&e));
-                        v.map(|v| ((v, i), (v, i)))
-                    },
-                )
-                .try_reduce(
-                    || ((f64::NEG_INFINITY, 0), (f64::INFINITY, 0)),
-                    |a, b| {
-                        Ok((
-                            if b.0 .0 > a.0 .0 { b.0 } else { a.0 },
-                            if b.1 .0 < a.1 .0 { b.1 } else { a.1 },
-                        ))
-                    },
-                )?;
-            let (mut up, mut low) = (Vec::new(), Vec::new());
-            states_of(hi.1, &mut up);
-            states_of(lo.1, &mut low);
-            Ok(Along {
-                upper: hi.0,
-                lower: lo.0,
-                up,
-                low,
-                first_order: fo,
-                refined: false,
-                solves: size,
-            })
-        }
+        ClearanceMethod::FirstOrder => along_first_order(ev, regions, g, n, opt, first),
+        ClearanceMethod::Enumeration => enumeration::along(ev, regions, n, first.0),
     }
+}
+
+/// [`along`] by the first-order maximisers (`first`: the bound and the maximising
+/// states along `n`), each side solved exactly and re-linearised while that gains.
+fn along_first_order<E: Evaluate>(
+    ev: &mut E,
+    regions: &[Region],
+    g: &[Matrix3<f64>],
+    n: &Vector3<f64>,
+    opt: &ClearanceOptions,
+    (fo, up_states): (f64, Vec<JointState>),
+) -> Result<Along> {
+    let mut buf = Vec::with_capacity(6 * regions.len());
+    let (_, low_states) = first_order(regions, g, &-n);
+    let mut refined = false;
+    let mut solves = 0u64;
+    let mut side = |sign: f64, mut states: Vec<JointState>| -> Result<(f64, Vec<JointState>)> {
+        let mut v = sign * n.dot(&solve(ev, regions, &states, &mut buf)?);
+        solves += 1;
+        if (v - fo).abs() > opt.refine_above * fo {
+            refined = true;
+            // Re-linearise at the states and pick the maximiser again, while
+            // that gains.
+            for _ in 0..6 {
+                let gj = centre_sensitivities_at(ev, regions, &states, &mut buf)?;
+                solves += 6 * regions.len() as u64;
+                let (_, next) = first_order(regions, &gj, &(n * sign));
+                let w = sign * n.dot(&solve(ev, regions, &next, &mut buf)?);
+                solves += 1;
+                if w <= v + 1e-12 * (1.0 + v.abs()) {
+                    break;
+                }
+                (v, states) = (w, next);
+            }
+        }
+        Ok((sign * v, states))
+    };
+    let (upper, up) = side(1.0, up_states)?;
+    let (lower, low) = side(-1.0, low_states)?;
+    Ok(Along {
+        upper,
+        lower,
+        up,
+        low,
+        first_order: fo,
+        refined,
+        solves,
+    })
 }
 
 /// The bounds along the direction alone (`(direction, upper, lower)`, mm): what sweeps

@@ -106,6 +106,18 @@ where
             }
         },
     );
+    Ok(summary(n, dir, &along, max_norm, &sketch))
+}
+
+/// The distribution of `n` states from the streamed statistics of those solved: the
+/// moments along `dir`, the largest `|e|` and the sketch.
+fn summary(
+    n: usize,
+    dir: Vector3<f64>,
+    along: &ScalarMoments,
+    max_norm: f64,
+    sketch: &SignedSketch,
+) -> ClearanceMonteCarlo {
     let ok = along.n;
     let (min, max) = if ok == 0 {
         (0.0, 0.0)
@@ -118,7 +130,7 @@ where
         }
         sketch.rank(((ok as f64 - 1.0) * f).round() as u64, min, max)
     };
-    Ok(ClearanceMonteCarlo {
+    ClearanceMonteCarlo {
         samples: ok as usize,
         failed: n - ok as usize,
         direction: dir.into(),
@@ -130,5 +142,5 @@ where
         p99: pick(0.99),
         max_norm,
         histogram: sketch.histogram(40, min, max),
-    })
+    }
 }

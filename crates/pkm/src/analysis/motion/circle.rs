@@ -3,6 +3,8 @@
 //! doubling and bisection, with a margin, or around the best-conditioned points of the
 //! reach when no circle fits around the pose.
 
+use nalgebra::SVector;
+
 use crate::error::{Error, Result};
 use crate::machine::{Analysable, Machine, Visitor};
 use crate::mechanism::PoseSpace;
@@ -106,59 +108,13 @@ pub fn study_circle(machine: &Machine, centre: &[f64], fraction: f64) -> Result<
                 });
             }
             let c0 = crate::dynamic::fixed::<P>("circle centre", self.0)?;
-            let fits = |c: &nalgebra::SVector<f64, P>, r: f64| {
-                (0..CIRCLE_POINTS).all(|k| {
-                    let t = std::f64::consts::TAU * k as f64 / CIRCLE_POINTS as f64;
-                    let mut x = *c;
-                    x[0] += r * t.cos();
-                    x[1] += r * t.sin();
-                    crate::mechanism::inverse_checked(m, &x).is_ok()
-                })
-            };
-            let largest = |c: &nalgebra::SVector<f64, P>| {
-                let mut hi = 1.0;
-                if !fits(c, hi) {
-                    return None;
-                }
-                while fits(c, 2.0 * hi) && hi < 1e5 {
-                    hi *= 2.0;
-                }
-                let mut lo = hi;
-                hi *= 2.0;
-                for _ in 0..20 {
-                    let mid = 0.5 * (lo + hi);
-                    if fits(c, mid) {
-                        lo = mid;
-                    } else {
-                        hi = mid;
-                    }
-                }
-                Some(lo)
-            };
             // The pose itself, else (a robot's stretched zero pose is on the edge of
             // its reach) the best-conditioned reachable points of a coarse map of the
             // reach at its orientation.
-            let mut best = largest(&c0).map(|r| (c0, r));
-            if best.is_none() {
-                let g = crate::workspace::reach_grid(m, &c0, 8, None)?;
-                let wm = crate::workspace::map(m, &c0, &g.axes, &[], &|_| {})?;
-                let mut cands: Vec<(f64, usize)> = wm
-                    .points
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, p)| p.reachable)
-                    .map(|(k, p)| (p.condition, k))
-                    .collect();
-                cands.sort_by(|a, b| a.0.total_cmp(&b.0));
-                for (_, k) in cands.into_iter().take(12) {
-                    let c = crate::dynamic::fixed::<P>("circle centre", &wm.coords(k))?;
-                    if let Some(r) = largest(&c) {
-                        if best.is_none_or(|b| r > b.1) {
-                            best = Some((c, r));
-                        }
-                    }
-                }
-            }
+            let best = match largest_circle(m, &c0) {
+                Some(r) => Some((c0, r)),
+                None => best_conditioned_circle(m, &c0)?,
+            };
             let Some((c, lo)) = best else {
                 return Err(Error::NotAttainable {
                     reason: "no horizontal circle of 1 mm is within every limit around the \
@@ -175,4 +131,74 @@ pub fn study_circle(machine: &Machine, centre: &[f64], fraction: f64) -> Result<
         }
     }
     machine.visit(Job(centre, fraction))
+}
+
+/// Whether all [`CIRCLE_POINTS`] points of the horizontal circle of radius `r` around
+/// `c` are within every limit of `m`.
+fn fits<M: Analysable<P, A>, const P: usize, const A: usize>(
+    m: &M,
+    c: &SVector<f64, P>,
+    r: f64,
+) -> bool {
+    (0..CIRCLE_POINTS).all(|k| {
+        let t = std::f64::consts::TAU * k as f64 / CIRCLE_POINTS as f64;
+        let mut x = *c;
+        x[0] += r * t.cos();
+        x[1] += r * t.sin();
+        crate::mechanism::inverse_checked(m, &x).is_ok()
+    })
+}
+
+/// The largest radius that [`fits`] around `c` (doubling from 1 mm, then 20
+/// bisections), or `None` when 1 mm does not.
+fn largest_circle<M: Analysable<P, A>, const P: usize, const A: usize>(
+    m: &M,
+    c: &SVector<f64, P>,
+) -> Option<f64> {
+    let mut hi = 1.0;
+    if !fits(m, c, hi) {
+        return None;
+    }
+    while fits(m, c, 2.0 * hi) && hi < 1e5 {
+        hi *= 2.0;
+    }
+    let mut lo = hi;
+    hi *= 2.0;
+    for _ in 0..20 {
+        let mid = 0.5 * (lo + hi);
+        if fits(m, c, mid) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    Some(lo)
+}
+
+/// Of the twelve best-conditioned reachable points of a coarse map of the reach at
+/// `c0`'s orientation, the one with the largest circle, and its radius.
+fn best_conditioned_circle<M: Analysable<P, A>, const P: usize, const A: usize>(
+    m: &M,
+    c0: &SVector<f64, P>,
+) -> Result<Option<(SVector<f64, P>, f64)>> {
+    let g = crate::workspace::reach_grid(m, c0, 8, None)?;
+    let wm = crate::workspace::map(m, c0, &g.axes, &[], &|_| {})?;
+    let mut cands: Vec<(f64, usize)> = wm
+        .points
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| p.reachable)
+        .map(|(k, p)| (p.condition, k))
+        .collect();
+    cands.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut best: Option<(SVector<f64, P>, f64)> = None;
+    for (_, k) in cands.into_iter().take(12) {
+        let c = crate::dynamic::fixed::<P>("circle centre", &wm.coords(k))?;
+        if let Some(r) = largest_circle(m, &c) {
+            if best.is_none_or(|b| r > b.1) {
+                best = Some((c, r));
+            }
+        }
+    }
+    Ok(best)
 }

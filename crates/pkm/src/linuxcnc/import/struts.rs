@@ -5,7 +5,7 @@
 
 use super::{fmt_num, join_origins, Writer, OPEN_STROKE};
 use crate::error::Result;
-use crate::linuxcnc::ini::file_error;
+use crate::linuxcnc::ini::{file_error, IniEntry};
 
 impl Writer<'_> {
     fn point(
@@ -259,43 +259,8 @@ impl Writer<'_> {
         let u = self.units.linear;
         let min = self.number(&sec, "MIN_LIMIT")?;
         let max = self.number(&sec, "MAX_LIMIT")?;
-        let (lo, lo_note) = match &min {
-            Some((v, e)) if *v >= 0.0 => (
-                v * k,
-                format!("MIN_LIMIT {} {u} ({})", fmt_num(*v), self.ini.at(e)),
-            ),
-            Some((v, e)) => (
-                0.0,
-                format!(
-                    "MIN_LIMIT {} {u} ({}) is below 0: a strut is never shorter than 0",
-                    fmt_num(*v),
-                    self.ini.at(e)
-                ),
-            ),
-            None => (0.0, "no MIN_LIMIT".into()),
-        };
-        let (hi, hi_note) = match &max {
-            Some((v, e)) if v * k <= OPEN_STROKE => (
-                v * k,
-                format!("MAX_LIMIT {} {u} ({})", fmt_num(*v), self.ini.at(e)),
-            ),
-            Some((v, e)) => (
-                OPEN_STROKE,
-                format!(
-                    "MAX_LIMIT {} {u} ({}) taken as {} mm",
-                    fmt_num(*v),
-                    self.ini.at(e),
-                    fmt_num(OPEN_STROKE)
-                ),
-            ),
-            None => {
-                self.warnings.push(format!(
-                    "[{sec}] has no MAX_LIMIT: the stroke is open up to {} mm",
-                    fmt_num(OPEN_STROKE)
-                ));
-                (OPEN_STROKE, "no MAX_LIMIT".into())
-            }
-        };
+        let (lo, lo_note) = self.stroke_min(min.as_ref());
+        let (hi, hi_note) = self.stroke_max(&sec, max.as_ref());
         if !(hi > lo) {
             let e = max.as_ref().map(|m| m.1.clone());
             let msg = format!("the stroke [{}, {}] mm is empty", fmt_num(lo), fmt_num(hi));
@@ -321,5 +286,54 @@ impl Writer<'_> {
             ));
         }
         Ok(())
+    }
+
+    /// The stroke's lower end (mm) from `MIN_LIMIT` (0 when absent or below 0), and
+    /// the note saying where it came from.
+    fn stroke_min(&self, min: Option<&(f64, IniEntry)>) -> (f64, String) {
+        let (k, u) = (self.units.mm, self.units.linear);
+        match min {
+            Some((v, e)) if *v >= 0.0 => (
+                v * k,
+                format!("MIN_LIMIT {} {u} ({})", fmt_num(*v), self.ini.at(e)),
+            ),
+            Some((v, e)) => (
+                0.0,
+                format!(
+                    "MIN_LIMIT {} {u} ({}) is below 0: a strut is never shorter than 0",
+                    fmt_num(*v),
+                    self.ini.at(e)
+                ),
+            ),
+            None => (0.0, "no MIN_LIMIT".into()),
+        }
+    }
+
+    /// The stroke's upper end (mm) from `[sec] MAX_LIMIT` (at most [`OPEN_STROKE`], a
+    /// warning when absent), and the note saying where it came from.
+    fn stroke_max(&mut self, sec: &str, max: Option<&(f64, IniEntry)>) -> (f64, String) {
+        let (k, u) = (self.units.mm, self.units.linear);
+        match max {
+            Some((v, e)) if v * k <= OPEN_STROKE => (
+                v * k,
+                format!("MAX_LIMIT {} {u} ({})", fmt_num(*v), self.ini.at(e)),
+            ),
+            Some((v, e)) => (
+                OPEN_STROKE,
+                format!(
+                    "MAX_LIMIT {} {u} ({}) taken as {} mm",
+                    fmt_num(*v),
+                    self.ini.at(e),
+                    fmt_num(OPEN_STROKE)
+                ),
+            ),
+            None => {
+                self.warnings.push(format!(
+                    "[{sec}] has no MAX_LIMIT: the stroke is open up to {} mm",
+                    fmt_num(OPEN_STROKE)
+                ));
+                (OPEN_STROKE, "no MAX_LIMIT".into())
+            }
+        }
     }
 }

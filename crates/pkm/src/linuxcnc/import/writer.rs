@@ -325,63 +325,11 @@ impl Writer<'_> {
         let home = mech.home();
         let q = mech.inverse(&home)?;
         let n = q.len();
-        let read = |key: &str| -> Result<Option<Vec<(f64, IniEntry)>>> {
-            let mut v = Vec::new();
-            for i in 0..n {
-                match self.number(&format!("JOINT_{i}"), key)? {
-                    Some((x, e)) => v.push((x * self.units.mm, e)),
-                    None => return Ok(None),
-                }
-            }
-            Ok(Some(v))
-        };
-        let joint_home = read("HOME")?;
-        let joint_offset = read("HOME_OFFSET")?;
-        let ik: Vec<String> = q.iter().map(|x| format!("{x:.4}")).collect();
+        let joint_home = self.joint_values("HOME", n)?;
+        let joint_offset = self.joint_values("HOME_OFFSET", n)?;
         let mut tail = String::new();
         if let Some(h) = &joint_home {
-            let worst = h
-                .iter()
-                .zip(&q)
-                .map(|((a, _), b)| (a - b).abs())
-                .fold(0.0, f64::max);
-            if worst <= 1e-2 {
-                let _ = writeln!(tail, "\n[[reference]]");
-                let _ = writeln!(
-                    tail,
-                    "source = {}",
-                    toml_str(&format!(
-                        "{}: [JOINT_n] HOME, the strut lengths LinuxCNC homes to at the home pose",
-                        short(&self.ini.file)
-                    ))
-                );
-                let angles: Vec<f64> = home[3..].iter().map(|a| a.to_degrees()).collect();
-                let pose: Vec<String> = home[..3]
-                    .iter()
-                    .copied()
-                    .chain(angles)
-                    .map(fmt_num)
-                    .collect();
-                let _ = writeln!(tail, "pose = [{}]", pose.join(", "));
-                let _ = writeln!(tail, "tolerance = 0.01");
-                let acts: Vec<String> = h
-                    .iter()
-                    .enumerate()
-                    .map(|(i, (v, _))| format!("\"{i}\" = {}", fmt_num(*v)))
-                    .collect();
-                let _ = writeln!(tail, "actuators = {{ {} }}", acts.join(", "));
-            } else {
-                let vals: Vec<String> = h.iter().map(|(v, _)| format!("{v:.4}")).collect();
-                let msg = format!(
-                    "the INI's [JOINT_n] HOME ({} mm) are not the strut lengths at the home \
-                     pose ({} mm; up to {worst:.3} mm off): LinuxCNC would home to another \
-                     pose; pkm uses the home pose",
-                    vals.join(", "),
-                    ik.join(", ")
-                );
-                self.warnings.push(msg.clone());
-                tail.push_str(&format!("\n# Note: {msg}.\n"));
-            }
+            self.home_reference(h, &q, &home, &mut tail);
         }
         if let (Some(off), Kinematics::Genhex | Kinematics::Tripod) = (&joint_offset, self.kins) {
             if off.iter().all(|(v, _)| *v > 0.0) {
@@ -403,6 +351,73 @@ impl Writer<'_> {
             kinematics: self.kins.module(),
             warnings: self.warnings,
         })
+    }
+
+    /// `[JOINT_i] key` of each of the `n` joints (mm), or `None` unless every joint
+    /// has it.
+    fn joint_values(&self, key: &str, n: usize) -> Result<Option<Vec<(f64, IniEntry)>>> {
+        let mut v = Vec::new();
+        for i in 0..n {
+            match self.number(&format!("JOINT_{i}"), key)? {
+                Some((x, e)) => v.push((x * self.units.mm, e)),
+                None => return Ok(None),
+            }
+        }
+        Ok(Some(v))
+    }
+
+    /// Compares the INI's joint HOME `h` with the strut lengths `q` at the home pose
+    /// `home`: a `[[reference]]` into `tail` when they agree, else a warning and a note.
+    fn home_reference(
+        &mut self,
+        h: &[(f64, IniEntry)],
+        q: &[f64],
+        home: &[f64],
+        tail: &mut String,
+    ) {
+        let worst = h
+            .iter()
+            .zip(q)
+            .map(|((a, _), b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        if worst <= 1e-2 {
+            let _ = writeln!(tail, "\n[[reference]]");
+            let _ = writeln!(
+                tail,
+                "source = {}",
+                toml_str(&format!(
+                    "{}: [JOINT_n] HOME, the strut lengths LinuxCNC homes to at the home pose",
+                    short(&self.ini.file)
+                ))
+            );
+            let angles: Vec<f64> = home[3..].iter().map(|a| a.to_degrees()).collect();
+            let pose: Vec<String> = home[..3]
+                .iter()
+                .copied()
+                .chain(angles)
+                .map(fmt_num)
+                .collect();
+            let _ = writeln!(tail, "pose = [{}]", pose.join(", "));
+            let _ = writeln!(tail, "tolerance = 0.01");
+            let acts: Vec<String> = h
+                .iter()
+                .enumerate()
+                .map(|(i, (v, _))| format!("\"{i}\" = {}", fmt_num(*v)))
+                .collect();
+            let _ = writeln!(tail, "actuators = {{ {} }}", acts.join(", "));
+        } else {
+            let ik: Vec<String> = q.iter().map(|x| format!("{x:.4}")).collect();
+            let vals: Vec<String> = h.iter().map(|(v, _)| format!("{v:.4}")).collect();
+            let msg = format!(
+                "the INI's [JOINT_n] HOME ({} mm) are not the strut lengths at the home \
+                 pose ({} mm; up to {worst:.3} mm off): LinuxCNC would home to another \
+                 pose; pkm uses the home pose",
+                vals.join(", "),
+                ik.join(", ")
+            );
+            self.warnings.push(msg.clone());
+            tail.push_str(&format!("\n# Note: {msg}.\n"));
+        }
     }
 }
 

@@ -143,25 +143,6 @@ pub(super) fn derivative(
     dev: &[ChainDeviations],
 ) -> Result<(usize, usize, Matrix4<f64>)> {
     let none = ChainDeviations::default();
-    // Index of link l's geometry factor and of joint j's factor in `factors`.
-    let link_factor = |ch: &Chain, l: usize| -> usize {
-        ch.links[..=l].iter().filter(|x| x.joint.is_some()).count() + l
-    };
-    let joint_factor = |ch: &Chain, j: usize| -> Option<usize> {
-        let mut seen = 0;
-        let mut idx = 0;
-        for link in &ch.links {
-            if link.joint.is_some() {
-                if seen == j {
-                    return Some(idx);
-                }
-                seen += 1;
-                idx += 1;
-            }
-            idx += 1;
-        }
-        None
-    };
     match *p {
         Parameter::Delta { chain, link, axis } => {
             let ch = m.chain(chain)?;
@@ -199,24 +180,51 @@ pub(super) fn derivative(
             let q = if chain == 0 { qt } else { qw };
             let d = dev.get(chain).unwrap_or(&none);
             let qv = q.get(joint).copied().unwrap_or(0.0) + d.dq.get(joint).copied().unwrap_or(0.0);
-            let mut dm = Matrix4::zeros();
-            match j.kind {
-                JointKind::Revolute => {
-                    let (s, c) = qv.sin_cos();
-                    dm[(0, 0)] = -s;
-                    dm[(0, 1)] = -c;
-                    dm[(1, 0)] = c;
-                    dm[(1, 1)] = -s;
-                }
-                JointKind::Prismatic => dm[(2, 3)] = 1.0,
-            }
-            Ok((chain, idx, dm))
+            Ok((chain, idx, joint_derivative(j.kind, qv)))
         }
         Parameter::Installation { .. } => Err(Error::InvalidInput {
             what: "deviation".into(),
             message: "an installation angle is not a factor of a chain".into(),
         }),
     }
+}
+
+/// Index of link `l`'s geometry factor in [`factors`].
+fn link_factor(ch: &Chain, l: usize) -> usize {
+    ch.links[..=l].iter().filter(|x| x.joint.is_some()).count() + l
+}
+
+/// Index of joint `j`'s factor in [`factors`], if the chain has that joint.
+fn joint_factor(ch: &Chain, j: usize) -> Option<usize> {
+    let mut seen = 0;
+    let mut idx = 0;
+    for link in &ch.links {
+        if link.joint.is_some() {
+            if seen == j {
+                return Some(idx);
+            }
+            seen += 1;
+            idx += 1;
+        }
+        idx += 1;
+    }
+    None
+}
+
+/// The derivative of a joint's transform of `kind` at value `q` by its value.
+fn joint_derivative(kind: JointKind, q: f64) -> Matrix4<f64> {
+    let mut dm = Matrix4::zeros();
+    match kind {
+        JointKind::Revolute => {
+            let (s, c) = q.sin_cos();
+            dm[(0, 0)] = -s;
+            dm[(0, 1)] = -c;
+            dm[(1, 0)] = c;
+            dm[(1, 1)] = -s;
+        }
+        JointKind::Prismatic => dm[(2, 3)] = 1.0,
+    }
+    dm
 }
 
 fn check_link(ch: &Chain, l: usize) -> Result<()> {

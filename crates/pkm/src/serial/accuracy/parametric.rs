@@ -88,45 +88,8 @@ fn triple_for(
 /// The completions for deviations given on the parameters `given` (indices of
 /// [`SerialMachine::all_parameters`]), or the reason a given parameter cannot be given.
 pub fn serial_completions(m: &SerialMachine, given: &[usize]) -> Result<Vec<LinkCompletion>> {
-    let params = m.all_parameters();
-    let refuse = |names: Vec<String>, reason: String| Error::InvalidInput {
-        what: "deviation".into(),
-        message: format!("{} cannot be given: {reason}", names.join(", ")),
-    };
-    let mut per_link: std::collections::BTreeMap<(usize, usize), Vec<(usize, usize)>> =
-        Default::default();
-    for &k in given {
-        match params.get(k) {
-            None => {
-                return Err(Error::InvalidInput {
-                    what: "deviation".into(),
-                    message: format!("parameter index {k} beyond the machine's {}", params.len()),
-                })
-            }
-            Some(p @ Deviation::Installation { .. }) if m.workpiece.is_some() => {
-                return Err(refuse(
-                    vec![m.parameter_name(p)],
-                    "the installation angles turn the bed, and with it tool and part alike: \
-                     they cannot change the tool relative to a part on the workpiece chain"
-                        .into(),
-                ))
-            }
-            Some(Deviation::Alpha {
-                chain,
-                link,
-                row,
-                col,
-            }) => {
-                let v = per_link.entry((*chain, *link)).or_default();
-                if !v.contains(&(*row, *col)) {
-                    v.push((*row, *col));
-                }
-            }
-            Some(_) => {}
-        }
-    }
     let mut out = Vec::new();
-    for ((chain, link), pos) in per_link {
+    for ((chain, link), pos) in given_angles(m, given)? {
         let names = || {
             pos.iter()
                 .map(|&(row, col)| {
@@ -163,6 +126,56 @@ pub fn serial_completions(m: &SerialMachine, given: &[usize]) -> Result<Vec<Link
         });
     }
     Ok(out)
+}
+
+/// The refusal of deviations on the parameters `names`, for `reason`.
+fn refuse(names: Vec<String>, reason: String) -> Error {
+    Error::InvalidInput {
+        what: "deviation".into(),
+        message: format!("{} cannot be given: {reason}", names.join(", ")),
+    }
+}
+
+/// Positions of angular deviations by link `(chain, link)`.
+type AnglesByLink = std::collections::BTreeMap<(usize, usize), Vec<(usize, usize)>>;
+
+/// The angular deviations among the parameters `given`, their positions by link
+/// `(chain, link)`; refuses an index beyond the parameters and installation angles
+/// that cannot be given.
+fn given_angles(m: &SerialMachine, given: &[usize]) -> Result<AnglesByLink> {
+    let params = m.all_parameters();
+    let mut per_link = AnglesByLink::default();
+    for &k in given {
+        match params.get(k) {
+            None => {
+                return Err(Error::InvalidInput {
+                    what: "deviation".into(),
+                    message: format!("parameter index {k} beyond the machine's {}", params.len()),
+                })
+            }
+            Some(p @ Deviation::Installation { .. }) if m.workpiece.is_some() => {
+                return Err(refuse(
+                    vec![m.parameter_name(p)],
+                    "the installation angles turn the bed, and with it tool and part alike: \
+                     they cannot change the tool relative to a part on the workpiece chain"
+                        .into(),
+                ))
+            }
+            Some(Deviation::Alpha {
+                chain,
+                link,
+                row,
+                col,
+            }) => {
+                let v = per_link.entry((*chain, *link)).or_default();
+                if !v.contains(&(*row, *col)) {
+                    v.push((*row, *col));
+                }
+            }
+            Some(_) => {}
+        }
+    }
+    Ok(per_link)
 }
 
 /// Which parameters can be toleranced one by one: per link the angular deviations of

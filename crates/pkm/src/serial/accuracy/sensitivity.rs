@@ -93,6 +93,95 @@ fn origin(a: &Affine) -> Vector3<f64> {
     Vector3::new(a[0][3], a[1][3], a[2][3])
 }
 
+/// The plan's item for parameter `p` of machine `m` (its `chains`, at joints `qt`,
+/// `qw` zero).
+fn plan_item(
+    m: &SerialMachine,
+    completions: &[LinkCompletion],
+    chains: &[&Chain],
+    qt: &[f64],
+    qw: &[f64],
+    p: &Parameter,
+) -> Result<Item> {
+    Ok(match *p {
+        Parameter::Installation { axis } => {
+            if m.workpiece.is_some() {
+                Item::Zero
+            } else {
+                Item::Installation {
+                    axis: installation_axis(&Vector3::zeros(), axis.min(2)),
+                }
+            }
+        }
+        Parameter::Dq { chain, joint } => {
+            let (c, factor, _) = super::derivative(m, p, qt, qw, &[])?;
+            let kind = chains[c]
+                .joints()
+                .nth(joint)
+                .map(|j| j.kind)
+                .ok_or_else(|| Error::InvalidInput {
+                    what: "deviation".into(),
+                    message: format!("chain {chain} has no joint {joint}"),
+                })?;
+            Item::Joint {
+                chain: c,
+                factor,
+                kind,
+            }
+        }
+        Parameter::Delta { chain, link, .. } | Parameter::Alpha { chain, link, .. } => {
+            let (c, factor, dm) = super::derivative(m, p, qt, qw, &[])?;
+            let mut d: Matrix3<f64> = dm.fixed_view::<3, 3>(0, 0).into_owned();
+            let t: Vector3<f64> = dm.fixed_view::<3, 1>(0, 3).into_owned();
+            if let Parameter::Alpha { row, col, .. } = *p {
+                if let Some(dc) = completed_derivative(completions, chain, link, (row, col))? {
+                    d = dc;
+                }
+            }
+            let nominal = chains[c].links[link].rotation;
+            let w = crate::rotation::skew_vee(&(d * nominal.transpose()));
+            Item::Link {
+                chain: c,
+                factor,
+                d,
+                t,
+                w,
+            }
+        }
+    })
+}
+
+/// The derivative of the block of link `link` of chain `chain` by its angular
+/// deviation at `position` when a triple completes that link and holds the position
+/// (central differences of the completion), else `None`.
+fn completed_derivative(
+    completions: &[LinkCompletion],
+    chain: usize,
+    link: usize,
+    position: (usize, usize),
+) -> Result<Option<Matrix3<f64>>> {
+    let completed = completions
+        .iter()
+        .find(|x| x.chain == chain && x.link == link && x.triple.positions().contains(&position));
+    let Some(cpl) = completed else {
+        return Ok(None);
+    };
+    let i = cpl
+        .triple
+        .positions()
+        .iter()
+        .position(|&x| x == position)
+        .expect("contained");
+    let h = 1e-6;
+    let mut plus = [0.0; 3];
+    plus[i] = h;
+    let mut minus = [0.0; 3];
+    minus[i] = -h;
+    Ok(Some(
+        (cpl.triple.complete_block(plus)? - cpl.triple.complete_block(minus)?) / (2.0 * h),
+    ))
+}
+
 impl SensitivityPlan {
     /// The plan for `params` of machine `m` whose links `completions` complete their
     /// angular deviations (eq. 3).
@@ -106,73 +195,7 @@ impl SensitivityPlan {
         let qw: &[f64] = zeros.get(1).map(|v| v.as_slice()).unwrap_or(&[]);
         let items = params
             .iter()
-            .map(|p| {
-                Ok(match *p {
-                    Parameter::Installation { axis } => {
-                        if m.workpiece.is_some() {
-                            Item::Zero
-                        } else {
-                            Item::Installation {
-                                axis: installation_axis(&Vector3::zeros(), axis.min(2)),
-                            }
-                        }
-                    }
-                    Parameter::Dq { chain, joint } => {
-                        let (c, factor, _) = super::derivative(m, p, &zeros[0], qw, &[])?;
-                        let kind =
-                            chains[c]
-                                .joints()
-                                .nth(joint)
-                                .map(|j| j.kind)
-                                .ok_or_else(|| Error::InvalidInput {
-                                    what: "deviation".into(),
-                                    message: format!("chain {chain} has no joint {joint}"),
-                                })?;
-                        Item::Joint {
-                            chain: c,
-                            factor,
-                            kind,
-                        }
-                    }
-                    Parameter::Delta { chain, link, .. } | Parameter::Alpha { chain, link, .. } => {
-                        let (c, factor, dm) = super::derivative(m, p, &zeros[0], qw, &[])?;
-                        let mut d: Matrix3<f64> = dm.fixed_view::<3, 3>(0, 0).into_owned();
-                        let t: Vector3<f64> = dm.fixed_view::<3, 1>(0, 3).into_owned();
-                        if let Parameter::Alpha { row, col, .. } = *p {
-                            let completed = completions.iter().find(|x| {
-                                x.chain == chain
-                                    && x.link == link
-                                    && x.triple.positions().contains(&(row, col))
-                            });
-                            if let Some(cpl) = completed {
-                                let i = cpl
-                                    .triple
-                                    .positions()
-                                    .iter()
-                                    .position(|&x| x == (row, col))
-                                    .expect("contained");
-                                let h = 1e-6;
-                                let mut plus = [0.0; 3];
-                                plus[i] = h;
-                                let mut minus = [0.0; 3];
-                                minus[i] = -h;
-                                d = (cpl.triple.complete_block(plus)?
-                                    - cpl.triple.complete_block(minus)?)
-                                    / (2.0 * h);
-                            }
-                        }
-                        let nominal = chains[c].links[link].rotation;
-                        let w = crate::rotation::skew_vee(&(d * nominal.transpose()));
-                        Item::Link {
-                            chain: c,
-                            factor,
-                            d,
-                            t,
-                            w,
-                        }
-                    }
-                })
-            })
+            .map(|p| plan_item(m, completions, &chains, &zeros[0], qw, p))
             .collect::<Result<Vec<_>>>()?;
         Ok(SensitivityPlan {
             chains: chains.iter().map(|c| factors_of(c)).collect(),
@@ -204,6 +227,32 @@ impl SensitivityPlan {
         s: &mut SensitivityScratch,
         out: &mut [(Vector3<f64>, Vector3<f64>)],
     ) -> Result<Vector3<f64>> {
+        self.check_sizes(qt, qw, s, out)?;
+        self.walk(qt, qw, s);
+        let tool = s.frames[0].last().expect("frames");
+        let p = origin(tool);
+        // World to part: the workpiece chain's end, else the world itself.
+        let (rw_t, ow) = match s.frames.get(1) {
+            Some(w) => {
+                let end = w.last().expect("frames");
+                (rotation(end).transpose(), origin(end))
+            }
+            None => (Matrix3::identity(), Vector3::zeros()),
+        };
+        for (o, item) in out.iter_mut().zip(&self.items) {
+            *o = item_sensitivity(item, &s.frames, &p, &rw_t, &ow);
+        }
+        Ok(rw_t * Vector3::new(tool[0][2], tool[1][2], tool[2][2]))
+    }
+
+    /// Checks the sizes of [`SensitivityPlan::evaluate`]'s arguments against the plan.
+    fn check_sizes(
+        &self,
+        qt: &[f64],
+        qw: &[f64],
+        s: &SensitivityScratch,
+        out: &[(Vector3<f64>, Vector3<f64>)],
+    ) -> Result<()> {
         if out.len() != self.items.len()
             || qt.len() != self.dofs[0]
             || qw.len() != self.dofs.get(1).copied().unwrap_or(0)
@@ -221,6 +270,12 @@ impl SensitivityPlan {
                 ),
             });
         }
+        Ok(())
+    }
+
+    /// The frames after every factor of each chain at joints `qt`, `qw` into `s`.
+    #[inline]
+    fn walk(&self, qt: &[f64], qw: &[f64], s: &mut SensitivityScratch) {
         for (c, q) in [qt, qw].iter().enumerate().take(self.chains.len()) {
             let frames = &mut s.frames[c];
             let mut t = AFFINE_IDENTITY;
@@ -242,49 +297,48 @@ impl SensitivityPlan {
                 frames[i + 1] = t;
             }
         }
-        let tool = s.frames[0].last().expect("frames");
-        let p = origin(tool);
-        // World to part: the workpiece chain's end, else the world itself.
-        let (rw_t, ow) = match s.frames.get(1) {
-            Some(w) => {
-                let end = w.last().expect("frames");
-                (rotation(end).transpose(), origin(end))
-            }
-            None => (Matrix3::identity(), Vector3::zeros()),
-        };
-        for (o, item) in out.iter_mut().zip(&self.items) {
-            let sign = |c: usize| if c == 0 { 1.0 } else { -1.0 };
-            *o = match *item {
-                Item::Link {
-                    chain,
-                    factor,
-                    ref d,
-                    ref t,
-                    ref w,
-                } => {
-                    let before = &s.frames[chain][factor];
-                    let after = &s.frames[chain][factor + 1];
-                    let b = rotation(after).transpose() * (p - origin(after));
-                    let rk = rw_t * rotation(before) * sign(chain);
-                    (rk * (d * b + t), rk * w)
-                }
-                Item::Joint {
-                    chain,
-                    factor,
-                    kind,
-                } => {
-                    let f = &s.frames[chain][factor];
-                    let z = Vector3::new(f[0][2], f[1][2], f[2][2]);
-                    let (v, w) = match kind {
-                        JointKind::Revolute => (z.cross(&(p - origin(f))), z),
-                        JointKind::Prismatic => (z, Vector3::zeros()),
-                    };
-                    (rw_t * v * sign(chain), rw_t * w * sign(chain))
-                }
-                Item::Installation { axis } => (axis.cross(&(p - ow)), axis),
-                Item::Zero => (Vector3::zeros(), Vector3::zeros()),
-            };
+    }
+}
+
+/// The sensitivity of one deviation `item` from the chains' `frames`, with the tool
+/// point `p`, the world-to-part rotation `rw_t` and the part origin `ow`.
+#[inline(always)]
+fn item_sensitivity(
+    item: &Item,
+    frames: &[Vec<Affine>],
+    p: &Vector3<f64>,
+    rw_t: &Matrix3<f64>,
+    ow: &Vector3<f64>,
+) -> (Vector3<f64>, Vector3<f64>) {
+    let sign = |c: usize| if c == 0 { 1.0 } else { -1.0 };
+    match *item {
+        Item::Link {
+            chain,
+            factor,
+            ref d,
+            ref t,
+            ref w,
+        } => {
+            let before = &frames[chain][factor];
+            let after = &frames[chain][factor + 1];
+            let b = rotation(after).transpose() * (p - origin(after));
+            let rk = rw_t * rotation(before) * sign(chain);
+            (rk * (d * b + t), rk * w)
         }
-        Ok(rw_t * Vector3::new(tool[0][2], tool[1][2], tool[2][2]))
+        Item::Joint {
+            chain,
+            factor,
+            kind,
+        } => {
+            let f = &frames[chain][factor];
+            let z = Vector3::new(f[0][2], f[1][2], f[2][2]);
+            let (v, w) = match kind {
+                JointKind::Revolute => (z.cross(&(p - origin(f))), z),
+                JointKind::Prismatic => (z, Vector3::zeros()),
+            };
+            (rw_t * v * sign(chain), rw_t * w * sign(chain))
+        }
+        Item::Installation { axis } => (axis.cross(&(p - ow)), axis),
+        Item::Zero => (Vector3::zeros(), Vector3::zeros()),
     }
 }
