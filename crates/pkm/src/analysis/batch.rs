@@ -2,7 +2,7 @@
 //! arrays): columns in, columns out, on all cores (rayon, chunks of
 //! [`BATCH_CHUNK`] rows), fixed-size types per row, and why a row failed kept as a
 //! code into a table of distinct causes (violated limits by name, solver failures by
-//! [`Error::category`]) rather than a message per row.
+//! [`crate::Error::category`]) rather than a message per row.
 
 use serde::Serialize;
 
