@@ -183,6 +183,7 @@ pub fn summary_json(machine: &Machine, s: &MotionSummary, feed: &FeedOptions) ->
         "violations": s.violations,
         "violations_not_listed": s.violations_not_listed,
         "feed_override_max": s.feed_override_max,
+        "rapid_override_max": s.rapid_override_max,
         "singular": s.singular,
         "duration_s": s.duration_s,
         "samples": s.samples,

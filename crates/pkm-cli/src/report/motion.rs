@@ -284,6 +284,11 @@ fn per_axis(h: &mut Html, m: &dyn DynMechanism, out: &MotionRun, last_feed: &str
         )),
         None => h.p("The machine file gives no actuator rate limits, so no feed override is computed."),
     }
+    if let Some(k) = s.rapid_override_max {
+        h.p(&format!(
+            "Largest rapid override within the same limits (the rapids alone: a feed override does not scale them): <b>{k:.3}</b>."
+        ));
+    }
     let (a, b) = plots(m, out, last_feed)?;
     h.raw(&format!("<div class=\"views\">{a}{b}</div>"));
     Ok(())

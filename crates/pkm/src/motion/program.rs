@@ -91,7 +91,7 @@ pub fn to_move<M: Mechanism<P, A>, const P: usize, const A: usize>(
             })?
         }
     };
-    let profile = move_profile(g, &segment, &q, &(end - start), o)?;
+    let profile = move_profile(m, g, &segment, &q, &(end - start), o)?;
     Ok(Move {
         segment,
         profile,
@@ -125,9 +125,11 @@ fn check_axes<M: Mechanism<P, A>, const P: usize, const A: usize>(m: &M, g: &GMo
     Ok(())
 }
 
-/// The time law of move `g` along `segment` (coordinates of quantities `q`, moved by
-/// `delta` from start to end): a dwell, a rapid, inverse time or the feed.
-fn move_profile<const P: usize>(
+/// The time law of move `g` of mechanism `m` along `segment` (coordinates of
+/// quantities `q`, moved by `delta` from start to end): a dwell, a rapid
+/// ([`rapid_duration`]), inverse time or the feed.
+fn move_profile<M: Mechanism<P, A>, const P: usize, const A: usize>(
+    m: &M,
     g: &GMove,
     segment: &Segment<P>,
     q: &[crate::units::Quantity; P],
@@ -137,15 +139,9 @@ fn move_profile<const P: usize>(
     Ok(match g.motion {
         Motion::Dwell { seconds } => Profile::dwell(seconds),
         Motion::Line { rapid: true } => {
-            // A rapid takes as long as its slowest part at the rapid rate: mm/min for
-            // the tip, deg/min for each rotary axis (a turn of C with a small move of
-            // the tip is not done in the tip's time).
-            let turn = (0..P)
-                .filter(|&k| q[k] == crate::units::Quantity::Angle)
-                .map(|k| q[k].to_user(delta[k]).abs())
-                .fold(0.0, f64::max);
-            let v = if turn > segment.length && segment.length > 0.0 {
-                o.rapid * segment.length / turn
+            let t = rapid_duration(m, q, delta, o.rapid);
+            let v = if t > 0.0 && segment.length > 0.0 {
+                segment.length / t
             } else {
                 o.rapid
             };
@@ -167,4 +163,52 @@ fn move_profile<const P: usize>(
             profile(o.profile, segment.length, v, o)?
         }
     })
+}
+
+/// How long a rapid (G0) moving the pose coordinates of `m` by `delta` (of quantities
+/// `q`, internal units) takes as a controller runs it: every coordinate at most at its
+/// own rate, all of them arriving together on the straight line (LinuxCNC's planner
+/// in world mode: the trajectory's linear rate and each axis's `MAX_VELOCITY`). The
+/// rates: the tool tip's distance at `rapid` (mm/s; the machine file's `[motion]
+/// rapid`); a coordinate that is one of the machine's axes (the same name and
+/// quantity as an actuator with a `max_velocity`: the slides and rotary axes of a
+/// 5-axis machine tool) at that axis's rate; any other rotary coordinate at `rapid`
+/// read as deg/s. The move takes as long as its slowest part.
+///
+/// Actuators that are not pose coordinates (a hexapod's struts) do not slow a rapid:
+/// a controller in world mode does not know their limits, and a run reports where a
+/// rapid exceeds them.
+pub fn rapid_duration<M: Mechanism<P, A>, const P: usize, const A: usize>(
+    m: &M,
+    q: &[crate::units::Quantity; P],
+    delta: &nalgebra::SVector<f64, P>,
+    rapid: f64,
+) -> f64 {
+    use crate::units::Quantity;
+    let tip = (0..P.min(3))
+        .filter(|&k| q[k] == Quantity::Length)
+        .map(|k| delta[k] * delta[k])
+        .sum::<f64>()
+        .sqrt();
+    let info = m.info();
+    let mut t = tip / rapid;
+    for (k, c) in info.coordinates().iter().enumerate().take(P) {
+        let change = q[k].to_user(delta[k]).abs();
+        if change == 0.0 {
+            continue;
+        }
+        let own = info
+            .actuators()
+            .iter()
+            .find(|a| a.name == c.name && a.quantity == c.quantity)
+            .and_then(|a| a.max_velocity)
+            .map(|v| c.quantity.to_user(v));
+        let rate = match (own, c.quantity) {
+            (Some(r), _) => r,
+            (None, Quantity::Angle) => rapid,
+            (None, Quantity::Length) => continue,
+        };
+        t = t.max(change / rate);
+    }
+    t
 }

@@ -76,8 +76,11 @@ pub(super) struct Recorder<'m, M, const P: usize, const A: usize> {
     /// Per actuator, the names of its velocity and acceleration limits (`actuator 3
     /// velocity`), named once: a program beyond one clones them per sample.
     rate_names: Vec<[LimitName; 2]>,
-    /// Per actuator, the largest |q'| and |q''| seen.
+    /// Per actuator, the largest |q'| and |q''| seen in the moves being added: the
+    /// feed moves', swapped with `rapid_peaks` while rapids are added.
     peak_rates: [(f64, f64); A],
+    /// Per actuator, the largest |q'| and |q''| seen in rapids (G0).
+    rapid_peaks: [(f64, f64); A],
     pub(super) singular: SingularTracker,
     /// The last sample recorded, which the next continues ([`super::follow`]).
     last: Last<A>,
@@ -128,6 +131,7 @@ impl<'m, M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'m, M, P, 
                 })
                 .collect(),
             peak_rates: [(0.0, 0.0); A],
+            rapid_peaks: [(0.0, 0.0); A],
             serial_idx,
             singular: SingularTracker::new(m.info().actuators(), DEFAULT_SINGULAR_ANGLE)?,
             last: None,
@@ -172,7 +176,7 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
             }
         }
         b.violations.clear();
-        self.add_stats(&b.samples[..taken]);
+        self.add_block_stats(b, taken);
         recorded?;
         if let Some((_, e)) = b.failed.take() {
             return Err(e);
@@ -180,6 +184,28 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
         match b.tail.take() {
             Some(e) => Err(e),
             None => Ok(()),
+        }
+    }
+
+    /// Adds the first `taken` samples of block `b` to the statistics, in order: each
+    /// stretch of samples of feed moves or of rapids with the peak rates of its kind
+    /// (a feed override scales the feed moves, not the rapids).
+    fn add_block_stats(&mut self, b: &Block<M, P, A>, taken: usize) {
+        let rapid = |k: usize| b.moves[b.plan[k].0 as usize].0.rapid;
+        let mut from = 0;
+        while from < taken {
+            let kind = rapid(from);
+            let to = (from + 1..taken)
+                .find(|&k| rapid(k) != kind)
+                .unwrap_or(taken);
+            if kind {
+                std::mem::swap(&mut self.peak_rates, &mut self.rapid_peaks);
+                self.add_stats(&b.samples[from..to]);
+                std::mem::swap(&mut self.peak_rates, &mut self.rapid_peaks);
+            } else {
+                self.add_stats(&b.samples[from..to]);
+            }
+            from = to;
         }
     }
 
@@ -220,7 +246,7 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
             self.buf = rate;
         }
         // The singular direction does not depend on the tool length. Rapids run each
-        // axis at its rapid rate whatever the direction: what a passage costs is the
+        // axis at its own rate whatever the direction: what a passage costs is the
         // feed moves'.
         if !rapid {
             if let Some(d) = self.m.tool_axis().and_then(|t| t.singular_distance(x)) {
@@ -339,27 +365,34 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
             ratios,
             violations: self.runs,
             violations_not_listed: self.dropped,
-            feed_override_max: {
-                // Velocities scale with the override k, accelerations with k^2.
-                // max over samples of |q'| / limit is max |q'| / limit: a correctly
-                // rounded division is monotonic in its numerator.
-                let (mut v_ratio, mut a_ratio) = (0.0f64, 0.0f64);
-                for (&(vp, ap), &(vm, am)) in self.peak_rates.iter().zip(&self.rate_limits) {
-                    if vm < f64::INFINITY {
-                        v_ratio = v_ratio.max(vp / vm);
-                    }
-                    if am < f64::INFINITY {
-                        a_ratio = a_ratio.max(ap / am);
-                    }
-                }
-                let k = (1.0 / v_ratio).min((1.0 / a_ratio).sqrt());
-                k.is_finite().then_some(k)
-            },
+            feed_override_max: override_max(&self.peak_rates, &self.rate_limits),
+            rapid_override_max: override_max(&self.rapid_peaks, &self.rate_limits),
             singular: self.singular.finish(),
             duration_s,
             samples,
         }
     }
+}
+
+/// The largest factor k by which the moves of `peaks` (per actuator, the largest
+/// |q'| and |q''|) can be sped up while every actuator keeps within `limits` (its
+/// velocity and acceleration limits, infinite where none): velocities scale with k,
+/// accelerations with k^2, so k = min(min_i v_max / |q'|, sqrt(min_i a_max / |q''|)).
+/// `None` without limits or without motion.
+fn override_max<const A: usize>(peaks: &[(f64, f64); A], limits: &[(f64, f64); A]) -> Option<f64> {
+    // max over samples of |q'| / limit is max |q'| / limit: a correctly rounded
+    // division is monotonic in its numerator.
+    let (mut v_ratio, mut a_ratio) = (0.0f64, 0.0f64);
+    for (&(vp, ap), &(vm, am)) in peaks.iter().zip(limits) {
+        if vm < f64::INFINITY {
+            v_ratio = v_ratio.max(vp / vm);
+        }
+        if am < f64::INFINITY {
+            a_ratio = a_ratio.max(ap / am);
+        }
+    }
+    let k = (1.0 / v_ratio).min((1.0 / a_ratio).sqrt());
+    k.is_finite().then_some(k)
 }
 
 mod statistics;

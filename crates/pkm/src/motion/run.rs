@@ -91,11 +91,17 @@ pub struct MotionSummary {
     pub violations: Vec<ViolationRun>,
     /// Stretches beyond the first 10 000, not listed.
     pub violations_not_listed: u64,
-    /// Largest factor by which every feed (and so the time scale) can be multiplied
-    /// while the actuators keep within their velocity and acceleration limits
-    /// (velocities scale with it, accelerations with its square); `None` when the
-    /// machine gives no rate limits or nothing moves.
+    /// Largest factor by which every feed (and so the time scale of the feed moves)
+    /// can be multiplied while the actuators keep within their velocity and
+    /// acceleration limits in the feed moves (velocities scale with it,
+    /// accelerations with its square); `None` when the machine gives no rate limits
+    /// or no feed move moves. Rapids are left out: a feed override does not scale
+    /// them (LinuxCNC has a rapid override of its own).
     pub feed_override_max: Option<f64>,
+    /// The same factor for the rapids (G0) alone: above 1, the rapids could run
+    /// faster within the actuators' limits; below 1, they exceed them unless slowed
+    /// by that rapid override. `None` without rate limits or without a rapid.
+    pub rapid_override_max: Option<f64>,
     /// Passages near the mechanism's singular direction with the rotary axes' speeds
     /// in them; `None` for mechanisms without one.
     pub singular: Option<SingularReport>,

@@ -5,7 +5,7 @@
 //! rotary axes speed up. Each passage within the threshold angle is reported with its
 //! G-code lines, its closest approach, and every rotary axis' peak speed in it against
 //! its limit and against its peak everywhere else on the path. Rapids are left out:
-//! they run every axis at its rapid rate whatever the direction (and a rapid through
+//! they run every axis at its own rate whatever the direction (and a rapid through
 //! the singular direction is a repositioning, not a cut); what a passage costs is the
 //! programmed feed moves'.
 

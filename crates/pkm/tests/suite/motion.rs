@@ -595,3 +595,59 @@ fn the_study_circle_fits_and_a_larger_one_does_not() {
         out.summary.duration_s
     );
 }
+
+/// A rapid runs each axis of a 5-axis machine at most at its own rate, all arriving
+/// together, as a controller runs G0: the head's A (limit 50 deg/s here) and the
+/// table's C (180 deg/s) within their limits, the move as long as its slowest axis
+/// (A's 90 deg at 50 deg/s: 1.8 s), not the tip's rapid rate read as deg/s
+/// (166.7 deg/s, past A's limit). And a feed override scales the feed moves, not
+/// the rapids: the largest feed override is the feed move's.
+#[test]
+fn rapids_run_each_axis_at_its_own_rate_and_are_not_feed_overridden() {
+    let path = format!(
+        "{}/../../examples/machines/head-table-5axis.toml",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let text = std::fs::read_to_string(&path)
+        .unwrap()
+        .replace("max_velocity = 90.0", "max_velocity = 50.0");
+    assert!(text.contains("max_velocity = 50.0"));
+    let m = Machine::from_toml_str(&text, "head-table-a50.toml").unwrap();
+    let s = summary_at_100_hz(&m, "G21 G90\nG0 A90 C180\nM2\n");
+    assert!(s.violations.is_empty(), "{:?}", s.violations);
+    // 1.8 s of motion (the samples are taken at 100 Hz, the last at the end).
+    assert!((s.duration_s - 1.8).abs() < 1e-9, "{}", s.duration_s);
+    let peak = |name: &str| {
+        s.actuators
+            .iter()
+            .find(|(n, _)| n == name)
+            .unwrap()
+            .1
+            .peak_velocity
+    };
+    assert!((peak("A") - 50.0).abs() < 1e-9, "{}", peak("A"));
+    assert!((peak("C") - 100.0).abs() < 1e-9, "{}", peak("C"));
+    // Only rapids: no feed override, the rapids' own just 1 (A at its limit).
+    assert_eq!(s.feed_override_max, None);
+    let k = s.rapid_override_max.unwrap();
+    assert!((k - 1.0).abs() < 1e-9, "{k}");
+    // A feed move at 1000 mm/min beside the rapids: its override is its own
+    // (the slides' 300-400 mm/s over 16.7 mm/s of tip feed, far above 1).
+    let s = summary_at_100_hz(&m, "G21 G90\nG0 A90 C180\nG1 X20 F1000\nG0 A0 C0\nM2\n");
+    assert!(s.violations.is_empty(), "{:?}", s.violations);
+    let k = s.feed_override_max.unwrap();
+    assert!(k > 5.0, "{k}");
+    assert!((s.rapid_override_max.unwrap() - 1.0).abs() < 1e-9);
+}
+
+/// On a machine whose pose coordinates are not its axes (a hexapod's struts), a
+/// rapid takes the tip's rapid rate, the rotary coordinates at that rate in deg/s:
+/// the duration is the larger of the tip's distance and the largest turn over it.
+#[test]
+fn rapids_of_a_hexapod_take_the_rapid_rate() {
+    let m = load("hexapod-linuxcnc.toml");
+    let program = "G21 G91\nG0 X100 A10\nM2\n";
+    let s = summary_at_100_hz(&m, program);
+    // 100 mm at 10 000 mm/min: 0.6 s (the A turn of 10 deg would take 0.06 s).
+    assert!((s.duration_s - 0.6).abs() < 1e-9, "{}", s.duration_s);
+}

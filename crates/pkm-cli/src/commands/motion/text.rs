@@ -28,7 +28,13 @@ pub(super) fn print_text(m: &dyn DynMechanism, outcome: &MotionRun, profile: Pro
             "largest feed override within the actuator rate limits: {:.4}",
             k
         ),
+        None if s.rapid_override_max.is_some() => {
+            println!("largest feed override: no feed move")
+        }
         None => println!("largest feed override: no rate limits in the machine file"),
+    }
+    if let Some(k) = s.rapid_override_max {
+        println!("largest rapid override within the actuator rate limits: {k:.4}");
     }
     if let Some(sg) = &s.singular {
         print_singular(sg);
