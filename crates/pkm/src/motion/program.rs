@@ -212,3 +212,51 @@ pub fn rapid_duration<M: Mechanism<P, A>, const P: usize, const A: usize>(
     }
     t
 }
+
+/// A note on move `g` of mechanism `m` turning an orientation angle by half a turn or
+/// more: on a machine whose A, B, C are the tool's orientation (a robot's, a
+/// hexapod's: [`PoseSpace::Spatial`]) an angle and that angle plus a whole turn name
+/// the same orientation, so `A-180` to `A180` is no change of orientation, yet the
+/// move interpolates A, B, C linearly, as LinuxCNC does, and turns the tool through a
+/// whole turn (a robot controller interpolating orientations would take the short
+/// way). The note names the angle, its turn and the nearer angle that names the same
+/// end orientation. `None` for other machines (the rotary axes of a machine tool turn
+/// as far as they are told) and for moves of less than half a turn.
+///
+/// ```
+/// use pkm::motion::gcode::Interpreter;
+/// use pkm::motion::program::wrap_note;
+///
+/// let m = pkm::Machine::from_path(concat!(
+///     env!("CARGO_MANIFEST_DIR"),
+///     "/../../examples/machines/hexapod-linuxcnc.toml"
+/// ))?;
+/// let pkm::machine::Model::Hexapod(h) = &m.model else { unreachable!() };
+/// let mut g = Interpreter::new([0.0, 0.0, 508.0, -std::f64::consts::PI, 0.0, 0.0]);
+/// let mv = g.line("G1 A180 F100", 3)?.unwrap();
+/// let note = wrap_note(h.as_ref(), &mv).unwrap();
+/// assert!(note.starts_with("A turns 360.000 deg"), "{note}");
+/// # Ok::<(), pkm::Error>(())
+/// ```
+pub fn wrap_note<M: Mechanism<P, A>, const P: usize, const A: usize>(
+    m: &M,
+    g: &GMove,
+) -> Option<String> {
+    if m.info().pose_space() != PoseSpace::Spatial || matches!(g.motion, Motion::Dwell { .. }) {
+        return None;
+    }
+    // Half a turn, less a rounding margin (1e-9 deg).
+    let half = std::f64::consts::PI - 1e-9f64.to_radians();
+    let k = (3..6).find(|&k| (g.end[k] - g.start[k]).abs() >= half)?;
+    let (start, end) = (g.start[k].to_degrees(), g.end[k].to_degrees());
+    let nearer = end - 360.0 * ((end - start) / 360.0).round();
+    let letter = ["A", "B", "C"][k - 3];
+    Some(format!(
+        "{letter} turns {turn:.3} deg, from {start:.3} to {end:.3} deg: {letter}{nearer:.3} \
+         names the same orientation {off:.3} deg from the start; pkm moves A, B, C \
+         linearly, as LinuxCNC does, so the tool turns all the way (write the nearer \
+         angle for the short way)",
+        turn = (end - start).abs(),
+        off = (nearer - start).abs(),
+    ))
+}

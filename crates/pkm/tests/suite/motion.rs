@@ -651,3 +651,58 @@ fn rapids_of_a_hexapod_take_the_rapid_rate() {
     // 100 mm at 10 000 mm/min: 0.6 s (the A turn of 10 deg would take 0.06 s).
     assert!((s.duration_s - 0.6).abs() < 1e-9, "{}", s.duration_s);
 }
+
+/// The run of `program` through `m` from its home at 100 Hz, default feeds.
+fn run_at_100_hz(m: &pkm::Machine, program: &str) -> pkm::analysis::motion::MotionRun {
+    pkm::analysis::motion::run_motion(
+        m,
+        pkm::analysis::motion::MotionSource::Gcode {
+            reader: Box::new(std::io::Cursor::new(program.as_bytes().to_vec())),
+            from: None,
+            setup: Default::default(),
+        },
+        &FeedOptions::default(),
+        Sampling::Rate(100.0),
+        &mut pkm::analysis::motion::NoSink,
+    )
+    .unwrap()
+}
+
+/// A robot whose home orientation reads A = -180 deg, given the same orientation as
+/// A180: the move turns A through 360 deg (A, B, C interpolated linearly, as LinuxCNC
+/// does), and the run says so with a note naming the nearer angle. A machine tool's
+/// rotary table told to turn a whole turn turns it, without a note.
+#[test]
+fn a_whole_turn_of_an_orientation_angle_is_noted() {
+    let m = Machine::from_path(format!(
+        "{}/../../tests/fixtures/ur5-dh.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let home = m.mechanism().home();
+    assert!((home[3].to_degrees() + 180.0).abs() < 1e-9, "{home:?}");
+    let run = run_at_100_hz(&m, "G21 G90\nG1 A180 F1000\nM2\n");
+    let notes: Vec<_> = run
+        .notes
+        .iter()
+        .filter(|(_, n)| n.contains("turns"))
+        .collect();
+    assert_eq!(notes.len(), 1, "{:?}", run.notes);
+    let (line, text) = notes[0];
+    assert_eq!(*line, 2);
+    assert!(
+        text.starts_with("A turns 360.000 deg, from -180.000 to 180.000 deg: A-180.000"),
+        "{text}"
+    );
+    // Less than half a turn: no note.
+    let run = run_at_100_hz(&m, "G21 G91\nG1 A170 F1000\nM2\n");
+    assert!(
+        !run.notes.iter().any(|(_, n)| n.contains("turns")),
+        "{:?}",
+        run.notes
+    );
+    // A rotary table's whole turn is a whole turn.
+    let t = load("head-table-5axis.toml");
+    let run = run_at_100_hz(&t, "G21 G90\nG0 C360\nM2\n");
+    assert!(run.notes.is_empty(), "{:?}", run.notes);
+}

@@ -10,7 +10,7 @@ use crate::error::Result;
 use crate::machine::Analysable;
 use crate::mechanism::PoseSpace;
 use crate::motion::gcode::{Interpreter, ToolEvent};
-use crate::motion::program::{to_move, FeedOptions};
+use crate::motion::program::{to_move, wrap_note, FeedOptions};
 use crate::motion::{Move, Step};
 
 /// A program's moves and tool changes, in order, read one line at a time: each move is
@@ -144,7 +144,12 @@ impl<'r, 'b, 's, M: Analysable<P, A>, const P: usize, const A: usize>
         }
         let g = self.interp.line(text, self.lines as u64)?;
         let mv = match &g {
-            Some(g) => Some(to_move(self.m, g, self.feed)?),
+            Some(g) => {
+                if let Some(note) = wrap_note(self.m, g) {
+                    self.interp.note(g.line, note);
+                }
+                Some(to_move(self.m, g, self.feed)?)
+            }
             None => None,
         };
         if let Some(ev) = self.interp.tool_event.take() {
