@@ -333,19 +333,7 @@ fn ratios_are_not_given_for_turning_drives() {
 
 /// The summary of `program` run through `m` from its home at 100 Hz, default feeds.
 fn summary_at_100_hz(m: &pkm::Machine, program: &str) -> pkm::motion::MotionSummary {
-    pkm::analysis::motion::run_motion(
-        m,
-        pkm::analysis::motion::MotionSource::Gcode {
-            reader: Box::new(std::io::Cursor::new(program.as_bytes().to_vec())),
-            from: None,
-            setup: Default::default(),
-        },
-        &pkm::motion::program::FeedOptions::default(),
-        Sampling::Rate(100.0),
-        &mut pkm::analysis::motion::NoSink,
-    )
-    .unwrap()
-    .summary
+    run_at_100_hz(m, program).summary
 }
 
 /// The program is read line by line into one buffer: CRLF and LF endings and a last
