@@ -10,9 +10,11 @@
 //!   rate, `s_max(J_R)` over the angle columns ((mm/s) per (rad/s));
 //! * force transmission: the largest actuator force per unit tool force,
 //!   `s_max((J^-T)_L)` (N per N), and per unit tool moment (N per N mm);
-//! * distance to singularity: the smallest singular value of the driven Jacobian with
-//!   angle columns divided by the characteristic length (dimensionless: actuator mm per
-//!   tool mm; 0 at a singularity), beside the condition number.
+//! * conditioning: the condition number `kappa = s_max / s_min` of the driven Jacobian
+//!   with angle columns divided by the characteristic length (1 isotropic, infinite at
+//!   a singularity of a parallel or a serial machine) and its inverse `1 / kappa` (0 at
+//!   a singularity); beside them the smallest singular value `s_min` (actuator units
+//!   per tool mm), 0 at a parallel machine's singularity only.
 //!
 //! Coordinates the mechanism holds are not in these figures. Not a hot path: dynamic
 //! matrices (the split into length and angle columns varies by machine).
@@ -36,11 +38,20 @@ pub struct Transmission {
     pub force: Option<f64>,
     /// Largest actuator force per unit tool moment (N per N mm).
     pub moment: Option<f64>,
-    /// Smallest singular value of the scaled driven Jacobian (0 at a singularity).
+    /// Smallest singular value of the scaled driven Jacobian `dq/dx` (actuator units
+    /// per tool mm). 0 at a parallel machine's singularity, where `dq/dx` loses rank;
+    /// a serial chain's singularity makes `dq/dx` unbounded instead and leaves this
+    /// figure small but not 0 (a robot's joints turn rad per tool mm: 0.0003 on a
+    /// KR 30 far from any singularity). [`Transmission::condition`] reads the same on
+    /// both kinds.
     pub distance_to_singularity: f64,
     /// Condition number of the mechanism ([`Mechanism::condition`]: the scaled driven
-    /// Jacobian's, unless the machine defines its own).
+    /// Jacobian's, unless the machine defines its own): 1 isotropic, infinite at a
+    /// singularity of either kind.
     pub condition: f64,
+    /// `1 / condition`: 1 isotropic, 0 at a singularity (Gosselin and Angeles'
+    /// local conditioning index).
+    pub inverse_condition: f64,
     /// The characteristic length the angle columns are scaled by (mm).
     pub characteristic_length: f64,
 }
@@ -84,14 +95,16 @@ where
             })
         }
     };
+    // The mechanism's own measure (a machine with a serial table axis leaves it out).
+    let condition = m.condition(x).unwrap_or(f64::INFINITY);
     Ok(Transmission {
         velocity: smax(&cols(&jd, false)),
         angular_velocity: smax(&cols(&jd, true)),
         force,
         moment,
         distance_to_singularity: smin,
-        // The mechanism's own measure (a machine with a serial table axis leaves it out).
-        condition: m.condition(x).unwrap_or(f64::INFINITY),
+        condition,
+        inverse_condition: 1.0 / condition,
         characteristic_length: lc,
     })
 }

@@ -76,8 +76,9 @@ fn transmission_json(machine: &Machine, x: &[f64]) -> Value {
             "moment": t.moment,
             "distance_to_singularity": t.distance_to_singularity,
             "condition": t.condition,
+            "inverse_condition": t.inverse_condition,
             "characteristic_length_mm": t.characteristic_length,
-            "units": "velocity: actuator mm/s per tool mm/s; angular_velocity: mm/s per rad/s; force: actuator N per tool N; moment: N per N mm; distance_to_singularity: smallest singular value of the driven Jacobian with rotations scaled by the characteristic length (0 = singular)",
+            "units": "velocity: actuator mm/s (rad/s for a revolute drive) per tool mm/s; angular_velocity: the same per tool rad/s; force: actuator N (N mm) per tool N; moment: the same per tool N mm; condition: 2-norm condition number of the driven columns of dq/dx, rotations counted as characteristic_length_mm per rad (1 = isotropic, inf = singular), inverse_condition its inverse (0 = singular); distance_to_singularity: smallest singular value of those scaled columns, 0 at a parallel machine's singularity but not at a serial chain's (whose dq/dx grows without bound there): compare machines by condition",
         }),
         Err(e) => json!({ "error": e.to_string() }),
     }
@@ -260,7 +261,7 @@ fn print_transmission(machine: &Machine, pose: &[f64]) {
         }
     };
     let f = |v: Option<f64>, unit: &str| {
-        v.map(|v| format!("{v:.4} {unit}"))
+        v.map(|v| format!("{} {unit}", figure(v, 4)))
             .unwrap_or_else(|| "-".into())
     };
     // Actuator rates in mm/s (linear drives) or rad/s (revolute ones),
@@ -275,18 +276,63 @@ fn print_transmission(machine: &Machine, pose: &[f64]) {
     };
     println!(
         "transmit   velocity {}, angular {}, force {}, moment {}",
-        f(t.velocity, &format!("({rate})/(mm/s)")),
+        f(t.velocity, &per(rate, "mm/s")),
         f(
             t.angular_velocity.map(|v| v.to_radians()),
-            &format!("({rate})/(deg/s)")
+            &per(rate, "deg/s")
         ),
-        f(t.force, &format!("({effort})/N")),
-        f(t.moment, &format!("({effort})/(N mm)"))
+        f(t.force, &per(effort, "N")),
+        f(t.moment, &per(effort, "N mm"))
     );
+    let scale = if m
+        .driven()
+        .iter()
+        .any(|&k| m.coordinates()[k].quantity == pkm::Quantity::Angle)
+    {
+        format!(", 1 rad counted as {:.3} mm", t.characteristic_length)
+    } else {
+        String::new()
+    };
     println!(
-        "singular   distance {:.4} (smallest scaled singular value; 0 = singular), condition {:.3}",
-        t.distance_to_singularity, t.condition
+        "condition  {} (1 = isotropic, inf = singular; its inverse {}, 0 = singular; \
+         driven columns of dq/dx, 2-norm{scale})",
+        figure(t.condition, 3),
+        significant(t.inverse_condition)
     );
+}
+
+/// `{value:.digits}`, in exponent form from 1e6 on (a figure near a singularity).
+fn figure(value: f64, digits: usize) -> String {
+    if value.abs() >= 1e6 && value.is_finite() {
+        format!("{value:.digits$e}")
+    } else {
+        format!("{value:.digits$}")
+    }
+}
+
+/// `value` in [0, 1] to 4 significant digits (`0.6050`, `0.01684`), in exponent form
+/// below 1e-4.
+fn significant(value: f64) -> String {
+    if value == 0.0 || !value.is_finite() {
+        format!("{value}")
+    } else if value < 1e-4 {
+        format!("{value:.3e}")
+    } else {
+        let decimals = (3 - value.log10().floor() as i32).max(0) as usize;
+        format!("{value:.decimals$}")
+    }
+}
+
+/// The unit `num` per `den`, each in parentheses when compound (`(N mm)/N`, `N/N`).
+fn per(num: &str, den: &str) -> String {
+    let wrap = |u: &str| {
+        if u.contains([' ', '/']) {
+            format!("({u})")
+        } else {
+            u.to_string()
+        }
+    };
+    format!("{}/{}", wrap(num), wrap(den))
 }
 
 fn batch(

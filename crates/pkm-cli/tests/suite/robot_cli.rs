@@ -184,3 +184,43 @@ fn text_outputs_show_no_negative_zero() {
         assert!(text.contains("=-1"), "{args:?}:\n{text}");
     }
 }
+
+/// `pkm ik` reads its conditioning as one measure: the condition number and its
+/// inverse (0 = singular), the same on a robot and on a hexapod, where it printed a
+/// robot's smallest singular value of dq/dx (0.0003 rad per tool mm on a KR 30 far
+/// from any singularity) as a "singular distance" beside a condition of 7.5.
+#[test]
+fn ik_reads_its_conditioning_as_one_measure() {
+    for (machine, pose) in [
+        ("examples/machines/kr30-dh.toml", "1200,100,1400,10,80,5"),
+        ("examples/machines/hexapod-linuxcnc.toml", "10,20,520,3,2,1"),
+    ] {
+        let run = |json: bool| {
+            let mut c = pkm();
+            c.args(["ik", &path(machine), &format!("--pose={pose}")]);
+            if json {
+                c.arg("--json");
+            }
+            let o = c.output().unwrap();
+            ok(&o);
+            String::from_utf8(o.stdout).unwrap()
+        };
+        let text = run(false);
+        assert!(!text.contains("distance"), "{text}");
+        let line = text.lines().find(|l| l.starts_with("condition  ")).unwrap();
+        let words: Vec<&str> = line.split_whitespace().collect();
+        let cond: f64 = words[1].parse().unwrap();
+        let k = words.iter().position(|w| *w == "inverse").unwrap();
+        let inv: f64 = words[k + 1].trim_end_matches(',').parse().unwrap();
+        // Both printed rounded: 3 and 4 decimals.
+        assert!(cond > 1.0 && (inv * cond - 1.0).abs() < 1e-3, "{line}");
+        let v: serde_json::Value = serde_json::from_str(&run(true)).unwrap();
+        let t = &v["transmission"];
+        let (c, i) = (
+            t["condition"].as_f64().unwrap(),
+            t["inverse_condition"].as_f64().unwrap(),
+        );
+        assert!((c * i - 1.0).abs() < 1e-12, "{t}");
+        assert!((c - cond).abs() < 1e-3, "{t} vs {line}");
+    }
+}
