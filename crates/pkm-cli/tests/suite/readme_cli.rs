@@ -1,8 +1,10 @@
 //! The README's tour and the docs' examples are real: every `$ pkm ...` command a page
 //! shows runs, in order, in one directory per page (later commands read what earlier
-//! ones wrote), and every output line it prints under a command is a line of that
-//! command's output. A line ending in `...` stands for any line it begins; a run time
-//! (`in 0.055 s`) may differ.
+//! ones wrote), and the lines it prints under a command are that command's output
+//! (standard output, then standard error, or the other way round; empty lines
+//! aside), in order and none left
+//! out: a line `...` stands for any number of lines, a line ending in `...` for one
+//! line it begins, and a run time (`in 0.055 s`) may differ.
 
 use super::common::path;
 
@@ -38,6 +40,55 @@ fn without_time(line: &str) -> String {
     line.to_string()
 }
 
+/// Whether `line` of a command's output is the shown line `s`: the same up to a run
+/// time, or beginning with what precedes a trailing `...`.
+fn line_is(s: &str, line: &str) -> bool {
+    match s.strip_suffix("...") {
+        Some(prefix) => line.starts_with(prefix.trim_end()),
+        None => without_time(s) == line,
+    }
+}
+
+/// Whether the shown lines `shown` are the output `lines`: each stretch between `...`
+/// lines is a stretch of consecutive output lines, in order; the first begins the
+/// output unless `...` precedes it, the last ends it unless `...` follows it.
+fn shows(shown: &[String], lines: &[String]) -> bool {
+    let shown: Vec<&str> = shown
+        .iter()
+        .map(|s| s.as_str())
+        .filter(|s| !s.is_empty())
+        .collect();
+    let parts: Vec<&[&str]> = shown.split(|s| *s == "...").collect();
+    let at = |part: &[&str], k: usize| {
+        k + part.len() <= lines.len() && part.iter().zip(&lines[k..]).all(|(s, l)| line_is(s, l))
+    };
+    let last = parts.len() - 1;
+    let mut cursor = 0;
+    for (i, part) in parts.iter().enumerate() {
+        if part.is_empty() {
+            continue;
+        }
+        if i == last && last > 0 {
+            // The last stretch ends the output (anywhere from the cursor on).
+            return lines.len() >= cursor + part.len() && at(part, lines.len() - part.len());
+        }
+        let found = if i == 0 {
+            at(part, 0).then_some(0)
+        } else {
+            (cursor..=lines.len().saturating_sub(part.len())).find(|&k| at(part, k))
+        };
+        match found {
+            Some(k) => cursor = k + part.len(),
+            None => return false,
+        }
+        if i == last {
+            // One stretch and no `...`: it is the whole output.
+            return cursor == lines.len();
+        }
+    }
+    true
+}
+
 /// The commands of `page` (a path from the repository's root) that do not print what
 /// the page shows, each with the line and the output.
 #[cfg(unix)]
@@ -60,22 +111,25 @@ fn mismatches(page: &str) -> Vec<String> {
             .current_dir(dir.path())
             .output()
             .unwrap();
-        let text = format!(
-            "{}{}",
+        let (stdout, stderr) = (
             String::from_utf8_lossy(&out.stdout),
-            String::from_utf8_lossy(&out.stderr)
+            String::from_utf8_lossy(&out.stderr),
         );
-        let lines: Vec<String> = text.lines().map(|l| without_time(l.trim())).collect();
-        for s in shown.iter().filter(|s| !s.is_empty() && *s != "...") {
-            let found = match s.strip_suffix("...") {
-                Some(prefix) => lines.iter().any(|l| l.starts_with(prefix.trim_end())),
-                None => lines.contains(&without_time(s)),
-            };
-            if !found {
-                wrong.push(format!(
-                    "{page}: pkm {cmd}\n  shown: {s}\n  output:\n{text}"
-                ));
-            }
+        let lines = |text: String| -> Vec<String> {
+            text.lines()
+                .map(|l| without_time(l.trim()))
+                .filter(|l| !l.is_empty())
+                .collect()
+        };
+        // A terminal shows a warning written before the output above it.
+        let text = format!("{stdout}{stderr}");
+        let shown_ok = shows(shown, &lines(text.clone()))
+            || shows(shown, &lines(format!("{stderr}{stdout}")));
+        if !shown.is_empty() && !shown_ok {
+            wrong.push(format!(
+                "{page}: pkm {cmd}\n  shown:\n{}\n  output:\n{text}",
+                shown.join("\n")
+            ));
         }
     }
     wrong
@@ -122,4 +176,28 @@ fn tour_reads_commands_and_their_lines() {
         "x: 68921 points in # s"
     );
     assert_eq!(without_time("peak 0.055 s"), "peak 0.055 s");
+}
+
+/// A shown block is the output with `...` for what it leaves out, nothing dropped
+/// silently.
+#[test]
+fn a_shown_block_leaves_lines_out_only_where_it_says_so() {
+    let out: Vec<String> = ["name (tripod)", "pose X=1", "actuator e 3", "limits ok"]
+        .map(String::from)
+        .to_vec();
+    let v = |s: &[&str]| s.iter().map(|x| x.to_string()).collect::<Vec<_>>();
+    assert!(shows(
+        &v(&["name (tripod)", "pose X=1", "actuator e 3", "limits ok"]),
+        &out
+    ));
+    assert!(shows(&v(&["name (tripod)", "...", "limits ok"]), &out));
+    assert!(shows(&v(&["...", "actuator e 3", "..."]), &out));
+    assert!(shows(&v(&["name (tripod)", "pose X...", "..."]), &out));
+    assert!(shows(&v(&["...", "limits ok"]), &out));
+    // The header dropped, a line dropped in between, the end dropped: refused.
+    assert!(!shows(&v(&["pose X=1", "...", "limits ok"]), &out));
+    assert!(!shows(&v(&["name (tripod)", "actuator e 3", "..."]), &out));
+    assert!(!shows(&v(&["name (tripod)", "pose X=1"]), &out));
+    assert!(!shows(&v(&["...", "actuator e 3"]), &out));
+    assert!(!shows(&v(&["...", "limits ok", "pose X=1"]), &out));
 }
