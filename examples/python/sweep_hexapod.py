@@ -167,4 +167,8 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    main()
+    try:
+        main()
+    except ImportError as e:
+        # Dask, pandas, scipy... come with pkm's `sweep` extra: say so, no traceback.
+        sys.exit(f"error: {e}")

@@ -24,6 +24,15 @@ def example_module():
 EX = example_module()
 
 
+def test_a_missing_sweep_dependency_names_the_extra(monkeypatch):
+    # None in sys.modules makes the import fail as if scipy were not installed.
+    monkeypatch.setitem(__import__("sys").modules, "scipy", None)
+    monkeypatch.setitem(__import__("sys").modules, "scipy.stats", None)
+    monkeypatch.setitem(__import__("sys").modules, "scipy.stats.qmc", None)
+    with pytest.raises(ImportError, match=r"needs scipy for Latin hypercube sampling.*pkm\[sweep\]"):
+        sweep.latin_hypercube({"a": (0, 1)}, 4)
+
+
 def test_spaces():
     g = sweep.grid({"a": [1, 2, 3], "b": [10, 20]})
     assert list(g.columns) == ["a", "b"] and len(g) == 6

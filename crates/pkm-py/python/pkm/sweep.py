@@ -40,11 +40,27 @@ import pkm
 
 Build = Callable[[dict], Union[dict, str, "pkm.Machine"]]
 
+def _extra(module: str, what: str):
+    """``module`` imported, or an ImportError saying it comes with the ``sweep``
+    extra: ``pkm.sweep`` needs Dask, pandas, pyarrow, matplotlib and scipy, which a
+    plain ``pip install pkm`` leaves out."""
+    import importlib
+
+    try:
+        return importlib.import_module(module)
+    except ImportError as e:
+        top = module.split(".")[0]
+        raise ImportError(
+            f"pkm.sweep needs {top} for {what}: install the sweep extra, "
+            f"pip install 'pkm[sweep]' (from a clone: pip install './crates/pkm-py[sweep]')"
+        ) from e
+
+
 # -- parameter spaces -------------------------------------------------------------
 
 
 def _frame(columns: Sequence[str], values: np.ndarray):
-    import pandas as pd
+    pd = _extra("pandas", "its tables")
 
     return pd.DataFrame(values, columns=list(columns))
 
@@ -72,7 +88,7 @@ def _bounds(parameters: dict[str, tuple[float, float]]):
 def latin_hypercube(parameters: dict[str, tuple[float, float]], n: int, seed: int = 1):
     """``n`` candidates by Latin hypercube sampling of ``{name: (low, high)}``
     (scipy.stats.qmc, reproducible by ``seed``)."""
-    from scipy.stats import qmc
+    qmc = _extra("scipy.stats.qmc", "Latin hypercube sampling")
 
     names, lo, hi = _bounds(parameters)
     u = qmc.LatinHypercube(d=len(names), seed=seed).random(n)
@@ -82,7 +98,7 @@ def latin_hypercube(parameters: dict[str, tuple[float, float]], n: int, seed: in
 def sobol(parameters: dict[str, tuple[float, float]], n: int, seed: int = 1):
     """``n`` candidates of a scrambled Sobol sequence over ``{name: (low, high)}``
     (scipy.stats.qmc; ``n`` a power of two keeps its balance properties)."""
-    from scipy.stats import qmc
+    qmc = _extra("scipy.stats.qmc", "Sobol sequences")
 
     names, lo, hi = _bounds(parameters)
     u = qmc.Sobol(d=len(names), scramble=True, seed=seed).random(n)
@@ -271,7 +287,7 @@ def run(build: Build, space, objectives: Objectives, client=None,
     finish. Returns ``space`` with the objective columns, ``error`` and ``seconds``
     (evaluation time per candidate), in the rows' order.
     """
-    import pandas as pd
+    pd = _extra("pandas", "its tables")
 
     rows = space.to_dict("records")
     n = len(rows)
@@ -350,7 +366,7 @@ def plot_pareto(table, x: str, y: str, front: np.ndarray, path: Union[str, os.Pa
     """Scatter of every candidate (``x`` against ``y``; coloured by ``color`` when
     given), the Pareto front highlighted and joined; written to ``path`` (SVG, PNG,
     PDF by its suffix) whole."""
-    import matplotlib
+    matplotlib = _extra("matplotlib", "its plots")
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
