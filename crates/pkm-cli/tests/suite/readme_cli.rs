@@ -123,8 +123,8 @@ fn mismatches(page: &str) -> Vec<String> {
         };
         // A terminal shows a warning written before the output above it.
         let text = format!("{stdout}{stderr}");
-        let shown_ok = shows(shown, &lines(text.clone()))
-            || shows(shown, &lines(format!("{stderr}{stdout}")));
+        let shown_ok =
+            shows(shown, &lines(text.clone())) || shows(shown, &lines(format!("{stderr}{stdout}")));
         if !shown.is_empty() && !shown_ok {
             wrong.push(format!(
                 "{page}: pkm {cmd}\n  shown:\n{}\n  output:\n{text}",

@@ -255,6 +255,34 @@ fn chain_links(root: &str, joints: &[&urdf_rs::Joint], file: &str) -> Result<Vec
     Ok(links)
 }
 
+/// An angle limit `v` (rad) as the file states it: a URDF writes radians rounded to a
+/// few decimals (`6.2832` for a joint that turns a whole turn either way), which
+/// printed in degrees reads 360.001. When a whole, tenth, hundredth or thousandth of
+/// a degree lies within half a unit of the last decimal written, and says the angle
+/// in fewer significant digits than the radians do, that degree value is the limit
+/// (6.2832: 360 deg; 1.5708: 90 deg); otherwise `v` as written (1.5 stays 1.5 rad,
+/// not 86 deg). The change is below the precision the file states.
+pub(crate) fn stated_angle(v: f64) -> f64 {
+    if !v.is_finite() || v == 0.0 {
+        return v;
+    }
+    // The shortest decimal that reads back as `v` (Rust prints no exponent).
+    let text = format!("{}", v.abs());
+    let (int, frac) = text.split_once('.').unwrap_or((&text, ""));
+    let significant = |s: String| s.trim_start_matches('0').trim_end_matches('0').len();
+    let written = significant(format!("{int}{frac}"));
+    let half = (0.5 * 10f64.powi(-(frac.len() as i32))).to_degrees();
+    let deg = v.to_degrees();
+    for per_degree in [1.0, 10.0, 100.0, 1000.0] {
+        let snapped = (deg * per_degree).round() / per_degree;
+        let digits = significant(format!("{}", (snapped * per_degree).round().abs()));
+        if (snapped - deg).abs() <= half && digits < written {
+            return snapped.to_radians();
+        }
+    }
+    v
+}
+
 /// The chain joint of movable URDF joint `j`: its kind and range (mm or rad; a
 /// continuous joint turns two turns either way).
 fn chain_joint(j: &urdf_rs::Joint, file: &str) -> Result<Joint, Error> {
@@ -276,8 +304,8 @@ fn chain_joint(j: &urdf_rs::Joint, file: &str) -> Result<Joint, Error> {
         _ => (
             JointKind::Revolute,
             Range {
-                min: j.limit.lower,
-                max: j.limit.upper,
+                min: stated_angle(j.limit.lower),
+                max: stated_angle(j.limit.upper),
             },
         ),
     };
@@ -297,4 +325,42 @@ fn chain_joint(j: &urdf_rs::Joint, file: &str) -> Result<Joint, Error> {
         max_velocity: None,
         max_acceleration: None,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::stated_angle;
+
+    /// A limit written as radians rounded to a few decimals is the degree value it
+    /// stands for; one that is round in radians stays as written.
+    // The literals are the rounded radians a URDF writes, not approximations of pi.
+    #[allow(clippy::approx_constant)]
+    #[test]
+    fn angle_limits_read_as_the_file_states_them() {
+        let deg = |v: f64| stated_angle(v).to_degrees();
+        for (written, meant) in [
+            (6.2832, 360.0),
+            (-6.2832, -360.0),
+            (3.1416, 180.0),
+            (1.5708, 90.0),
+            (0.7854, 45.0),
+            (2.0944, 120.0),
+            (6.283185307179586, 360.0),
+            (-2.967, -170.0),
+        ] {
+            assert!(
+                (deg(written) - meant).abs() < 1e-12,
+                "{written}: {}",
+                deg(written)
+            );
+            // Within half a unit of the last decimal written.
+            assert!(
+                (stated_angle(written) - written).abs() <= 0.5e-3,
+                "{written}"
+            );
+        }
+        for round in [1.5, 2.0, 0.5, -1.0, 0.0, 1.2345678, 3.0] {
+            assert_eq!(stated_angle(round), round, "{round}");
+        }
+    }
 }

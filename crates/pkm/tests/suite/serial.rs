@@ -592,7 +592,10 @@ fn urdf_import_equals_the_hand_built_chain() {
     // Limits converted, names kept; the tool Jacobian equals differences there too.
     let j = sm.tool.joints().nth(2).unwrap();
     assert_eq!(j.name, "elbow");
-    assert!((j.range.max - 31_416.0 / 10_000.0).abs() < 1e-12); // the file says 3.1416
+    // The file says 3.1416 (rad): 180 deg rounded to its four decimals, read as 180.
+    assert!((j.range.max.to_degrees() - 180.0).abs() < 1e-12);
+    let written: f64 = "3.1416".parse().unwrap();
+    assert!((j.range.max - written).abs() < 0.5e-4);
     let q = [0.3, -0.8, 1.2, -0.4, 0.9, 0.2];
     let jac = sm.tool_jacobian(&q, &[]).unwrap();
     let h = 1e-7;
