@@ -13,5 +13,6 @@ mod pipes_cli;
 mod readme_cli;
 mod report_cli;
 mod robot_cli;
+mod scripts;
 mod seed002_cli;
 mod workspace_cli;
