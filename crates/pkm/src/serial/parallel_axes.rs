@@ -30,8 +30,10 @@
 //!    R_0^T` turns about `w_6`.
 //!
 //! Up to eight solutions (shoulder, elbow, wrist flip). Where a step has infinitely
-//! many (the point `c` on axis 1; axis 6 parallel to axes 2 to 4, `q_5 = 0` on a UR)
-//! the joint keeps its start value, as Newton would. Where one has none (beyond a
+//! many (the point `c` on axis 1) the joint keeps its start value, as Newton would;
+//! with axis 6 parallel to axes 2 to 4 (`q_5 = 0` on a UR) the orientation leaves the
+//! parallel axes' turn free and the position fixes it within a band, the start's turn
+//! kept when it lies in it ([`ParallelAxes::singular_turn`]). Where one has none (beyond a
 //! tolerance of 1e-10 relative) the pose is out of reach, proven, and the reason names
 //! the distances involved. The solutions are polished by one Newton step, as the
 //! spherical wrist's are ([`super::arm::SerialArm`]).
@@ -182,7 +184,7 @@ impl ParallelAxes {
     /// Steps 2 to 4 after shoulder `i` at `q1` (partial distance `d1`): the wrist's
     /// solutions, the parallel axes' turn and the elbow of each.
     fn after_shoulder(&self, s: &mut Solving, i: usize, q1: f64, d1: f64) {
-        let (w, p, n) = (&self.w, &self.p, self.w[1]);
+        let (w, n) = (&self.w, self.w[1]);
         let (w5, w6) = (&w[4], &w[5]);
         let (a5, b5, c56) = s.wrist;
         let r1 = rot(&w[0], q1);
@@ -192,6 +194,8 @@ impl ParallelAxes {
             s.wrist_miss = true;
             return;
         };
+        let v_n = normal(&v, &n);
+        let (q5s, singular) = self.near_tangent(q5s, &v_n);
         for k in s.search.order(4, &q5s) {
             let q5 = q5s[k];
             let d15 = d1 + s.search.term(4, q5);
@@ -199,19 +203,23 @@ impl ParallelAxes {
                 continue;
             }
             let r5 = rot(w5, q5);
-            // 3. The parallel axes' turn.
-            let (u_n, v_n) = (normal(&(r5 * w6), &n), normal(&v, &n));
-            let theta = if u_n.norm() <= 1e-9 || v_n.norm() <= 1e-9 {
-                s.theta_start
+            // 3. The parallel axes' turn: from the tool axis, unless axis 6 is (nearly)
+            // along them, where the orientation fixes only theta + q_6 and the position
+            // fixes theta.
+            let mut theta = if singular {
+                self.singular_turn(s, &r1)
             } else {
-                angle_about(&n, &u_n, &v_n)
+                angle_about(&n, &normal(&(r5 * w6), &n), &v_n)
             };
-            let r_theta = rot(&n, theta);
-            // 4. Elbow: axis 4's point, seen from before the shoulder's turn.
-            let p4 = s.c_star - r1 * r_theta * (self.c - p[3]);
-            let d = normal(&(p[0] + r1.transpose() * (p4 - p[0]) - p[1]), &n);
-            let q3s = match self.elbow.bend(&n, &d) {
-                Ok(q3s) => q3s,
+            let mut reached = self.reach(s, &r1, theta);
+            if reached.is_err() && !singular && v_n.norm() <= NEAR_TANGENT {
+                // So near the singularity the tool axis' turn may be rounding's (a
+                // DH chain's sines of 90 deg): the position's.
+                theta = self.singular_turn(s, &r1);
+                reached = self.reach(s, &r1, theta);
+            }
+            let (d, q3s) = match reached {
+                Ok(found) => found,
                 Err((miss, r)) => {
                     if s.elbow_miss.is_none_or(|(m, _)| miss < m) {
                         s.elbow_miss = Some((miss, r));
@@ -219,6 +227,7 @@ impl ParallelAxes {
                     continue;
                 }
             };
+            let r_theta = rot(&n, theta);
             let branch = WristBranch {
                 slot: 4 * i + k,
                 q1,
@@ -229,6 +238,95 @@ impl ParallelAxes {
             };
             self.elbow_branches(s, &branch, &d, &q3s);
         }
+    }
+
+    /// Step 4 for the parallel axes' turn `theta` after shoulder turn `r1`: axis 4's
+    /// point seen from axis 2 before the shoulder's turn (`d`, normal to `n`) and the
+    /// elbow's two angles, or the elbow's miss ([`Elbow::bend`]).
+    fn reach(
+        &self,
+        s: &Solving,
+        r1: &Matrix3<f64>,
+        theta: f64,
+    ) -> Result<(Vector3<f64>, [f64; 2]), (f64, f64)> {
+        let (p, n) = (&self.p, self.w[1]);
+        let p4 = s.c_star - r1 * rot(&n, theta) * (self.c - p[3]);
+        let d = normal(&(p[0] + r1.transpose() * (p4 - p[0]) - p[1]), &n);
+        self.elbow.bend(&n, &d).map(|q3s| (d, q3s))
+    }
+
+    /// The wrist's two solutions `q5s` (`phi +- delta` of the subproblem `n .
+    /// Rot(w_5, q_5) w_6 = n . v`) where axis 6 is within [`NEAR_TANGENT`] of the
+    /// parallel axes (`delta` near 0 or pi), and whether the wrist is singular there.
+    /// Near that tangent the subproblem's `delta = acos(ratio)` is rounding (a ratio within 1e-16 of 1 gives
+    /// 1.5e-8 rad), while `v_n`, axis 6's component normal to `n` at the target, still
+    /// holds it: `|normal(Rot(w_5, phi +- delta) w_6, n)| = sin(delta) |t|` with
+    /// `t = normal(w_5 x Rot(w_5, phi) w_6, n)` (exactly where `w_5` is normal to `n`,
+    /// as on a UR; to first order otherwise, which the polishing Newton step takes
+    /// up). So `delta = asin(|v_n| / |t|)`; below [`WRIST_NOISE`] the target is on the
+    /// singularity itself and the turn comes from the position.
+    fn near_tangent(&self, q5s: [f64; 2], v_n: &Vector3<f64>) -> ([f64; 2], bool) {
+        let (n, w5, w6) = (self.w[1], &self.w[4], &self.w[5]);
+        if normal(&(rot(w5, q5s[0]) * w6), &n).norm() > NEAR_TANGENT {
+            return (q5s, false);
+        }
+        // The tangent: `phi` (axis 6 along n) or `phi + pi` (against it), where the
+        // two solutions `phi +- delta` meet at `delta` near 0 or near pi.
+        let (phi, delta) = (0.5 * (q5s[0] + q5s[1]), 0.5 * (q5s[0] - q5s[1]));
+        let phi = if delta > std::f64::consts::FRAC_PI_2 {
+            phi + std::f64::consts::PI
+        } else {
+            phi
+        };
+        let along = rot(w5, phi) * w6;
+        let t = normal(&w5.cross(&along), &n).norm();
+        if v_n.norm() <= WRIST_NOISE || t <= 0.5 {
+            return ([phi, phi], true);
+        }
+        let delta = (v_n.norm() / t).min(1.0).asin();
+        ([phi + delta, phi - delta], false)
+    }
+
+    /// The parallel axes' turn `theta` at the wrist singularity (axis 6 along axes 2
+    /// to 4: `q_5 = 0` or `pi` on a UR), after shoulder turn `r1`. There the tool's
+    /// orientation fixes only `theta` and `q_6` together, and the solutions form a
+    /// family: axis 4's point `p_4*` seen from axis 2 is `d(theta) = g - Rot(n,
+    /// theta) h` (normal to `n`; `g` the wrist centre `c*`, `h = c - p_4`), with
+    /// `|d|^2 = |g|^2 + |h|^2 - 2 |g| |h| cos(theta - phi)`, `phi` the angle about `n`
+    /// from `h` to `g`. The elbow reaches `|d|` within `[| |e| - |f| |, |e| + |f|]`: a
+    /// band of `theta`. The turn is the start's when it lies in the band, else the
+    /// band's nearest point a millionth of its width inside (the elbow not at its
+    /// stretched or folded edge); the start's when no `theta` reaches (the elbow then
+    /// reports the miss).
+    fn singular_turn(&self, s: &Solving, r1: &Matrix3<f64>) -> f64 {
+        let (p, n) = (&self.p, self.w[1]);
+        let g = normal(&(p[0] + r1.transpose() * (s.c_star - p[0]) - p[1]), &n);
+        let h = normal(&(self.c - p[3]), &n);
+        let (gn, hn) = (g.norm(), h.norm());
+        if gn * hn <= s.tol * s.tol {
+            // |d| does not depend on theta.
+            return s.theta_start;
+        }
+        let phi = angle_about(&n, &h, &g);
+        let (e, f) = (self.elbow.e.norm(), self.elbow.f.norm());
+        let (r_min, r_max) = ((e - f).abs(), e + f);
+        let cos_at = |r: f64| (gn * gn + hn * hn - r * r) / (2.0 * gn * hn);
+        // |d| <= r_max where cos(theta - phi) >= cos_at(r_max); |d| >= r_min where
+        // cos(theta - phi) <= cos_at(r_min).
+        let (lo, hi) = (cos_at(r_max).max(-1.0), cos_at(r_min).min(1.0));
+        // A band of one point (the arm stretched out to the target) may come out a
+        // rounding's width empty.
+        if lo > hi + 1e-12 {
+            return s.theta_start;
+        }
+        let lo = lo.min(hi);
+        // |theta - phi| within [acos(hi), acos(lo)].
+        let (a, b) = (hi.acos(), lo.acos());
+        let margin = 1e-6 * (b - a);
+        let delta = (s.theta_start - phi + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU)
+            - std::f64::consts::PI;
+        let inside = delta.abs().clamp(a + margin, b - margin);
+        s.theta_start + (inside * if delta < 0.0 { -1.0 } else { 1.0 } - delta)
     }
 
     /// The elbow's solutions `q3s` (planar distance `d`) of a wrist branch, then `q_2`,
@@ -257,6 +355,17 @@ impl ParallelAxes {
         }
     }
 }
+
+/// The sine of the angle between axis 6 and the parallel axes below which the wrist
+/// subproblem is near its tangent and its solutions are taken from axis 6's normal
+/// component instead ([`ParallelAxes::near_tangent`]): there `acos` near 1 loses
+/// half the digits (1e-8 rad from rounding), the normal component none.
+const NEAR_TANGENT: f64 = 1e-6;
+
+/// Axis 6's component normal to the parallel axes at the target below which the
+/// target is on the wrist singularity itself (rounding of a unit vector: a few
+/// 1e-16): the turn then comes from the position ([`ParallelAxes::singular_turn`]).
+const WRIST_NOISE: f64 = 1e-14;
 
 /// One solve's state: the target seen by the closed form, the branch-and-bound, the
 /// solutions found by slot and why branches failed.
