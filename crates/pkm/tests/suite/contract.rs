@@ -707,3 +707,70 @@ fn abilities_fall_back_to_the_core_on_every_example() {
         machine.visit(Check(path.display().to_string()));
     }
 }
+
+/// A configuration exactly on a limit is within it both ways: forward kinematics of
+/// the home actuators with one of them at its bound, and inverse kinematics of the
+/// pose found, name the same violated limits (the actuator at its bound not among
+/// them), on every example machine. Before one tolerance rule, `fk` said "limits all
+/// satisfied" and `ik` of its pose "strut 0 length 1000.000 mm is above its maximum
+/// 1000.000 mm by 0.000 mm".
+#[test]
+fn a_configuration_on_a_limit_is_within_it_both_ways() {
+    use pkm::analysis::kinematics::{forward, inverse};
+    let names = |v: &[pkm::limits::Violation]| {
+        let mut n: Vec<String> = v.iter().map(|x| x.limit.to_string()).collect();
+        n.sort();
+        n
+    };
+    let mut compared = 0;
+    for path in examples() {
+        let machine = Machine::from_path(&path).unwrap();
+        let m = machine.mechanism();
+        let home = m.home();
+        let Ok(at_home) = inverse(&machine, &home) else {
+            continue;
+        };
+        for (i, a) in m.actuators().iter().enumerate() {
+            for bound in [a.range.min, a.range.max] {
+                if !bound.is_finite() {
+                    continue;
+                }
+                let mut q = at_home.actuators.clone();
+                q[i] = bound;
+                let Ok(f) = forward(&machine, &q, &home) else {
+                    continue;
+                };
+                let Ok(back) = inverse(&machine, &f.pose) else {
+                    continue;
+                };
+                // Another posture of the same pose has limits of its own.
+                let same = back
+                    .actuators
+                    .iter()
+                    .zip(&q)
+                    .all(|(b, q)| (b - q).abs() < 1e-6);
+                if !same {
+                    continue;
+                }
+                let name = &a.name;
+                assert!(
+                    !f.violations
+                        .iter()
+                        .any(|v| v.limit.contains(&format!(" {name} "))),
+                    "{path:?}: {name} at {bound}: {:?}",
+                    f.violations
+                );
+                assert_eq!(
+                    names(&f.violations),
+                    names(&back.violations),
+                    "{path:?}: {name} at {bound}"
+                );
+                compared += 1;
+            }
+        }
+    }
+    assert!(
+        compared >= 40,
+        "{compared} configurations on a limit compared"
+    );
+}
