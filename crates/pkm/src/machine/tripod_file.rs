@@ -108,9 +108,10 @@ fn check_triangle(
         .norm()
         .max((pts[2] - pts[0]).norm())
         .max((pts[2] - pts[1]).norm());
-    // Three joints within a micrometre of each other coincide (the relative test alone
-    // would pass them: its bound underflows to zero).
-    if !(scale > 1e-3 && area2 >= 1e-9 * scale * scale) {
+    // Relative to the triangle's size, as a ratio (`1e-9 * scale^2` underflows to 0
+    // for joints 1e-200 mm apart, which coinciding joints would pass): a tripod of
+    // micrometres is a tripod.
+    if !(scale > 0.0 && area2 / scale / scale >= 1e-9) {
         return Err(src.error(
             path,
             if what == "platform" {

@@ -70,7 +70,7 @@ impl TranslationalTripod {
         let ey_raw = d31 - ex * i;
         let jn = ey_raw.norm();
         let scale = d.max(d31.norm());
-        if !(d > 1e-9 * scale.max(1.0)) || !(jn > 1e-9 * scale.max(1.0)) {
+        if !(d > 1e-9 * scale) || !(jn > 1e-9 * scale) {
             return Err(Error::Singular {
                 what: "tripod joints are collinear: the strut lengths do not fix the platform"
                     .into(),
@@ -94,7 +94,7 @@ impl TranslationalTripod {
             });
         }
         let z = z2.sqrt();
-        if z < 1e-9 * scale.max(1.0) {
+        if z < 1e-9 * scale {
             return Err(Error::Singular {
                 what: "the struts lie in one plane with the platform joints (the two assembly \
                        modes meet)"

@@ -1083,49 +1083,25 @@ fn strut_motion_across_lanes_is_the_three_vector_form_bit_for_bit() {
 /// The LinuxCNC hexapod scaled by `k` (joints, strokes, home, strut diameter; its
 /// published reference left out).
 fn scaled_linuxcnc(k: f64) -> pkm::Machine {
-    let text = std::fs::read_to_string(format!(
-        "{}/../../examples/machines/hexapod-linuxcnc.toml",
-        env!("CARGO_MANIFEST_DIR")
-    ))
-    .unwrap();
-    let text = text.split("[[reference]]").next().unwrap();
-    let scale_numbers = |line: &str| {
-        let (body, comment) = line.split_once('#').unwrap_or((line, ""));
-        let mut out = String::new();
-        let mut number = String::new();
-        for ch in body.chars().chain(std::iter::once(' ')) {
-            if ch.is_ascii_digit() || ch == '.' || (ch == '-' && number.is_empty()) {
-                number.push(ch);
-            } else {
-                if let Ok(v) = number.parse::<f64>() {
-                    out.push_str(&format!("{:?}", v * k));
-                } else {
-                    out.push_str(&number);
-                }
-                number.clear();
-                out.push(ch);
-            }
-        }
-        format!(
-            "{}{}",
-            out.trim_end(),
-            if comment.is_empty() { "" } else { " #" }
-        ) + comment
-    };
-    let scaled: Vec<String> = text
-        .lines()
-        .map(|l| {
-            let t = l.trim_start();
-            let lengths = ["B", "P", "length", "position", "strut_diameter", "tip"];
-            if lengths.iter().any(|p| t.starts_with(p)) && !t.starts_with("platform") {
-                let (key, value) = l.split_once('=').unwrap();
-                format!("{key}={}", scale_numbers(value))
-            } else {
-                l.to_string()
-            }
-        })
-        .collect();
-    pkm::Machine::from_toml_str(&scaled.join("\n"), "hexapod-linuxcnc-scaled.toml").unwrap()
+    crate::common::scaled_example(
+        "hexapod-linuxcnc.toml",
+        k,
+        &[
+            "B1",
+            "B2",
+            "B3",
+            "P1",
+            "P2",
+            "P3",
+            "P4",
+            "P5",
+            "P6",
+            "length",
+            "position",
+            "strut_diameter",
+            "tip",
+        ],
+    )
 }
 
 /// Forward kinematics converges on a hexapod of any size: the LinuxCNC hexapod scaled

@@ -427,3 +427,31 @@ fn round_trip(a: &SerialArm, q: &Vector6<f64>, file: &str) -> Result<(), String>
     );
     Ok(())
 }
+
+/// A robot's condition number does not depend on its size: the KR 30 scaled by 1e-4
+/// (a 0.2 mm arm) has the full-size one's at every pose, where a characteristic
+/// length clamped to 1 mm gave 39.3 instead of 8.05.
+#[test]
+fn a_robots_condition_does_not_depend_on_its_size() {
+    use pkm::analysis::kinematics::inverse;
+    let k = 1e-4;
+    let full = crate::common::example("kr30-dh.toml");
+    let small = crate::common::scaled_example("kr30-dh.toml", k, &["a", "d", "translation"]);
+    for q in [
+        [0.0, 0.0, 0.0, 0.0, 90.0, 0.0],
+        [10.0, 20.0, -30.0, 40.0, 50.0, 60.0],
+    ] {
+        let q: Vec<f64> = q.iter().map(|v: &f64| v.to_radians()).collect();
+        let cond = |m: &pkm::Machine| {
+            let f = pkm::analysis::kinematics::forward(m, &q, &m.mechanism().home()).unwrap();
+            let s = inverse(m, &f.pose).unwrap();
+            (f.condition.unwrap(), s.actuators)
+        };
+        let ((c, qa), (cs, qb)) = (cond(&full), cond(&small));
+        assert!(
+            qa.iter().zip(&qb).all(|(a, b)| (a - b).abs() < 1e-9),
+            "{qa:?} vs {qb:?}"
+        );
+        assert!((c - cs).abs() < 1e-9 * c, "{c} vs {cs}");
+    }
+}

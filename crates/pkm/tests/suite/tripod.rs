@@ -270,3 +270,33 @@ fn strut_length_limits_are_named_in_strut_order() {
         crate::common::check_position_names(&centre_leg(), by, name);
     }
 }
+
+/// Seed 000's tripod scaled down to struts of micrometres (by 1e-5: 1.5 to 3 um) is a
+/// tripod, refused as collinear before (an absolute micrometre in the check), and
+/// solves as the full-size one does, scaled.
+#[test]
+fn a_micrometre_tripod_is_a_tripod() {
+    use pkm::analysis::kinematics::{forward, inverse};
+    let keys = ["F", "G", "H", "C", "D", "E", "length", "tip", "position"];
+    let full = crate::common::example("tripod-seed000.toml");
+    let k = 1e-5;
+    let small = crate::common::scaled_example("tripod-seed000.toml", k, &keys);
+    let x = [-20.0, 45.54, -286.25, 0.0, 0.0, 0.0];
+    let xs: Vec<f64> = x
+        .iter()
+        .enumerate()
+        .map(|(i, v)| if i < 3 { v * k } else { *v })
+        .collect();
+    let (a, b) = (inverse(&full, &x).unwrap(), inverse(&small, &xs).unwrap());
+    for (l, ls) in a.actuators.iter().zip(&b.actuators) {
+        assert!((l * k - ls).abs() < 1e-12 * l * k, "{l} {ls}");
+    }
+    let f = forward(&small, &b.actuators, &small.mechanism().home()).unwrap();
+    for i in 0..3 {
+        assert!(
+            (f.pose[i] - xs[i]).abs() < 1e-12 * 300.0 * k,
+            "{:?} vs {xs:?}",
+            f.pose
+        );
+    }
+}

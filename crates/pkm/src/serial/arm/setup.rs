@@ -61,9 +61,14 @@ impl SerialArm {
     fn with_inverse(mut self, home: &Vector6<f64>) -> Self {
         // The reach at home weighs a radian against millimetres.
         let (t, _) = self.pose_and_jacobian(home);
-        let lc = Vector3::new(t[(0, 3)], t[(1, 3)], t[(2, 3)])
-            .norm()
-            .max(1.0);
+        // Relative to the arm, not clamped to a millimetre (a 0.2 mm arm's radian
+        // weighs 0.2 mm); 1 mm only for a tool on the first axis' origin.
+        let reach = Vector3::new(t[(0, 3)], t[(1, 3)], t[(2, 3)]).norm();
+        let lc = if reach > 0.0 && reach.is_finite() {
+            reach
+        } else {
+            1.0
+        };
         self.wrist = closed_form::ClosedForm::detect(&self.tool, &self.part_inverse, lc);
         self.info = self
             .info

@@ -111,3 +111,44 @@ pub fn check_position_names<M, const P: usize, const A: usize>(
         );
     }
 }
+
+/// Example machine `name` with every number after `key =` scaled by `k` for the given
+/// `keys` (lengths; angles and rates left), its published references left out (they
+/// hold the unscaled values).
+pub fn scaled_example(name: &str, k: f64, keys: &[&str]) -> Machine {
+    let text = std::fs::read_to_string(format!(
+        "{}/../../examples/machines/{name}",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let text = text.split("[[reference]]").next().unwrap();
+    let scaled: Vec<String> = text
+        .lines()
+        .map(|l| match l.split_once('=') {
+            Some((key, value)) if keys.contains(&key.trim()) => {
+                let value = value.split('#').next().unwrap();
+                format!("{key}={}", scale_numbers(value, k))
+            }
+            _ => l.to_string(),
+        })
+        .collect();
+    Machine::from_toml_str(&scaled.join("\n"), &format!("{name} scaled by {k}")).unwrap()
+}
+
+/// `text` with every number in it multiplied by `k`.
+fn scale_numbers(text: &str, k: f64) -> String {
+    let (mut out, mut number) = (String::new(), String::new());
+    for ch in text.chars().chain(std::iter::once(' ')) {
+        if ch.is_ascii_digit() || ch == '.' || (ch == '-' && number.is_empty()) {
+            number.push(ch);
+            continue;
+        }
+        match number.parse::<f64>() {
+            Ok(v) => out.push_str(&format!("{:?}", v * k)),
+            Err(_) => out.push_str(&number),
+        }
+        number.clear();
+        out.push(ch);
+    }
+    out
+}
