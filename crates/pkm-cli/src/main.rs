@@ -4,6 +4,7 @@ mod columnar;
 mod commands;
 mod fixed;
 mod io;
+mod out;
 mod poses;
 mod progress;
 mod report;
@@ -176,7 +177,7 @@ pub fn parse_convention(s: &str) -> Result<Convention, String> {
 
 /// A reader that stops reading (`pkm ... | head`) ends the command quietly, as it does
 /// any Unix tool: SIGPIPE back to its default action. Rust ignores it, so every
-/// `println!` after the pipe closed would panic with "Broken pipe".
+/// write after the pipe closed would fail with "Broken pipe" (`out`).
 fn quiet_on_closed_pipe() {
     #[cfg(unix)]
     // SAFETY: called first in `main`, before any thread exists; SIG_DFL is a valid
@@ -186,9 +187,24 @@ fn quiet_on_closed_pipe() {
     }
 }
 
+/// Clap's help, version or usage error, printed: help and version to standard output,
+/// where a failed write is an error (exit 1), usage errors to standard error.
+fn command_line_error(e: &clap::Error) -> ExitCode {
+    let printed = e
+        .print()
+        .and_then(|()| std::io::Write::flush(&mut std::io::stdout()));
+    match printed {
+        Err(io) if !e.use_stderr() => failure(&out::StdoutError(io).into()),
+        _ => ExitCode::from(u8::try_from(e.exit_code()).unwrap_or(2)),
+    }
+}
+
 fn main() -> ExitCode {
     quiet_on_closed_pipe();
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => return command_line_error(&e),
+    };
     let res = match cli.command {
         Command::Ik(a) => commands::ik::run(&a),
         Command::Fk(a) => commands::fk::run(&a),
@@ -202,34 +218,40 @@ fn main() -> ExitCode {
         Command::Import(a) => commands::linuxcnc::import_run(&a),
         Command::Export(a) => commands::linuxcnc::export_run(&a),
     };
+    // What is still buffered is written now, and its failure reported, before the
+    // command's outcome: an answer lost on the way out is no success.
+    let res = res.and_then(|code| out::flush().map(|()| code).map_err(Into::into));
     match res {
         Ok(code) => ExitCode::from(code),
-        Err(e) => {
-            let chain: Vec<String> = e.chain().map(|c| c.to_string()).collect();
-            eprintln!("error: {}", chain.join(": "));
-            let unreachable = matches!(
-                e.downcast_ref::<pkm::Error>(),
-                Some(
-                    pkm::Error::Unreachable { .. }
-                        | pkm::Error::NotAttainable { .. }
-                        | pkm::Error::NotConverged { .. }
-                        | pkm::Error::Singular { .. }
-                )
-            );
-            // A malformed value on the command line, or a pose with the wrong number of
-            // values for this machine: a bad command line.
-            let bad_argument = e.downcast_ref::<poses::BadArgument>().is_some()
-                || matches!(
-                    e.downcast_ref::<pkm::Error>(),
-                    Some(pkm::Error::InvalidInput { what, .. }) if what == "pose"
-                );
-            ExitCode::from(if unreachable {
-                EXIT_UNREACHABLE
-            } else if bad_argument {
-                2
-            } else {
-                1
-            })
-        }
+        Err(e) => failure(&e),
     }
+}
+
+/// Reports `e` on standard error and gives its exit code.
+fn failure(e: &anyhow::Error) -> ExitCode {
+    let chain: Vec<String> = e.chain().map(|c| c.to_string()).collect();
+    eprintln!("error: {}", chain.join(": "));
+    let unreachable = matches!(
+        e.downcast_ref::<pkm::Error>(),
+        Some(
+            pkm::Error::Unreachable { .. }
+                | pkm::Error::NotAttainable { .. }
+                | pkm::Error::NotConverged { .. }
+                | pkm::Error::Singular { .. }
+        )
+    );
+    // A malformed value on the command line, or a pose with the wrong number of
+    // values for this machine: a bad command line.
+    let bad_argument = e.downcast_ref::<poses::BadArgument>().is_some()
+        || matches!(
+            e.downcast_ref::<pkm::Error>(),
+            Some(pkm::Error::InvalidInput { what, .. }) if what == "pose"
+        );
+    ExitCode::from(if unreachable {
+        EXIT_UNREACHABLE
+    } else if bad_argument {
+        2
+    } else {
+        1
+    })
 }

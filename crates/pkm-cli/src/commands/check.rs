@@ -8,6 +8,7 @@ use serde_json::json;
 use std::path::PathBuf;
 
 use super::load;
+use crate::out::{outln, Printed};
 use crate::poses::{actuators_json, coords_text, name_width, tool_json, Shown};
 
 #[derive(Args, Debug)]
@@ -61,11 +62,11 @@ pub fn run(a: &CheckArgs) -> Result<u8> {
     let references = check_references(&machine);
     if a.json {
         let v = check_json(&machine, &home, &references);
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        outln!("{}", serde_json::to_string_pretty(&v)?)?;
     } else {
-        print_text(&machine, &home);
+        print_text(&machine, &home)?;
         for r in &references {
-            print_reference(m, r);
+            print_reference(m, r)?;
         }
     }
     Ok(exit_code(&machine, &references, &home.violations))
@@ -125,12 +126,12 @@ fn check_json(machine: &Machine, home: &Home, references: &[ReferenceCheck]) -> 
 }
 
 /// The summary as text: name, coordinates, actuators, home, conditioning, limits.
-fn print_text(machine: &Machine, home: &Home) {
+fn print_text(machine: &Machine, home: &Home) -> Printed {
     let m = machine.mechanism();
-    println!("{}: valid {} machine", machine.source, m.kind());
-    println!("name        {}", m.name());
+    outln!("{}: valid {} machine", machine.source, m.kind())?;
+    outln!("name        {}", m.name())?;
     if let Some(d) = &machine.description {
-        println!("description {d}");
+        outln!("description {d}")?;
     }
     let c: Vec<String> = m
         .coordinates()
@@ -145,24 +146,25 @@ fn print_text(machine: &Machine, home: &Home) {
             format!("{} [{}]{held}", c.name, c.quantity.unit())
         })
         .collect();
-    println!("coordinates {}", c.join(", "));
-    print_actuators(m, &home.q);
-    println!("home        {}", coords_text(m, &home.pose));
-    print_conditioning(m, home);
+    outln!("coordinates {}", c.join(", "))?;
+    print_actuators(m, &home.q)?;
+    outln!("home        {}", coords_text(m, &home.pose))?;
+    print_conditioning(m, home)?;
     if m.pose_space() == pkm::PoseSpace::Tcp {
-        warn_turned_part_frame(m, &home.pose);
+        warn_turned_part_frame(m, &home.pose)?;
     }
     if home.violations.is_empty() {
-        println!("home limits all satisfied");
+        outln!("home limits all satisfied")?;
     } else {
         for v in &home.violations {
-            println!("home limit  VIOLATED: {v}");
+            outln!("home limit  VIOLATED: {v}")?;
         }
     }
+    Ok(())
 }
 
 /// One line per actuator: range, value at home, rate limits.
-fn print_actuators(m: &dyn DynMechanism, q: &[f64]) {
+fn print_actuators(m: &dyn DynMechanism, q: &[f64]) -> Printed {
     let width = name_width(m.actuators().iter().map(|x| x.name.as_str()), 6);
     for (x, v) in m.actuators().iter().zip(q) {
         let u = |v: f64| x.quantity.to_user(v);
@@ -180,12 +182,13 @@ fn print_actuators(m: &dyn DynMechanism, q: &[f64]) {
         if let Some(am) = x.max_acceleration {
             line.push_str(&format!(", max acceleration {:.1} {unit}/s^2", u(am)));
         }
-        println!("{line}");
+        outln!("{line}")?;
     }
+    Ok(())
 }
 
 /// The Jacobian's condition number at home, the inverse method, and a singular home.
-fn print_conditioning(m: &dyn DynMechanism, home: &Home) {
+fn print_conditioning(m: &dyn DynMechanism, home: &Home) -> Printed {
     let (cond, lc) = (home.condition, home.length);
     let angles = home
         .driven
@@ -196,38 +199,42 @@ fn print_conditioning(m: &dyn DynMechanism, home: &Home) {
     } else {
         String::new()
     };
-    println!("jacobian    condition number {cond:.3} at home (driven columns, 2-norm{scale})");
-    println!("inverse     {}", m.inverse_method());
+    outln!("jacobian    condition number {cond:.3} at home (driven columns, 2-norm{scale})")?;
+    outln!("inverse     {}", m.inverse_method())?;
     if !cond.is_finite() {
-        println!(
+        outln!(
             "warning     the home pose is singular: the Jacobian loses rank there (a robot's \
              stretched zero pose often is); the file is valid, but poses near home need \
              fast joint motion"
-        );
+        )?;
     }
+    Ok(())
 }
 
 /// TCP coordinates are in the part frame, the workpiece chain's last frame: a file
 /// whose last link leaves that frame turned makes a program's Z move along another
 /// machine axis.
-fn warn_turned_part_frame(m: &dyn DynMechanism, home: &[f64]) {
+fn warn_turned_part_frame(m: &dyn DynMechanism, home: &[f64]) -> Printed {
     let Ok(p) = m.tool_pose(home) else {
-        return;
+        return Ok(());
     };
     let z = p.rotation * nalgebra::Vector3::z();
     if z.z < 1.0 - 1e-9 {
-        println!(
+        outln!(
             "warning     at home the tool axis is ({:.4}, {:.4}, {:.4}) in the part \
              frame, not +Z: a program's X, Y, Z are along the axes of the workpiece \
              chain's last frame; end the chain with a link turning them onto the \
              machine's (as the tilting table link of examples/machines/mc300.toml does)",
-            z.x, z.y, z.z
-        );
+            z.x,
+            z.y,
+            z.z
+        )?;
     }
+    Ok(())
 }
 
 /// One reproduced reference: where, and whether it is reproduced.
-fn print_reference(m: &dyn DynMechanism, r: &ReferenceCheck) {
+fn print_reference(m: &dyn DynMechanism, r: &ReferenceCheck) -> Printed {
     let worst = r
         .items
         .iter()
@@ -252,7 +259,8 @@ fn print_reference(m: &dyn DynMechanism, r: &ReferenceCheck) {
         ),
         (true, true) => discrepancy(r),
     };
-    println!("reference   {} [{at}]: {status}", r.source);
+    outln!("reference   {} [{at}]: {status}", r.source)?;
+    Ok(())
 }
 
 /// A reference that passes with pkm's values where the source prints others.

@@ -11,6 +11,7 @@ use std::path::PathBuf;
 
 use super::load;
 use crate::io::write_atomic;
+use crate::out::outln;
 use crate::poses::{parse_list, pose_from_user};
 
 mod text;
@@ -131,10 +132,10 @@ pub fn run(a: &ErrorsArgs) -> Result<u8> {
     let text = serde_json::to_string_pretty(&out)?;
     write_atomic(&a.out.join("errors.json"), text.as_bytes(), &inputs)?;
     if a.json {
-        println!("{text}");
+        outln!("{text}")?;
     } else {
-        print_text(m, &r);
-        println!("wrote {}", a.out.display());
+        print_text(m, &r)?;
+        outln!("wrote {}", a.out.display())?;
     }
     Ok(0)
 }

@@ -15,6 +15,7 @@ use serde_json::json;
 use super::csvio::{input_columns, read_table, BatchTable, NO_VALUES};
 use super::load;
 use crate::columnar::{machine_metadata, Kind};
+use crate::out::outln;
 use crate::poses::{
     actuators_from_user, actuators_json, coords_json, coords_text, parse_list, pose_from_user,
     tool_json, Shown,
@@ -81,7 +82,7 @@ pub fn run(a: &FkArgs) -> Result<u8> {
     };
     if a.opts.json {
         let v = solution_json(m, &q, &f, modes.as_deref(), conv)?;
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        outln!("{}", serde_json::to_string_pretty(&v)?)?;
     } else {
         print_text(m, &f, conv)?;
         if let Some(modes) = &modes {
@@ -149,55 +150,57 @@ fn print_text(m: &dyn DynMechanism, f: &ForwardSolution, conv: Convention) -> Re
     let r = rotation_matrix(&pose);
     let ang = conv.from_matrix(&r).map(|v| Shown(v.to_degrees()));
     let names = conv.angle_names();
-    println!("{} ({})", m.name(), m.kind());
-    println!("pose       {}", coords_text(m, &f.pose));
+    outln!("{} ({})", m.name(), m.kind())?;
+    outln!("pose       {}", coords_text(m, &f.pose))?;
     let p = pose.translation.vector;
-    println!(
+    outln!(
         "tool       X={:.4} Y={:.4} Z={:.4} mm",
         Shown(p.x),
         Shown(p.y),
         Shown(p.z)
-    );
-    println!(
+    )?;
+    outln!(
         "angles     {}={:.4} {}={:.4} {}={:.4} deg ({conv})",
-        names[0], ang[0], names[1], ang[1], names[2], ang[2]
-    );
+        names[0],
+        ang[0],
+        names[1],
+        ang[1],
+        names[2],
+        ang[2]
+    )?;
     if f.closed_form {
-        println!("solver     closed form, residual {:.3e}", f.residual);
+        outln!("solver     closed form, residual {:.3e}", f.residual)?;
     } else {
-        println!(
+        outln!(
             "solver     {} iterations, residual {:.3e}",
-            f.iterations, f.residual
-        );
+            f.iterations,
+            f.residual
+        )?;
     }
     match f.condition {
-        Some(c) if !f.near_singular => {
-            println!("condition  {c:.3} (driven columns, 2-norm)")
-        }
-        Some(c) => println!(
+        Some(c) if !f.near_singular => outln!("condition  {c:.3} (driven columns, 2-norm)")?,
+        Some(c) => outln!(
             "condition  {c:.4e}: NEAR A SINGULAR CONFIGURATION, the pose is poorly \
              determined by the actuators (their errors are magnified up to this factor)"
-        ),
-        None => {
-            println!("condition  none: the pose is singular, the actuators do not determine it")
-        }
+        )?,
+        None => outln!("condition  none: the pose is singular, the actuators do not determine it")?,
     }
     if f.violations.is_empty() {
-        println!("limits     all satisfied");
+        outln!("limits     all satisfied")?;
     }
     for v in &f.violations {
-        println!("limit      VIOLATED: {v}");
+        outln!("limit      VIOLATED: {v}")?;
     }
     Ok(())
 }
 
 /// `--assembly-modes`: every distinct pose found for the actuators `q` from `starts`.
 fn print_modes(m: &dyn DynMechanism, q: &[f64], modes: &[DynForward], starts: usize) -> Result<()> {
-    println!(
+    outln!(
         "assembly   {} distinct poses with these actuators from {} starts:",
         modes.len(),
         starts
-    );
+    )?;
     for (i, f) in modes.iter().enumerate() {
         let viol = m.check_limits(&f.pose, q)?;
         let status = if viol.is_empty() {
@@ -205,7 +208,7 @@ fn print_modes(m: &dyn DynMechanism, q: &[f64], modes: &[DynForward], starts: us
         } else {
             format!("{} limits violated (first: {})", viol.len(), viol[0].limit)
         };
-        println!("  mode {:<3} {}  {status}", i + 1, coords_text(m, &f.pose));
+        outln!("  mode {:<3} {}  {status}", i + 1, coords_text(m, &f.pose))?;
     }
     Ok(())
 }

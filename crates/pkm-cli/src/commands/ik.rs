@@ -16,6 +16,7 @@ use serde_json::{json, Map, Value};
 use super::csvio::{input_columns, read_table, BatchTable, NO_VALUES};
 use super::load;
 use crate::columnar::{machine_metadata, Kind};
+use crate::out::{outln, Printed};
 use crate::poses::{
     actuators_json, coords_json, coords_text, name_width, parse_list, pose_from_user, pose_names,
     tool_json, Shown,
@@ -130,7 +131,7 @@ pub fn run(a: &IkArgs) -> Result<u8> {
         if let Some(sol) = &axis {
             v["tool_axis"] = tool_axis_json(m, sol);
         }
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        outln!("{}", serde_json::to_string_pretty(&v)?)?;
     } else {
         print_text(&machine, &r, axis.as_ref())?;
     }
@@ -184,50 +185,50 @@ fn print_text(
     axis: Option<&ToolAxisSolution>,
 ) -> Result<()> {
     let m = machine.mechanism();
-    println!("{} ({})", m.name(), m.kind());
-    println!("pose       {}", coords_text(m, &r.pose));
+    outln!("{} ({})", m.name(), m.kind())?;
+    outln!("pose       {}", coords_text(m, &r.pose))?;
     if let Some(sol) = axis {
-        print_branches(m, sol);
+        print_branches(m, sol)?;
     }
     // Actuator names as long as a user's file makes them stay in one column too.
     let aw = name_width(m.actuators().iter().map(|a| a.name.as_str()), 8);
     for (act, v) in m.actuators().iter().zip(&r.actuators) {
-        println!(
+        outln!(
             "actuator   {:<aw$} {:>12.4} {}   range [{:.3}, {:.3}]",
             act.name,
             Shown(act.quantity.to_user(*v)),
             act.quantity.unit(),
             act.quantity.to_user(act.range.min),
             act.quantity.to_user(act.range.max)
-        );
+        )?;
     }
     let points = m.skeleton(&r.pose)?.points;
     // Names as long as a user's file makes them stay in one column.
     let w = name_width(points.iter().map(|p| p.name.as_str()), 8);
     for p in points {
-        println!(
+        outln!(
             "joint      {:<w$} {:>10.4} {:>10.4} {:>10.4} mm",
             p.name,
             Shown(p.position[0]),
             Shown(p.position[1]),
             Shown(p.position[2])
-        );
+        )?;
     }
-    print_transmission(machine, &r.pose);
+    print_transmission(machine, &r.pose)?;
     if r.violations.is_empty() {
-        println!("limits     all satisfied");
+        outln!("limits     all satisfied")?;
     }
     for v in &r.violations {
-        println!("limit      VIOLATED: {v}");
+        outln!("limit      VIOLATED: {v}")?;
     }
     Ok(())
 }
 
 /// The branches of a `--tool-axis` solution (the chosen one starred) and the distance
 /// to the singular direction.
-fn print_branches(m: &dyn DynMechanism, sol: &ToolAxisSolution) {
+fn print_branches(m: &dyn DynMechanism, sol: &ToolAxisSolution) -> Printed {
     for (k, b) in sol.branches.iter().enumerate() {
-        println!(
+        outln!(
             "branch {}{}  {}{}",
             k + 1,
             if k == sol.chosen { "*" } else { " " },
@@ -237,9 +238,9 @@ fn print_branches(m: &dyn DynMechanism, sol: &ToolAxisSolution) {
             } else {
                 format!("  ({} limit(s) violated)", b.violations.len())
             }
-        );
+        )?;
     }
-    println!(
+    outln!(
         "tool axis  {:.4} deg from the singular direction{}",
         sol.singular_distance.to_degrees(),
         if sol.singular {
@@ -247,17 +248,18 @@ fn print_branches(m: &dyn DynMechanism, sol: &ToolAxisSolution) {
         } else {
             ""
         }
-    );
+    )?;
+    Ok(())
 }
 
 /// Velocity and force transmission at the pose, and the distance to a singularity.
-fn print_transmission(machine: &Machine, pose: &[f64]) {
+fn print_transmission(machine: &Machine, pose: &[f64]) -> Printed {
     let m = machine.mechanism();
     let t = match transmission(machine, pose) {
         Ok(t) => t,
         Err(e) => {
-            println!("transmit   {e}");
-            return;
+            outln!("transmit   {e}")?;
+            return Ok(());
         }
     };
     let f = |v: Option<f64>, unit: &str| {
@@ -274,7 +276,7 @@ fn print_transmission(machine: &Machine, pose: &[f64]) {
     } else {
         ("mm/s", "N")
     };
-    println!(
+    outln!(
         "transmit   velocity {}, angular {}, force {}, moment {}",
         f(t.velocity, &per(rate, "mm/s")),
         f(
@@ -283,7 +285,7 @@ fn print_transmission(machine: &Machine, pose: &[f64]) {
         ),
         f(t.force, &per(effort, "N")),
         f(t.moment, &per(effort, "N mm"))
-    );
+    )?;
     let scale = if m
         .driven()
         .iter()
@@ -293,12 +295,13 @@ fn print_transmission(machine: &Machine, pose: &[f64]) {
     } else {
         String::new()
     };
-    println!(
+    outln!(
         "condition  {} (1 = isotropic, inf = singular; its inverse {}, 0 = singular; \
          driven columns of dq/dx, 2-norm{scale})",
         figure(t.condition, 3),
         significant(t.inverse_condition)
-    );
+    )?;
+    Ok(())
 }
 
 /// `{value:.digits}`, in exponent form from 1e6 on (a figure near a singularity).
@@ -486,19 +489,19 @@ fn all_solutions(machine: &Machine, x: &[f64], json_out: bool) -> Result<u8> {
                 })
             })
             .collect();
-        println!(
+        outln!(
             "{}",
             serde_json::to_string_pretty(&json!({
                 "machine": m.name(),
                 "pose": coords_json(m, x),
                 "solutions": arr,
             }))?
-        );
+        )?;
     } else {
-        println!("{} ({})", m.name(), m.kind());
-        println!("pose       {}", coords_text(m, x));
+        outln!("{} ({})", m.name(), m.kind())?;
+        outln!("pose       {}", coords_text(m, x))?;
         if list.is_empty() {
-            println!("no inverse solution found (256 starts)");
+            outln!("no inverse solution found (256 starts)")?;
         }
         for (k, (q, v)) in list.iter().enumerate() {
             let joints: Vec<String> = m
@@ -514,7 +517,7 @@ fn all_solutions(machine: &Machine, x: &[f64], json_out: bool) -> Result<u8> {
                     f.limit, f.bound, f.excess, f.unit
                 ),
             };
-            println!("solution {:>2} {}  ({status})", k + 1, joints.join(" "));
+            outln!("solution {:>2} {}  ({status})", k + 1, joints.join(" "))?;
         }
     }
     Ok(if list.iter().any(|(_, v)| v.is_empty()) {

@@ -9,6 +9,7 @@ use serde_json::json;
 
 use super::load;
 use crate::io::write_atomic;
+use crate::out::outln;
 
 /// Where `pkm import` reads from.
 #[derive(Subcommand, Debug)]
@@ -85,7 +86,7 @@ pub fn import_run(from: &ImportFrom) -> Result<u8> {
         eprintln!("warning: {w}");
     }
     if a.json {
-        println!(
+        outln!(
             "{}",
             serde_json::to_string_pretty(&json!({
                 "ini": a.ini,
@@ -93,14 +94,14 @@ pub fn import_run(from: &ImportFrom) -> Result<u8> {
                 "machine": a.out,
                 "warnings": imp.warnings,
             }))?
-        );
+        )?;
     } else {
-        println!(
+        outln!(
             "imported {} ({}) into {}",
             a.ini.display(),
             imp.kinematics,
             a.out.display()
-        );
+        )?;
     }
     Ok(0)
 }
@@ -118,7 +119,7 @@ pub fn export_run(to: &ExportTo) -> Result<u8> {
     write_atomic(&hal, exp.hal.as_bytes(), &[a.machine.as_path()])?;
     write_atomic(&ini, exp.ini.as_bytes(), &[a.machine.as_path()])?;
     if a.json {
-        println!(
+        outln!(
             "{}",
             serde_json::to_string_pretty(&json!({
                 "machine": a.machine,
@@ -126,14 +127,14 @@ pub fn export_run(to: &ExportTo) -> Result<u8> {
                 "hal": hal,
                 "ini": ini,
             }))?
-        );
+        )?;
     } else {
-        println!(
+        outln!(
             "wrote {} and {} ({})",
             hal.display(),
             ini.display(),
             exp.kinematics
-        );
+        )?;
     }
     Ok(0)
 }

@@ -8,6 +8,7 @@ use std::fs::File;
 use std::io::{BufReader, Write};
 use std::path::{Path, PathBuf};
 
+use crate::out::outln;
 use anyhow::{Context, Result};
 use pkm::analysis::motion::{run_motion_with, MotionRun, MotionSource, ProgramSetup};
 use pkm::motion::program::FeedOptions;
@@ -384,10 +385,10 @@ pub fn run(a: &MotionArgs) -> Result<u8> {
     let summary = run_summary(a, &machine, &outcome, &feed);
     write_outputs(a, m, &outcome, &summary, &inputs)?;
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&summary)?);
+        outln!("{}", serde_json::to_string_pretty(&summary)?)?;
     } else {
-        text::print_text(m, &outcome, a.profile);
-        println!("wrote {}", a.out.display());
+        text::print_text(m, &outcome, a.profile)?;
+        outln!("wrote {}", a.out.display())?;
     }
     Ok(text::exit_code(&outcome.summary))
 }

@@ -12,6 +12,7 @@ use serde_json::json;
 
 use super::tolerance_args::ToleranceArgs;
 use crate::io::write_atomic;
+use crate::out::{outln, Printed};
 use crate::report::plot::{panels_marked, Panel, Series};
 
 /// Options of the accuracy along the program.
@@ -159,29 +160,29 @@ pub fn write(out: &Path, r: &PathAccuracyRun, title: &str, inputs: &[&Path]) -> 
 }
 
 /// The console lines.
-pub fn print(r: &PathAccuracyRun) {
+pub fn print(r: &PathAccuracyRun) -> Printed {
     let p = &r.path;
     let line = |l: Option<u64>| l.map(|l| format!("line {l}")).unwrap_or("-".into());
-    println!(
+    outln!(
         "accuracy along the program ({} tolerances {}; first order, tool tip relative to \
          the part or base):",
         p.tolerances,
         r.tolerance_source.describe()
-    );
+    )?;
     for (what, v) in [
         ("worst case", &p.worst_case),
         ("RSS", &p.rss),
         ("along the tool axis, worst case", &p.surface_worst_case),
     ] {
-        println!(
+        outln!(
             "  {what:<32} up to {:.2} um at t = {:.3} s ({})",
             v.0 * 1000.0,
             v.1,
             line(v.2)
-        );
+        )?;
     }
     if let Some(mc) = &p.monte_carlo {
-        println!(
+        outln!(
             "  Monte Carlo, {} machines at {} samples: largest error along the path per machine \
              median {:.2} um, 95 % {:.2} um, max {:.2} um; along the tool axis median {:.2} um, \
              95 % {:.2} um, max {:.2} um",
@@ -193,12 +194,12 @@ pub fn print(r: &PathAccuracyRun) {
             mc.surface_p50 * 1000.0,
             mc.surface_p95 * 1000.0,
             mc.surface_max * 1000.0
-        );
+        )?;
     }
     let mut worst: Vec<_> = p.segments.iter().collect();
     worst.sort_by(|a, b| b.worst_case.total_cmp(&a.worst_case));
     for g in worst.into_iter().take(3) {
-        println!(
+        outln!(
             "  {}: worst case {:.2} um, RSS {:.2} um, along the axis {:.2} um; largest share \
              {} ({:.2} um)",
             line(g.line),
@@ -207,6 +208,7 @@ pub fn print(r: &PathAccuracyRun) {
             g.surface_worst_case * 1000.0,
             g.top.0,
             g.top.1 * 1000.0
-        );
+        )?;
     }
+    Ok(())
 }

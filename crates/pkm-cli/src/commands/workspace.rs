@@ -12,6 +12,7 @@ use std::path::{Path, PathBuf};
 use super::load;
 use crate::columnar::SeriesFormat;
 use crate::io::write_atomic;
+use crate::out::outln;
 use crate::poses::{parse_list, pose_from_user};
 use crate::report::heatmap::{slice_svg, Cell, Scale};
 
@@ -265,11 +266,11 @@ fn tilt_at(
         serde_json::to_string_pretty(&v)?.as_bytes(),
         inputs,
     )?;
-    println!(
+    outln!(
         "reachable tilt in every direction at this point: {:.3} deg (search up to {} deg)",
         min.to_degrees(),
         a.max_tilt
-    );
+    )?;
     Ok(0)
 }
 
@@ -347,10 +348,10 @@ pub fn run(a: &WorkspaceArgs) -> Result<u8> {
     )?;
     write_points_and_slices(a, m, &wm, &inputs)?;
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&summary)?);
+        outln!("{}", serde_json::to_string_pretty(&summary)?)?;
     } else {
-        summary::print_text(m, &mapped);
-        println!("wrote {}", a.out.display());
+        summary::print_text(m, &mapped)?;
+        outln!("wrote {}", a.out.display())?;
     }
     Ok(0)
 }

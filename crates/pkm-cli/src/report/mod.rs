@@ -25,6 +25,7 @@ use pkm::Machine;
 use std::path::PathBuf;
 
 use crate::io::write_atomic;
+use crate::out::outln;
 pub use context::Context;
 use html::{esc, Html};
 
@@ -318,7 +319,7 @@ pub fn run(a: &ReportArgs) -> Result<u8> {
             "failed": built.failed.iter().map(|(s, e)| serde_json::json!({"section": s, "error": e})).collect::<Vec<_>>(),
             "missing": built.missing,
         });
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        outln!("{}", serde_json::to_string_pretty(&v)?)?;
     }
     Ok(outcome(&built, &path))
 }

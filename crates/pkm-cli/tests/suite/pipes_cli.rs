@@ -47,6 +47,38 @@ fn a_closed_pipe_ends_the_command_quietly() {
     }
 }
 
+/// Standard output that cannot be written (a full disk: `/dev/full`) is an error, exit
+/// code 1 as any other failed write, never a panic or a success with the answer lost:
+/// a command's text and JSON, and clap's help and version.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_full_standard_output_is_an_error() {
+    let machine = path("examples/machines/hexapod-linuxcnc.toml");
+    for args in [
+        vec!["check", &machine],
+        vec!["check", &machine, "--json"],
+        vec!["--help"],
+        vec!["--version"],
+        vec!["motion", "--help"],
+    ] {
+        let full = std::fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .unwrap();
+        let o = std::process::Command::new(assert_cmd::cargo::cargo_bin("pkm"))
+            .args(&args)
+            .stdout(full)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {stderr}");
+        assert!(
+            stderr.starts_with("error: writing to standard output: No space left on device"),
+            "{args:?}: {stderr}"
+        );
+    }
+}
+
 /// SIGPIPE's number on Linux and the BSDs.
 #[cfg(unix)]
 fn libc_sigpipe() -> i32 {

@@ -14,6 +14,7 @@ use std::path::Path;
 use super::super::load;
 use super::{read, CalibrateArgs};
 use crate::io::write_atomic;
+use crate::out::{outln, Printed};
 use crate::report::plot::{panels_svg_x, Series};
 
 fn read_measurements(path: &Path, machine: &pkm::Machine) -> Result<Measurements> {
@@ -64,7 +65,7 @@ pub fn calibrate_run(a: &CalibrateArgs) -> Result<u8> {
     )?;
     plots(&a.out, &c.identification, &inputs)?;
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        outln!("{}", serde_json::to_string_pretty(&report)?)?;
     } else {
         print_text(
             machine.mechanism().name(),
@@ -72,7 +73,7 @@ pub fn calibrate_run(a: &CalibrateArgs) -> Result<u8> {
             c.seed_procedure.as_ref(),
             c.validation.as_ref(),
             &a.out,
-        );
+        )?;
     }
     Ok(0)
 }
@@ -230,45 +231,48 @@ fn print_text(
     seed: Option<&SeedProcedure>,
     validation: Option<&Validation>,
     out: &Path,
-) {
-    println!(
+) -> Printed {
+    outln!(
         "{name}: {} parameters from {} equations",
         id.names.len(),
         id.equations
-    );
-    println!(
+    )?;
+    outln!(
         "residual RMS     {:.4} mm (nominal) -> {:.4} mm (identified), {} evaluations",
-        id.rms_before, id.rms_after, id.evaluations
-    );
-    println!(
+        id.rms_before,
+        id.rms_after,
+        id.evaluations
+    )?;
+    outln!(
         "condition        {:.3e} (scaled identification Jacobian)",
         id.condition
-    );
-    print_changes(id);
+    )?;
+    print_changes(id)?;
     if let Some(note) = &id.standard_errors_note {
-        println!("note             {note}");
+        outln!("note             {note}")?;
     }
     for w in &id.weak {
-        println!("weak             {}", w.description);
+        outln!("weak             {}", w.description)?;
     }
     if let Some(s) = seed {
-        println!(
+        outln!(
             "seed procedure   per-strut condition {}",
             s.conditions
                 .iter()
                 .map(|c| format!("{c:.2e}"))
                 .collect::<Vec<_>>()
                 .join(", ")
-        );
+        )?;
     }
     if let Some(v) = validation {
-        print_validation(v);
+        print_validation(v)?;
     }
-    println!("wrote {}", out.display());
+    outln!("wrote {}", out.display())?;
+    Ok(())
 }
 
 /// The six largest parameter changes with their standard errors.
-fn print_changes(id: &Identification) {
+fn print_changes(id: &Identification) -> Printed {
     let mut order: Vec<usize> = (0..id.names.len()).collect();
     order.sort_by(|&a, &b| {
         (id.values[b] - id.start[b])
@@ -278,30 +282,32 @@ fn print_changes(id: &Identification) {
     let shown = &order[..order.len().min(6)];
     let w = shown.iter().map(|&i| id.names[i].len()).max().unwrap_or(0);
     for &i in shown {
-        println!(
+        outln!(
             "  largest change {:<w$} {:+.4} mm  (standard error {:.4} mm)",
             id.names[i],
             id.values[i] - id.start[i],
             id.standard_errors[i]
-        );
+        )?;
     }
+    Ok(())
 }
 
 /// The point (and tool pose) errors of both models at the held-out states.
-fn print_validation(v: &Validation) {
+fn print_validation(v: &Validation) -> Printed {
     let Validation {
         states: n,
         nominal: b,
         identified: a,
     } = v;
-    println!(
+    outln!(
         "validation       {n} states: point error max {:.4} / RMS {:.4} mm (nominal) -> max {:.4} / RMS {:.4} mm (identified)",
         b.max, b.rms, a.max, a.rms
-    );
+    )?;
     if let (Some(pb), Some(pa)) = (b.pose, a.pose) {
-        println!(
+        outln!(
             "                 tool pose: position max {:.4} / RMS {:.4} mm, orientation max {:.2e} deg (nominal) -> position max {:.4} / RMS {:.4} mm, orientation max {:.2e} deg (identified)",
             pb.position_max, pb.position_rms, pb.orientation_max.to_degrees(), pa.position_max, pa.position_rms, pa.orientation_max.to_degrees()
-        );
+        )?;
     }
+    Ok(())
 }

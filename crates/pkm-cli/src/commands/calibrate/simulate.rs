@@ -13,6 +13,7 @@ use serde_json::json;
 use super::super::load;
 use super::{read, SimulateArgs};
 use crate::io::write_atomic;
+use crate::out::outln;
 
 pub fn simulate_run(a: &SimulateArgs) -> Result<u8> {
     let machine = load(&a.machine)?;
@@ -59,16 +60,16 @@ pub fn simulate_run(a: &SimulateArgs) -> Result<u8> {
     if a.json {
         let mut v = summary;
         v["out"] = json!(a.out.display().to_string());
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        outln!("{}", serde_json::to_string_pretty(&v)?)?;
     } else {
-        println!(
+        outln!(
             "{}: {} states (+{} held out) on a true machine {} mm off nominal; wrote {}",
             machine.mechanism().name(),
             a.states,
             a.holdout,
             deviation,
             a.out.display()
-        );
+        )?;
     }
     Ok(0)
 }

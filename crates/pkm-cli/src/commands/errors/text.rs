@@ -5,6 +5,7 @@ use pkm::analysis::clearance::ClearanceReport;
 use pkm::analysis::AccuracyReport;
 use serde_json::json;
 
+use crate::out::{outln, Printed};
 use crate::poses::{coords_json, coords_text};
 
 /// The `errors.json` contract (user units: mm, deg for angular parameters).
@@ -62,60 +63,64 @@ pub(super) fn report_json(m: &dyn pkm::DynMechanism, r: &AccuracyReport) -> serd
     })
 }
 
-pub(super) fn print_text(m: &dyn pkm::DynMechanism, r: &AccuracyReport) {
-    println!("{} ({})", r.machine, r.kind);
-    println!("pose             {}", coords_text(m, &r.pose));
+pub(super) fn print_text(m: &dyn pkm::DynMechanism, r: &AccuracyReport) -> Printed {
+    outln!("{} ({})", r.machine, r.kind)?;
+    outln!("pose             {}", coords_text(m, &r.pose))?;
     for v in &r.violations {
-        println!("limit            VIOLATED at this pose: {v}");
+        outln!("limit            VIOLATED at this pose: {v}")?;
     }
     if !r.deviations.is_empty() {
-        print_pose_error(r);
+        print_pose_error(r)?;
     }
-    print_budget(r);
+    print_budget(r)?;
     if let Some(mc) = &r.monte_carlo {
-        println!(
+        outln!(
             "monte carlo      {} samples: mean {:.4}, std {:.4}, p95 {:.4}, p99 {:.4}, max {:.4} mm{}",
             mc.samples, mc.mean, mc.std, mc.p95, mc.p99, mc.max,
             if mc.failed > 0 { format!(" ({} machines without a forward solution left out)", mc.failed) } else { String::new() }
-        );
+        )?;
     }
     if let Some(c) = &r.clearance {
-        print_clearance(c);
+        print_clearance(c)?;
     }
     if let Some(em) = &r.map {
-        println!(
+        outln!(
             "error map        {} points, {} unreachable, largest RSS {:.4} mm",
             em.cells.len(),
             em.unreachable,
             em.max_rss
-        );
+        )?;
     }
+    Ok(())
 }
 
 /// The exact tool-pose error of the given deviations.
-fn print_pose_error(r: &AccuracyReport) {
+fn print_pose_error(r: &AccuracyReport) -> Printed {
     let (dp, dw) = (
         r.pose_error.position,
         r.pose_error.orientation.map(f64::to_degrees),
     );
-    println!(
+    outln!(
         "position error   dx={:+.6} dy={:+.6} dz={:+.6} mm (|e| = {:.6} mm, {} deviations given)",
         dp.x,
         dp.y,
         dp.z,
         dp.norm(),
         r.deviations.len()
-    );
-    println!(
+    )?;
+    outln!(
         "orientation      rx={:+.3e} ry={:+.3e} rz={:+.3e} deg",
-        dw.x, dw.y, dw.z
-    );
+        dw.x,
+        dw.y,
+        dw.z
+    )?;
+    Ok(())
 }
 
 /// The parameters, the tolerances' source and the error budget with its largest items.
-fn print_budget(r: &AccuracyReport) {
+fn print_budget(r: &AccuracyReport) -> Printed {
     let source = r.tolerance_source.describe();
-    println!(
+    outln!(
         "parameters       {} ({} sensitivities), {} toleranced, {source}",
         r.parameters.len(),
         if r.analytic {
@@ -124,58 +129,61 @@ fn print_budget(r: &AccuracyReport) {
             "central-difference"
         },
         r.tolerances.len()
-    );
-    println!(
+    )?;
+    outln!(
         "budget           worst case {:.4} mm, RSS {:.4} mm ({} toleranced deviations)",
         r.budget.worst_case,
         r.budget.rss,
         r.tolerances.len()
-    );
+    )?;
     for i in r.budget.items.iter().take(5) {
-        println!("  largest        {:<28} {:.4} mm", i.name, i.position);
+        outln!("  largest        {:<28} {:.4} mm", i.name, i.position)?;
     }
+    Ok(())
 }
 
 /// The clearance bounds at the pose, their Monte Carlo, over the surface and the path,
 /// and the largest clearances within the tolerance.
-fn print_clearance(c: &ClearanceReport) {
+fn print_clearance(c: &ClearanceReport) -> Printed {
     let b = &c.bounds;
     let d = b.direction;
-    println!(
+    outln!(
         "clearance        {} joints, along ({:.4}, {:.4}, {:.4}): upper {:+.5} mm, lower {:+.5} mm ({}, {} solves{})",
         c.clearances.len(), d[0], d[1], d[2], b.upper, b.lower,
         match b.method { pkm::accuracy::clearance::ClearanceMethod::FirstOrder => "first-order states re-solved", _ => "enumeration" },
         b.solves,
         if b.refined { ", refined" } else { "" }
-    );
-    println!(
+    )?;
+    outln!(
         "  largest |e|    {:.5} mm (first order {:.5} mm)",
-        b.deviation_3d.norm, b.deviation_3d.first_order
-    );
+        b.deviation_3d.norm,
+        b.deviation_3d.first_order
+    )?;
     for j in b.contributions.iter().take(5) {
-        println!(
+        outln!(
             "  largest        {:<28} {:.5} mm ({:.0} %)",
             j.joint,
             j.first_order,
             100.0 * j.share
-        );
+        )?;
     }
     if let Some(mc) = &c.monte_carlo {
-        println!(
+        outln!(
             "  monte carlo    {} states: along the direction {:+.5} .. {:+.5} mm (std {:.5}), largest |e| {:.5} mm",
             mc.samples, mc.min, mc.max, mc.std, mc.max_norm
-        );
+        )?;
     }
-    print_clearance_sweeps(c);
+    print_clearance_sweeps(c)?;
     if let (Some(t), Some(s)) = (c.tolerance, c.largest_clearance_scale) {
-        print_clearance_tolerance(c, t, s);
+        print_clearance_tolerance(c, t, s)?;
     }
+    Ok(())
 }
 
 /// The clearance bounds over the part surface and along the path.
-fn print_clearance_sweeps(c: &ClearanceReport) {
+fn print_clearance_sweeps(c: &ClearanceReport) -> Printed {
     if let Some(sf) = &c.surface {
-        println!(
+        outln!(
             "  surface        hemisphere R = {} mm, {} heights ({} unreachable): largest {}",
             sf.hemisphere.radius,
             sf.points.len(),
@@ -184,11 +192,11 @@ fn print_clearance_sweeps(c: &ClearanceReport) {
                 (Some(w), Some(z)) => format!("{w:.5} mm at z = {z:.3} mm"),
                 _ => "- (no reachable height)".into(),
             }
-        );
+        )?;
     }
     if let Some(p) = &c.path {
         if let Some(w) = p.worst.and_then(|i| p.points.get(i)) {
-            println!(
+            outln!(
                 "  path           {} of {} samples bounded: largest {:.5} mm at t = {:.3} s{}",
                 p.points.len(),
                 p.samples,
@@ -198,14 +206,15 @@ fn print_clearance_sweeps(c: &ClearanceReport) {
                     .line
                     .map(|l| format!(" (line {l})"))
                     .unwrap_or_default()
-            );
+            )?;
         }
     }
+    Ok(())
 }
 
 /// The largest clearance within tolerance `t` (mm; `s` the scale of every clearance),
 /// and per joint class with the others as given.
-fn print_clearance_tolerance(c: &ClearanceReport, t: f64, s: f64) {
+fn print_clearance_tolerance(c: &ClearanceReport, t: f64, s: f64) -> Printed {
     let over = match (&c.surface, &c.path) {
         (None, None) => " at the pose",
         (Some(_), None) => " over the surface",
@@ -213,8 +222,8 @@ fn print_clearance_tolerance(c: &ClearanceReport, t: f64, s: f64) {
         (Some(_), Some(_)) => " over the surface and the path",
     };
     match c.largest_clearance_mm {
-        Some(mm) => println!("  tolerance      {t} mm: largest clearance{over} {mm:.5} mm"),
-        None => println!("  tolerance      {t} mm: every clearance times {s:.4}{over}"),
+        Some(mm) => outln!("  tolerance      {t} mm: largest clearance{over} {mm:.5} mm")?,
+        None => outln!("  tolerance      {t} mm: every clearance times {s:.4}{over}")?,
     }
     for k in &c.largest_per_class {
         let what = match (k.largest_mm, k.largest_scale) {
@@ -226,10 +235,11 @@ fn print_clearance_tolerance(c: &ClearanceReport, t: f64, s: f64) {
             ),
             (None, None) => "any: these joints move nothing along it".to_string(),
         };
-        println!(
+        outln!(
             "  class {:<9}{} joints, the others as given: {what}",
             k.class,
             k.joints.len()
-        );
+        )?;
     }
+    Ok(())
 }

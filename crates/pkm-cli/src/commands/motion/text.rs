@@ -6,47 +6,51 @@ use pkm::motion::MotionSummary;
 use pkm::DynMechanism;
 
 use super::ProfileArg;
+use crate::out::{outln, Printed};
 use crate::EXIT_UNREACHABLE;
 
 /// Notes printed; the others are in summary.json.
 const NOTES_SHOWN: usize = 20;
 
 /// The run as text (without the closing `wrote DIR`).
-pub(super) fn print_text(m: &dyn DynMechanism, outcome: &MotionRun, profile: ProfileArg) {
+pub(super) fn print_text(
+    m: &dyn DynMechanism,
+    outcome: &MotionRun,
+    profile: ProfileArg,
+) -> Printed {
     let s = &outcome.summary;
-    println!(
+    outln!(
         "{} ({}): {} samples over {:.4} s",
         m.name(),
         m.kind(),
         s.samples,
         s.duration_s
-    );
-    print_axes(s);
-    print_ratios(s, profile);
+    )?;
+    print_axes(s)?;
+    print_ratios(s, profile)?;
     match s.feed_override_max {
-        Some(k) => println!(
+        Some(k) => outln!(
             "largest feed override within the actuator rate limits: {:.4}",
             k
-        ),
-        None if s.rapid_override_max.is_some() => {
-            println!("largest feed override: no feed move")
-        }
-        None => println!("largest feed override: no rate limits in the machine file"),
+        )?,
+        None if s.rapid_override_max.is_some() => outln!("largest feed override: no feed move")?,
+        None => outln!("largest feed override: no rate limits in the machine file")?,
     }
     if let Some(k) = s.rapid_override_max {
-        println!("largest rapid override within the actuator rate limits: {k:.4}");
+        outln!("largest rapid override within the actuator rate limits: {k:.4}")?;
     }
     if let Some(sg) = &s.singular {
-        print_singular(sg);
+        print_singular(sg)?;
     }
     if let Some(acc) = &outcome.accuracy {
-        super::super::motion_accuracy::print(acc);
+        super::super::motion_accuracy::print(acc)?;
     }
-    print_notes(outcome);
+    print_notes(outcome)?;
+    Ok(())
 }
 
 /// The table of travel, velocity and acceleration per actuator and serial axis.
-fn print_axes(s: &MotionSummary) {
+fn print_axes(s: &MotionSummary) -> Printed {
     // The first column as wide as the longest axis label (a machine's own
     // actuator names, `actuator north-west`, keep the columns aligned).
     let lists = [("actuator", &s.actuators), ("serial", &s.serial)];
@@ -57,13 +61,18 @@ fn print_axes(s: &MotionSummary) {
                 .map(move |(n, _)| kind.len() + 1 + n.chars().count())
         })
         .fold(10, usize::max);
-    println!(
+    outln!(
         "{:<w$} {:>12} {:>14} {:>14} {:>16} {:>16}",
-        "axis", "travel", "peak |v|", "mean |v|", "peak |a|", "mean |a|"
-    );
+        "axis",
+        "travel",
+        "peak |v|",
+        "mean |v|",
+        "peak |a|",
+        "mean |a|"
+    )?;
     for (kind, list) in lists {
         for (n, st) in list.iter() {
-            println!(
+            outln!(
                 "{:<w$} {:>12.4} {:>14.4} {:>14.4} {:>16.4} {:>16.4}",
                 format!("{kind} {n}"),
                 st.travel,
@@ -71,22 +80,23 @@ fn print_axes(s: &MotionSummary) {
                 st.mean_abs_velocity,
                 st.peak_acceleration,
                 st.mean_abs_acceleration
-            );
+            )?;
         }
     }
+    Ok(())
 }
 
 /// Seed 000's serial/PKM ratios, and why one is not available.
-fn print_ratios(s: &MotionSummary, profile: ProfileArg) {
+fn print_ratios(s: &MotionSummary, profile: ProfileArg) -> Printed {
     let ratio = |r: Option<f64>| r.map_or("n/a".to_string(), |r| format!("{r:.3}"));
     let Some(r) = &s.ratios else {
-        println!(
+        outln!(
             "ratios serial/PKM: none (no serial axis moved, or an actuator or axis turns: \
              mm over deg means nothing)"
-        );
-        return;
+        )?;
+        return Ok(());
     };
-    println!(
+    outln!(
         "ratios serial/PKM (seed 000's): travel {:.3} (mean over mean), peak \
          velocity {}, peak acceleration {} (largest over largest); of mean \
          peaks: velocity {}, acceleration {}",
@@ -95,15 +105,15 @@ fn print_ratios(s: &MotionSummary, profile: ProfileArg) {
         ratio(r.acceleration),
         ratio(r.velocity_of_mean_peaks),
         ratio(r.acceleration_of_mean_peaks)
-    );
+    )?;
     if r.velocity.is_none() {
-        println!(
+        outln!(
             "  (n/a: no sample caught the machine moving: every move is shorter \
              than the sampling period, so its samples are its ends, at rest; \
              a higher --rate samples it)"
-        );
+        )?;
     } else if r.acceleration.is_none() {
-        println!(
+        outln!(
             "  (acceleration n/a: no sample caught a serial axis accelerating{})",
             match profile {
                 ProfileArg::Constant =>
@@ -113,19 +123,21 @@ fn print_ratios(s: &MotionSummary, profile: ProfileArg) {
                      gives the ramps",
                 _ => "",
             }
-        );
+        )?;
     }
+    Ok(())
 }
 
 /// The program's first notes, and how many more summary.json lists.
-fn print_notes(outcome: &MotionRun) {
+fn print_notes(outcome: &MotionRun) -> Printed {
     for (l, t) in outcome.notes.iter().take(NOTES_SHOWN) {
-        println!("note: line {l}: {t}");
+        outln!("note: line {l}: {t}")?;
     }
     let more = outcome.notes.len().saturating_sub(NOTES_SHOWN) as u64 + outcome.notes_dropped;
     if more > 0 {
-        println!("note: {more} more in summary.json");
+        outln!("note: {more} more in summary.json")?;
     }
+    Ok(())
 }
 
 /// 0, or [`EXIT_UNREACHABLE`] with the first limit violation on stderr.
@@ -152,10 +164,10 @@ pub(super) fn exit_code(s: &MotionSummary) -> u8 {
 }
 
 /// The closest approach to the singular direction and the worst passages near it.
-fn print_singular(sg: &pkm::motion::singular::SingularReport) {
+fn print_singular(sg: &pkm::motion::singular::SingularReport) -> Printed {
     let line = |l: Option<u64>| l.map(|l| format!("line {l}")).unwrap_or("-".into());
     let (deg, t, l) = sg.closest;
-    println!(
+    outln!(
         "singular direction (tool axis along the rotary axis nearer the part), feed moves: \
          closest {deg:.4} deg at t = {t:.3} s ({}); {} passage(s) within {:.3} deg{}",
         line(l),
@@ -166,7 +178,7 @@ fn print_singular(sg: &pkm::motion::singular::SingularReport) {
         } else {
             ", largest speed-ups:"
         }
-    );
+    )?;
     for p in sg.worst().into_iter().take(5) {
         let peaks: Vec<String> = p
             .rotary
@@ -185,7 +197,7 @@ fn print_singular(sg: &pkm::motion::singular::SingularReport) {
                 )
             })
             .collect();
-        println!(
+        outln!(
             "  {} to {} (t {:.3}-{:.3} s), closest {:.4} deg: {}",
             line(p.start_line),
             line(p.end_line),
@@ -193,6 +205,7 @@ fn print_singular(sg: &pkm::motion::singular::SingularReport) {
             p.end_s,
             p.closest_deg,
             peaks.join(", ")
-        );
+        )?;
     }
+    Ok(())
 }

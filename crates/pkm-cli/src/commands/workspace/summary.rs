@@ -5,6 +5,7 @@ use pkm::DynMechanism;
 use serde_json::json;
 
 use super::Mapped;
+use crate::out::{outln, Printed};
 
 /// `summary.json` of a map (without the atlas and forward entries).
 pub(super) fn summary_json(
@@ -62,45 +63,49 @@ pub(super) fn summary_json(
 }
 
 /// The map as text (without the closing `wrote DIR`).
-pub(super) fn print_text(m: &dyn DynMechanism, mapped: &Mapped) {
+pub(super) fn print_text(m: &dyn DynMechanism, mapped: &Mapped) -> Printed {
     let s = mapped.summary;
-    println!(
+    outln!(
         "{} ({}): {} points in {:.3} s",
         m.name(),
         m.kind(),
         s.points,
         mapped.seconds
-    );
-    println!(
+    )?;
+    outln!(
         "reachable  {} ({:.1} %), {} {:.4e} {}",
         s.reachable,
         100.0 * s.reachable_fraction,
         s.measure_name,
         s.measure,
         s.measure_unit
-    );
+    )?;
     for (i, b) in s.bounding_box.iter().enumerate() {
         let c = &m.coordinates()[mapped.wm.axes[i].coordinate];
-        println!(
+        outln!(
             "range      {} [{:.3}, {:.3}] {}",
             c.name,
             b[0],
             b[1],
             c.quantity.unit()
-        );
+        )?;
     }
-    println!(
+    outln!(
         "condition  min {:.3}, median {:.3}, p95 {:.3}, max {:.3}",
-        s.condition.min, s.condition.median, s.condition.p95, s.condition.max
-    );
-    println!("grid       over {}", mapped.grid_bounds);
-    print_outcomes(s);
+        s.condition.min,
+        s.condition.median,
+        s.condition.p95,
+        s.condition.max
+    )?;
+    outln!("grid       over {}", mapped.grid_bounds)?;
+    print_outcomes(s)?;
+    Ok(())
 }
 
 /// The outcome of every point, the limits that bind, and whether the region is cut.
-fn print_outcomes(s: &pkm::workspace::WorkspaceSummary) {
+fn print_outcomes(s: &pkm::workspace::WorkspaceSummary) -> Printed {
     use pkm::workspace::PointStatus as St;
-    println!(
+    outln!(
         "outcomes   {} reachable, {} beyond a limit, {} without solution, {} solver failures, {} singular, {} in separate regions",
         s.outcome(St::Reachable),
         s.outcome(St::Limits),
@@ -108,17 +113,18 @@ fn print_outcomes(s: &pkm::workspace::WorkspaceSummary) {
         s.outcome(St::SolverFailed),
         s.outcome(St::Singular),
         s.outcome(St::Separate)
-    );
+    )?;
     for (k, n) in s.binding.iter().take(8) {
-        println!("first      {n:>8} x {k}");
+        outln!("first      {n:>8} x {k}")?;
     }
     for (k, n) in s.violated.iter().take(8) {
-        println!("violated   {n:>8} x {k}");
+        outln!("violated   {n:>8} x {k}")?;
     }
     if !s.cut.is_empty() {
-        println!(
+        outln!(
             "warning    reachable points lie on the grid's faces ({}): the reachable region may go on beyond the grid; widen --bounds",
             s.cut.join(", ")
-        );
+        )?;
     }
+    Ok(())
 }
