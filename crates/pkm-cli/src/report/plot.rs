@@ -136,6 +136,9 @@ fn draw_panel(
     // Plotters needs a range that is not too narrow for its tick marks.
     let pad = ((y1 - y0) * 0.08).max(1e-3 * y0.abs().max(y1.abs()).max(1.0));
     let (y0, y1) = (y0 - pad, y1 + pad);
+    if !(y0.is_finite() && y1.is_finite() && (y1 - y0).is_finite()) {
+        return Ok(());
+    }
     let mut chart = ChartBuilder::on(&plot_area)
         .margin(8)
         .caption(p.title, ("sans-serif", 14))
@@ -165,11 +168,21 @@ fn draw_panel(
     }
     for (i, s) in p.series.iter().enumerate() {
         let c = COLORS[i % COLORS.len()];
-        chart
-            .draw_series(LineSeries::new(s.points.iter().copied(), c.stroke_width(2)))
-            .map_err(|e| anyhow!("{e}"))?;
+        for run in finite_runs(&s.points) {
+            chart
+                .draw_series(LineSeries::new(run.iter().copied(), c.stroke_width(2)))
+                .map_err(|e| anyhow!("{e}"))?;
+        }
     }
     draw_legend(&legend_area, p, !limits.is_empty(), !marks.is_empty())
+}
+
+/// The stretches of `points` between the points that are not finite: a curve is drawn
+/// with a gap where its quantity is undefined.
+fn finite_runs(points: &[(f64, f64)]) -> impl Iterator<Item = &[(f64, f64)]> {
+    points
+        .split(|(t, y)| !(t.is_finite() && y.is_finite()))
+        .filter(|run| !run.is_empty())
 }
 
 /// The x and y ranges of a panel's curves, x over `span` when given (at least 1e-12
@@ -181,8 +194,14 @@ fn extent(p: &Panel, span: Option<(f64, f64)>) -> Option<(f64, f64, f64, f64)> {
         f64::INFINITY,
         f64::NEG_INFINITY,
     );
+    // A point that is not finite (an undefined quantity, an overflow) is no part of
+    // the range: it is left out of the curve too (`finite_runs`).
     for s in p.series {
-        for &(t, y) in &s.points {
+        for &(t, y) in s
+            .points
+            .iter()
+            .filter(|(t, y)| t.is_finite() && y.is_finite())
+        {
             t0 = t0.min(t);
             t1 = t1.max(t);
             y0 = y0.min(y);
@@ -192,7 +211,8 @@ fn extent(p: &Panel, span: Option<(f64, f64)>) -> Option<(f64, f64, f64, f64)> {
     if let Some((a, b)) = span {
         (t0, t1) = (a, b);
     }
-    if !t0.is_finite() {
+    // A range whose width overflows (curves from -1e300 to 1e300) cannot be drawn.
+    if !(t0.is_finite() && (t1 - t0).is_finite() && (y1 - y0).is_finite()) {
         return None;
     }
     if t1 - t0 < 1e-12 {
@@ -353,4 +373,45 @@ pub fn histogram_svg(
         root.present().map_err(|e| anyhow!("{e}"))?;
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn panel(points: Vec<(f64, f64)>) -> Vec<(String, String, Vec<Series>)> {
+        let series = vec![Series {
+            name: "q".into(),
+            points,
+        }];
+        vec![("title".into(), "y".into(), series)]
+    }
+
+    /// Values that are not finite, or whose range overflows, give a plot with a gap or
+    /// an empty panel, never plotters' assertion on a NaN range.
+    #[test]
+    fn values_that_are_not_finite_make_no_panic() {
+        let cases = [
+            vec![(0.0, 1.0), (1.0, f64::NAN), (2.0, 3.0)],
+            vec![(0.0, f64::INFINITY), (1.0, f64::NEG_INFINITY)],
+            vec![(f64::NAN, 1.0), (1.0, 2.0)],
+            vec![(0.0, -1e300), (1.0, 1e300)],
+            vec![(0.0, -1.7e308), (1.0, 0.0)],
+            vec![(0.0, f64::NAN)],
+        ];
+        for points in cases {
+            let svg = panels_svg_x("t", "x", &panel(points.clone()), (400, 300));
+            assert!(svg.is_ok(), "{points:?}: {svg:?}");
+        }
+        let span = Some((0.0, 1.0));
+        let svg = panels_svg_span("t", "x", span, &panel(Vec::new()), (400, 300));
+        assert!(svg.is_ok());
+    }
+
+    #[test]
+    fn a_gap_splits_a_curve() {
+        let pts = [(0.0, 1.0), (1.0, f64::NAN), (2.0, 3.0), (3.0, 4.0)];
+        let runs: Vec<_> = finite_runs(&pts).collect();
+        assert_eq!(runs, [&pts[..1], &pts[2..]]);
+    }
 }

@@ -260,15 +260,25 @@ fn tripod_calibrates_with_its_platform_joints_held() {
         .arg(cal.join("identified.toml"))
         .output()
         .unwrap());
+    let fixing = |fix: &str| {
+        pkm()
+            .args(["calibrate", &tri, "--fix", fix, "--measurements"])
+            .arg(sim.join("measurements.csv"))
+            .arg("--out")
+            .arg(dir.path().join("c1"))
+            .output()
+            .unwrap()
+    };
     // An unknown --fix pattern lists the parameters.
-    let o = pkm()
-        .args(["calibrate", &tri, "--fix", "Q.*", "--measurements"])
-        .arg(sim.join("measurements.csv"))
-        .arg("--out")
-        .arg(dir.path().join("c1"))
-        .output()
-        .unwrap();
+    let o = fixing("Q.*");
     assert!(String::from_utf8_lossy(&o.stderr).contains("no parameter matches `Q.*`"));
+    // Holding every parameter leaves nothing to identify (it once panicked in the SVD).
+    let o = fixing("*");
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(
+        String::from_utf8_lossy(&o.stderr),
+        "error: fixed parameters: nothing to identify: every parameter is fixed by --fix '*'\n"
+    );
 }
 
 /// A pentapod is identified from points on its tool axis, and its identified

@@ -187,6 +187,49 @@ fn bad_programs_and_moves() {
     assert_eq!(v["samples"], 1001);
 }
 
+/// `--feed 1e300` and `--duration 1e-200` once panicked in the plots (NaN ranges) and
+/// `--duration 0` wrote one sample that never moved, exit 0: each is refused, exit 1,
+/// naming the option and its value, before anything is written.
+#[test]
+fn absurd_feeds_and_durations_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    for (option, value, want) in [
+        (
+            "--feed",
+            "1e300",
+            "error: feed: expected a feed in (0, 6e7] mm/min",
+        ),
+        (
+            "--duration",
+            "1e-200",
+            "error: --duration: expected a finite duration",
+        ),
+        ("--duration", "0", "at least 1e-6 s, got 0 s"),
+        ("--duration", "5e-324", "got 4.9407e-324 s"),
+    ] {
+        let out = dir.path().join("o");
+        let o = pkm()
+            .args([
+                "motion",
+                &path("examples/machines/hexapod-linuxcnc.toml"),
+                "--from",
+                "0,0,508",
+                "--to",
+                "1,0,508",
+                option,
+                value,
+                "--out",
+            ])
+            .arg(&out)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{option} {value}: {err}");
+        assert!(err.contains(want), "{option} {value}: {err}");
+        assert!(!out.join("summary.json").exists(), "{option} {value}");
+    }
+}
+
 #[test]
 fn rapid_rate_comes_from_the_machine_file() {
     let dir = tempfile::tempdir().unwrap();

@@ -462,6 +462,17 @@ impl CalibratableVisitor for CalibrateJob<'_> {
             }
             fixed.extend(hits);
         }
+        fixed.sort_unstable();
+        fixed.dedup();
+        if fixed.len() == names.len() {
+            return Err(Error::InvalidInput {
+                what: "fixed parameters".into(),
+                message: format!(
+                    "nothing to identify: every parameter is fixed by --fix '{}'",
+                    self.opt.fix.join(",")
+                ),
+            });
+        }
         let o = identify::Options {
             model: self.opt.model,
             fixed,

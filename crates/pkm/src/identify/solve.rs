@@ -264,7 +264,15 @@ fn validate<M: Identifiable<P, A>, const P: usize, const A: usize>(
             )));
         }
     }
-    let free = n - o.fixed.len();
+    // A parameter held twice is held once.
+    let held = (0..n).filter(|i| o.fixed.contains(i)).count();
+    let free = n - held;
+    if free == 0 {
+        return Err(Error::InvalidInput {
+            what: "fixed parameters".into(),
+            message: format!("nothing to identify: all {n} parameters are held"),
+        });
+    }
     let per_state = match o.model {
         MeasurementModel::Pose => A,
         MeasurementModel::Points => 3 * meas.fixture.len(),

@@ -58,6 +58,122 @@ impl Default for FeedOptions {
     }
 }
 
+/// The fastest feed or rapid rate a run takes (mm/s, or deg/s for a machine in its
+/// own angles): 1e6 mm/s, 60 km/min, far beyond any machine tool or robot. A faster
+/// one is a mistake of units or of typing, and would make velocities and
+/// accelerations beyond what the statistics and plots can hold.
+pub const MAX_FEED: f64 = 1e6;
+
+/// The shortest duration of a timed move (s): a microsecond, a thousandth of the
+/// sampling period of the fastest controller. A shorter one cannot be sampled (its end
+/// instant is its start in floating point, or its speed overflows).
+pub const MIN_DURATION: f64 = 1e-6;
+
+impl FeedOptions {
+    /// Refuses options no run can take, before any sample: a feed or rapid rate not in
+    /// (0, [`MAX_FEED`]], an acceleration or jerk that is not positive and finite, a
+    /// work limit of no sample.
+    ///
+    /// # Examples
+    ///
+    /// ```
+    /// use pkm::motion::program::FeedOptions;
+    /// assert!(FeedOptions::default().validate().is_ok());
+    /// let absurd = FeedOptions { feed: Some(1e300 / 60.0), ..FeedOptions::default() };
+    /// let e = absurd.validate().unwrap_err().to_string();
+    /// assert!(e.starts_with("feed: expected a feed in (0, 6e7] mm/min"), "{e}");
+    /// ```
+    pub fn validate(&self) -> Result<()> {
+        if let Some(v) = self.feed {
+            check_speed("feed", "a feed", v)?;
+        }
+        check_speed("rapid", "a rapid rate", self.rapid)?;
+        for (what, v, unit) in [
+            ("acceleration", self.acceleration, "mm/s^2"),
+            ("jerk", self.jerk, "mm/s^3"),
+        ] {
+            if !(v > 0.0 && v.is_finite()) {
+                return Err(Error::InvalidInput {
+                    what: what.into(),
+                    message: format!("expected a positive finite {what} ({unit}), got {v}"),
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Refuses a speed `v` (mm/s) of option `what` outside (0, [`MAX_FEED`]]; the message
+/// gives it in mm/min too, the unit of G-code and of `pkm motion --feed`.
+pub fn check_speed(what: &str, kind: &str, v: f64) -> Result<()> {
+    if v > 0.0 && v <= MAX_FEED {
+        return Ok(());
+    }
+    Err(Error::InvalidInput {
+        what: what.into(),
+        message: format!(
+            "expected {kind} in (0, {}] mm/min ({} mm/s), got {} mm/min ({} mm/s)",
+            short(MAX_FEED * 60.0),
+            short(MAX_FEED),
+            short(v * 60.0),
+            short(v)
+        ),
+    })
+}
+
+/// Refuses the duration `d` (s) of a timed move of `length` that is not finite, shorter
+/// than [`MIN_DURATION`] or so short that the move would be faster than [`MAX_FEED`].
+pub fn check_duration(length: f64, d: f64) -> Result<()> {
+    let bad = |message: String| Error::InvalidInput {
+        what: "--duration".into(),
+        message,
+    };
+    if !(d.is_finite() && d >= MIN_DURATION) {
+        return Err(bad(format!(
+            "expected a finite duration of at least {} s, got {} s",
+            short(MIN_DURATION),
+            short(d)
+        )));
+    }
+    if length / d > MAX_FEED {
+        return Err(bad(format!(
+            "{} s for a move of {} makes {} mm/s, beyond the fastest accepted ({} mm/s): \
+             expected at least {} s",
+            short(d),
+            short(length),
+            short(length / d),
+            short(MAX_FEED),
+            short(length / MAX_FEED)
+        )));
+    }
+    Ok(())
+}
+
+/// `v` to five significant digits, trailing zeros dropped: plain from 1e-3 below 1e6
+/// (`0`, `1.5`, `6000`), in scientific notation beyond (`6e7`, `1.6667e298`).
+fn short(v: f64) -> String {
+    let trim = |s: &str| -> String {
+        if s.contains('.') {
+            s.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            s.to_string()
+        }
+    };
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let mag = v.abs().log10().floor() as i32;
+    if (-3..6).contains(&mag) {
+        let decimals = (4 - mag).max(0) as usize;
+        return trim(&format!("{v:.decimals$}"));
+    }
+    let s = format!("{v:.4e}");
+    match s.split_once('e') {
+        Some((m, e)) => format!("{}e{e}", trim(m)),
+        None => s,
+    }
+}
+
 /// A time law of `kind` along `length` at speed `v`.
 pub fn profile(kind: ProfileKind, length: f64, v: f64, o: &FeedOptions) -> Result<Profile> {
     match kind {
@@ -150,7 +266,13 @@ fn move_profile<M: Mechanism<P, A>, const P: usize, const A: usize>(
         // Inverse time (G93): the move takes the programmed time at constant speed.
         _ if o.feed.is_none() && g.duration.is_some() => match g.duration {
             Some(d) if segment.length > 0.0 => {
-                Profile::constant(segment.length, segment.length / d)?
+                let v = segment.length / d;
+                check_speed(
+                    &format!("G-code line {}", g.line),
+                    "an inverse-time speed",
+                    v,
+                )?;
+                Profile::constant(segment.length, v)?
             }
             Some(d) => Profile::dwell(d),
             None => unreachable!("guarded above"),
@@ -160,6 +282,7 @@ fn move_profile<M: Mechanism<P, A>, const P: usize, const A: usize>(
                 what: format!("G-code line {}", g.line),
                 message: "no feed".into(),
             })?;
+            check_speed(&format!("G-code line {}", g.line), "a feed", v)?;
             profile(o.profile, segment.length, v, o)?
         }
     })

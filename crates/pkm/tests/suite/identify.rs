@@ -373,6 +373,56 @@ fn translational_tripod_identified_with_its_platform_joints_held() {
     assert!(after.position_max < 1e-6, "{after:?}");
 }
 
+/// Holding every parameter (`--fix '*'`) once panicked in the SVD of an empty
+/// Jacobian: it is refused, naming the patterns, and a parameter held by two patterns
+/// counts once (the free count once underflowed).
+#[test]
+fn holding_every_parameter_is_refused() {
+    use pkm::analysis::identification::{
+        calibrate, simulate_measurements, sized_experiment, CalibrateOptions, SimulateOptions,
+    };
+    let m = machine("hexapod-seed001.toml");
+    let mut experiment = sized_experiment(&m).unwrap().experiment;
+    experiment.states = 20;
+    let opt = SimulateOptions {
+        experiment,
+        holdout: 0,
+        comment: String::new(),
+    };
+    let campaign = simulate_measurements(&m, None, &opt).unwrap();
+    let fixing = |fix: &[&str]| CalibrateOptions {
+        fix: fix.iter().map(|s| s.to_string()).collect(),
+        ..CalibrateOptions::default()
+    };
+    for fix in [&["*"][..], &["A*", "*"], &["*", "*"]] {
+        let e = calibrate(&m, &campaign.measurements, None, &fixing(fix))
+            .unwrap_err()
+            .to_string();
+        let want = format!(
+            "fixed parameters: nothing to identify: every parameter is fixed by --fix '{}'",
+            fix.join(",")
+        );
+        assert_eq!(e, want);
+    }
+    // One parameter held twice: the other 47 are identified.
+    let c = calibrate(&m, &campaign.measurements, None, &fixing(&["A1.z", "A1.z"])).unwrap();
+    let id = &c.identification;
+    assert_eq!(id.free.iter().filter(|f| !**f).count(), 1);
+    // The engine refuses it too, for a caller that gives the indices.
+    let h = hexapod();
+    let zero = h.zero_readings().unwrap();
+    let n = parameter_names(&h).len();
+    let o = Options {
+        fixed: (0..n).chain(0..3).collect(),
+        ..Default::default()
+    };
+    let e = identify(&h, &zero, &campaign.measurements, &o).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        format!("fixed parameters: nothing to identify: all {n} parameters are held")
+    );
+}
+
 /// The report's calibration study runs seed 001's one-strut design with the seven
 /// states the procedure needs, on every strut machine: the hexapods' systems solve;
 /// the translational tripod's are singular, and the study says so with the

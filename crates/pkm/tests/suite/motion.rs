@@ -522,6 +522,97 @@ fn motion_work_is_bounded_before_it_is_done() {
     assert!(run("G1 X33 F600\nG1 X34\n", Sampling::Rate(1000.0), n + 4).is_ok());
 }
 
+/// A feed or rapid rate beyond 1e6 mm/s (`--feed 1e300` once failed in the plots on
+/// NaN velocities), and a duration that is not positive and finite or too short to
+/// sample (`--duration 0` once gave one sample at the end pose, travel 0, exit 0), are
+/// refused before the run, naming the option, the value and the range.
+#[test]
+fn absurd_feeds_and_durations_are_refused() {
+    use pkm::analysis::motion::{run_motion, MotionSource, NoSink};
+    let m = load("hexapod-linuxcnc.toml");
+    let run = |feed: &FeedOptions, duration: Option<f64>| {
+        let source = MotionSource::PointToPoint {
+            from: vec![0.0, 0.0, 508.0, 0.0, 0.0, 0.0],
+            to: vec![1.0, 0.0, 508.0, 0.0, 0.0, 0.0],
+            duration,
+            accel_time: None,
+        };
+        run_motion(&m, source, feed, Sampling::Rate(1000.0), &mut NoSink)
+    };
+    let at = |v: f64| FeedOptions {
+        feed: Some(v),
+        ..Default::default()
+    };
+    for v in [1e300 / 60.0, f64::INFINITY, f64::NAN, 0.0, -1.0, 2e6] {
+        let e = run(&at(v), None).unwrap_err().to_string();
+        assert!(
+            e.starts_with("feed: expected a feed in (0, 6e7] mm/min (1e6 mm/s), got "),
+            "{v}: {e}"
+        );
+    }
+    assert!(run(&at(1e6), None).is_ok());
+    let rapid = FeedOptions {
+        rapid: 1e300,
+        ..at(10.0)
+    };
+    let e = run(&rapid, None).unwrap_err().to_string();
+    assert!(
+        e.starts_with("rapid: expected a rapid rate in (0, 6e7]"),
+        "{e}"
+    );
+    let e = run(&at(1e300), None).unwrap_err().to_string();
+    assert!(e.contains("got 6e301 mm/min (1e300 mm/s)"), "{e}");
+    for d in [0.0, 5e-324, 1e-200, 1e-7, -1.0, f64::NAN, f64::INFINITY] {
+        let e = run(&FeedOptions::default(), Some(d))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("--duration: expected a finite duration of at least 1e-6 s, got "),
+            "{d}: {e}"
+        );
+    }
+    // Long enough to sample, but a millimetre in 1e-6 s is 1e6 mm/s: the fastest taken.
+    let ok = run(&FeedOptions::default(), Some(1e-6)).unwrap();
+    assert!(ok.summary.samples >= 2);
+    let far = MotionSource::PointToPoint {
+        from: vec![0.0, 0.0, 508.0, 0.0, 0.0, 0.0],
+        to: vec![10.0, 0.0, 508.0, 0.0, 0.0, 0.0],
+        duration: Some(1e-6),
+        accel_time: None,
+    };
+    let e = run_motion(
+        &m,
+        far,
+        &FeedOptions::default(),
+        Sampling::Rate(1e3),
+        &mut NoSink,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("makes 1e7 mm/s, beyond the fastest accepted"),
+        "{e}"
+    );
+    assert!(e.ends_with("expected at least 1e-5 s"), "{e}");
+    // A program's own feed, per minute or in inverse time, is held to the same range.
+    for program in ["G1 X1 F99999999999\n", "G93 G1 X1 F99999999999\n"] {
+        let source = MotionSource::Gcode {
+            reader: Box::new(std::io::Cursor::new(program.to_string())),
+            from: Some(vec![0.0, 0.0, 508.0, 0.0, 0.0, 0.0]),
+            setup: Default::default(),
+        };
+        let feed = FeedOptions::default();
+        let e = run_motion(&m, source, &feed, Sampling::Rate(1e3), &mut NoSink)
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("G-code line 1: expected a"), "{program}: {e}");
+        assert!(
+            e.contains(" in (0, 6e7] mm/min (1e6 mm/s), got "),
+            "{program}: {e}"
+        );
+    }
+}
+
 /// `Decimated` keeps at most its cap, evenly spaced, the first item always.
 #[test]
 fn decimated_streams_keep_evenly_spaced_items() {

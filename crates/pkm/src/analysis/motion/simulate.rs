@@ -12,7 +12,7 @@ use crate::analysis::accuracy::ToleranceSource;
 use crate::error::{Error, Result};
 use crate::machine::{Analysable, Visitor};
 use crate::mechanism::PoseSpace;
-use crate::motion::program::{profile, FeedOptions, ProfileKind};
+use crate::motion::program::{check_duration, profile, FeedOptions, ProfileKind};
 use crate::motion::{Move, Profile, RunSink, Runner, Sample, Sampling, Segment, Step};
 
 mod program;
@@ -42,6 +42,7 @@ impl Visitor for Simulate<'_, '_> {
         self,
         m: &M,
     ) -> Result<MotionRun> {
+        self.feed.validate()?;
         let mut runner = Runner::new(m, self.sampling)?;
         runner.set_max_samples(self.feed.max_samples);
         runner.set_singular_angle(self.feed.singular_angle)?;
@@ -263,6 +264,9 @@ fn timed_profile(
     accel_time: Option<f64>,
     feed: &FeedOptions,
 ) -> Result<Profile> {
+    if let Some(d) = duration {
+        check_duration(length, d)?;
+    }
     match (duration, accel_time, feed.profile) {
         (Some(d), Some(ta), ProfileKind::Trapezoid) => Profile::trapezoid_timed(length, d, ta),
         (Some(_), Some(_), _) => Err(invalid("--accel-time", "needs --profile trapezoid")),
