@@ -12,6 +12,8 @@
 //! G40 (cutter compensation off), T and M6 (tool change), M0/M1/M2/M30/M3/M4/M5/M7/
 //! M8/M9 with S (no kinematic effect). Other M codes (a controller's own, such as
 //! LinuxCNC's remapped M428) are accepted with a note ([`Interpreter::notes`]).
+//! A line LinuxCNC refuses is refused with its line and column: a word twice, two
+//! codes of one modal group, a comment left open (`gcode/groups.rs`, `screen.rs`).
 //! Numbers are re-read from the source text as f64 (the parser reads f32); the parser
 //! runs through its zero-allocation visitors (`motion/words.rs`).
 //!
@@ -25,10 +27,11 @@ use crate::error::{Error, Result};
 
 mod apply;
 mod arc;
+mod groups;
 mod screen;
 pub use arc::plane_axes;
 use screen::exponent_hint;
-pub(super) use screen::{oversized_code, variable_hint};
+pub(super) use screen::{oversized_code, unclosed_comment, variable_hint};
 
 /// Active plane for arcs: in-plane axes `(e1, e2)` and normal `e1 x e2`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -163,6 +166,15 @@ pub(super) fn err(line: u64, message: String) -> Error {
     }
 }
 
+/// The error of G-code line `line` at `column` (1-based, in characters): `message`
+/// under "G-code line N, column C".
+pub(super) fn err_at(line: u64, column: usize, message: String) -> Error {
+    Error::InvalidInput {
+        what: format!("G-code line {line}, column {column}"),
+        message,
+    }
+}
+
 const TWO_PI: f64 = std::f64::consts::TAU;
 
 impl Interpreter {
@@ -219,6 +231,7 @@ impl Interpreter {
         let r = read.read(text, line).and_then(|()| {
             let glued_exponent =
                 read.words.iter().any(|w| w.0 == 'E') && !exponent_hint(text).is_empty();
+            groups::check(&read.codes, &read.words, text, line)?;
             self.apply(&read.codes, &read.words, line)
                 .map_err(|e| match e {
                     Error::InvalidInput { what, message }

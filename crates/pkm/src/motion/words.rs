@@ -15,7 +15,7 @@ use gcode::core::{
     Span, TokenType, Value,
 };
 
-use super::gcode::err;
+use super::gcode::{err, err_at};
 use crate::error::Result;
 
 mod plain;
@@ -64,9 +64,9 @@ impl std::fmt::Debug for LineWords {
 impl LineWords {
     /// Reads `text`, one source line (1-based number `line`), into [`Self::codes`] and
     /// [`Self::words`]. Errors, naming the line: a G, M or T code number of more than
-    /// six digits (`screen.rs`: the crate's `u32` would wrap it to another code), the
-    /// parser's first diagnostic (`malformed: ...`), a variable, a word whose number is
-    /// not a finite f64.
+    /// six digits (`screen.rs`: the crate's `u32` would wrap it to another code), a
+    /// comment left open (with its column), the parser's first diagnostic
+    /// (`malformed: ...`), a variable, a word whose number is not a finite f64.
     ///
     /// A plain line (`plain.rs`: codes, words and a trailing `;` comment, nearly every
     /// line of a program) is read in one pass over its bytes to the same codes and
@@ -84,6 +84,13 @@ impl LineWords {
             return Err(err(
                 line,
                 format!("`{word}`: a G, M or T code number has at most 6 digits"),
+            ));
+        }
+        if let Some(column) = super::gcode::unclosed_comment(text) {
+            return Err(err_at(
+                line,
+                column,
+                "unclosed comment found: `(` without `)`".into(),
             ));
         }
         self.raw.clear();
@@ -289,9 +296,11 @@ mod tests {
     }
 
     fn check(buf: &mut LineWords, text: &str) {
-        // Refused before the parser sees them (the crate's code numbers overflow); a
-        // plain line never has one.
-        if crate::motion::gcode::oversized_code(text).is_some() {
+        // Refused before the parser sees them (the crate's code numbers overflow, it
+        // takes an open comment to the line's end); a plain line never has one.
+        let screened = crate::motion::gcode::oversized_code(text).is_some()
+            || crate::motion::gcode::unclosed_comment(text).is_some();
+        if screened {
             let (mut c, mut w) = (Vec::new(), Vec::new());
             assert!(!plain::read(text.as_bytes(), &mut c, &mut w), "{text:?}");
             assert!(buf.read(text, 7).is_err(), "{text:?}");

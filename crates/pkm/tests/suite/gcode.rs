@@ -144,6 +144,82 @@ fn malformed_programs_name_the_line() {
     }
 }
 
+/// A line a controller refuses was read with the last word winning: an axis or any
+/// other word twice, two codes of one modal group, a comment left open. Each is an
+/// error with its line and the column of the second word (of the `(`), worded as
+/// LinuxCNC's rs274ngc words it.
+#[test]
+fn words_twice_codes_of_one_group_and_open_comments_are_refused() {
+    let cases = [
+        (
+            "G1 X1 X2 F100",
+            "1, column 7",
+            "multiple X words on one line",
+        ),
+        (
+            "G1 X1 F60 F6000",
+            "1, column 11",
+            "multiple F words on one line",
+        ),
+        (
+            "G1 X1 (a) Y2 (b) Y3 F100",
+            "1, column 18",
+            "multiple Y words",
+        ),
+        ("g1 x1 f100 i2 I3", "1, column 15", "multiple I words"),
+        ("T1 T2 M6", "1, column 4", "multiple T words"),
+        (
+            "G0 X0\nG1 G0 X1 F100",
+            "2, column 4",
+            "G1 and G0: two G codes used from the same modal group (group 1, motion: G0 G1 G2 G3)",
+        ),
+        ("G2 G3 X1 R5 F100", "1, column 4", "G2 and G3: two G codes"),
+        (
+            "G21 G20 X1 F100",
+            "1, column 5",
+            "G21 and G20: two G codes used from the same modal group (group 6, units: G20 G21)",
+        ),
+        ("G17 G19", "1, column 5", "(group 2, plane selection"),
+        ("G90 G91", "1, column 5", "(group 3, distance mode"),
+        ("G90.1 G91.1", "1, column 7", "(group 4, arc IJK"),
+        ("G93 G94", "1, column 5", "(group 5, feed rate mode"),
+        ("G43 H1 G49", "1, column 8", "(group 8, tool length offset"),
+        ("G59.1 G54", "1, column 7", "(group 12, coordinate system"),
+        ("G4 G53 P1", "1, column 4", "(group 0, non-modal: G4 G53)"),
+        (
+            "M3 M5",
+            "1, column 4",
+            "M3 and M5: two M codes used from the same modal group (group 7, spindle: M3 M4 M5)",
+        ),
+        ("M7 M9", "1, column 4", "(group 8, coolant"),
+        ("M0 M30", "1, column 4", "(group 4, stopping"),
+        ("G1 X1 F100 (feed", "1, column 12", "unclosed comment found"),
+        (
+            "G1 X1 (ok) F100 (feed",
+            "1, column 17",
+            "unclosed comment found",
+        ),
+    ];
+    for (text, at, want) in cases {
+        let e = run(text).unwrap_err().to_string();
+        assert!(
+            e.starts_with(&format!("G-code line {at}: ")),
+            "{text:?}: {e}"
+        );
+        assert!(e.contains(want), "{text:?}: {e}");
+    }
+    // Codes of different groups, a closed comment, a `(` inside a `;` comment, the same
+    // letter in a comment, and codes pkm notes without a group: each line is read.
+    for text in [
+        "N5 G17 G90 G91.1 G21 G94 G40 G49 G54 M3 S1000 M8 G1 X1 F100",
+        "G1 X2 (X3 as well) F100 ; (unclosed here is a comment)",
+        "G4 P1 M5 M9",
+        "M428 M429 G0 X1",
+    ] {
+        assert!(run(text).is_ok(), "{text:?}: {:?}", run(text));
+    }
+}
+
 /// `F1e300` once said "unsupported word E300" (a word the user never wrote) and a
 /// UTF-8 byte-order mark said "Unknown content"; now the exponent is explained and the
 /// mark is not content.

@@ -1,6 +1,7 @@
 //! What the program's text is checked for around the `gcode` crate's reading: code
-//! numbers too long for the crate's `u32` (which would wrap to another code), and the
-//! hints for a number written with an exponent and for a variable.
+//! numbers too long for the crate's `u32` (which would wrap to another code), a
+//! comment left open (which the crate takes to the line's end), and the hints for a
+//! number written with an exponent and for a variable.
 
 /// When a word `E` follows a digit directly (`F1e300`), the writer meant an exponent,
 /// which G-code numbers do not have: the hint to add to the "unsupported word" error.
@@ -93,4 +94,21 @@ pub(crate) fn oversized_code(text: &str) -> Option<String> {
         i += 1;
     }
     None
+}
+
+/// The 1-based column (in characters) of a `(` that opens a comment the line never
+/// closes, outside a `;` comment. The crate reads `G1 X1 (feed` as a move with a
+/// comment; a controller refuses it (LinuxCNC: "Unclosed comment found"), since the
+/// writer meant something the line lost.
+pub(crate) fn unclosed_comment(text: &str) -> Option<usize> {
+    let mut open = None;
+    for (i, c) in text.char_indices() {
+        match c {
+            ';' if open.is_none() => return None,
+            '(' if open.is_none() => open = Some(i),
+            ')' => open = None,
+            _ => {}
+        }
+    }
+    open.map(|i| text[..i].chars().count() + 1)
 }
