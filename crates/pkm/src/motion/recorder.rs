@@ -191,6 +191,12 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
     /// stretch of samples of feed moves or of rapids with the peak rates of its kind
     /// (a feed override scales the feed moves, not the rapids).
     fn add_block_stats(&mut self, b: &Block<M, P, A>, taken: usize) {
+        // A block without a rapid (most of them: a block holds a few moves) is one
+        // stretch, its samples not looked at one by one.
+        if !b.moves.iter().any(|m| m.0.rapid) {
+            self.add_stats(&b.samples[..taken]);
+            return;
+        }
         let rapid = |k: usize| b.moves[b.plan[k].0 as usize].0.rapid;
         let mut from = 0;
         while from < taken {

@@ -17,14 +17,6 @@ fn load(name: &str) -> Machine {
     .unwrap()
 }
 
-fn fixture(name: &str) -> Machine {
-    Machine::from_path(format!(
-        "{}/../../tests/fixtures/{name}",
-        env!("CARGO_MANIFEST_DIR")
-    ))
-    .unwrap()
-}
-
 fn translational() -> TranslationalTripod {
     match load("tripod-seed000.toml").model {
         Model::TranslationalTripod(t) => t,
@@ -638,7 +630,7 @@ fn decimated_streams_keep_evenly_spaced_items() {
 #[test]
 fn the_study_circle_fits_and_a_larger_one_does_not() {
     use pkm::analysis::motion::{feed_options, run_motion, study_circle, MotionSource, NoSink};
-    let m = fixture("own-hexapod.toml");
+    let m = crate::common::fixture("own-hexapod.toml");
     let home = m.mechanism().home();
     let c = study_circle(&m, &home, 0.8).unwrap();
     assert!(!c.moved);
@@ -757,7 +749,7 @@ fn run_at_100_hz(m: &pkm::Machine, program: &str) -> pkm::analysis::motion::Moti
 /// rotary table told to turn a whole turn turns it, without a note.
 #[test]
 fn a_whole_turn_of_an_orientation_angle_is_noted() {
-    let m = fixture("ur5-dh.toml");
+    let m = crate::common::fixture("ur5-dh.toml");
     let home = m.mechanism().home();
     assert!((home[3].to_degrees() + 180.0).abs() < 1e-9, "{home:?}");
     let run = run_at_100_hz(&m, "G21 G90\nG1 A180 F1000\nM2\n");

@@ -361,11 +361,7 @@ fn inverse_reaches_a_singular_configuration() {
 fn inverse_reaches_every_pose_of_a_singular_ur_wrist() {
     use rand::{Rng, SeedableRng};
     use std::f64::consts::PI;
-    let fixture = pkm::Machine::from_path(format!(
-        "{}/../../tests/fixtures/ur5-dh.toml",
-        env!("CARGO_MANIFEST_DIR")
-    ))
-    .unwrap();
+    let fixture = crate::common::fixture("ur5-dh.toml");
     let Model::Serial(s) = fixture.model else {
         panic!()
     };
