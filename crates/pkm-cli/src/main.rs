@@ -36,7 +36,9 @@ pub const EXIT_UNREACHABLE: u8 = 3;
         option, or a pose or actuator list of the wrong length or magnitude), 3 a pose that\n\
         is unreachable (a limit is violated) or forward kinematics that found no pose, 4 a\n\
         report written without the sections that could not be computed.\n\
-        Output to a pipe that closes (pkm ... | head) ends pkm quietly.",
+        Output to a pipe that closes (pkm ... | head) ends pkm quietly.\n\n\
+        Environment: PKM_SIMD=scalar|avx2|avx512 lowers the vector instructions the\n\
+        kernels use below the widest this CPU has (never above it).",
     after_help = "Examples:\n  \
         pkm report                                    # HTML report of the bundled seed-000 tripod\n  \
         pkm check examples/machines/tripod-seed000.toml\n  \
@@ -205,6 +207,10 @@ fn main() -> ExitCode {
         Ok(cli) => cli,
         Err(e) => return command_line_error(&e),
     };
+    // A PKM_SIMD the kernels could not follow (a level this CPU lacks, a typo).
+    if let Some(note) = pkm::simd::environment_note() {
+        eprintln!("pkm: {note}");
+    }
     let res = match cli.command {
         Command::Ik(a) => commands::ik::run(&a),
         Command::Fk(a) => commands::fk::run(&a),

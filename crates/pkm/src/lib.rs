@@ -44,6 +44,7 @@ pub mod pentapod;
 pub mod pose;
 pub mod rotation;
 pub mod serial;
+pub mod simd;
 pub mod transmission;
 pub mod trig;
 pub mod tripod;

@@ -138,6 +138,37 @@ pub fn sin_cos_array<const N: usize>(x: &[f64; N]) -> ([f64; N], [f64; N]) {
     })
 }
 
+/// `(sin x, cos x)` of every lane of `x` by the fused kernel, for a lane kernel compiled
+/// with FMA (inlined into it, the loop is its vector instructions): the bits of
+/// [`sin_cos`] and of the AVX-512 lanes; `None` when a lane is beyond the kernel's range
+/// `|x| <= 1e4` or NaN (the caller takes its scalar path, which defers those to libm).
+#[inline(always)]
+pub(crate) fn sin_cos_lanes<const N: usize>(x: &[f64; N]) -> Option<([f64; N], [f64; N])> {
+    let mut in_range = true;
+    let mut s = [0.0; N];
+    let mut c = [0.0; N];
+    for k in 0..N {
+        in_range &= x[k].abs() <= 1e4;
+        (s[k], c[k]) = kernel::<Fused>(x[k]);
+    }
+    in_range.then_some((s, c))
+}
+
+/// [`sin_cos_lanes`] on up to eight lanes whatever their range, with the mask of the lanes
+/// within it (`|x| <= 1e4`, not NaN): the others hold whatever the kernel gives and
+/// are not to be used, as the AVX-512 lanes' (`avx512::sin_cos`).
+#[inline(always)]
+pub(crate) fn sin_cos_lanes_masked<const N: usize>(x: &[f64; N]) -> ([f64; N], [f64; N], u8) {
+    let mut s = [0.0; N];
+    let mut c = [0.0; N];
+    let mut in_range = 0u8;
+    for k in 0..N {
+        (s[k], c[k]) = kernel::<Fused>(x[k]);
+        in_range |= u8::from(x[k].abs() <= 1e4) << k;
+    }
+    (s, c, in_range)
+}
+
 /// [`sin_cos_array`] with separate products and sums, inlined into the caller (whose
 /// loop over the angles it vectorises with, on any target, with no call): for a
 /// serial chain's joints, which no AVX-512 kernel has to agree with. Within the same

@@ -4,8 +4,8 @@ use super::common::path;
 
 /// `scripts/test` runs every step even when one fails, and lists every failure at
 /// the end with exit status 1: run here with a `cargo` and a `python3` that fail at
-/// once (fakes first on PATH), it reports the Rust tests, then the Python
-/// environment, both.
+/// once (fakes first on PATH), it reports the Rust tests, the library's tests on each
+/// narrower SIMD level, then the Python environment, all four.
 #[cfg(unix)]
 #[test]
 fn the_test_script_runs_every_suite_and_reports_every_failure() {
@@ -41,8 +41,10 @@ fn the_test_script_runs_every_suite_and_reports_every_failure() {
     assert!(err.contains("fake python3 -m venv"), "{err}");
     let last = err.lines().last().unwrap();
     assert!(
-        last.contains("2 step(s)")
+        last.contains("4 step(s)")
             && last.contains("cargo test --workspace")
+            && last.contains("PKM_SIMD=scalar")
+            && last.contains("PKM_SIMD=avx2")
             && last.contains("making the Python virtual environment"),
         "{last}"
     );

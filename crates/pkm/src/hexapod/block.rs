@@ -39,7 +39,7 @@ pub(crate) const MARGIN: f64 = 1e-9;
 
 /// Segments closer to parallel than this (`1 - cos^2` of their angle) are left to the
 /// exact path: the closest points of nearly parallel segments are ill-conditioned.
-const PARALLEL: f64 = 1e-6;
+pub(super) const PARALLEL: f64 = 1e-6;
 
 /// The limits of one hexapod laid out for the screen (built per call from the
 /// machine's public fields, so it cannot go stale when a caller edits them).
@@ -48,21 +48,23 @@ pub(crate) struct Screen {
     pub(super) arm: [[f64; 6]; 3],
     pub(super) base: [[f64; 6]; 3],
     /// Axis travel by pose coordinate (infinite where unlimited).
-    axis: [(f64, f64); 6],
+    pub(super) axis: [(f64, f64); 6],
     /// Strut length range by strut.
-    length: [(f64, f64); 6],
+    pub(super) length: [(f64, f64); 6],
     /// Base cone axis and `cos(max)` by strut (`cos = -inf`: no cone).
-    base_cone: [([f64; 3], f64); 6],
+    pub(super) base_cone: [([f64; 3], f64); 6],
     /// Platform cone axis (platform frame) and `cos(max)` by strut.
-    platform_cone: [([f64; 3], f64); 6],
+    pub(super) platform_cone: [([f64; 3], f64); 6],
     /// Strut pairs checked for interference, and the strut diameter.
-    pairs: Vec<(usize, usize)>,
-    diameter: f64,
+    pub(super) pairs: Vec<(usize, usize)>,
+    pub(super) diameter: f64,
     /// Every arm's z is exactly 0: the strut vectors need no `R_k2 a_z` term
     /// ([`super::simd::strut_component`]'s `PLANAR`).
     planar: bool,
     /// The CPU has AVX-512F (the hexapod's one detection, `simd.rs`).
     avx512: bool,
+    /// The level is AVX2 with FMA: the portable lanes' kernel (`block_lanes.rs`).
+    avx2: bool,
 }
 
 impl Screen {
@@ -101,6 +103,7 @@ impl Screen {
             pairs,
             diameter: h.strut_diameter.unwrap_or(0.0),
             avx512,
+            avx2: h.lanes.avx2,
         }
     }
 
@@ -114,8 +117,8 @@ impl Screen {
 /// per row), and `clear[i]` set where row `i` is certainly within every limit (with
 /// `check`; without it, where its angles are within the fast sine's range, so its
 /// lengths are the single call's). Rows past the last whole block are not cleared.
-/// Returns `false` (nothing written) on a CPU without AVX-512F, whose callers take the
-/// per-pose path.
+/// Returns `false` (nothing written) below the AVX2 level ([`crate::simd::level`]),
+/// whose callers take the per-pose path.
 pub(crate) fn screen_rows(
     s: &Screen,
     xs: &[f64],
@@ -184,6 +187,31 @@ fn screen_rows_with<const PLANAR: bool>(
                 }
             }
             clear[blocks * LANES..].fill(false);
+            return true;
+        }
+    }
+    #[cfg(target_arch = "x86_64")]
+    {
+        if s.avx2 {
+            let rows = xs
+                .chunks_exact(6 * LANES)
+                .zip(qs.chunks_exact_mut(6 * LANES));
+            for ((x, q), c) in rows.zip(clear.chunks_exact_mut(LANES)) {
+                let whole = "whole blocks";
+                let (x, q) = (x.try_into().expect(whole), q.try_into().expect(whole));
+                // SAFETY: `avx2` is set only at the AVX2 level, which a CPU with AVX2
+                // and FMA alone reaches (`crate::simd::level`).
+                let mask = unsafe {
+                    if check {
+                        super::block_lanes::block_avx2::<true, PLANAR>(s, x, q)
+                    } else {
+                        super::block_lanes::block_avx2::<false, PLANAR>(s, x, q)
+                    }
+                };
+                set_clear(c, &[mask]);
+            }
+            let n = clear.len();
+            clear[n / LANES * LANES..].fill(false);
             return true;
         }
     }

@@ -1,6 +1,7 @@
-//! The hexapod's strut lengths and their motion, by the fastest kernel the CPU has:
-//! the AVX-512 lanes of `simd.rs` where it has AVX-512F, the portable structure of
-//! arrays ([`crate::legs::StrutSoa`]) otherwise; both give the same bits (tested).
+//! The hexapod's strut lengths and their motion, by the widest kernel the level
+//! ([`crate::simd::level`]) allows: the AVX-512 or AVX2 lanes of `simd.rs`, else the
+//! portable structure of arrays ([`crate::legs::StrutSoa`]). The motion is the same
+//! bits on every level; the lengths within a few units in the last place (tested).
 
 use nalgebra::{Matrix3, Vector3, Vector6};
 
@@ -55,6 +56,12 @@ impl Hexapod {
             // SAFETY: `simd_lengths` is the detection of AVX-512F, the one feature the
             // function enables.
             return unsafe { simd::motion(&self.soa, p, r, &v, &w, &a, &al) };
+        }
+        #[cfg(target_arch = "x86_64")]
+        if self.lanes.avx2 {
+            // SAFETY: `avx2` is set only at the AVX2 level, which a CPU with AVX2 and
+            // FMA alone reaches (`crate::simd::level`).
+            return unsafe { simd::motion_avx2(&self.soa, p, r, &v, &w, &a, &al) };
         }
         self.soa.motion(p, r, &v, &w, &a, &al)
     }

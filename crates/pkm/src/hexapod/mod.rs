@@ -10,6 +10,8 @@
 
 mod accuracy;
 mod block;
+#[cfg(target_arch = "x86_64")]
+mod block_lanes;
 mod block_motion;
 pub mod forward;
 mod interference;

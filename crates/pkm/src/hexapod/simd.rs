@@ -10,6 +10,9 @@
 
 use nalgebra::{Matrix3, Vector3, Vector6};
 
+#[cfg(target_arch = "x86_64")]
+use crate::lane::{Lane, Zmm};
+
 /// Strut geometry padded to eight lanes (the two spare lanes hold a copy of strut 0,
 /// so every lane computes a finite, positive length).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -24,8 +27,12 @@ pub(crate) struct Lanes {
     /// as in LinuxCNC's genhexkins): the rotation's third column is not needed
     /// ([`strut_component`]).
     planar: bool,
-    /// The CPU has AVX-512F (checked once, when the machine is built).
+    /// The CPU has AVX-512F (checked once, when the machine is built, by
+    /// [`crate::simd::level`]).
     pub(crate) available: bool,
+    /// The level is AVX2 with FMA (no AVX-512F): the portable lanes' kernel
+    /// ([`pose_lengths_avx2`]).
+    pub(crate) avx2: bool,
 }
 
 impl Lanes {
@@ -39,6 +46,7 @@ impl Lanes {
             bz: [0.0; 8],
             planar: false,
             available: detect(),
+            avx2: crate::simd::level() == crate::simd::Level::Avx2,
         };
         lanes.set_geometry(arms, base);
         lanes
@@ -64,6 +72,11 @@ impl Lanes {
                 // SAFETY: `available` is true only when the running CPU reported
                 // AVX-512F (`detect`), the one feature the kernel is compiled with.
                 let l = unsafe { lengths_avx512(self, p, r) };
+                return Some(Vector6::new(l[0], l[1], l[2], l[3], l[4], l[5]));
+            }
+            if self.avx2 {
+                // SAFETY: as in `pose_lengths`: the CPU reported AVX2 and FMA.
+                let l = unsafe { lengths_avx2(self, p, r) };
                 return Some(Vector6::new(l[0], l[1], l[2], l[3], l[4], l[5]));
             }
         }
@@ -95,6 +108,17 @@ impl Lanes {
                     }
                 };
             }
+            if self.avx2 {
+                // SAFETY: `avx2` is true only when the level is AVX2, which
+                // `crate::simd::level` takes only from a CPU reporting AVX2 and FMA.
+                return unsafe {
+                    if self.planar {
+                        pose_lengths_avx2::<true>(self, x, out)
+                    } else {
+                        pose_lengths_avx2::<false>(self, x, out)
+                    }
+                };
+            }
         }
         let _ = (x, out);
         false
@@ -113,6 +137,11 @@ impl Lanes {
             if self.available {
                 // SAFETY: as in `lengths`: the CPU reported AVX-512F.
                 unsafe { batch_avx512(self, p, r, out) };
+                return true;
+            }
+            if self.avx2 {
+                // SAFETY: as in `pose_lengths`: the CPU reported AVX2 and FMA.
+                unsafe { batch_avx2(self, p, r, out) };
                 return true;
             }
         }
@@ -143,7 +172,7 @@ unsafe fn batch_avx512(
 fn detect() -> bool {
     #[cfg(target_arch = "x86_64")]
     {
-        std::arch::is_x86_feature_detected!("avx512f")
+        crate::simd::level() >= crate::simd::Level::Avx512
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
@@ -194,6 +223,97 @@ unsafe fn pose_lengths_avx512<const PLANAR: bool>(
         _mm_storeu_pd(o.add(4), _mm256_castpd256_pd128(high));
     }
     true
+}
+
+/// [`Lanes::pose_lengths`] on the portable lanes, compiled with AVX2 and FMA: each
+/// eight-lane operation two 256-bit instructions. The sines and cosines of A, B, C by
+/// [`crate::trig::sin_cos_lanes`] (the scalar kernel's operations, so its bits), the
+/// rotation by [`crate::rotation::rpy_entries`] once on scalars and broadcast (each
+/// lane of the AVX-512 kernel computes the same), the struts by [`lanes_of_entries`].
+/// The square roots are the CPU's (`vsqrtpd`, correctly rounded): the lengths are the
+/// portable code's within its rounding of the sum, and the AVX-512 kernel's within
+/// the refined estimate's few units in the last place.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn pose_lengths_avx2<const PLANAR: bool>(
+    s: &Lanes,
+    x: &Vector6<f64>,
+    out: &mut Vector6<f64>,
+) -> bool {
+    let r = if x[3] == 0.0 && x[4] == 0.0 && x[5] == 0.0 {
+        // As `rotation::rpy_matrix`: exactly the identity.
+        [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]
+    } else {
+        let Some((sn, cs)) = crate::trig::sin_cos_lanes(&[x[3], x[4], x[5], 0.0]) else {
+            return false;
+        };
+        crate::rotation::rpy_entries([sn[0], sn[1], sn[2]], [cs[0], cs[1], cs[2]])
+    };
+    let p = x.as_slice().first_chunk::<3>().expect("six coordinates");
+    let mut e = [crate::lane::Lanes([0.0; 8]); 9];
+    for k in 0..9 {
+        e[k] = Zmm::from(r[k]);
+    }
+    let l = lanes_of_entries::<PLANAR>(s, p, &e);
+    out.as_mut_slice().copy_from_slice(&l.0[..6]);
+    true
+}
+
+/// [`Lanes::lengths`] of a caller's rotation matrix with AVX2 and FMA (every entry in
+/// the sum: a caller's matrix may hold NaN in its third column).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn lengths_avx2(s: &Lanes, p: &Vector3<f64>, r: &Matrix3<f64>) -> [f64; 8] {
+    let e = entries(r);
+    lanes_of_entries::<false>(s, p.as_ref(), &e).0
+}
+
+/// [`Lanes::lengths_batch`] with AVX2 and FMA, the loop inside the function.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn batch_avx2(s: &Lanes, p: &[Vector3<f64>], r: &[Matrix3<f64>], out: &mut [Vector6<f64>]) {
+    for ((o, p), r) in out.iter_mut().zip(p).zip(r) {
+        let e = entries(r);
+        let l = lanes_of_entries::<false>(s, p.as_ref(), &e);
+        o.as_mut_slice().copy_from_slice(&l.0[..6]);
+    }
+}
+
+/// The entries of `r` row by row, each in every lane.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn entries(r: &Matrix3<f64>) -> [Zmm; 9] {
+    let mut e = [crate::lane::Lanes([0.0; 8]); 9];
+    for k in 0..9 {
+        e[k] = Zmm::from(r[(k / 3, k % 3)]);
+    }
+    e
+}
+
+/// [`lengths_of_entries`] on the portable lanes ([`crate::lane::Zmm`]), for a caller
+/// compiled with the instructions it is to use; `|d|` by the lanes' square root.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn lanes_of_entries<const PLANAR: bool>(s: &Lanes, p: &[f64; 3], r: &[Zmm; 9]) -> Zmm {
+    let (ax, ay, az) = (
+        crate::lane::Lanes(s.ax),
+        crate::lane::Lanes(s.ay),
+        crate::lane::Lanes(s.az),
+    );
+    let base = [&s.bx, &s.by, &s.bz];
+    let mut d = [crate::lane::Lanes([0.0; 8]); 3];
+    for i in 0..3 {
+        let offset = Zmm::from(p[i]).sub(crate::lane::Lanes(*base[i]));
+        let t = if PLANAR {
+            offset
+        } else {
+            r[3 * i + 2].mul_add(az, offset)
+        };
+        let t = r[3 * i + 1].mul_add(ay, t);
+        d[i] = r[3 * i].mul_add(ax, t);
+    }
+    let [dx, dy, dz] = d;
+    super::block_lanes::strut_length(dx, dy, dz)
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -287,24 +407,39 @@ pub(crate) fn strut_length(d: [std::arch::x86_64::__m512d; 3]) -> std::arch::x86
     crate::lane::sqrt_refined(d2)
 }
 
-/// [`crate::legs::StrutSoa::motion`] compiled with AVX-512 enabled (the same operations,
-/// so the same bits, in wider vectors).
-///
-/// # Safety
-/// The CPU must have AVX-512F.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-#[allow(clippy::too_many_arguments)]
-pub(crate) unsafe fn motion(
-    soa: &crate::legs::StrutSoa<6>,
-    p: &nalgebra::Vector3<f64>,
-    r: &nalgebra::Matrix3<f64>,
-    v: &nalgebra::Vector3<f64>,
-    w: &nalgebra::Vector3<f64>,
-    a: &nalgebra::Vector3<f64>,
-    al: &nalgebra::Vector3<f64>,
-) -> crate::mechanism::ActuatorMotion<6> {
-    soa.motion(p, r, v, w, a, al)
+/// [`crate::legs::StrutSoa::motion`] compiled with the instructions of a level (the
+/// same operations, so the same bits, in wider vectors).
+macro_rules! motion_with {
+    ($($(#[doc = $doc:literal])* $name:ident: $features:literal;)*) => {$(
+        $(#[doc = $doc])*
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = $features)]
+        #[allow(clippy::too_many_arguments)]
+        pub(crate) unsafe fn $name(
+            soa: &crate::legs::StrutSoa<6>,
+            p: &nalgebra::Vector3<f64>,
+            r: &nalgebra::Matrix3<f64>,
+            v: &nalgebra::Vector3<f64>,
+            w: &nalgebra::Vector3<f64>,
+            a: &nalgebra::Vector3<f64>,
+            al: &nalgebra::Vector3<f64>,
+        ) -> crate::mechanism::ActuatorMotion<6> {
+            soa.motion(p, r, v, w, a, al)
+        }
+    )*};
+}
+
+motion_with! {
+    /// The motion with AVX-512F.
+    ///
+    /// # Safety
+    /// The CPU must have AVX-512F.
+    motion: "avx512f";
+    /// The motion with AVX2 and FMA.
+    ///
+    /// # Safety
+    /// The CPU must have AVX2 and FMA.
+    motion_avx2: "avx2,fma";
 }
 
 #[cfg(all(test, target_arch = "x86_64"))]
@@ -340,6 +475,75 @@ mod tests {
         assert!(lanes.planar);
         let (arms, base) = geometry("hexapod-seed001.toml");
         assert!(!Lanes::new(&arms, &base).planar);
+    }
+
+    /// The AVX2 kernel: the planar and full sums give the same bits, the one pass from
+    /// the angles equals the rotation matrix's lengths bit for bit (the same sines, the
+    /// same rotation), the batch equals the single calls, and every length is the
+    /// portable code's within 1e-15 relative; angles beyond the fast sine's range and
+    /// NaN are refused.
+    #[test]
+    fn avx2_kernel_equals_the_matrix_path_and_the_portable_code() {
+        if !(std::arch::is_x86_feature_detected!("avx2")
+            && std::arch::is_x86_feature_detected!("fma"))
+        {
+            eprintln!("no AVX2 with FMA on this CPU: the kernel is not run");
+            return;
+        }
+        let (arms, base) = geometry("hexapod-linuxcnc.toml");
+        let lanes = Lanes::new(&arms, &base);
+        let path = format!(
+            "{}/../../examples/machines/hexapod-linuxcnc.toml",
+            env!("CARGO_MANIFEST_DIR")
+        );
+        let crate::machine::Model::Hexapod(h) = crate::Machine::from_path(path).unwrap().model
+        else {
+            panic!("not a hexapod")
+        };
+        let mut rng = rand::rngs::StdRng::seed_from_u64(12);
+        let xs: Vec<Vector6<f64>> = (0..100_000)
+            .map(|k| {
+                let a = if k % 7 == 0 { 0.0 } else { 0.6 };
+                Vector6::new(
+                    rng.random_range(-300.0..300.0),
+                    rng.random_range(-300.0..300.0),
+                    rng.random_range(300.0..800.0),
+                    rng.random_range(-a..=a),
+                    rng.random_range(-a..=a),
+                    rng.random_range(-3.2 * a..=3.2 * a),
+                )
+            })
+            .collect();
+        let (mut planar, mut full) = (Vector6::zeros(), Vector6::zeros());
+        let (ps, rs): (Vec<_>, Vec<_>) = xs.iter().map(crate::legs::split_pose).unzip();
+        let mut batch = vec![Vector6::zeros(); xs.len()];
+        // SAFETY: the CPU has AVX2 and FMA (checked above).
+        unsafe { super::batch_avx2(&lanes, &ps, &rs, &mut batch) };
+        for (k, x) in xs.iter().enumerate() {
+            // SAFETY: as above.
+            let ok = unsafe {
+                (
+                    super::pose_lengths_avx2::<true>(&lanes, x, &mut planar),
+                    super::pose_lengths_avx2::<false>(&lanes, x, &mut full),
+                )
+            };
+            assert!(ok.0 && ok.1, "{x:?}");
+            // SAFETY: as above.
+            let matrix = unsafe { super::lengths_avx2(&lanes, &ps[k], &rs[k]) };
+            let portable = h.lengths_portable(&ps[k], &rs[k]);
+            for i in 0..6 {
+                assert_eq!(planar[i].to_bits(), full[i].to_bits(), "{x:?} strut {i}");
+                assert_eq!(matrix[i].to_bits(), full[i].to_bits(), "{x:?} strut {i}");
+                assert_eq!(batch[k][i].to_bits(), full[i].to_bits(), "{x:?} strut {i}");
+                let e = (full[i] - portable[i]).abs() / portable[i];
+                assert!(e <= 1e-15, "{x:?} strut {i}: {e:e}");
+            }
+        }
+        for bad in [1e5, f64::NAN, f64::INFINITY] {
+            let x = Vector6::new(0.0, 0.0, 500.0, 0.1, bad, 0.2);
+            // SAFETY: as above.
+            assert!(!unsafe { super::pose_lengths_avx2::<true>(&lanes, &x, &mut full) });
+        }
     }
 
     /// The kernel without the `R_k2 a_z` terms gives the lengths of the full sum bit for

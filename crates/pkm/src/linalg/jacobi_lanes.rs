@@ -129,7 +129,7 @@ pub(crate) fn symmetric_eigenvalues_x8<const N: usize>(
     m: &[SMatrix<f64, N, N>; 8],
 ) -> Option<([[f64; 8]; N], u8)> {
     // The round-robin order is laid out for at most 16 rows.
-    if N > 16 || !std::arch::is_x86_feature_detected!("avx512f") {
+    if N > 16 || crate::simd::level() < crate::simd::Level::Avx512 {
         return None;
     }
     // SAFETY: the CPU reported AVX-512F, the one feature the kernel is compiled with.

@@ -169,7 +169,7 @@ pub fn link_transform(link: &Link, dev: &LinkDeviation) -> Matrix4<f64> {
 #[inline]
 pub fn deviated_block(link: &Link, dev: &LinkDeviation) -> Matrix3<f64> {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
+    if crate::simd::level() >= crate::simd::Level::Avx2 {
         // SAFETY: the CPU has AVX2 (checked on the line above).
         return unsafe { deviated_block_avx2(link, dev) };
     }

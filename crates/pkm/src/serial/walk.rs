@@ -206,7 +206,7 @@ pub(super) trait Walk {
 #[inline(always)]
 pub(super) fn fast<W: Walk>(walk: W) -> W::Out {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
+    if crate::simd::level() >= crate::simd::Level::Avx2 {
         // SAFETY: the CPU has AVX2 (checked on the line above).
         return unsafe { avx2(walk) };
     }

@@ -791,8 +791,9 @@ fn screened_batch_equals_the_exact_path_on_and_near_every_limit() {
         let flat: Vec<f64> = poses.iter().flat_map(|x| x.iter().copied()).collect();
         let mut qs = vec![0.0; 6 * n];
         let mut clear = vec![false; n];
-        if !abilities::inverse_screened(h, &flat, &mut qs, &mut clear, true) {
-            eprintln!("no AVX-512 on this CPU: the per-pose path only");
+        let kernel = abilities::inverse_screened(h, &flat, &mut qs, &mut clear, true);
+        if !kernel {
+            eprintln!("no block kernel at this SIMD level: the per-pose path only");
             clear.fill(false);
             qs.clear();
         }
@@ -821,8 +822,9 @@ fn screened_batch_equals_the_exact_path_on_and_near_every_limit() {
             within += usize::from(ok);
             cleared += usize::from(clear[r] && ok);
         }
+        // Without a block kernel nothing is cleared: the per-pose path settles all.
         assert!(
-            within >= 100 && cleared as f64 > 0.99 * within as f64,
+            within >= 100 && (!kernel || cleared as f64 > 0.99 * within as f64),
             "{name}: {within} of {} random rows within limits, {cleared} cleared",
             random.len()
         );

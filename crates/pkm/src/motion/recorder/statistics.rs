@@ -14,7 +14,7 @@ impl<M: Mechanism<P, A>, const P: usize, const A: usize> Recorder<'_, M, P, A> {
     /// back once per block, not once per sample around the sink's call.
     pub(super) fn add_stats(&mut self, samples: &[Sample<P, A>]) {
         #[cfg(target_arch = "x86_64")]
-        if A <= 8 && P <= 8 && std::arch::is_x86_feature_detected!("avx512f") {
+        if A <= 8 && P <= 8 && crate::simd::level() >= crate::simd::Level::Avx512 {
             // SAFETY: the CPU has AVX-512F; A, P <= 8.
             unsafe { self.add_stats_avx512(samples) };
             return;
