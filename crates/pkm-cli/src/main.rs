@@ -18,6 +18,7 @@ use commands::errors::ErrorsArgs;
 use commands::fk::FkArgs;
 use commands::ik::IkArgs;
 use commands::motion::MotionArgs;
+use commands::statics::StaticsArgs;
 use commands::workspace::WorkspaceArgs;
 use pkm::Convention;
 use report::ReportArgs;
@@ -89,13 +90,25 @@ enum Command {
         A program starts at --from when given, else at the machine's home pose. Moves stop\n\
         exactly at each segment end (no blending). Exit code 3 when a limit is violated.")]
     Motion(Box<MotionArgs>),
+    /// Statics and stiffness at one pose: the actuator forces that hold a wrench on the
+    /// tool, the 6 x 6 stiffness at the tool (with the load-dependent term) and the
+    /// tool's deflection.
+    #[command(after_help = "Examples:\n  \
+        pkm statics examples/machines/hexapod-linuxcnc.toml --wrench 0,0,-1000\n  \
+        pkm statics examples/machines/hexapod-linuxcnc.toml --pose 50,0,550,0,5,0 --wrench 200,0,-1000,0,0,10 --json\n\n\
+        The wrench is the load on the tool in the base frame: force (N) at the tool tip,\n\
+        moment (N m). Each strut, slide or joint needs `stiffness` in the machine file\n\
+        (N/mm; N mm/rad for a revolute joint) for the stiffness and deflection; the\n\
+        actuator forces need none. Passive joints and links are taken as rigid.")]
+    Statics(StaticsArgs),
     /// Map the workspace: reachable points, the limit that binds elsewhere, and the
     /// Jacobian's conditioning, on a grid (rayon, all cores).
     #[command(after_help = "Examples:\n  \
         pkm workspace examples/machines/hexapod-linuxcnc.toml --step 20 --out ws\n  \
         pkm workspace examples/machines/hexapod-linuxcnc.toml --orientation 0,10,0 --bounds=-400,400,-400,400,300,800 --step 10 --out ws\n  \
         pkm workspace examples/machines/hexapod-linuxcnc.toml --tilt 15 --step 25 --out total   # reachable at every tilt <= 15 deg\n  \
-        pkm workspace examples/machines/hexapod-linuxcnc.toml --at 0,0,550 --out tilt          # orientation workspace at a point\n\n\
+        pkm workspace examples/machines/hexapod-linuxcnc.toml --at 0,0,550 --out tilt          # orientation workspace at a point\n  \
+        pkm workspace examples/machines/hexapod-linuxcnc.toml --step 25 --stiffness --out stiff  # stiffness map (N/um)\n\n\
         Writes DIR/summary.json (measure and measure_unit, volume_mm3 over X, Y, Z, bounding_box, reachable_fraction, condition\n\
         statistics, points per binding limit), DIR/points.csv (DIR/points.parquet with\n\
         --format parquet), DIR/points.ply and slice heat maps.")]
@@ -216,6 +229,7 @@ fn main() -> ExitCode {
         Command::Fk(a) => commands::fk::run(&a),
         Command::Check(a) => commands::check::run(&a),
         Command::Motion(a) => commands::motion::run(&a),
+        Command::Statics(a) => commands::statics::run(&a),
         Command::Workspace(a) => commands::workspace::run(&a),
         Command::Errors(a) => commands::errors::run(&a),
         Command::SimulateMeasurements(a) => commands::calibrate::simulate_run(&a),

@@ -4,6 +4,7 @@
 
 use std::collections::BTreeMap;
 
+use numpy::PyArrayMethods;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -204,6 +205,83 @@ impl Machine {
             .detach(|| pkm::analysis::accuracy::accuracy(&inner, &opt))
             .map_err(to_py)?;
         convert::to_py(py, &r)
+    }
+
+    /// Statics at one pose (pkm statics): the actuator forces that hold `wrench` on
+    /// the tool, the tool's stiffness and deflection.
+    ///
+    /// `pose`: the pose coordinates (mm, rad; default home). `wrench`: the load on the
+    /// tool, base frame: `[fx, fy, fz]` (N, at the tool tip) or `[fx, fy, fz, mx, my,
+    /// mz]` (N, N mm); default none. Returns a dict (N, mm, rad): `actuator_forces`
+    /// (array, N or N mm; positive where the drive pushes its coordinate to grow),
+    /// `stiffness` (a dict: `matrix` 6 x 6 in N/mm, N/rad, N, N mm/rad or None where
+    /// the machine holds coordinates rigidly, `geometric`, `compliance`, `deflection`,
+    /// `deflection_exact`, `smallest_translational_n_per_um`, `weakest_direction`), or
+    /// None with `stiffness_error` saying why (drives without `stiffness`).
+    #[pyo3(signature = (pose = None, wrench = None))]
+    fn statics<'py>(
+        &self,
+        py: Python<'py>,
+        pose: Option<&Bound<'py, PyAny>>,
+        wrench: Option<Vec<f64>>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let m = self.m();
+        let pose =
+            convert::one_pose(pose, m.coordinates().len(), "pose")?.unwrap_or_else(|| m.home());
+        let mut w = [0.0; 6];
+        match wrench.as_deref() {
+            None => {}
+            Some(v) if (v.len() == 3 || v.len() == 6) && v.iter().all(|x| x.is_finite()) => {
+                w[..v.len()].copy_from_slice(v)
+            }
+            Some(v) => {
+                return Err(invalid(
+                    "wrench",
+                    format!("expected 3 or 6 finite values (N, N mm), found {v:?}"),
+                ))
+            }
+        }
+        let o = pkm::analysis::statics::StaticsOptions { pose, wrench: w };
+        let inner = self.inner.clone();
+        let r = py
+            .detach(|| pkm::analysis::statics::statics(&inner, &o))
+            .map_err(to_py)?;
+        let d = convert::to_py(py, &r)?;
+        d.set_item("actuator_forces", vec1(py, r.actuator_forces.clone()))?;
+        Ok(d)
+    }
+
+    /// The unloaded stiffness at many poses, on every core: a stiffness map.
+    ///
+    /// `poses`: `(N, P)` array (mm, rad). Returns a dict: `smallest_n_per_um` (N,)
+    /// the smallest stiffness of the tool tip against a force, `direction` (N, 3) its
+    /// direction, `weakest` the index of the weakest pose (None if no pose has a
+    /// value), `failed` the count of poses without a value (NaN: no inverse solution,
+    /// singular), and with `matrices=True` `matrices` (N, 6, 6) in N/mm, N/rad, N,
+    /// N mm/rad.
+    #[pyo3(signature = (poses, matrices = false))]
+    fn stiffness<'py>(
+        &self,
+        py: Python<'py>,
+        poses: &Bound<'py, PyAny>,
+        matrices: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let m = self.m();
+        let (x, _) = convert::rows(poses, m.coordinates().len(), "poses")?;
+        let inner = self.inner.clone();
+        let map = py
+            .detach(|| pkm::analysis::statics::stiffness_map(&inner, &x, matrices))
+            .map_err(to_py)?;
+        let d = PyDict::new(py);
+        let n = map.smallest_n_per_um.len();
+        d.set_item("smallest_n_per_um", vec1(py, map.smallest_n_per_um))?;
+        d.set_item("direction", vec2(py, map.direction.concat(), 3)?)?;
+        d.set_item("weakest", map.weakest)?;
+        d.set_item("failed", map.failed)?;
+        if matrices {
+            d.set_item("matrices", vec1(py, map.matrices).reshape([n, 6, 6])?)?;
+        }
+        Ok(d.into_any())
     }
 
     /// The geometric parameters (name, quantity, kind) whose deviations the accuracy

@@ -343,3 +343,48 @@ def test_garbage_input_raises_never_crashes():
         m.workspace(bounds=[[-1e6, 1e6]] * 3, step=1e-3)
     with pytest.raises(pkm.InvalidInputError):
         m.motion(gcode="G1 X10 F0.000001\n", max_samples=1000)
+
+
+HEXAPOD = example("hexapod-linuxcnc.toml")
+
+
+def test_statics_equals_the_command():
+    m = pkm.load(HEXAPOD)
+    pose = [50.0, 0.0, 550.0, 0.0, math.radians(5.0), 0.0]
+    # N and N mm here; the command takes the moment in N m.
+    r = m.statics(pose, wrench=[200.0, 0.0, -1000.0, 0.0, 0.0, 10000.0])
+    out = cli(
+        "statics", HEXAPOD, "--pose=50,0,550,0,5,0", "--wrench=200,0,-1000,0,0,10", "--json"
+    )
+    s = json.loads(out)
+    assert isinstance(r["actuator_forces"], np.ndarray)
+    assert r["actuator_forces"] == pytest.approx(list(s["actuator_forces"].values()), rel=1e-9)
+    k = r["stiffness"]
+    assert np.array(k["matrix"]) == pytest.approx(np.array(s["stiffness"]), rel=1e-9)
+    assert k["deflection"] == pytest.approx(s["deflection"], rel=1e-9, abs=1e-15)
+    assert r["stiffness_error"] is None
+
+
+def test_a_stiffness_map_equals_statics_pose_by_pose():
+    m = pkm.load(HEXAPOD)
+    rng = np.random.default_rng(3)
+    poses = np.tile(m.home, (50, 1))
+    poses[:, :3] += rng.uniform(-50, 50, (50, 3))
+    poses[:, 3:] += rng.uniform(-0.1, 0.1, (50, 3))
+    poses[7, 2] = 5000.0  # out of reach: NaN, counted as failed
+    s = m.stiffness(poses, matrices=True)
+    assert s["smallest_n_per_um"].shape == (50,) and s["matrices"].shape == (50, 6, 6)
+    assert s["failed"] == 1 and math.isnan(s["smallest_n_per_um"][7])
+    for i in (0, 13, 49):
+        one = m.statics(poses[i])["stiffness"]
+        assert s["smallest_n_per_um"][i] == pytest.approx(one["smallest_translational_n_per_um"], rel=1e-12)
+        assert s["matrices"][i] == pytest.approx(np.array(one["matrix"]), rel=1e-12)
+    w = s["weakest"]
+    assert s["smallest_n_per_um"][w] == np.nanmin(s["smallest_n_per_um"])
+
+
+def test_statics_refuses_a_bad_wrench_and_names_missing_stiffness():
+    with pytest.raises(pkm.InvalidInputError, match="wrench"):
+        pkm.load(HEXAPOD).statics(wrench=[1.0, 2.0])
+    r = pkm.load(TRIPOD).statics(wrench=[0.0, 0.0, -100.0])
+    assert r["stiffness"] is None and "no `stiffness` for drives" in r["stiffness_error"]

@@ -94,7 +94,8 @@ criterion_main!(
     hexapod_benches,
     workspace_benches,
     serial_benches,
-    identification_benches
+    identification_benches,
+    statics_benches
 );
 
 fn motion(c: &mut Criterion) {
@@ -684,6 +685,7 @@ fn serial(c: &mut Criterion) {
                 },
                 max_velocity: None,
                 max_acceleration: None,
+                stiffness: None,
             }),
             translation: Vector3::new(35.0 * (i % 2) as f64, 0.0, 150.0 + 50.0 * i as f64),
             rotation: if i % 2 == 0 {
@@ -1120,3 +1122,58 @@ fn accuracy(c: &mut Criterion) {
 }
 
 criterion_group!(accuracy_benches, accuracy);
+
+fn statics(c: &mut Criterion) {
+    use pkm::statics::{actuator_forces, drive_stiffness, stiffness, Wrench};
+    use rand::{Rng, SeedableRng};
+    let machine = machine("hexapod-linuxcnc.toml");
+    let Model::Hexapod(h) = &machine.model else {
+        panic!()
+    };
+    let h = &**h;
+    let k = drive_stiffness(h).unwrap();
+    let x = Vector6::new(20.0, -10.0, 540.0, 0.05, -0.03, 0.1);
+    let w = Wrench::from_array([200.0, -100.0, -1000.0, 5e3, -2e3, 1e4]);
+    c.bench_function("hexapod static forces, one pose", |b| {
+        b.iter(|| actuator_forces(h, black_box(&x), black_box(&w)).unwrap())
+    });
+    c.bench_function("hexapod stiffness unloaded, one pose", |b| {
+        b.iter(|| stiffness(h, black_box(&x), &Wrench::default(), &k).unwrap())
+    });
+    c.bench_function("hexapod stiffness under a wrench, one pose", |b| {
+        b.iter(|| stiffness(h, black_box(&x), black_box(&w), &k).unwrap())
+    });
+    // Random poses as a user's map has them: +-100 mm, +-10 deg about home.
+    let mut rng = rand::rngs::StdRng::seed_from_u64(17);
+    let home = h.info().home();
+    let n = 100_000;
+    let poses: Vec<f64> = (0..n)
+        .flat_map(|_| {
+            let mut p = home;
+            for i in 0..6 {
+                let r = if i < 3 { 100.0 } else { 10f64.to_radians() };
+                p[i] += rng.random_range(-r..r);
+            }
+            p.iter().copied().collect::<Vec<_>>()
+        })
+        .collect();
+    let mut g = c.benchmark_group("stiffness map");
+    g.sample_size(10);
+    g.throughput(criterion::Throughput::Elements(n as u64));
+    g.bench_function(
+        format!(
+            "hexapod 1e5 random poses (rayon, {} threads)",
+            rayon::current_num_threads()
+        ),
+        |b| {
+            b.iter(|| {
+                pkm::analysis::statics::stiffness_map(&machine, black_box(&poses), false)
+                    .unwrap()
+                    .failed
+            })
+        },
+    );
+    g.finish();
+}
+
+criterion_group!(statics_benches, statics);

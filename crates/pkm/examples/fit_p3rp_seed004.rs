@@ -42,6 +42,7 @@ fn head(p: &Vector4<f64>) -> P3rpHead {
         },
         max_velocity: None,
         max_acceleration: None,
+        stiffness: None,
     };
     P3rpHead::new(
         "fit".into(),

@@ -45,6 +45,7 @@ pub mod pose;
 pub mod rotation;
 pub mod serial;
 pub mod simd;
+pub mod statics;
 pub mod transmission;
 pub mod trig;
 pub mod tripod;

@@ -11,6 +11,7 @@ pub mod linuxcnc;
 pub mod motion;
 pub mod motion_accuracy;
 pub mod motion_series;
+pub mod statics;
 pub mod tolerance_args;
 pub mod workspace;
 

@@ -18,6 +18,7 @@ use crate::report::heatmap::{slice_svg, Cell, Scale};
 
 mod extra;
 mod points;
+mod stiffness;
 mod summary;
 use points::write_points;
 
@@ -62,6 +63,11 @@ pub struct WorkspaceArgs {
     /// Step of the --forward grid (mm or deg); default 1/40 of each stroke.
     #[arg(long)]
     pub forward_step: Option<f64>,
+    /// Stiffness map: the smallest stiffness of the tool tip against a force (N/um) at
+    /// every reachable point, from the drives' `stiffness` in the machine file; writes
+    /// stiffness.csv and stiffness slice maps, the weakest point in summary.json.
+    #[arg(long)]
+    pub stiffness: bool,
     /// Output directory.
     #[arg(long)]
     pub out: PathBuf,
@@ -351,6 +357,26 @@ pub fn run(a: &WorkspaceArgs) -> Result<u8> {
         outln!("{}", serde_json::to_string_pretty(&summary)?)?;
     } else {
         summary::print_text(m, &mapped)?;
+        if let Some(w) = summary
+            .pointer("/stiffness/weakest")
+            .filter(|w| !w.is_null())
+        {
+            let at: Vec<String> = w["at"]
+                .as_object()
+                .into_iter()
+                .flatten()
+                .map(|(k, v)| format!("{k}={:.2}", v.as_f64().unwrap_or(f64::NAN)))
+                .collect();
+            outln!(
+                "stiffness  weakest {:.2} N/um at {} (median {:.2} N/um)",
+                w["stiffness_n_per_um"].as_f64().unwrap_or(f64::NAN),
+                at.join(" "),
+                summary
+                    .pointer("/stiffness/median_n_per_um")
+                    .and_then(|v| v.as_f64())
+                    .unwrap_or(f64::NAN)
+            )?;
+        }
         outln!("wrote {}", a.out.display())?;
     }
     Ok(0)

@@ -15,4 +15,5 @@ mod report_cli;
 mod robot_cli;
 mod scripts;
 mod seed002_cli;
+mod statics_cli;
 mod workspace_cli;

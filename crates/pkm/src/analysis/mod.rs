@@ -17,6 +17,7 @@ pub mod identification;
 pub mod kinematics;
 pub mod motion;
 pub mod seed004;
+pub mod statics;
 pub mod workspace;
 
 pub use accuracy::{

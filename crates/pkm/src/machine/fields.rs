@@ -115,6 +115,9 @@ pub(crate) struct StrutFile {
     pub(crate) max_velocity: Option<f64>,
     #[serde(default)]
     pub(crate) max_acceleration: Option<f64>,
+    /// Axial stiffness (N/mm).
+    #[serde(default)]
+    pub(crate) stiffness: Option<f64>,
 }
 
 type Joints = std::collections::BTreeMap<String, Exact<3>>;
@@ -156,6 +159,7 @@ pub(crate) fn strut_entry(
         s.length,
         s.max_velocity,
         s.max_acceleration,
+        s.stiffness,
     )?;
     Ok((actuator, base, plat))
 }
@@ -205,19 +209,38 @@ pub(crate) fn strut_actuator(
     length: Exact<2>,
     max_velocity: Option<f64>,
     max_acceleration: Option<f64>,
+    stiffness: Option<f64>,
 ) -> Result<crate::mechanism::Actuator> {
     use source::Seg;
     let p = |k: &str| vec![Seg::Key("struts".into()), Seg::Index(i), Seg::Key(k.into())];
     let range = length_range(src, &p("length"), length)?;
     positive_opt(src, &p("max_velocity"), max_velocity, "mm/s")?;
     positive_opt(src, &p("max_acceleration"), max_acceleration, "mm/s^2")?;
+    stiffness_opt(src, &p("stiffness"), stiffness, "N/mm")?;
     Ok(crate::mechanism::Actuator {
         name: name.to_string(),
         quantity: crate::units::Quantity::Length,
         range,
         max_velocity,
         max_acceleration,
+        stiffness,
     })
+}
+
+/// Checks a drive's `stiffness` (`unit`: N/mm or N mm/rad): finite and > 0 when given.
+pub(crate) fn stiffness_opt(
+    src: &source::Source,
+    path: &[source::Seg],
+    v: Option<f64>,
+    unit: &str,
+) -> Result<()> {
+    match v {
+        Some(k) if !(k > 0.0 && k <= 1e12) => Err(src.error(
+            path,
+            format!("expected a stiffness > 0 {unit} (at most 1e12), found {k}"),
+        )),
+        _ => Ok(()),
+    }
 }
 
 /// `[limits] axes`: the travel `[min, max]` of pose coordinates by name (mm, deg),

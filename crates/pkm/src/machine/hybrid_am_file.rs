@@ -58,6 +58,8 @@ struct StrutFile {
     max_velocity: Option<f64>,
     #[serde(default)]
     max_acceleration: Option<f64>,
+    #[serde(default)]
+    stiffness: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -81,6 +83,8 @@ struct TableFile {
     max_velocity: Option<f64>,
     #[serde(default)]
     max_acceleration: Option<f64>,
+    #[serde(default)]
+    stiffness: Option<f64>,
 }
 
 fn table_name() -> String {
@@ -99,6 +103,7 @@ impl Default for TableFile {
             range: table_range(),
             max_velocity: None,
             max_acceleration: None,
+            stiffness: None,
         }
     }
 }
@@ -225,6 +230,7 @@ fn leg(src: &Source, f: &HybridAmFile, i: usize) -> Result<Leg, Error> {
     let range = ordered(src, &p("stroke"), s.stroke, "mm")?;
     super::positive_opt(src, &p("max_velocity"), s.max_velocity, "mm/s")?;
     super::positive_opt(src, &p("max_acceleration"), s.max_acceleration, "mm/s^2")?;
+    super::stiffness_opt(src, &p("stiffness"), s.stiffness, "N/mm")?;
     Ok(Leg {
         actuator: Actuator {
             name: s.name.clone(),
@@ -232,6 +238,7 @@ fn leg(src: &Source, f: &HybridAmFile, i: usize) -> Result<Leg, Error> {
             range,
             max_velocity: s.max_velocity,
             max_acceleration: s.max_acceleration,
+            stiffness: s.stiffness,
         },
         carriage_name: s.carriage.clone(),
         platform_name: s.platform.clone(),
@@ -284,6 +291,7 @@ fn table(src: &Source, t: &TableFile) -> Result<Actuator, Error> {
     let range = ordered(src, &tp("range"), t.range, "deg")?;
     super::positive_opt(src, &tp("max_velocity"), t.max_velocity, "deg/s")?;
     super::positive_opt(src, &tp("max_acceleration"), t.max_acceleration, "deg/s^2")?;
+    super::stiffness_opt(src, &tp("stiffness"), t.stiffness, "N mm/rad")?;
     Ok(Actuator {
         name: t.name.clone(),
         quantity: Quantity::Angle,
@@ -293,6 +301,7 @@ fn table(src: &Source, t: &TableFile) -> Result<Actuator, Error> {
         },
         max_velocity: t.max_velocity.map(f64::to_radians),
         max_acceleration: t.max_acceleration.map(f64::to_radians),
+        stiffness: t.stiffness,
     })
 }
 

@@ -64,6 +64,9 @@ struct AxisFile {
     max_velocity: Option<f64>,
     #[serde(default)]
     max_acceleration: Option<f64>,
+    /// Axial stiffness (N/mm).
+    #[serde(default)]
+    stiffness: Option<f64>,
 }
 
 #[derive(Debug, Deserialize, Default)]
@@ -138,6 +141,7 @@ fn axes<const N: usize>(
         }
         super::positive_opt(src, &p("max_velocity"), a.max_velocity, "mm/s")?;
         super::positive_opt(src, &p("max_acceleration"), a.max_acceleration, "mm/s^2")?;
+        super::stiffness_opt(src, &p("stiffness"), a.stiffness, "N/mm")?;
         out.push(Actuator {
             name: n.into(),
             quantity: Quantity::Length,
@@ -147,6 +151,7 @@ fn axes<const N: usize>(
             },
             max_velocity: a.max_velocity,
             max_acceleration: a.max_acceleration,
+            stiffness: a.stiffness,
         });
     }
     Ok(out.try_into().expect("N axes pushed"))

@@ -62,6 +62,9 @@ struct StrutFile {
     max_velocity: Option<f64>,
     #[serde(default)]
     max_acceleration: Option<f64>,
+    /// Axial stiffness (N/mm).
+    #[serde(default)]
+    stiffness: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -200,6 +203,7 @@ fn struts(
             s.length,
             s.max_velocity,
             s.max_acceleration,
+            s.stiffness,
         )?;
         struts.push(PentaStrut {
             actuator,

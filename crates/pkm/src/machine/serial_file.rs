@@ -113,6 +113,7 @@ fn dh_links(rows: &[DhFile], tool: Option<&DhToolFile>) -> Vec<LinkFile> {
                 range: r.joint.range,
                 max_velocity: r.joint.max_velocity,
                 max_acceleration: r.joint.max_acceleration,
+                stiffness: r.joint.stiffness,
             }),
             translation: Exact([r.a * ct, r.a * st, r.d]),
             rotation: Some(Exact(rot.map(Exact))),
@@ -142,6 +143,9 @@ struct JointFile {
     /// Largest acceleration (mm/s^2 or deg/s^2).
     #[serde(default)]
     max_acceleration: Option<f64>,
+    /// Stiffness of the joint's drive (N/mm, or N mm/rad for a revolute joint).
+    #[serde(default)]
+    stiffness: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -272,6 +276,14 @@ fn joint(
         },
         max_velocity: rate(j.max_velocity, "max_velocity")?,
         max_acceleration: rate(j.max_acceleration, "max_acceleration")?,
+        stiffness: {
+            let unit = match kind {
+                JointKind::Revolute => "N mm/rad",
+                JointKind::Prismatic => "N/mm",
+            };
+            super::stiffness_opt(src, &at("stiffness"), j.stiffness, unit)?;
+            j.stiffness
+        },
     })
 }
 

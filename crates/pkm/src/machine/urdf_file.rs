@@ -324,6 +324,7 @@ fn chain_joint(j: &urdf_rs::Joint, file: &str) -> Result<Joint, Error> {
         range,
         max_velocity: None,
         max_acceleration: None,
+        stiffness: None,
     })
 }
 

@@ -24,6 +24,7 @@ use super::{Actuator, Coordinate, PoseSpace};
 ///     range: Range { min: 0.0, max: 100.0 },
 ///     max_velocity: None,
 ///     max_acceleration: None,
+///     stiffness: None,
 /// };
 /// let info = MechanismInfo::new(
 ///     "xy table".into(),

@@ -95,6 +95,10 @@ pub struct Actuator {
     pub max_velocity: Option<f64>,
     /// Largest acceleration (mm/s^2 or rad/s^2), when the file gives one.
     pub max_acceleration: Option<f64>,
+    /// Stiffness of the drive along its own coordinate, when the file gives one: axial
+    /// (N/mm) for a linear drive, torsional (N mm/rad) for a revolute one. The
+    /// statics and stiffness analyses ([`crate::statics`]) need it.
+    pub stiffness: Option<f64>,
 }
 
 /// How a mechanism's pose coordinates relate to a full tool pose.

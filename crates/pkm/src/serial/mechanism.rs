@@ -181,6 +181,9 @@ impl<const N: usize> Mechanism<N, N> for SerialMechanism<N> {
 /// A serial machine of any joint count pkm loads (1 to 8).
 #[derive(Debug, Clone, PartialEq)]
 #[allow(missing_docs)]
+// One per loaded machine, never in a collection: the arm's inline size costs nothing,
+// and a box would hide its type from the generic dispatch (`with_serial!`).
+#[allow(clippy::large_enum_variant)]
 pub enum SerialAny {
     J1(SerialMechanism<1>),
     J2(SerialMechanism<2>),

@@ -68,6 +68,9 @@ pub struct Joint {
     pub max_velocity: Option<f64>,
     /// Largest acceleration (mm/s^2 or rad/s^2), when the file gives one.
     pub max_acceleration: Option<f64>,
+    /// Stiffness of the joint's drive along its coordinate (N/mm, or N mm/rad for a
+    /// revolute joint), when the file gives one.
+    pub stiffness: Option<f64>,
 }
 
 impl Joint {
@@ -87,6 +90,7 @@ impl Joint {
             range: self.range,
             max_velocity: self.max_velocity,
             max_acceleration: self.max_acceleration,
+            stiffness: self.stiffness,
         }
     }
 }
@@ -494,6 +498,7 @@ mod tests {
                         },
                         max_velocity: None,
                         max_acceleration: None,
+                        stiffness: None,
                     }),
                     translation: Vector3::from_fn(|_, _| rng.random_range(-500.0..500.0)),
                     rotation: *nalgebra::Rotation3::from_euler_angles(

@@ -32,6 +32,7 @@ mod serial;
 mod serial_arm;
 mod setters;
 mod spherical_wrist;
+mod statics;
 mod tcp;
 mod tripod;
 mod workspace;

@@ -124,6 +124,7 @@ fn prismatic(name: &str) -> Option<Joint> {
         },
         max_velocity: None,
         max_acceleration: None,
+        stiffness: None,
     })
 }
 
@@ -226,6 +227,7 @@ fn revolute(name: &str) -> Option<Joint> {
         },
         max_velocity: None,
         max_acceleration: None,
+        stiffness: None,
     })
 }
 

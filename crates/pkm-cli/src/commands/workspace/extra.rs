@@ -23,6 +23,12 @@ pub(super) fn write_extras(
     if a.atlas_velocity.is_some() || a.atlas_acceleration.is_some() {
         extra.insert("atlas".into(), write_atlas(a, machine, mapped, inputs)?);
     }
+    if a.stiffness {
+        extra.insert(
+            "stiffness".into(),
+            super::stiffness::write_stiffness(a, machine, mapped, inputs)?,
+        );
+    }
     if a.forward {
         extra.insert(
             "forward".into(),
@@ -85,7 +91,7 @@ fn write_all(out: &Path, o: &atlas::Outputs, csv: &str, inputs: &[&Path]) -> Res
 }
 
 /// The map's axis coordinates of point `k`, user units.
-fn user_coords(m: &dyn DynMechanism, wm: &WorkspaceMap, k: usize) -> Vec<f64> {
+pub(super) fn user_coords(m: &dyn DynMechanism, wm: &WorkspaceMap, k: usize) -> Vec<f64> {
     let x = wm.coords(k);
     wm.axes
         .iter()
