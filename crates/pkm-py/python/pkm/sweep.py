@@ -131,6 +131,10 @@ class Objectives:
     ``program_violations`` (limit violations along it) and
     ``feed_override_max``.
 
+    ``stiffness=True`` (the drives' ``stiffness`` in the machine) gives
+    ``min_stiffness_n_per_um``: the smallest stiffness of the tool tip against a force
+    over the region's reachable points (``Machine.stiffness``, N/um).
+
     ``tolerances`` (one per kind, as ``Machine.errors``: ``joint``, ``length``,
     ``zero`` in mm, ``angle`` in rad) gives ``accuracy_worst_mm``: the worst-case
     position error over the region's centre and corners (its centre alone without a
@@ -146,6 +150,7 @@ class Objectives:
     rate: float = 250.0
     start: Optional[Sequence[float]] = None
     tolerances: Optional[dict] = None
+    stiffness: bool = False
 
     def region(self, m: "pkm.Machine") -> Optional[np.ndarray]:
         """The required region's poses (N, P) on this machine, or None."""
@@ -195,6 +200,8 @@ class Objectives:
             cols += ["peak_actuator_speed", "program_violations", "feed_override_max"]
         if self.tolerances is not None:
             cols += ["accuracy_worst_mm"]
+        if self.stiffness:
+            cols += ["min_stiffness_n_per_um"]
         return cols
 
 
@@ -220,6 +227,11 @@ def evaluate(m: "pkm.Machine", objectives: Objectives) -> dict[str, Any]:
         out["reachable_fraction"] = share
         out["reachable_volume_mm3"] = share * objectives.volume()
         out["worst_condition"] = float(m.condition(region[ok]).max()) if ok.any() else float("nan")
+        if objectives.stiffness:
+            k = m.stiffness(region[ok])["smallest_n_per_um"] if ok.any() else np.array([])
+            out["min_stiffness_n_per_um"] = float(np.nanmin(k)) if np.isfinite(k).any() else float("nan")
+    elif objectives.stiffness:
+        raise pkm.InvalidInputError("stiffness: needs a required region (box or cylinder)")
     if objectives.gcode is not None:
         # The summary alone: constant memory whatever the program's length.
         s = m.motion(gcode=objectives.gcode, feed=objectives.feed, rate=objectives.rate,
