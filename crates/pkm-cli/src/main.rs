@@ -14,6 +14,7 @@ use std::process::ExitCode;
 use clap::{Args, Parser, Subcommand};
 use commands::calibrate::{CalibrateArgs, SimulateArgs};
 use commands::check::CheckArgs;
+use commands::dynamics::DynamicsArgs;
 use commands::errors::ErrorsArgs;
 use commands::fk::FkArgs;
 use commands::ik::IkArgs;
@@ -101,6 +102,15 @@ enum Command {
         (N/mm; N mm/rad for a revolute joint) for the stiffness and deflection; the\n\
         actuator forces need none. Passive joints and links are taken as rigid.")]
     Statics(StaticsArgs),
+    /// Inverse dynamics of a serial machine or robot: the joint torques and forces for
+    /// joint positions, rates and accelerations, with gravity and a load on the tool.
+    #[command(after_help = "Examples:\n  \
+        pkm dynamics examples/robots/ur5-like.urdf --q 0,-60,30,0,0,0\n  \
+        pkm dynamics examples/robots/ur5-like.urdf --q 0,-60,30,0,0,0 --qd 30,30,30,0,0,0 --qdd 100,0,0,0,0,0 --json\n\n\
+        Joint values in deg (mm for a slide), rates per s, accelerations per s^2. The links'\n\
+        masses, centres of mass and inertias come from the URDF's <inertial> elements.\n\
+        Torques in N m (N for a slide), the drive's on its joint.")]
+    Dynamics(DynamicsArgs),
     /// Map the workspace: reachable points, the limit that binds elsewhere, and the
     /// Jacobian's conditioning, on a grid (rayon, all cores).
     #[command(after_help = "Examples:\n  \
@@ -230,6 +240,7 @@ fn main() -> ExitCode {
         Command::Check(a) => commands::check::run(&a),
         Command::Motion(a) => commands::motion::run(&a),
         Command::Statics(a) => commands::statics::run(&a),
+        Command::Dynamics(a) => commands::dynamics::run(&a),
         Command::Workspace(a) => commands::workspace::run(&a),
         Command::Errors(a) => commands::errors::run(&a),
         Command::SimulateMeasurements(a) => commands::calibrate::simulate_run(&a),

@@ -284,6 +284,47 @@ impl Machine {
         Ok(d.into_any())
     }
 
+    /// Inverse dynamics of a serial machine or robot (recursive Newton-Euler, the
+    /// links' URDF `<inertial>`): the joint forces (N) and torques (N mm) for joint
+    /// positions `q`, rates `qd` and accelerations `qdd` (mm or rad, per s, per s^2),
+    /// each `(n,)` or `(N, n)`, on every core. `gravity`: mm/s^2 in the base frame
+    /// (default 9806.65 along -Z); `wrench`: the load on the tool `[fx, fy, fz, mx, my,
+    /// mz]` (N, N mm, base frame). Returns an array shaped like `q`.
+    #[pyo3(signature = (q, qd, qdd, gravity = None, wrench = None))]
+    fn inverse_dynamics<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'py, PyAny>,
+        qd: &Bound<'py, PyAny>,
+        qdd: &Bound<'py, PyAny>,
+        gravity: Option<[f64; 3]>,
+        wrench: Option<[f64; 6]>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        use pkm::analysis::dynamics::{inverse_dynamics_batch, DynamicsOptions};
+        let n = self.m().actuators().len();
+        let (q, single) = convert::rows(q, n, "q")?;
+        let (qd, _) = convert::rows(qd, n, "qd")?;
+        let (qdd, _) = convert::rows(qdd, n, "qdd")?;
+        let mut o = DynamicsOptions::default();
+        if let Some(g) = gravity {
+            o.gravity = g.into();
+        }
+        if let Some(w) = wrench {
+            o.wrench = w;
+        }
+        if !(o.gravity.iter().all(|v| v.is_finite()) && o.wrench.iter().all(|v| v.is_finite())) {
+            return Err(invalid("gravity, wrench", "expected finite values"));
+        }
+        let inner = self.inner.clone();
+        let t = py
+            .detach(|| inverse_dynamics_batch(&inner, &q, &qd, &qdd, &o))
+            .map_err(to_py)?;
+        if single {
+            return Ok(vec1(py, t).into_any());
+        }
+        vec2(py, t, n)
+    }
+
     /// The geometric parameters (name, quantity, kind) whose deviations the accuracy
     /// analyses take (`errors(deviations=...)`, tolerances).
     #[getter]

@@ -124,7 +124,8 @@ impl Machine {
     }
 
     /// The actuators: list of `{"name", "unit", "min", "max", "max_velocity",
-    /// "max_acceleration"}` (mm or rad, per s, per s^2; None where not given).
+    /// "max_acceleration", "stiffness"}` (mm or rad, per s, per s^2; N/mm or N mm/rad;
+    /// None where not given).
     #[getter]
     fn actuators<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
         let items = self
@@ -139,6 +140,7 @@ impl Machine {
                 d.set_item("max", a.range.max)?;
                 d.set_item("max_velocity", a.max_velocity)?;
                 d.set_item("max_acceleration", a.max_acceleration)?;
+                d.set_item("stiffness", a.stiffness)?;
                 Ok(d)
             })
             .collect::<PyResult<Vec<_>>>()?;

@@ -693,6 +693,7 @@ fn serial(c: &mut Criterion) {
             } else {
                 Matrix3::new(1.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 1.0, 0.0)
             },
+            inertial: None,
         })
         .collect();
     let chain = Chain {

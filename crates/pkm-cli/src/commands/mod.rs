@@ -4,6 +4,7 @@ pub mod atlas;
 pub mod calibrate;
 pub mod check;
 pub mod csvio;
+pub mod dynamics;
 pub mod errors;
 pub mod fk;
 pub mod ik;

@@ -18,7 +18,7 @@ use crate::report::heatmap::{slice_svg, Cell, Scale};
 
 mod extra;
 mod points;
-mod stiffness;
+pub mod stiffness;
 mod summary;
 use points::write_points;
 

@@ -14,6 +14,7 @@ mod motion;
 mod p3rp;
 pub mod plot;
 mod references;
+mod stiffness;
 pub mod ticks;
 mod view3d;
 mod workspace;
@@ -60,7 +61,7 @@ pub struct ReportArgs {
     #[arg(long)]
     pub step: Option<f64>,
     /// Sections to write, comma separated (machine, drawing, checks, workspace, motion,
-    /// seed004, accuracy, clearance, calibration, references); default: every one the
+    /// seed004, accuracy, stiffness, clearance, calibration, references); default: every one the
     /// machine has.
     #[arg(long)]
     pub sections: Option<String>,
@@ -137,6 +138,12 @@ const SECTIONS: &[Section] = &[
         title: "Accuracy",
         shown: |_| true,
         render: accuracy::section,
+    },
+    Section {
+        id: "stiffness",
+        title: "Stiffness",
+        shown: stiffness::shown,
+        render: stiffness::section,
     },
     Section {
         id: "clearance",

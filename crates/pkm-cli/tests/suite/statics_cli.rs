@@ -141,3 +141,98 @@ fn a_workspace_stiffness_map_names_its_weakest_point_as_statics_finds_it() {
         .unwrap();
     assert!((one - k).abs() < 1e-9 * k, "{one} against {k}");
 }
+
+#[test]
+fn the_report_has_a_stiffness_section_where_the_drives_have_stiffness() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("rep");
+    let o = pkm()
+        .args(["report", &path("examples/machines/hexapod-linuxcnc.toml")])
+        .args(["--sections", "stiffness", "--step", "60", "--json", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    ok(&o);
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["sections"], serde_json::json!(["stiffness"]));
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    assert!(html.contains("smallest stiffness, XY slice"));
+    assert!(html.contains("Drive forces holding 1 kN on the tool at home"));
+    // The same weakest figure as `pkm workspace --stiffness` on the same grid.
+    let ws = dir.path().join("ws");
+    let o = pkm()
+        .args([
+            "workspace",
+            &path("examples/machines/hexapod-linuxcnc.toml"),
+        ])
+        .args(["--step", "60", "--stiffness", "--json", "--out"])
+        .arg(&ws)
+        .output()
+        .unwrap();
+    ok(&o);
+    let s: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let k = s["stiffness"]["weakest"]["stiffness_n_per_um"]
+        .as_f64()
+        .unwrap();
+    assert!(html.contains(&format!("weakest {k:.1} N/um")), "{k}");
+    // A machine without drive stiffness has no such section.
+    let o = pkm()
+        .args(["report", &path("examples/machines/tripod-seed000.toml")])
+        .args(["--sections", "stiffness", "--json", "--out"])
+        .arg(dir.path().join("tripod"))
+        .output()
+        .unwrap();
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap_or_default();
+    assert!(!v["sections"]
+        .as_array()
+        .is_some_and(|a| a.contains(&serde_json::json!("stiffness"))));
+}
+
+#[test]
+fn dynamics_prints_torques_by_joint_name_in_newton_metres() {
+    let o = pkm()
+        .args([
+            "dynamics",
+            &path("examples/robots/ur5-like.urdf"),
+            "--q=0,-60,30,0,0,0",
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    ok(&o);
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let t = v["torques"].as_object().unwrap();
+    assert_eq!(t.len(), 6);
+    // The vertical base joint carries no weight; the shoulder tens of N m.
+    assert!(t["shoulder_pan"].as_f64().unwrap().abs() < 1e-9);
+    let lift = t["shoulder_lift"].as_f64().unwrap();
+    assert!(lift.abs() > 10.0 && lift.abs() < 100.0, "{lift}");
+    // The same with gravity along +Z turns every sign.
+    let o = pkm()
+        .args([
+            "dynamics",
+            &path("examples/robots/ur5-like.urdf"),
+            "--q=0,-60,30,0,0,0",
+        ])
+        .args(["--gravity=0,0,9.80665", "--json"])
+        .output()
+        .unwrap();
+    ok(&o);
+    let up: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!((up["torques"]["shoulder_lift"].as_f64().unwrap() + lift).abs() < 1e-9 * lift.abs());
+}
+
+#[test]
+fn dynamics_refuses_wrong_counts_and_machines_it_cannot_model() {
+    let urdf = path("examples/robots/ur5-like.urdf");
+    let o = pkm()
+        .args(["dynamics", &urdf, "--q=0,0,0"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("expected 6 values"));
+    let hex = path("examples/machines/hexapod-linuxcnc.toml");
+    let o = pkm().args(["dynamics", &hex]).output().unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("only serial machines"));
+}

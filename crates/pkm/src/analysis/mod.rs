@@ -13,6 +13,7 @@ pub mod clearance_class;
 pub mod clearance_path;
 mod clearance_study;
 pub mod clearance_surface;
+pub mod dynamics;
 pub mod identification;
 pub mod kinematics;
 pub mod motion;

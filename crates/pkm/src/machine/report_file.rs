@@ -35,6 +35,7 @@ pub const REPORT_SECTIONS: &[&str] = &[
     "motion",
     "seed004",
     "accuracy",
+    "stiffness",
     "clearance",
     "calibration",
     "references",

@@ -194,6 +194,7 @@ fn chain(
             joint,
             translation: v3(l.translation),
             rotation,
+            inertial: None,
         });
     }
     Ok(Chain {

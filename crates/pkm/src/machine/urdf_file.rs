@@ -14,7 +14,7 @@ use crate::error::Error;
 use crate::limits::Range;
 use crate::serial::machine::SerialMachine;
 use crate::serial::mechanism::SerialAny;
-use crate::serial::{Chain, Joint, JointKind, Link, SerialModel};
+use crate::serial::{Chain, Inertial, Joint, JointKind, Link, SerialModel};
 
 /// A machine-file error of `file` with `message`.
 fn err(file: &str, message: String) -> Error {
@@ -54,6 +54,7 @@ fn link(name: &str, joint: Option<Joint>, t: &Matrix4<f64>) -> Link {
         joint,
         translation: Vector3::new(t[(0, 3)], t[(1, 3)], t[(2, 3)]),
         rotation: t.fixed_view::<3, 3>(0, 0).into_owned(),
+        inertial: None,
     }
 }
 
@@ -71,7 +72,7 @@ pub(super) fn build(text: &str, file: &str) -> Result<super::Parts, Error> {
     }
     check_joint_kinds(&joints, file)?;
     check_magnitudes(&joints, file)?;
-    let links = chain_links(root, &joints, file)?;
+    let links = chain_links(&robot, root, &joints, file)?;
     let machine = SerialMachine {
         name: if robot.name.is_empty() {
             "URDF robot".into()
@@ -220,20 +221,90 @@ struct PendingLink {
     name: String,
     /// Its joint.
     joint: Option<Joint>,
+    /// Its mass properties so far, in its URDF link frame (mm, kg mm^2): the link's
+    /// own and those of the links fixed to it.
+    body: Option<Inertial>,
+    /// The URDF frame reached from it through fixed joints (mm).
+    at: Matrix4<f64>,
+}
+
+impl PendingLink {
+    fn new(name: &str, joint: Option<Joint>, robot: &urdf_rs::Robot) -> Self {
+        let mut p = PendingLink {
+            name: name.to_string(),
+            joint,
+            body: None,
+            at: Matrix4::identity(),
+        };
+        p.add(robot, name);
+        p
+    }
+
+    /// Joins the mass properties of URDF link `name` (at the frame `at`).
+    fn add(&mut self, robot: &urdf_rs::Robot, name: &str) {
+        let Some(b) = robot
+            .links
+            .iter()
+            .find(|l| l.name == name)
+            .and_then(inertial)
+        else {
+            return;
+        };
+        let r = self.at.fixed_view::<3, 3>(0, 0).into_owned();
+        let p = Vector3::new(self.at[(0, 3)], self.at[(1, 3)], self.at[(2, 3)]);
+        let b = b.transformed(&r, &p);
+        self.body = Some(self.body.map_or(b, |a| a.joined(&b)));
+    }
+
+    /// The finished link: mass properties in the chain's frame `S_i`, whose rotation
+    /// from the URDF link frame is `ra` (the joint's Z turned onto its axis).
+    fn link(self, ra: &Matrix3<f64>, t: &Matrix4<f64>) -> Link {
+        let mut l = link(&self.name, self.joint, t);
+        l.inertial = self
+            .body
+            .map(|b| b.transformed(&ra.transpose(), &Vector3::zeros()));
+        l
+    }
+}
+
+/// A URDF link's `<inertial>` in its frame (mm, kg, kg mm^2); `None` without mass.
+fn inertial(l: &urdf_rs::Link) -> Option<Inertial> {
+    let i = &l.inertial;
+    if !(i.mass.value > 0.0) {
+        return None;
+    }
+    let t = origin(&i.origin);
+    let c = &i.inertia;
+    let local = Matrix3::new(
+        c.ixx, c.ixy, c.ixz, c.ixy, c.iyy, c.iyz, c.ixz, c.iyz, c.izz,
+    ) * 1e6;
+    let r = t.fixed_view::<3, 3>(0, 0).into_owned();
+    Some(Inertial {
+        mass: i.mass.value,
+        com: Vector3::new(t[(0, 3)], t[(1, 3)], t[(2, 3)]),
+        inertia: r * local * r.transpose(),
+    })
 }
 
 /// The links of the chain from `root` through `joints`: each movable joint's motion
-/// about its link's Z, the fixed joints and origins folded into the transforms.
-fn chain_links(root: &str, joints: &[&urdf_rs::Joint], file: &str) -> Result<Vec<Link>, Error> {
+/// about its link's Z, the fixed joints and origins folded into the transforms, the
+/// mass properties of every link on the way in the frame of the moving link they are
+/// fixed to.
+fn chain_links(
+    robot: &urdf_rs::Robot,
+    root: &str,
+    joints: &[&urdf_rs::Joint],
+    file: &str,
+) -> Result<Vec<Link>, Error> {
     let mut links = Vec::new();
     let mut acc = Matrix4::identity();
-    let mut pending = PendingLink {
-        name: root.to_string(),
-        joint: None,
-    };
+    let mut pending = PendingLink::new(root, None, robot);
+    let mut ra_prev = Matrix3::identity();
     for j in joints {
         acc *= origin(&j.origin);
         if !movable(j) {
+            pending.at *= origin(&j.origin);
+            pending.add(robot, &j.child.link);
             continue;
         }
         let a = Vector3::new(j.axis.xyz[0], j.axis.xyz[1], j.axis.xyz[2]);
@@ -244,14 +315,12 @@ fn chain_links(root: &str, joints: &[&urdf_rs::Joint], file: &str) -> Result<Vec
         let mut r4 = Matrix4::identity();
         r4.fixed_view_mut::<3, 3>(0, 0).copy_from(&ra);
         acc *= r4;
-        links.push(link(&pending.name, pending.joint.take(), &acc));
+        let next = PendingLink::new(&j.child.link, Some(chain_joint(j, file)?), robot);
+        links.push(std::mem::replace(&mut pending, next).link(&ra_prev, &acc));
+        ra_prev = ra;
         acc = r4.transpose();
-        pending = PendingLink {
-            name: j.child.link.clone(),
-            joint: Some(chain_joint(j, file)?),
-        };
     }
-    links.push(link(&pending.name, pending.joint, &acc));
+    links.push(pending.link(&ra_prev, &acc));
     Ok(links)
 }
 

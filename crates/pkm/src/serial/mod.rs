@@ -20,6 +20,7 @@ pub mod accuracy;
 pub mod arm;
 pub mod completion;
 pub mod deviations;
+pub mod dynamics;
 pub mod jacobian;
 pub mod machine;
 pub mod mechanism;
@@ -107,6 +108,57 @@ pub struct Link {
     /// Nominal direction cosines `cos(a_i, b_i*)` (row: axis of `S_i`, column: axis of
     /// `S_i*`); a rotation matrix.
     pub rotation: Matrix3<f64>,
+    /// The link's mass properties in its frame `S_i`, when the file gives them (URDF
+    /// `<inertial>`); `None`: massless. Inverse dynamics ([`dynamics`]) needs them.
+    pub inertial: Option<Inertial>,
+}
+
+/// A rigid body's mass properties in its link frame: mass (kg), centre of mass (mm)
+/// and inertia tensor about the centre of mass (kg mm^2).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Inertial {
+    /// Mass (kg).
+    pub mass: f64,
+    /// Centre of mass in the link frame (mm).
+    pub com: Vector3<f64>,
+    /// Inertia about the centre of mass, link-frame axes (kg mm^2).
+    pub inertia: Matrix3<f64>,
+}
+
+impl Inertial {
+    /// The body with `other` (both in the same frame) joined: masses added, the centre
+    /// of mass their mean, the inertia moved to it by the parallel-axis theorem
+    /// `I = sum (I_k + m_k (|d_k|^2 E - d_k d_k^T))`, `d_k = c_k - c`.
+    pub fn joined(&self, other: &Inertial) -> Inertial {
+        let mass = self.mass + other.mass;
+        if !(mass > 0.0) {
+            return Inertial {
+                mass: 0.0,
+                com: Vector3::zeros(),
+                inertia: Matrix3::zeros(),
+            };
+        }
+        let com = (self.com * self.mass + other.com * other.mass) / mass;
+        let shift = |b: &Inertial| {
+            let d = b.com - com;
+            b.inertia + (Matrix3::identity() * d.norm_squared() - d * d.transpose()) * b.mass
+        };
+        Inertial {
+            mass,
+            com,
+            inertia: shift(self) + shift(other),
+        }
+    }
+
+    /// The same body seen from a frame in which the link frame has rotation `r` and
+    /// origin `p` (mm).
+    pub fn transformed(&self, r: &Matrix3<f64>, p: &Vector3<f64>) -> Inertial {
+        Inertial {
+            mass: self.mass,
+            com: r * self.com + p,
+            inertia: r * self.inertia * r.transpose(),
+        }
+    }
 }
 
 impl Link {
@@ -453,6 +505,7 @@ mod tests {
                 joint: None,
                 translation: Vector3::zeros(),
                 rotation,
+                inertial: None,
             };
             let dev = LinkDeviation {
                 alpha,
@@ -507,6 +560,7 @@ mod tests {
                         rng.random_range(-3.0..3.0),
                     )
                     .matrix(),
+                    inertial: None,
                 })
                 .collect();
             let chain = Chain {

@@ -425,3 +425,35 @@ fn report_tables_are_read_and_checked() {
         assert_eq!(m.report.step, Some(2.0), "{f}");
     }
 }
+
+#[test]
+fn a_drive_stiffness_must_be_positive_and_finite() {
+    for (bad, shown) in [("-5.0", "-5"), ("0.0", "0"), ("nan", "NaN"), ("inf", "inf")] {
+        let text = GOOD.replacen(
+            "max_acceleration = ",
+            &format!("stiffness = {bad}\nmax_acceleration = "),
+            1,
+        );
+        let (line, field, message) = parts(&err(&text));
+        assert_eq!(line, Some(line_of(&text, "stiffness =")), "{bad}");
+        assert_eq!(field, "struts[0].stiffness");
+        assert!(
+            message.contains(&format!(
+                "expected a stiffness > 0 N/mm (at most 1e12), found {shown}"
+            )),
+            "{message}"
+        );
+    }
+    // A robot joint's is torsional: N mm/rad.
+    let robot = include_str!("../../../../examples/machines/kr30-dh.toml");
+    let text = robot.replacen(
+        "range = [-185.0, 185.0] }",
+        "range = [-185.0, 185.0], stiffness = -1.0 }",
+        1,
+    );
+    assert_ne!(text, robot);
+    let m = Machine::from_toml_str(&text, "bad.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(m.contains("stiffness > 0 N mm/rad"), "{m}");
+}

@@ -9,6 +9,7 @@ mod clearance_p3rp;
 mod clearance_seed002;
 mod completion;
 mod contract;
+mod dynamics;
 mod fuzz_corpus;
 mod gcode;
 mod hexapod;

@@ -142,24 +142,28 @@ fn xyz_chain() -> Chain {
                 joint: None,
                 translation: Vector3::new(0.0, 0.0, 100.0),
                 rotation: to_x,
+                inertial: None,
             },
             Link {
                 name: "1 slide".into(),
                 joint: prismatic("X"),
                 translation: Vector3::new(0.0, 0.0, 0.0),
                 rotation: to_next,
+                inertial: None,
             },
             Link {
                 name: "2 column".into(),
                 joint: prismatic("Y"),
                 translation: Vector3::zeros(),
                 rotation: to_next,
+                inertial: None,
             },
             Link {
                 name: "3 spindle".into(),
                 joint: prismatic("Z"),
                 translation: Vector3::new(0.0, 0.0, -50.0),
                 rotation: Matrix3::identity(),
+                inertial: None,
             },
         ],
     }
@@ -246,18 +250,21 @@ fn five_axis() -> pkm::serial::machine::SerialMachine {
                     joint: None,
                     translation: Vector3::new(0.0, 0.0, -200.0),
                     rotation: to_y,
+                    inertial: None,
                 },
                 Link {
                     name: "4 tilting table".into(),
                     joint: revolute("B"),
                     translation: Vector3::new(0.0, 80.0, 0.0),
                     rotation: back,
+                    inertial: None,
                 },
                 Link {
                     name: "5 face plate".into(),
                     joint: revolute("C"),
                     translation: Vector3::new(0.0, 0.0, 40.0),
                     rotation: Matrix3::identity(),
+                    inertial: None,
                 },
             ],
         }),
@@ -450,6 +457,7 @@ fn prepared_chain_equals_the_general_pose() {
             } else {
                 Matrix3::new(1.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 1.0, 0.0)
             },
+            inertial: None,
         })
         .collect();
     let c = Chain {
@@ -781,6 +789,7 @@ fn deviated_block_equals_the_acos_cos_form() {
             joint: None,
             translation: Vector3::zeros(),
             rotation,
+            inertial: None,
         };
         let dev = LinkDeviation {
             alpha,
@@ -862,6 +871,7 @@ fn jacobian_rate_equals_central_differences_of_the_jacobian() {
                 joint,
                 translation: Vector3::new(40.0 * i as f64, -25.0, 60.0 + 15.0 * i as f64),
                 rotation: small_rotation([0.7 * i as f64, -0.4, 0.9 - 0.3 * i as f64]),
+                inertial: None,
             })
             .collect(),
     };

@@ -3,6 +3,7 @@
 //! summary's weakest point.
 
 use anyhow::Result;
+use pkm::workspace::WorkspaceMap;
 use pkm::Machine;
 use serde_json::{json, Value};
 use std::fmt::Write as _;
@@ -12,17 +13,20 @@ use super::{slice_pairs, slice_plot, Mapped, WorkspaceArgs};
 use crate::io::write_atomic;
 use crate::report::heatmap::Scale;
 
-/// Writes `stiffness.csv` (grid coordinates, smallest stiffness of the tool tip
-/// against a force in N/um, its direction) and `stiffness-<axes>.svg`; the summary
-/// entry: the weakest point, the strongest, the median.
-pub(super) fn write_stiffness(
-    a: &WorkspaceArgs,
-    machine: &Machine,
-    mapped: &Mapped,
-    inputs: &[&Path],
-) -> Result<Value> {
+/// A stiffness map's outputs: the table, the slice maps (file name, SVG), the summary.
+pub struct StiffnessOutputs {
+    /// `stiffness.csv`: grid coordinates (user units), smallest stiffness of the tool
+    /// tip against a force (N/um), its direction.
+    pub csv: String,
+    /// `stiffness-<axes>.svg` slices through the map's pose.
+    pub slices: Vec<(String, String)>,
+    /// The summary entry: the weakest point, the strongest, the median.
+    pub summary: Value,
+}
+
+/// The stiffness map over the reachable points of `wm` and its outputs.
+pub fn stiffness_outputs(machine: &Machine, wm: &WorkspaceMap) -> Result<StiffnessOutputs> {
     let m = machine.mechanism();
-    let wm = mapped.wm;
     let reach: Vec<usize> = (0..wm.points.len())
         .filter(|&k| wm.points[k].reachable)
         .collect();
@@ -57,7 +61,7 @@ pub(super) fn write_stiffness(
             d[2]
         )?;
     }
-    write_atomic(&a.out.join("stiffness.csv"), csv.as_bytes(), inputs)?;
+    let mut slices = Vec::new();
     for (ha, va) in slice_pairs(wm.axes.len()) {
         let what = format!("smallest stiffness, {}{} slice", coord(ha).0, coord(va).0);
         let svg = slice_plot(
@@ -70,9 +74,28 @@ pub(super) fn write_stiffness(
             &|k| by_point[k],
         )?;
         let name = format!("stiffness-{}{}.svg", coord(ha).0, coord(va).0).to_lowercase();
+        slices.push((name, svg));
+    }
+    Ok(StiffnessOutputs {
+        csv,
+        slices,
+        summary: summary(&map, &reach, &user, &names),
+    })
+}
+
+/// Writes [`stiffness_outputs`] to `--out`; the summary entry.
+pub(super) fn write_stiffness(
+    a: &WorkspaceArgs,
+    machine: &Machine,
+    mapped: &Mapped,
+    inputs: &[&Path],
+) -> Result<Value> {
+    let o = stiffness_outputs(machine, mapped.wm)?;
+    write_atomic(&a.out.join("stiffness.csv"), o.csv.as_bytes(), inputs)?;
+    for (name, svg) in &o.slices {
         write_atomic(&a.out.join(name), svg.as_bytes(), inputs)?;
     }
-    Ok(summary(&map, &reach, &user, &names))
+    Ok(o.summary)
 }
 
 fn summary(
