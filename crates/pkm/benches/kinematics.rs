@@ -1177,4 +1177,35 @@ fn statics(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(statics_benches, statics);
+criterion_group!(statics_benches, statics, dynamics);
+
+fn dynamics(c: &mut Criterion) {
+    use nalgebra::Vector3 as V3;
+    let robot = Machine::from_path(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../examples/robots/ur5-like.urdf"
+    ))
+    .unwrap();
+    let Model::Serial(s) = &robot.model else {
+        panic!()
+    };
+    let chain = &s.mechanism.machine().tool;
+    let q = [0.3, -1.1, 0.7, -0.4, 1.2, 0.5];
+    let qd = [0.5, -0.2, 0.9, 1.5, -1.0, 2.0];
+    let qdd = [3.0, -2.0, 1.0, 5.0, -4.0, 6.0];
+    let mut tau = [0.0; 6];
+    let g = pkm::serial::dynamics::GRAVITY;
+    c.bench_function("UR5-class 6R inverse dynamics (RNEA), one state", |b| {
+        b.iter(|| {
+            pkm::serial::dynamics::inverse_dynamics_into(
+                chain,
+                [black_box(&q), &qd, &qdd],
+                &g,
+                [&V3::zeros(), &V3::zeros()],
+                &mut tau,
+            )
+            .unwrap();
+            tau[1]
+        })
+    });
+}

@@ -114,16 +114,23 @@ pub fn inverse_dynamics_batch(
             ),
         });
     }
-    let rows: Vec<Result<Vec<f64>>> = (0..q.len() / n)
-        .into_par_iter()
-        .map(|r| {
-            let s = r * n..(r + 1) * n;
-            inverse_dynamics(machine, &q[s.clone()], &qd[s.clone()], &qdd[s], o)
-        })
-        .collect();
-    let mut out = Vec::with_capacity(q.len());
-    for r in rows {
-        out.extend(r?);
-    }
+    let c = chain(machine)?;
+    let w = &o.wrench;
+    let (force, moment) = (
+        Vector3::new(w[0], w[1], w[2]),
+        Vector3::new(w[3], w[4], w[5]),
+    );
+    let mut out = vec![0.0; q.len()];
+    out.par_chunks_mut(n)
+        .zip(q.par_chunks(n).zip(qd.par_chunks(n)).zip(qdd.par_chunks(n)))
+        .try_for_each(|(tau, ((q, qd), qdd))| {
+            crate::serial::dynamics::inverse_dynamics_into(
+                c,
+                [q, qd, qdd],
+                &o.gravity,
+                [&force, &moment],
+                tau,
+            )
+        })?;
     Ok(out)
 }

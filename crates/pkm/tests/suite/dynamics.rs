@@ -265,3 +265,27 @@ fn machines_without_masses_or_a_serial_chain_are_refused() {
     .to_string();
     assert!(e.contains("only serial machines"), "{e}");
 }
+
+#[test]
+fn a_batch_gives_each_rows_single_call_and_refuses_ragged_rows() {
+    use pkm::analysis::dynamics::inverse_dynamics_batch;
+    let mut rng = StdRng::seed_from_u64(5);
+    for m in robots() {
+        let n = chain(&m).dof();
+        let rows = 100;
+        let mut draw = || random_state(&mut rng, n * rows);
+        let (q, qd, qdd) = (draw(), draw(), draw());
+        let o = DynamicsOptions {
+            wrench: [1.0, 2.0, 3.0, 4.0, 5.0, 6.0],
+            ..Default::default()
+        };
+        let all = inverse_dynamics_batch(&m, &q, &qd, &qdd, &o).unwrap();
+        for r in 0..rows {
+            let s = r * n..(r + 1) * n;
+            let one =
+                inverse_dynamics(&m, &q[s.clone()], &qd[s.clone()], &qdd[s.clone()], &o).unwrap();
+            assert_eq!(one, all[s]);
+        }
+        assert!(inverse_dynamics_batch(&m, &q[1..], &qd[1..], &qdd[1..], &o).is_err());
+    }
+}
