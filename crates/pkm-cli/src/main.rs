@@ -118,7 +118,7 @@ enum Command {
         pkm workspace examples/machines/hexapod-linuxcnc.toml --orientation 0,10,0 --bounds=-400,400,-400,400,300,800 --step 10 --out ws\n  \
         pkm workspace examples/machines/hexapod-linuxcnc.toml --tilt 15 --step 25 --out total   # reachable at every tilt <= 15 deg\n  \
         pkm workspace examples/machines/hexapod-linuxcnc.toml --at 0,0,550 --out tilt          # orientation workspace at a point\n  \
-        pkm workspace examples/machines/hexapod-linuxcnc.toml --step 25 --stiffness --out stiff  # stiffness map (N/um)\n\n\
+        pkm workspace examples/machines/hexapod-linuxcnc.toml --step 25 --stiffness --out stiff    # stiffness map (N/um)\n\n\
         Writes DIR/summary.json (measure and measure_unit, volume_mm3 over X, Y, Z, bounding_box, reachable_fraction, condition\n\
         statistics, points per binding limit), DIR/points.csv (DIR/points.parquet with\n\
         --format parquet), DIR/points.ply and slice heat maps.")]

@@ -437,12 +437,13 @@ fn a_drive_stiffness_must_be_positive_and_finite() {
         let (line, field, message) = parts(&err(&text));
         assert_eq!(line, Some(line_of(&text, "stiffness =")), "{bad}");
         assert_eq!(field, "struts[0].stiffness");
-        assert!(
-            message.contains(&format!(
-                "expected a stiffness > 0 N/mm (at most 1e12), found {shown}"
-            )),
-            "{message}"
-        );
+        // The reader itself refuses a value that is not finite, naming the same place.
+        let expected = if bad == "nan" || bad == "inf" {
+            "expected a finite number".to_string()
+        } else {
+            format!("expected a stiffness > 0 N/mm (at most 1e12), found {shown}")
+        };
+        assert!(message.contains(&expected), "{message}");
     }
     // A robot joint's is torsional: N mm/rad.
     let robot = include_str!("../../../../examples/machines/kr30-dh.toml");
