@@ -86,14 +86,6 @@ fn drive_table(h: &mut Html, machine: &Machine, ctx: &Context) -> Result<()> {
          coordinate to grow; pkm statics MACHINE --wrench ...):",
         esc(&ctx.pose_label)
     ));
-    h.table(
-        &[
-            "drive",
-            "F<sub>x</sub> = 1 kN",
-            "F<sub>y</sub> = 1 kN",
-            "F<sub>z</sub> = 1 kN",
-        ],
-        &rows,
-    );
+    h.table(&["drive", "Fx = 1 kN", "Fy = 1 kN", "Fz = 1 kN"], &rows);
     Ok(())
 }
